@@ -1,0 +1,14 @@
+#pragma once
+
+// Each sub-command of `ssta` lives in its own cmd_<name>.cpp and registers itself here.
+// A command's callback throws ssta::Error for bad input; main() prints it as one line.
+
+#include <CLI/CLI.hpp>
+
+namespace ssta::cli {
+
+void RegisterClassify(CLI::App& app);
+void RegisterSynth(CLI::App& app);
+void RegisterEval(CLI::App& app);
+
+}  // namespace ssta::cli

@@ -1,0 +1,30 @@
+// ssta: stereo traversability analysis on the command line. Thin: parses arguments and hands
+// them to the library; every sub-command is in cmd_<name>.cpp.
+
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+
+#include "commands.h"
+#include "ssta/core/error.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"ssta: stereo superpixel surface traversability analysis (SSTA) and maps"};
+  app.set_version_flag("--version", std::string("ssta ") + SSTA_VERSION);
+  app.require_subcommand(1);
+  ssta::cli::RegisterClassify(app);
+  ssta::cli::RegisterSynth(app);
+  ssta::cli::RegisterEval(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const ssta::Error& e) {
+    std::cerr << "ssta: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "ssta: internal error: " << e.what() << "\n";
+    return 3;
+  }
+  return 0;
+}

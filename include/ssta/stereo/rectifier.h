@@ -1,0 +1,65 @@
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ssta/core/image.h"
+#include "ssta/io/camera_calibration.h"
+
+namespace ssta {
+
+/// YAML section `rectification`.
+struct RectifierOptions {
+  /// Crop to the area valid in both rectified images (the paper's "common area").
+  bool crop_to_common_area = true;
+  bool IsValid(std::string* error) const;
+};
+
+/// Geometry of the rectified, cropped left camera: everything triangulation and the analysis
+/// need. Pixel coordinates (cu, cv) refer to the cropped image.
+struct RectifiedGeometry {
+  int full_width = 0, full_height = 0;  ///< size of the rectified image (= input size) [px]
+  int crop_u0 = 0, crop_v0 = 0;         ///< top-left of the common area in the full image [px]
+  int crop_width = 0, crop_height = 0;  ///< size of the common area [px]
+  double f = 0.0;            ///< focal length of the rectified pair [px]
+  double cu = 0.0, cv = 0.0; ///< principal point in cropped-image coordinates [px]
+  double baseline_m = 0.0;   ///< distance between the two optical centres [m]
+  /// Rotation taking vectors from the original cam0 frame into the rectified cam0 frame.
+  Eigen::Matrix3d rectified_R_camera = Eigen::Matrix3d::Identity();
+};
+
+/// A rectified pair cropped to the common area, plus the full rectified left image (for
+/// overlays that keep the rectified size).
+struct RectifiedPair {
+  ImageU8 left;       ///< cropped, crop_width x crop_height
+  ImageU8 right;      ///< cropped, same size
+  ImageU8 left_full;  ///< full rectified left image
+};
+
+/// Rectifies raw stereo pairs (cv::stereoRectify + remap) and crops them to the common valid
+/// area. A rig that is already rectified (StereoCalibration::IsRectified) passes through
+/// untouched. Thread-safe for concurrent Rectify() calls once constructed.
+class Rectifier {
+ public:
+  /// Throws ssta::Error when the calibration is invalid or leaves no common area.
+  Rectifier(const StereoCalibration& calibration, const RectifierOptions& options);
+  ~Rectifier();
+  Rectifier(Rectifier&&) noexcept;
+  Rectifier& operator=(Rectifier&&) noexcept;
+
+  const RectifiedGeometry& geometry() const { return geometry_; }
+  bool passes_through() const { return passes_through_; }
+
+  /// Precondition (checked, ssta::Error): both images have the calibrated size.
+  RectifiedPair Rectify(const ImageU8& left, const ImageU8& right) const;
+
+ private:
+  struct Maps;
+  RectifiedGeometry geometry_;
+  bool passes_through_ = false;
+  std::unique_ptr<Maps> maps_;
+};
+
+}  // namespace ssta

@@ -1,0 +1,23 @@
+#pragma once
+
+#include <string>
+
+#include "ssta/core/image.h"
+#include "ssta/stereo/rectifier.h"
+
+namespace ssta {
+
+/// YAML section `triangulation`.
+struct TriangulationOptions {
+  double min_range_m = 0.3;   ///< points nearer than this (depth Z) become NaN [m]
+  double max_range_m = 25.0;  ///< points farther than this (depth Z) become NaN [m]
+  bool IsValid(std::string* error) const;
+};
+
+/// Organized point cloud of the left (cropped, rectified) image in the rectified camera frame:
+/// Z = f*b/d, X = (u-cu)*Z/f, Y = (v-cv)*Z/f; NaN where d <= 0 or Z is out of range.
+/// Precondition: disparity has the geometry's crop size.
+Image3f Triangulate(const ImageF& disparity, const RectifiedGeometry& geometry,
+                    const TriangulationOptions& options);
+
+}  // namespace ssta

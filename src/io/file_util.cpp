@@ -1,0 +1,83 @@
+#include "ssta/io/file_util.h"
+
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <system_error>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include "ssta/core/error.h"
+
+namespace fs = std::filesystem;
+
+namespace ssta {
+namespace {
+
+std::string TemporaryName(const std::string& path) {
+  static thread_local std::mt19937_64 rng{std::random_device{}()};
+  std::ostringstream name;
+  name << path << ".tmp" << std::hex << (rng() & 0xffffffu);
+  return name.str();
+}
+
+void SyncFile(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) throw Error(path + ": cannot reopen to flush to disk");
+  const int rc = ::fsync(fd);
+  ::close(fd);
+  if (rc != 0) throw Error(path + ": flushing to disk failed (disk full?)");
+}
+
+}  // namespace
+
+void WriteFileAtomically(const std::string& path,
+                         const std::function<void(const std::string& tmp_path)>& write) {
+  const fs::path target(path);
+  if (target.has_parent_path() && !fs::is_directory(target.parent_path())) {
+    throw Error(path + ": the folder " + target.parent_path().string() + " does not exist");
+  }
+  const std::string tmp = TemporaryName(path);
+  try {
+    write(tmp);
+    SyncFile(tmp);
+    std::error_code ec;
+    fs::rename(tmp, target, ec);
+    if (ec) throw Error(path + ": cannot replace the file: " + ec.message());
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(tmp, ignored);
+    throw;
+  }
+}
+
+void WriteTextAtomically(const std::string& path, const std::string& text) {
+  WriteFileAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(path + ": cannot open for writing");
+    out << text;
+    out.flush();
+    if (!out) throw Error(path + ": write failed (disk full?)");
+  });
+}
+
+std::string ReadTextFile(const std::string& path) {
+  if (!fs::exists(path)) throw Error(path + ": file not found");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open for reading");
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void MakeDirectories(const std::string& path) {
+  std::error_code ec;
+  fs::create_directories(path, ec);
+  if (ec || !fs::is_directory(path)) {
+    throw Error(path + ": cannot create directory" + (ec ? ": " + ec.message() : ""));
+  }
+}
+
+}  // namespace ssta

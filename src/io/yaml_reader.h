@@ -1,0 +1,72 @@
+#pragma once
+
+// Private helper: reads a YAML mapping key by key, names every key it reports on with its full
+// path ("stereo.num_disparities"), and reports keys that nobody asked for.
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include <yaml-cpp/yaml.h>
+
+#include "ssta/core/error.h"
+
+namespace ssta::internal {
+
+/// Parses YAML text; OpenCV's `%YAML:1.0` first line is accepted. Throws ssta::Error naming
+/// `file` and the line on a syntax error.
+YAML::Node ParseYaml(const std::string& text, const std::string& file);
+
+class YamlSection {
+ public:
+  /// `node` must be a map or null; `file` and `path` only name things in messages.
+  YamlSection(YAML::Node node, std::string file, std::string path);
+
+  bool Has(const std::string& key) const;
+  /// Overwrites `*value` when the key is present; throws naming the key on a type error.
+  template <typename T>
+  void Read(const std::string& key, T* value);
+  /// Reads a fixed-length numeric list.
+  void ReadList(const std::string& key, std::vector<double>* values, std::size_t expected_size);
+  /// Like Read but the key must exist.
+  template <typename T>
+  T Require(const std::string& key);
+  /// Child section (an empty one when absent).
+  YamlSection Child(const std::string& key);
+
+  /// Throws naming the first key of this section that no Read/Child call asked for.
+  void RejectUnknownKeys() const;
+  /// Marks keys as known without reading them (keys documented but ignored).
+  void Ignore(const std::string& key) { used_.insert(key); }
+
+  /// "file: path.key" for messages.
+  std::string Name(const std::string& key) const;
+  const std::string& file() const { return file_; }
+
+ private:
+  YAML::Node node_;
+  std::string file_;
+  std::string path_;
+  std::set<std::string> used_;
+};
+
+template <typename T>
+void YamlSection::Read(const std::string& key, T* value) {
+  used_.insert(key);
+  if (!node_ || !node_[key]) return;
+  try {
+    *value = node_[key].template as<T>();
+  } catch (const YAML::Exception&) {
+    throw Error(Name(key) + ": wrong type (value '" + YAML::Dump(node_[key]) + "')");
+  }
+}
+
+template <typename T>
+T YamlSection::Require(const std::string& key) {
+  if (!Has(key)) throw Error(Name(key) + ": missing key");
+  T value{};
+  Read(key, &value);
+  return value;
+}
+
+}  // namespace ssta::internal

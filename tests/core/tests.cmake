@@ -1,0 +1,2 @@
+ssta_add_test(core_test
+  ${CMAKE_CURRENT_LIST_DIR}/classes_test.cpp)
