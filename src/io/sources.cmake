@@ -4,3 +4,5 @@ target_sources(ssta PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/file_util.cpp
   ${CMAKE_CURRENT_LIST_DIR}/image_io.cpp
   ${CMAKE_CURRENT_LIST_DIR}/yaml_reader.cpp)
+target_sources(ssta PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/asl_sequence.cpp)

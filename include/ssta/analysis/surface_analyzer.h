@@ -1,0 +1,116 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/classes.h"
+#include "ssta/core/image.h"
+
+namespace ssta {
+
+/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E).
+struct AnalysisOptions {
+  /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
+  /// their own in the paper.
+  double inliers_min_ratio = 0.02;
+  /// false (default): a small segment with at least `min_plane_points` points that is steeper
+  /// than max_slope_deg or stands more than max_step_m off the ground is still an obstacle
+  /// (non-traversable); the rest stay undecided. true: the paper exactly, every small segment
+  /// is undecided.
+  bool paper_small_segments = false;
+  /// Fewest points for a plane fit of a small segment [points].
+  int min_plane_points = 30;
+  /// Quality check of the dominant ground plane: least share of the frame's depth pixels that
+  /// must lie on it, and the largest RMS point-to-plane distance [m].
+  double min_ground_share = 0.08;
+  double max_ground_rms_m = 0.08;
+
+  bool IsValid(std::string* error) const;
+};
+
+/// One superpixel surface: its PCA plane and verdict.
+struct SegmentResult {
+  int id = -1;           ///< segment id in the segmentation label image
+  int inliers = 0;       ///< pixels with a valid point
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mean point, camera frame [m]
+  /// Unit normal (smallest PCA eigenvector), oriented to the up side (n . up >= 0).
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< A, B, C, D with (A,B,C) = normal
+  double rms_m = 0.0;       ///< RMS point-to-plane distance [m]
+  double slope_deg = 0.0;   ///< angle between the normal and up [deg]
+  double step_m = 0.0;      ///< |distance| of the centroid to the ground plane [m]; NaN without one
+  bool has_plane = false;   ///< enough points for a plane fit (else no geometry, undecided)
+  bool small = false;       ///< fewer inliers than inliers_min
+  bool ground = false;      ///< this is the dominant ground plane
+  TravClass slope_class = TravClass::kUndecided;
+  TravClass step_class = TravClass::kUndecided;
+  TravClass verdict = TravClass::kUndecided;  ///< the class its pixels get
+  std::string reason;       ///< why this verdict, for people
+};
+
+/// The dominant ground plane (paper III-E): the largest traversable segment whose normal points
+/// up and which lies below the camera.
+struct GroundPlane {
+  bool found = false;
+  int segment_id = -1;
+  Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< n . p + D = 0, n pointing up
+  double camera_height_m = 0.0;  ///< camera origin above the plane [m]
+  double rms_m = 0.0;            ///< RMS of its inliers to the plane [m]
+  double share = 0.0;            ///< its inliers / the frame's depth pixels
+};
+
+/// Verdict of the point-cloud quality check on the ground plane.
+struct QualityCheck {
+  bool passed = false;
+  std::string reason;  ///< empty when passed
+};
+
+struct AnalysisResult {
+  std::vector<SegmentResult> segments;  ///< one per segment id, in id order
+  GroundPlane ground;
+  QualityCheck quality;
+  int inliers_min = 0;       ///< the eq. 4 threshold used [px]
+  int depth_pixels = 0;      ///< pixels with a valid 3D point
+  /// Class per pixel (image size): 0 without depth, 4 undecided, else the segment's verdict.
+  ImageU8 labels;
+};
+
+/// Superpixel Surface Traversability Analysis of one frame.
+///
+/// `cloud`: organized points in the (rectified) camera frame, NaN invalid. `segment_ids`: per
+/// pixel segment id in [0, num_segments) or -1, same size as the cloud. `up_camera`: unit
+/// vector opposite to gravity, in the same camera frame. Per segment: mean and covariance,
+/// PCA normal, slope vs up (eq. 3), dominant ground plane, quality check, step (eq. 5); a
+/// segment's class is the worse of its slope and step classes. When the quality check fails,
+/// every depth pixel is undecided and the reason is reported. Thread-safe (pure function).
+AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
+                               const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                               const AnalysisOptions& options);
+
+/// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
+/// RMS distance. Exposed for tests and for the map.
+struct PlaneFit {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  double rms_m = 0.0;
+  int count = 0;
+};
+
+/// Accumulates first and second moments of points (double precision) and fits a plane.
+class PlaneAccumulator {
+ public:
+  void Add(const Eigen::Vector3d& p);
+  int count() const { return count_; }
+  /// Precondition: count() >= 3.
+  PlaneFit Fit() const;
+
+ private:
+  int count_ = 0;
+  Eigen::Vector3d sum_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_sq_ = Eigen::Matrix3d::Zero();
+};
+
+}  // namespace ssta

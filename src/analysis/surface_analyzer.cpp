@@ -1,0 +1,192 @@
+#include "ssta/analysis/surface_analyzer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include <Eigen/Eigenvalues>
+
+namespace ssta {
+namespace {
+
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
+std::string Format(const char* label, double value, int precision, const char* unit) {
+  std::ostringstream s;
+  s << label << " " << std::fixed << std::setprecision(precision) << value << unit;
+  return s.str();
+}
+
+std::string ClassReason(const SegmentResult& s) {
+  std::ostringstream r;
+  r << std::fixed << std::setprecision(1) << "slope " << s.slope_deg << " deg ("
+    << ClassName(s.slope_class) << ")";
+  if (std::isfinite(s.step_m)) {
+    r << std::setprecision(3) << ", step " << s.step_m << " m (" << ClassName(s.step_class) << ")";
+  }
+  return r.str();
+}
+
+}  // namespace
+
+bool AnalysisOptions::IsValid(std::string* error) const {
+  if (!(inliers_min_ratio >= 0 && inliers_min_ratio < 1)) {
+    return Fail(error, "inliers_min_ratio: must be in [0, 1)");
+  }
+  if (min_plane_points < 3) return Fail(error, "min_plane_points: must be at least 3");
+  if (!(min_ground_share >= 0 && min_ground_share <= 1)) {
+    return Fail(error, "min_ground_share: must be in [0, 1]");
+  }
+  if (!(max_ground_rms_m > 0)) return Fail(error, "max_ground_rms_m: must be positive");
+  return true;
+}
+
+void PlaneAccumulator::Add(const Eigen::Vector3d& p) {
+  ++count_;
+  sum_ += p;
+  sum_sq_.noalias() += p * p.transpose();
+}
+
+PlaneFit PlaneAccumulator::Fit() const {
+  SSTA_CHECK(count_ >= 3, "a plane fit needs at least 3 points");
+  PlaneFit fit;
+  fit.count = count_;
+  fit.centroid = sum_ / count_;
+  Eigen::Matrix3d cov = sum_sq_ / count_ - fit.centroid * fit.centroid.transpose();
+  cov = 0.5 * (cov + cov.transpose());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+  fit.normal = solver.eigenvectors().col(0).normalized();  // eigenvalues ascending
+  fit.rms_m = std::sqrt(std::max(0.0, solver.eigenvalues()(0)));
+  return fit;
+}
+
+AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
+                               const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                               const AnalysisOptions& options) {
+  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height(),
+             "cloud and segment ids differ in size");
+  SSTA_CHECK(std::abs(up_camera.norm() - 1.0) < 1e-6, "up_camera must be a unit vector");
+  SSTA_CHECK(num_segments >= 0, "negative segment count");
+
+  AnalysisResult result;
+  result.inliers_min = static_cast<int>(
+      std::ceil(options.inliers_min_ratio * cloud.width() * cloud.height()));
+
+  // Moments per segment in one pass over the pixels.
+  std::vector<PlaneAccumulator> moments(num_segments);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud[i];
+    if (!IsFinite(p)) continue;
+    ++result.depth_pixels;
+    const int id = segment_ids[i];
+    if (id >= 0) {
+      SSTA_CHECK(id < num_segments, "segment id out of range");
+      moments[id].Add(p.cast<double>());
+    }
+  }
+
+  // Plane, slope and slope class per segment (eq. 3).
+  result.segments.resize(num_segments);
+  for (int id = 0; id < num_segments; ++id) {
+    SegmentResult& s = result.segments[id];
+    s.id = id;
+    s.inliers = moments[id].count();
+    s.small = s.inliers < result.inliers_min;
+    s.step_m = std::numeric_limits<double>::quiet_NaN();
+    const int min_points = std::max(3, s.small ? options.min_plane_points : 3);
+    if (s.inliers < min_points) {
+      s.reason = "too few points for a plane";
+      continue;
+    }
+    const PlaneFit fit = moments[id].Fit();
+    s.has_plane = true;
+    s.centroid = fit.centroid;
+    s.normal = fit.normal.dot(up_camera) < 0 ? -fit.normal : fit.normal;
+    s.plane << s.normal, -s.normal.dot(s.centroid);
+    s.rms_m = fit.rms_m;
+    s.slope_deg = std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)) * kRadToDeg;
+    s.slope_class = vehicle.ClassifySlope(s.slope_deg);
+  }
+
+  // Dominant ground plane: the largest traversable, large-enough segment below the camera.
+  GroundPlane& ground = result.ground;
+  for (const SegmentResult& s : result.segments) {
+    if (!s.has_plane || s.small || s.slope_class != TravClass::kTraversable) continue;
+    const double camera_height = s.plane(3);  // signed distance of the camera origin
+    if (camera_height <= 0) continue;         // the plane is above the camera
+    if (!ground.found || s.inliers > result.segments[ground.segment_id].inliers) {
+      ground.found = true;
+      ground.segment_id = s.id;
+    }
+  }
+
+  QualityCheck& quality = result.quality;
+  if (!ground.found) {
+    quality.reason = "no dominant ground plane (no large traversable segment below the camera)";
+  } else {
+    const SegmentResult& g = result.segments[ground.segment_id];
+    ground.plane = g.plane;
+    ground.camera_height_m = g.plane(3);
+    ground.rms_m = g.rms_m;
+    ground.share = result.depth_pixels > 0 ? static_cast<double>(g.inliers) / result.depth_pixels : 0.0;
+    if (ground.camera_height_m < vehicle.min_camera_height_m ||
+        ground.camera_height_m > vehicle.max_camera_height_m) {
+      quality.reason = Format("implausible camera height", ground.camera_height_m, 2, " m") +
+                       Format(" above the ground plane (vehicle expects", vehicle.min_camera_height_m, 2, "") +
+                       Format(" to", vehicle.max_camera_height_m, 2, " m)");
+    } else if (ground.rms_m > options.max_ground_rms_m) {
+      quality.reason = Format("ground plane too rough: RMS", ground.rms_m, 3, " m") +
+                       Format(" > max_ground_rms_m", options.max_ground_rms_m, 3, "");
+    } else if (ground.share < options.min_ground_share) {
+      quality.reason = Format("ground plane too small: share", ground.share, 3, "") +
+                       Format(" < min_ground_share", options.min_ground_share, 3, "");
+    } else {
+      quality.passed = true;
+    }
+  }
+
+  // Step to the ground plane (eq. 5) and the verdict per segment.
+  for (SegmentResult& s : result.segments) {
+    if (s.inliers == 0) continue;
+    if (!quality.passed) {
+      s.verdict = TravClass::kUndecided;
+      s.reason = "frame failed the quality check";
+      continue;
+    }
+    if (!s.has_plane) continue;  // undecided, reason already given
+    s.ground = s.id == ground.segment_id;
+    s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
+    s.step_class = vehicle.ClassifyStep(s.step_m);
+    const TravClass worst = Worse(s.slope_class, s.step_class);
+    if (!s.small) {
+      s.verdict = worst;
+      s.reason = ClassReason(s);
+    } else if (!options.paper_small_segments && worst == TravClass::kNonTraversable) {
+      s.verdict = TravClass::kNonTraversable;
+      s.reason = "small segment, obstacle: " + ClassReason(s);
+    } else {
+      s.verdict = TravClass::kUndecided;
+      s.reason = "small segment (" + std::to_string(s.inliers) + " < " +
+                 std::to_string(result.inliers_min) + " px)";
+    }
+  }
+
+  // Per-pixel labels.
+  result.labels = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!IsFinite(cloud[i])) continue;
+    const int id = segment_ids[i];
+    const TravClass c = id >= 0 ? result.segments[id].verdict : TravClass::kUndecided;
+    result.labels[i] = static_cast<std::uint8_t>(c);
+  }
+  return result;
+}
+
+}  // namespace ssta

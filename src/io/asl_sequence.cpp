@@ -1,0 +1,245 @@
+#include "ssta/io/asl_sequence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
+#include "yaml_reader.h"
+
+namespace fs = std::filesystem;
+
+namespace ssta {
+namespace {
+
+constexpr std::int64_t kPairToleranceNs = 1'000'000;  // 1 ms (INTERFACES section 2)
+
+std::string Trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> SplitCommas(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  std::string item;
+  while (std::getline(ss, item, ',')) out.push_back(Trim(item));
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+std::int64_t ParseTimestamp(const std::string& text, const std::string& where) {
+  std::size_t used = 0;
+  long long value = 0;
+  try {
+    value = std::stoll(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw Error(where + ": bad timestamp '" + text + "'");
+  return value;
+}
+
+double ParseNumber(const std::string& text, const std::string& where) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw Error(where + ": bad number '" + text + "'");
+  if (!std::isfinite(value)) throw Error(where + ": NaN or infinite value");
+  return value;
+}
+
+struct ImageEntry {
+  std::int64_t timestamp_ns;
+  std::string file;
+};
+
+std::vector<ImageEntry> ReadImageList(const std::string& cam_dir) {
+  const std::string csv = cam_dir + "/data.csv";
+  if (!fs::exists(csv)) throw Error(csv + ": file not found");
+  std::ifstream in(csv);
+  if (!in) throw Error(csv + ": cannot open");
+  std::vector<ImageEntry> out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    line = Trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = csv + ":" + std::to_string(n);
+    const auto cols = SplitCommas(line);
+    if (cols.size() != 2) throw Error(where + ": expected 'timestamp,filename'");
+    const std::int64_t t = ParseTimestamp(cols[0], where);
+    if (!out.empty() && t <= out.back().timestamp_ns) {
+      throw Error(where + ": timestamp " + cols[0] + (t == out.back().timestamp_ns ? " is duplicated" : " is out of order"));
+    }
+    out.push_back({t, cam_dir + "/data/" + cols[1]});
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open");
+  std::vector<CsvRow> rows;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    line = Trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = path + ":" + std::to_string(n);
+    const auto cols = SplitCommas(line);
+    if (static_cast<int>(cols.size()) != columns) {
+      throw Error(where + ": expected " + std::to_string(columns) + " columns, found " + std::to_string(cols.size()));
+    }
+    CsvRow row;
+    row.line = n;
+    row.timestamp_ns = ParseTimestamp(cols[0], where);
+    if (!rows.empty() && row.timestamp_ns <= rows.back().timestamp_ns) {
+      throw Error(where + ": timestamp " + cols[0] +
+                  (row.timestamp_ns == rows.back().timestamp_ns ? " is duplicated" : " is out of order"));
+    }
+    for (int c = 1; c < columns; ++c) row.values.push_back(ParseNumber(cols[c], where));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+AslSequence AslSequence::Open(const std::string& path) {
+  if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
+  AslSequence seq;
+  seq.root_ = fs::is_directory(fs::path(path) / "mav0") ? (fs::path(path) / "mav0").string() : path;
+  const std::string cam0 = seq.root_ + "/cam0";
+  const std::string cam1 = seq.root_ + "/cam1";
+  for (const auto& dir : {cam0, cam1}) {
+    if (!fs::is_directory(dir)) throw Error(dir + ": camera folder not found (expected the ASL layout, INTERFACES section 2)");
+  }
+  seq.calibration_ = LoadStereoCalibration(cam0 + "/sensor.yaml", cam1 + "/sensor.yaml");
+
+  const auto left = ReadImageList(cam0);
+  const auto right = ReadImageList(cam1);
+  // Pair by timestamp: exact, or the nearest right frame within 1 ms.
+  std::size_t j = 0;
+  for (const auto& l : left) {
+    while (j + 1 < right.size() &&
+           std::llabs(right[j + 1].timestamp_ns - l.timestamp_ns) <= std::llabs(right[j].timestamp_ns - l.timestamp_ns)) {
+      ++j;
+    }
+    if (right.empty() || std::llabs(right[j].timestamp_ns - l.timestamp_ns) > kPairToleranceNs) {
+      seq.skipped_.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
+      continue;
+    }
+    if (!fs::exists(l.file)) {
+      seq.skipped_.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
+      continue;
+    }
+    if (!fs::exists(right[j].file)) {
+      seq.skipped_.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
+      continue;
+    }
+    seq.frames_.push_back({l.timestamp_ns, l.file, right[j].file});
+  }
+
+  const std::string imu_csv = seq.root_ + "/imu0/data.csv";
+  if (fs::exists(imu_csv)) {
+    for (const auto& row : ReadAslNumericCsv(imu_csv, 7)) {
+      ImuSample s;
+      s.timestamp_ns = row.timestamp_ns;
+      s.angular_rate = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
+      s.specific_force = Eigen::Vector3d(row.values[3], row.values[4], row.values[5]);
+      seq.imu_.push_back(s);
+    }
+    const std::string imu_yaml = seq.root_ + "/imu0/sensor.yaml";
+    if (fs::exists(imu_yaml)) {
+      const YAML::Node root = internal::ParseYaml(ReadTextFile(imu_yaml), imu_yaml);
+      if (root["T_BS"] && root["T_BS"]["data"]) {
+        internal::YamlSection t_bs(root["T_BS"], imu_yaml, "T_BS");
+        std::vector<double> m;
+        t_bs.ReadList("data", &m, 16);
+        Eigen::Matrix4d mat;
+        for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
+        const Eigen::Matrix3d r = mat.topLeftCorner<3, 3>();
+        if (!(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-4)) {
+          throw Error(imu_yaml + ": T_BS: not a rigid transform");
+        }
+        seq.body_T_imu_.matrix() = mat;
+      }
+    }
+  }
+
+  std::string pose_csv = seq.root_ + "/pose0/data.csv";
+  if (!fs::exists(pose_csv)) pose_csv = seq.root_ + "/state_groundtruth_estimate0/data.csv";
+  if (fs::exists(pose_csv)) {
+    std::ifstream probe(pose_csv);
+    std::string header;
+    std::getline(probe, header);
+    std::string first;
+    std::getline(probe, first);
+    const int columns = first.empty() ? 8 : static_cast<int>(SplitCommas(Trim(first)).size());
+    if (columns < 8) throw Error(pose_csv + ":2: expected at least 8 columns (t, p, q)");
+    for (const auto& row : ReadAslNumericCsv(pose_csv, columns)) {
+      PoseSample p;
+      p.timestamp_ns = row.timestamp_ns;
+      p.world_p_body = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
+      Eigen::Quaterniond q(row.values[3], row.values[4], row.values[5], row.values[6]);
+      if (q.norm() < 1e-6) throw Error(pose_csv + ":" + std::to_string(row.line) + ": zero quaternion");
+      q.normalize();
+      p.world_q_body = q;
+      seq.poses_.push_back(p);
+    }
+  }
+
+  for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(seq.root_) / "vehicle.yaml"}) {
+    if (fs::exists(candidate)) {
+      seq.vehicle_config_ = candidate.string();
+      break;
+    }
+  }
+  return seq;
+}
+
+std::optional<Eigen::Isometry3d> AslSequence::WorldTBodyAt(std::int64_t t) const {
+  if (poses_.empty() || t < poses_.front().timestamp_ns || t > poses_.back().timestamp_ns) {
+    return std::nullopt;
+  }
+  const auto it = std::lower_bound(poses_.begin(), poses_.end(), t,
+                                   [](const PoseSample& p, std::int64_t time) { return p.timestamp_ns < time; });
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  if (it->timestamp_ns == t || it == poses_.begin()) {
+    out.linear() = it->world_q_body.toRotationMatrix();
+    out.translation() = it->world_p_body;
+    return out;
+  }
+  const PoseSample& b = *it;
+  const PoseSample& a = *(it - 1);
+  const double s = static_cast<double>(t - a.timestamp_ns) / static_cast<double>(b.timestamp_ns - a.timestamp_ns);
+  out.linear() = a.world_q_body.slerp(s, b.world_q_body).toRotationMatrix();
+  out.translation() = (1.0 - s) * a.world_p_body + s * b.world_p_body;
+  return out;
+}
+
+std::optional<Eigen::Vector3d> AslSequence::UpInBodyFromImu(std::int64_t t, double window_s) const {
+  const auto half = static_cast<std::int64_t>(window_s * 0.5e9);
+  const auto lo = std::lower_bound(imu_.begin(), imu_.end(), t - half,
+                                   [](const ImuSample& s, std::int64_t time) { return s.timestamp_ns < time; });
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int n = 0;
+  for (auto it = lo; it != imu_.end() && it->timestamp_ns <= t + half; ++it, ++n) sum += it->specific_force;
+  if (n == 0 || sum.norm() < 1e-9) return std::nullopt;
+  return (body_T_imu_.linear() * (sum / n)).normalized();
+}
+
+}  // namespace ssta

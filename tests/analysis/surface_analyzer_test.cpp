@@ -1,0 +1,196 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <Eigen/Geometry>
+
+#include "ssta/analysis/surface_analyzer.h"
+
+namespace ssta {
+namespace {
+
+// An analytic world seen by a level camera 1 m above a floor (camera y points down, so up is
+// -y). Regions are painted into an organized cloud with known segment ids; the analysis must
+// recover planes, slopes, steps and classes in closed form.
+class AnalyticWorld {
+ public:
+  AnalyticWorld(int width, int height) : cloud_(width, height, NanVector3f()), ids_(width, height, -1) {}
+
+  /// Fills rows [v0, v1) x cols [u0, u1) with points of the plane through `origin` spanned by
+  /// `a` and `b` (grid coordinates scaled by `step`), all in segment `id`.
+  void Paint(int id, int v0, int v1, int u0, int u1, const Eigen::Vector3d& origin,
+             const Eigen::Vector3d& a, const Eigen::Vector3d& b, double step = 0.02) {
+    for (int v = v0; v < v1; ++v) {
+      for (int u = u0; u < u1; ++u) {
+        const Eigen::Vector3d p = origin + a * (u - u0) * step + b * (v - v0) * step;
+        cloud_(v, u) = p.cast<float>();
+        ids_(v, u) = id;
+      }
+    }
+    num_segments_ = std::max(num_segments_, id + 1);
+  }
+
+  AnalysisResult Analyze(const VehicleOptions& vehicle = {}, AnalysisOptions options = {}) const {
+    return AnalyzeSurfaces(cloud_, ids_, num_segments_, kUp, vehicle, options);
+  }
+
+  static inline const Eigen::Vector3d kUp{0, -1, 0};
+  Image3f cloud_;
+  ImageI32 ids_;
+  int num_segments_ = 0;
+};
+
+// Floor 1 m below the camera, spanning x and z.
+void PaintFloor(AnalyticWorld& w, int id, int v0, int v1, int u0, int u1, double height = 1.0) {
+  w.Paint(id, v0, v1, u0, u1, {-1.0, height, 2.0}, {1, 0, 0}, {0, 0, 1});
+}
+
+// A ramp rising at `slope_deg` away from the camera.
+void PaintRamp(AnalyticWorld& w, int id, int v0, int v1, int u0, int u1, double slope_deg) {
+  const double s = slope_deg * M_PI / 180.0;
+  w.Paint(id, v0, v1, u0, u1, {0.5, 1.0, 2.0}, {1, 0, 0}, {0, -std::sin(s), std::cos(s)});
+}
+
+TEST(SurfaceAnalyzer, FloorIsTheTraversableGroundAtCameraHeight) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100, 1.0);
+  const AnalysisResult r = w.Analyze();
+  ASSERT_TRUE(r.ground.found);
+  EXPECT_TRUE(r.quality.passed) << r.quality.reason;
+  EXPECT_NEAR(r.ground.camera_height_m, 1.0, 1e-6);
+  EXPECT_NEAR(r.segments[0].slope_deg, 0.0, 1e-3);
+  EXPECT_NEAR(r.ground.rms_m, 0.0, 1e-4);
+  EXPECT_NEAR(r.segments[0].normal.dot(AnalyticWorld::kUp), 1.0, 1e-9);
+  EXPECT_NEAR(r.segments[0].plane(3), 1.0, 1e-6);
+  EXPECT_EQ(r.labels(50, 50), static_cast<std::uint8_t>(TravClass::kTraversable));
+}
+
+TEST(SurfaceAnalyzer, RampsOfKnownSlopeGetTheirSlopeClass) {
+  for (const auto& [slope, expected] : std::vector<std::pair<double, TravClass>>{
+           {10.0, TravClass::kTraversable}, {20.0, TravClass::kSemiTraversable}, {35.0, TravClass::kNonTraversable}}) {
+    AnalyticWorld w(200, 100);
+    PaintFloor(w, 0, 0, 100, 0, 100);
+    // A short ramp so that its centroid stays within semi_step of the floor plane.
+    PaintRamp(w, 1, 0, 4, 100, 200, slope);
+    AnalysisOptions options;
+    options.inliers_min_ratio = 0.01;  // the ramp (400 px) is a full segment
+    const AnalysisResult r = w.Analyze({}, options);
+    ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+    EXPECT_NEAR(r.segments[1].slope_deg, slope, 1e-3) << slope;
+    EXPECT_EQ(r.segments[1].slope_class, expected) << slope;
+    EXPECT_EQ(r.labels(2, 150), static_cast<std::uint8_t>(r.segments[1].verdict));
+  }
+}
+
+TEST(SurfaceAnalyzer, StepsOfKnownHeightGetTheirStepClass) {
+  for (const auto& [height, expected] : std::vector<std::pair<double, TravClass>>{
+           {0.05, TravClass::kTraversable}, {0.15, TravClass::kSemiTraversable}, {0.30, TravClass::kNonTraversable}}) {
+    AnalyticWorld w(200, 100);
+    PaintFloor(w, 0, 0, 100, 0, 100, 1.0);
+    PaintFloor(w, 1, 0, 50, 100, 200, 1.0 - height);  // a raised flat top (y down: smaller y)
+    AnalysisOptions options;
+    options.inliers_min_ratio = 0.01;
+    const AnalysisResult r = w.Analyze({}, options);
+    ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+    EXPECT_EQ(r.ground.segment_id, 0);
+    EXPECT_NEAR(r.segments[1].step_m, height, 1e-6);
+    EXPECT_EQ(r.segments[1].slope_class, TravClass::kTraversable);
+    EXPECT_EQ(r.segments[1].step_class, expected) << height;
+    EXPECT_EQ(r.segments[1].verdict, expected) << height;
+  }
+}
+
+TEST(SurfaceAnalyzer, BoxFaceIsNonTraversableAndItsTopIsAStep) {
+  AnalyticWorld w(200, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  // Box front face: vertical, facing the camera, 0.4 m tall, 1 m wide.
+  w.Paint(1, 0, 20, 100, 150, {0.0, 1.0, 3.0}, {1, 0, 0}, {0, -1, 0});
+  // Box top at 0.4 m above the floor.
+  w.Paint(2, 20, 40, 100, 150, {0.0, 0.6, 3.0}, {1, 0, 0}, {0, 0, 1});
+  AnalysisOptions options;
+  options.inliers_min_ratio = 0.01;
+  const AnalysisResult r = w.Analyze({}, options);
+  ASSERT_TRUE(r.quality.passed);
+  EXPECT_NEAR(r.segments[1].slope_deg, 90.0, 1e-3);
+  EXPECT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);
+  EXPECT_NEAR(r.segments[2].step_m, 0.4, 1e-6);
+  EXPECT_EQ(r.segments[2].verdict, TravClass::kNonTraversable);
+}
+
+TEST(SurfaceAnalyzer, SmallObstacleIsFlaggedUnlessPaperExact) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  w.Paint(1, 0, 10, 0, 10, {0.0, 1.0, 3.0}, {1, 0, 0}, {0, -1, 0});  // 100 px wall, < 2 %
+  w.Paint(2, 10, 20, 0, 10, {0.0, 1.0, 4.0}, {1, 0, 0}, {0, 0, 1});  // 100 px flat patch
+  const AnalysisResult ours = w.Analyze();
+  EXPECT_TRUE(ours.segments[1].small);
+  EXPECT_EQ(ours.segments[1].verdict, TravClass::kNonTraversable);
+  EXPECT_EQ(ours.segments[2].verdict, TravClass::kUndecided);  // small and harmless: no verdict
+  AnalysisOptions paper;
+  paper.paper_small_segments = true;
+  const AnalysisResult exact = w.Analyze({}, paper);
+  EXPECT_EQ(exact.segments[1].verdict, TravClass::kUndecided);
+  EXPECT_EQ(exact.labels(5, 5), static_cast<std::uint8_t>(TravClass::kUndecided));
+}
+
+TEST(SurfaceAnalyzer, GroundAboveTheCameraIsRejected) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100, -0.5);  // a ceiling-like plane 0.5 m above the camera
+  const AnalysisResult r = w.Analyze();
+  EXPECT_FALSE(r.ground.found);
+  EXPECT_FALSE(r.quality.passed);
+  EXPECT_NE(r.quality.reason.find("no dominant ground plane"), std::string::npos);
+  EXPECT_EQ(r.labels(50, 50), static_cast<std::uint8_t>(TravClass::kUndecided));
+}
+
+TEST(SurfaceAnalyzer, QualityCheckRejectsImplausibleCameraHeight) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100, 5.0);
+  VehicleOptions vehicle;
+  vehicle.max_camera_height_m = 2.0;
+  const AnalysisResult r = w.Analyze(vehicle);
+  EXPECT_TRUE(r.ground.found);
+  EXPECT_FALSE(r.quality.passed);
+  EXPECT_NE(r.quality.reason.find("implausible camera height"), std::string::npos) << r.quality.reason;
+  EXPECT_EQ(r.labels(10, 10), static_cast<std::uint8_t>(TravClass::kUndecided));
+}
+
+TEST(SurfaceAnalyzer, QualityCheckRejectsARoughGround) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  for (int v = 0; v < 100; ++v) {
+    for (int u = 0; u < 100; ++u) w.cloud_(v, u).y() += ((u + v) % 2 ? 0.15f : -0.15f);
+  }
+  const AnalysisResult r = w.Analyze();
+  EXPECT_FALSE(r.quality.passed);
+  EXPECT_NE(r.quality.reason.find("too rough"), std::string::npos) << r.quality.reason;
+}
+
+TEST(SurfaceAnalyzer, PixelsWithoutDepthAreUnknownAndUnsegmentedAreUndecided) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  w.cloud_(0, 0) = NanVector3f();
+  w.ids_(0, 0) = -1;
+  w.ids_(1, 1) = -1;  // valid point, no segment
+  const AnalysisResult r = w.Analyze();
+  EXPECT_EQ(r.labels(0, 0), static_cast<std::uint8_t>(TravClass::kUnknown));
+  EXPECT_EQ(r.labels(1, 1), static_cast<std::uint8_t>(TravClass::kUndecided));
+  EXPECT_EQ(r.depth_pixels, 100 * 100 - 1);
+}
+
+TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {
+  PlaneAccumulator acc;
+  const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.9, 0.3).normalized();
+  const Eigen::Vector3d a = n.unitOrthogonal();
+  const Eigen::Vector3d b = n.cross(a);
+  for (int i = -10; i <= 10; ++i) {
+    for (int j = -10; j <= 10; ++j) acc.Add(Eigen::Vector3d(1, 2, 3) + 0.1 * i * a + 0.1 * j * b);
+  }
+  const PlaneFit fit = acc.Fit();
+  EXPECT_NEAR(std::abs(fit.normal.dot(n)), 1.0, 1e-9);
+  EXPECT_TRUE(fit.centroid.isApprox(Eigen::Vector3d(1, 2, 3), 1e-9));
+  EXPECT_NEAR(fit.rms_m, 0.0, 1e-6);
+}
+
+}  // namespace
+}  // namespace ssta
