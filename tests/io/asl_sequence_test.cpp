@@ -1,0 +1,117 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+
+#include "ssta/core/error.h"
+#include "ssta/io/asl_sequence.h"
+#include "ssta/io/image_io.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+namespace fs = std::filesystem;
+
+CameraCalibration Pinhole(double tx) {
+  CameraCalibration c;
+  c.width = 8;
+  c.height = 6;
+  c.fu = c.fv = 10;
+  c.cu = 4;
+  c.cv = 3;
+  c.body_T_camera.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  c.body_T_camera.translation() = Eigen::Vector3d(0, -tx, 1);
+  return c;
+}
+
+// Writes a small ASL sequence: left frames at 0, 100, 200, 300 ms; right frames offset by
+// 0.4 ms except the last (5 ms off, unpaired); the image of right frame 100 ms is missing.
+class AslFixture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    for (int cam = 0; cam < 2; ++cam) {
+      const std::string dir = root_ / ("cam" + std::to_string(cam));
+      fs::create_directories(dir + "/data");
+      SaveCameraCalibration(Pinhole(cam * 0.1), dir + "/sensor.yaml");
+      std::ofstream csv(dir + "/data.csv");
+      csv << "#timestamp [ns],filename\n";
+      for (int i = 0; i < 4; ++i) {
+        std::int64_t t = i * 100'000'000LL + (cam == 1 ? (i == 3 ? 5'000'000 : 400'000) : 0);
+        csv << t << "," << t << ".png\n";
+        if (!(cam == 1 && i == 1)) WriteImage(ImageU8(8, 6, 50), dir + "/data/" + std::to_string(t) + ".png");
+      }
+    }
+  }
+  testing::TempDir root_;
+};
+
+TEST_F(AslFixture, PairsWithinOneMillisecondAndReportsWhatItSkips) {
+  const AslSequence seq = AslSequence::Open(root_.path().string());
+  ASSERT_EQ(seq.frames().size(), 2u);
+  EXPECT_EQ(seq.frames()[0].timestamp_ns, 0);
+  EXPECT_EQ(seq.frames()[1].timestamp_ns, 200'000'000);
+  EXPECT_NE(seq.frames()[1].right_path.find("200400000.png"), std::string::npos);
+  ASSERT_EQ(seq.skipped().size(), 2u);
+  EXPECT_NE(seq.skipped()[0].reason.find("cam1 image missing"), std::string::npos);
+  EXPECT_NE(seq.skipped()[1].reason.find("within 1 ms"), std::string::npos);
+}
+
+TEST_F(AslFixture, FindsTheMav0SubFolder) {
+  testing::TempDir outer;
+  fs::copy(root_.path(), outer.path() / "mav0", fs::copy_options::recursive);
+  const AslSequence seq = AslSequence::Open(outer.path().string());
+  EXPECT_EQ(seq.frames().size(), 2u);
+  EXPECT_NE(seq.root().find("mav0"), std::string::npos);
+}
+
+TEST_F(AslFixture, OutOfOrderTimestampsNameTheLine) {
+  std::ofstream(root_ / "cam0/data.csv") << "#timestamp [ns],filename\n100,100.png\n50,50.png\n";
+  try {
+    AslSequence::Open(root_.path().string());
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cam0/data.csv:3"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("out of order"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(AslFixture, InterpolatesPosesLinearlyAndWithSlerp) {
+  fs::create_directories(root_ / "pose0");
+  const Eigen::Quaterniond q1(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
+  std::ofstream(root_ / "pose0/data.csv") << std::setprecision(17) << "#timestamp [ns],p_x [m],p_y,p_z,q_w,q_x,q_y,q_z\n"
+                                          << "0,0,0,0,1,0,0,0\n"
+                                          << "1000000000,2,0,0," << q1.w() << ",0,0," << q1.z() << "\n";
+  const AslSequence seq = AslSequence::Open(root_.path().string());
+  const auto pose = seq.WorldTBodyAt(250'000'000);
+  ASSERT_TRUE(pose.has_value());
+  EXPECT_NEAR(pose->translation().x(), 0.5, 1e-12);
+  EXPECT_NEAR(Eigen::AngleAxisd(pose->rotation()).angle(), 0.1, 1e-9);
+  EXPECT_FALSE(seq.WorldTBodyAt(2'000'000'000).has_value());
+}
+
+TEST_F(AslFixture, UpFromTheAccelerometerAtRest) {
+  fs::create_directories(root_ / "imu0");
+  std::ofstream csv(root_ / "imu0/data.csv");
+  csv << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y,w_RS_S_z,a_RS_S_x [m s^-2],a_RS_S_y,a_RS_S_z\n";
+  for (int i = 0; i < 100; ++i) csv << i * 5'000'000LL << ",0,0,0,9.81,0," << (i % 2 ? 0.1 : -0.1) << "\n";
+  csv.close();
+  const AslSequence seq = AslSequence::Open(root_.path().string());
+  const auto up = seq.UpInBodyFromImu(250'000'000, 0.2);
+  ASSERT_TRUE(up.has_value());
+  EXPECT_NEAR(up->x(), 1.0, 1e-4);
+  EXPECT_FALSE(seq.UpInBodyFromImu(10'000'000'000, 0.2).has_value());
+}
+
+TEST(AslSequence, MissingFolderIsAnErrorNamingIt) {
+  try {
+    AslSequence::Open("/nonexistent/seq");
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/seq"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace ssta

@@ -1,0 +1,3 @@
+ssta_add_test(io_test
+  ${CMAKE_CURRENT_LIST_DIR}/camera_calibration_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/asl_sequence_test.cpp)
