@@ -1,8 +1,91 @@
+// ssta classify: per-pixel traversability classes for every frame of a sequence, or one pair.
+
+#include <filesystem>
+#include <iostream>
+
 #include "commands.h"
+#include "config_loading.h"
+#include "progress.h"
+#include "ssta/io/image_io.h"
+#include "ssta/pipeline/frame_report.h"
+#include "ssta/pipeline/sequence_classifier.h"
 
 namespace ssta::cli {
+namespace {
 
-// Placeholder until the classify command lands.
-void RegisterClassify(CLI::App& app) { (void)app; }
+struct ClassifyArgs {
+  std::string sequence, left, right, calib0, calib1, config;
+  std::vector<double> up;
+  ClassifyOptions options;
+  bool quiet = false;
+};
+
+void RunSequence(const ClassifyArgs& a) {
+  const AslSequence sequence = AslSequence::Open(a.sequence);
+  const Config config = LoadLayeredConfig(&sequence, a.config);
+  ProgressLine progress("classify", !a.quiet);
+  const ClassifySummary summary = ClassifySequence(
+      sequence, config, a.options, [&](int done, int total) { progress.Update(done, total); });
+  progress.Finish();
+  if (!a.quiet) {
+    std::cout << summary.BriefReport();
+    std::cout << "outputs: " << a.options.out_dir << "/{labels,overlay,frames}/<timestamp>.{png,json}, "
+              << a.options.out_dir << "/summary.json\n";
+  }
+  if (summary.frames_classified == 0) throw Error(a.sequence + ": no frame could be classified");
+}
+
+void RunPair(const ClassifyArgs& a) {
+  if (a.left.empty() || a.right.empty() || a.calib0.empty() || a.calib1.empty()) {
+    throw Error("single-pair mode needs --left, --right, --calib0 and --calib1");
+  }
+  const StereoCalibration calibration = LoadStereoCalibration(a.calib0, a.calib1);
+  const Config config = LoadLayeredConfig(nullptr, a.config);
+  FramePipeline pipeline(calibration, config);
+  Eigen::Vector3d up = pipeline.UpInCamera(Eigen::Vector3d::UnitZ());
+  if (!a.up.empty()) {
+    up = Eigen::Vector3d(a.up[0], a.up[1], a.up[2]);
+    if (!up.allFinite() || up.norm() < 1e-9) throw Error("--up: must be a finite, non-zero vector");
+  }
+  const FrameResult result = pipeline.Process(ReadGreyImage(a.left), ReadGreyImage(a.right), up.normalized());
+  const std::string name = std::filesystem::path(a.left).stem().string();
+  WriteFrameOutputs(result, a.options.out_dir, name, a.options.write_disparity);
+  if (!a.quiet) {
+    const auto& q = result.analysis.quality;
+    std::cout << "quality check: " << (q.passed ? "passed" : "failed: " + q.reason) << "\n"
+              << "segments: " << result.num_segments << ", total " << result.timings.total_ms << " ms\n"
+              << "outputs: " << a.options.out_dir << "/{labels,overlay,frames}/" << name << ".{png,json}\n";
+  }
+}
+
+}  // namespace
+
+void RegisterClassify(CLI::App& app) {
+  auto args = std::make_shared<ClassifyArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "classify", "Classify every stereo frame of a sequence (or one pair) into the five SSTA classes");
+  cmd->add_option("--sequence", args->sequence, "ASL sequence folder (INTERFACES section 2)");
+  cmd->add_option("--left", args->left, "single-pair mode: left image");
+  cmd->add_option("--right", args->right, "single-pair mode: right image");
+  cmd->add_option("--calib0", args->calib0, "single-pair mode: cam0 sensor.yaml");
+  cmd->add_option("--calib1", args->calib1, "single-pair mode: cam1 sensor.yaml");
+  cmd->add_option("--up", args->up, "single-pair mode: up direction in cam0 (x right, y down, z forward); "
+                                    "default: a level body through cam0's T_BS")->expected(3)->delimiter(',');
+  cmd->add_option("--out", args->options.out_dir, "output folder")->required();
+  cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); overrides the sequence's vehicle.yaml");
+  cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
+  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png in false colour");
+  cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
+  cmd->callback([args] {
+    std::string error;
+    if (!args->options.IsValid(&error)) throw Error("--" + error);
+    if (!args->sequence.empty()) {
+      RunSequence(*args);
+    } else {
+      RunPair(*args);
+    }
+  });
+}
 
 }  // namespace ssta::cli

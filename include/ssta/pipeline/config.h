@@ -1,0 +1,63 @@
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/analysis/vehicle_options.h"
+#include "ssta/geometry/normal_estimator.h"
+#include "ssta/geometry/segmenter.h"
+#include "ssta/stereo/rectifier.h"
+#include "ssta/stereo/stereo_matcher.h"
+#include "ssta/stereo/triangulator.h"
+
+namespace ssta {
+
+/// Where each frame's gravity (up direction) comes from (YAML `gravity.source`).
+enum class GravitySource {
+  kAuto,   ///< "auto": the IMU when it has samples around the frame, else the pose, else level
+  kImu,    ///< "imu": mean accelerometer reading around the frame (platform at rest or cruising)
+  kPose,   ///< "pose": the attitude of pose0 (or EuRoC's ground truth) at the frame
+  kLevel,  ///< "level": the body is level, up = body z; the camera tilt comes from cam0's T_BS
+  kFixed,  ///< "fixed": `up_camera` as given, in the original cam0 frame
+};
+
+/// YAML section `gravity`.
+struct GravityOptions {
+  GravitySource source = GravitySource::kAuto;
+  double imu_window_s = 0.5;  ///< accelerometer averaging window around each frame [s]
+  Eigen::Vector3d up_camera{0.0, -1.0, 0.0};  ///< for source "fixed": up in cam0 (y down)
+  bool IsValid(std::string* error) const;
+};
+
+/// Every option of the per-frame pipeline, one struct per stage (one YAML section each).
+/// Defaults are the values documented in config/default.yaml.
+struct Config {
+  VehicleOptions vehicle;
+  RectifierOptions rectification;
+  StereoMatcherOptions stereo;
+  TriangulationOptions triangulation;
+  NormalOptions normals;
+  SegmenterOptions segmentation;
+  AnalysisOptions analysis;
+  GravityOptions gravity;
+
+  /// Validates every section; on failure the message reads "section.key: ...".
+  bool IsValid(std::string* error) const;
+};
+
+/// Reads `path` over `config`: the keys the file holds replace the values in `config`, the rest
+/// stay (a file may hold only a vehicle section). Throws ssta::Error naming the file and key
+/// for an unknown section or key, a wrong type, or a value out of range.
+void ApplyConfigFile(const std::string& path, Config* config);
+
+/// Defaults overlaid with `path` (ApplyConfigFile).
+Config LoadConfig(const std::string& path);
+
+/// The config as YAML text (every key, as ApplyConfigFile reads it back).
+std::string ConfigToYaml(const Config& config);
+
+std::string GravitySourceName(GravitySource source);
+
+}  // namespace ssta

@@ -1,0 +1,61 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/core/image.h"
+#include "ssta/io/camera_calibration.h"
+#include "ssta/pipeline/config.h"
+
+namespace ssta {
+
+/// Wall time of each stage of one frame [ms].
+struct StageTimings {
+  double rectify_ms = 0, match_ms = 0, triangulate_ms = 0, normals_ms = 0, segment_ms = 0,
+         analyze_ms = 0, total_ms = 0;
+};
+
+/// Everything one frame produced.
+struct FrameResult {
+  std::int64_t timestamp_ns = 0;
+  ImageU8 left_rectified;   ///< full rectified left image
+  ImageF disparity;         ///< cropped to the common area [px], 0 invalid
+  int num_segments = 0;
+  AnalysisResult analysis;  ///< on the cropped area
+  /// Class ids at the full rectified size; 0 (unknown) outside the common area.
+  ImageU8 labels;
+  Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< up in the rectified cam0 frame
+  StageTimings timings;
+};
+
+/// The paper's per-frame chain: rectify + crop, stereo matching, triangulation, integral-image
+/// normals, normal segmentation, SSTA. Not thread-safe: Process() reuses internal buffers;
+/// use one pipeline per thread.
+class FramePipeline {
+ public:
+  /// Throws ssta::Error on an invalid config or calibration.
+  FramePipeline(const StereoCalibration& calibration, const Config& config);
+  ~FramePipeline();
+
+  /// Classifies one raw stereo pair. `up_camera` is the unit up vector in the original (not
+  /// rectified) cam0 frame. Throws ssta::Error when the images have the wrong size.
+  FrameResult Process(const ImageU8& left, const ImageU8& right, const Eigen::Vector3d& up_camera);
+
+  /// Up in the cam0 frame for a body whose up direction is `up_body` (via cam0's T_BS).
+  Eigen::Vector3d UpInCamera(const Eigen::Vector3d& up_body) const;
+
+  const RectifiedGeometry& geometry() const;
+  const Config& config() const { return config_; }
+
+ private:
+  struct Stages;
+  Config config_;
+  StereoCalibration calibration_;
+  std::unique_ptr<Stages> stages_;
+};
+
+}  // namespace ssta

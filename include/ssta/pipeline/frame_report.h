@@ -1,0 +1,20 @@
+#pragma once
+
+#include <string>
+
+#include "ssta/pipeline/frame_pipeline.h"
+
+namespace ssta {
+
+/// The per-frame JSON (INTERFACES section 5 extension): every segment (id, inliers, centroid,
+/// normal, plane, slope_deg, step_m, class, reason), the ground plane, the quality verdict and
+/// the stage timings. Coordinates are in the rectified cam0 frame [m].
+std::string FrameReportJson(const FrameResult& frame, const std::string& name);
+
+/// Writes `out_dir/labels/<name>.png`, `out_dir/overlay/<name>.png` and
+/// `out_dir/frames/<name>.json` (folders created when missing), each file atomically.
+/// With `disparity`, also `out_dir/disparity/<name>.png` (false colour, for people).
+void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, const std::string& name,
+                       bool disparity);
+
+}  // namespace ssta

@@ -1,0 +1,56 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "ssta/io/asl_sequence.h"
+#include "ssta/pipeline/config.h"
+#include "ssta/pipeline/frame_pipeline.h"
+
+namespace ssta {
+
+/// How a sequence is classified (`ssta classify` options that are not in the config file).
+struct ClassifyOptions {
+  std::string out_dir;          ///< where labels/, overlay/, frames/ and summary.json go
+  int max_frames = 0;           ///< 0: all frames
+  int every = 1;                ///< use every n-th frame
+  bool write_disparity = false; ///< also write disparity/<ts>.png in false colour
+  bool IsValid(std::string* error) const;
+};
+
+/// What a classify run did: frames used and skipped (with reasons), quality-check failures,
+/// pixel shares per class and the mean time per stage.
+struct ClassifySummary {
+  int frames_total = 0;
+  int frames_classified = 0;
+  std::vector<SkippedFrame> skipped;        ///< unusable frames and why
+  std::vector<SkippedFrame> quality_failed; ///< classified, but their depth pixels are undecided
+  std::array<std::int64_t, 5> class_pixels{};  ///< pixels per class id over all frames
+  StageTimings mean_timings;
+  double wall_s = 0.0;
+
+  /// A few lines for people.
+  std::string BriefReport() const;
+  /// Machine-readable summary (written as summary.json).
+  std::string Json() const;
+};
+
+/// Called after each frame: (frames done, frames to do).
+using ProgressCallback = std::function<void(int done, int total)>;
+
+/// Up in the original cam0 frame for the frame at `t`, as `gravity` asks (IMU, pose, level
+/// body or fixed). `source_used` says which one answered (the auto source falls back).
+Eigen::Vector3d FrameUpInCamera(const AslSequence& sequence, std::int64_t t, const GravityOptions& gravity,
+                                std::string* source_used);
+
+/// Classifies every usable frame of `sequence` and writes the per-frame outputs and
+/// summary.json. Frames that cannot be read are skipped with a reason; bad config or
+/// calibration throw ssta::Error before any work.
+ClassifySummary ClassifySequence(const AslSequence& sequence, const Config& config,
+                                 const ClassifyOptions& options, const ProgressCallback& progress = {});
+
+}  // namespace ssta

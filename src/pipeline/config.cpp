@@ -1,0 +1,223 @@
+#include "ssta/pipeline/config.h"
+
+#include <sstream>
+
+#include "io/yaml_reader.h"
+#include "ssta/io/file_util.h"
+
+namespace ssta {
+namespace {
+
+using internal::YamlSection;
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
+template <typename Options>
+bool CheckSection(const Options& options, const char* section, std::string* error) {
+  std::string e;
+  if (options.IsValid(&e)) return true;
+  return Fail(error, std::string(section) + "." + e);
+}
+
+GravitySource ParseGravitySource(const std::string& name, const std::string& where) {
+  if (name == "auto") return GravitySource::kAuto;
+  if (name == "imu") return GravitySource::kImu;
+  if (name == "pose") return GravitySource::kPose;
+  if (name == "level") return GravitySource::kLevel;
+  if (name == "fixed") return GravitySource::kFixed;
+  throw Error(where + ": unknown gravity source '" + name + "' (auto, imu, pose, level, fixed)");
+}
+
+template <typename Enum, typename Parse>
+void ReadEnum(YamlSection& s, const std::string& key, Enum* value, Parse parse) {
+  if (!s.Has(key)) {
+    s.Ignore(key);
+    return;
+  }
+  const auto name = s.Require<std::string>(key);
+  try {
+    *value = parse(name);
+  } catch (const Error& e) {
+    throw Error(s.Name(key) + ": " + e.what());
+  }
+}
+
+void ReadVehicle(YamlSection s, VehicleOptions* o) {
+  s.Read("max_slope_deg", &o->max_slope_deg);
+  s.Read("semi_slope_deg", &o->semi_slope_deg);
+  s.Read("max_step_m", &o->max_step_m);
+  s.Read("semi_step_m", &o->semi_step_m);
+  s.Read("min_camera_height_m", &o->min_camera_height_m);
+  s.Read("max_camera_height_m", &o->max_camera_height_m);
+  s.Ignore("name");
+  s.Ignore("description");
+  s.RejectUnknownKeys();
+}
+
+void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
+  ReadEnum(s, "algorithm", &o->algorithm, [](const std::string& n) { return ParseMatcherType(n); });
+  s.Read("min_disparity", &o->min_disparity);
+  s.Read("num_disparities", &o->num_disparities);
+  s.Read("block_size", &o->block_size);
+  s.Read("uniqueness_ratio", &o->uniqueness_ratio);
+  s.Read("left_right_check", &o->left_right_check);
+  s.Read("left_right_max_diff", &o->left_right_max_diff);
+  s.Read("speckle_window_size", &o->speckle_window_size);
+  s.Read("speckle_range", &o->speckle_range);
+  s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
+  s.Read("pcl_peak_filter", &o->pcl_peak_filter);
+  s.Read("pcl_preprocessing", &o->pcl_preprocessing);
+  s.Read("acso_smoothness_strong", &o->acso_smoothness_strong);
+  s.Read("acso_smoothness_weak", &o->acso_smoothness_weak);
+  s.Read("acso_gamma_s", &o->acso_gamma_s);
+  s.RejectUnknownKeys();
+}
+
+void ReadNormals(YamlSection s, NormalOptions* o) {
+  ReadEnum(s, "method", &o->method, [](const std::string& n) { return ParseNormalMethod(n); });
+  s.Read("smoothing_size_px", &o->smoothing_size_px);
+  s.Read("max_depth_change_factor", &o->max_depth_change_factor);
+  s.Read("depth_dependent_smoothing", &o->depth_dependent_smoothing);
+  s.RejectUnknownKeys();
+}
+
+void ReadGravity(YamlSection s, GravityOptions* o) {
+  if (s.Has("source")) o->source = ParseGravitySource(s.Require<std::string>("source"), s.Name("source"));
+  s.Ignore("source");
+  s.Read("imu_window_s", &o->imu_window_s);
+  std::vector<double> up;
+  s.ReadList("up_camera", &up, 3);
+  if (!up.empty()) o->up_camera = Eigen::Vector3d(up[0], up[1], up[2]);
+  s.RejectUnknownKeys();
+}
+
+}  // namespace
+
+bool GravityOptions::IsValid(std::string* error) const {
+  if (!(imu_window_s > 0 && imu_window_s <= 10)) return Fail(error, "imu_window_s: must be in (0, 10] seconds");
+  if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
+    return Fail(error, "up_camera: must be a finite, non-zero vector");
+  }
+  return true;
+}
+
+bool Config::IsValid(std::string* error) const {
+  return CheckSection(vehicle, "vehicle", error) && CheckSection(rectification, "rectification", error) &&
+         CheckSection(stereo, "stereo", error) && CheckSection(triangulation, "triangulation", error) &&
+         CheckSection(normals, "normals", error) && CheckSection(segmentation, "segmentation", error) &&
+         CheckSection(analysis, "analysis", error) && CheckSection(gravity, "gravity", error);
+}
+
+void ApplyConfigFile(const std::string& path, Config* config) {
+  YamlSection root(internal::ParseYaml(ReadTextFile(path), path), path, "");
+  Config c = *config;
+  ReadVehicle(root.Child("vehicle"), &c.vehicle);
+  {
+    YamlSection s = root.Child("rectification");
+    s.Read("crop_to_common_area", &c.rectification.crop_to_common_area);
+    s.RejectUnknownKeys();
+  }
+  ReadStereo(root.Child("stereo"), &c.stereo);
+  {
+    YamlSection s = root.Child("triangulation");
+    s.Read("min_range_m", &c.triangulation.min_range_m);
+    s.Read("max_range_m", &c.triangulation.max_range_m);
+    s.RejectUnknownKeys();
+  }
+  ReadNormals(root.Child("normals"), &c.normals);
+  {
+    YamlSection s = root.Child("segmentation");
+    s.Read("roughness_deg", &c.segmentation.roughness_deg);
+    s.Read("max_disparity_jump_px", &c.segmentation.max_disparity_jump_px);
+    s.RejectUnknownKeys();
+  }
+  {
+    YamlSection s = root.Child("analysis");
+    s.Read("inliers_min_ratio", &c.analysis.inliers_min_ratio);
+    s.Read("paper_small_segments", &c.analysis.paper_small_segments);
+    s.Read("min_plane_points", &c.analysis.min_plane_points);
+    s.Read("min_ground_share", &c.analysis.min_ground_share);
+    s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
+    s.RejectUnknownKeys();
+  }
+  ReadGravity(root.Child("gravity"), &c.gravity);
+  root.RejectUnknownKeys();
+  std::string error;
+  if (!c.IsValid(&error)) throw Error(path + ": " + error);
+  *config = c;
+}
+
+Config LoadConfig(const std::string& path) {
+  Config config;
+  ApplyConfigFile(path, &config);
+  return config;
+}
+
+std::string GravitySourceName(GravitySource source) {
+  switch (source) {
+    case GravitySource::kAuto: return "auto";
+    case GravitySource::kImu: return "imu";
+    case GravitySource::kPose: return "pose";
+    case GravitySource::kLevel: return "level";
+    case GravitySource::kFixed: return "fixed";
+  }
+  return "auto";
+}
+
+std::string ConfigToYaml(const Config& c) {
+  std::ostringstream y;
+  y << std::boolalpha;
+  y << "vehicle:\n"
+    << "  max_slope_deg: " << c.vehicle.max_slope_deg << "\n"
+    << "  semi_slope_deg: " << c.vehicle.semi_slope_deg << "\n"
+    << "  max_step_m: " << c.vehicle.max_step_m << "\n"
+    << "  semi_step_m: " << c.vehicle.semi_step_m << "\n"
+    << "  min_camera_height_m: " << c.vehicle.min_camera_height_m << "\n"
+    << "  max_camera_height_m: " << c.vehicle.max_camera_height_m << "\n";
+  y << "rectification:\n  crop_to_common_area: " << c.rectification.crop_to_common_area << "\n";
+  const auto& s = c.stereo;
+  y << "stereo:\n"
+    << "  algorithm: " << MatcherTypeName(s.algorithm) << "\n"
+    << "  min_disparity: " << s.min_disparity << "\n"
+    << "  num_disparities: " << s.num_disparities << "\n"
+    << "  block_size: " << s.block_size << "\n"
+    << "  uniqueness_ratio: " << s.uniqueness_ratio << "\n"
+    << "  left_right_check: " << s.left_right_check << "\n"
+    << "  left_right_max_diff: " << s.left_right_max_diff << "\n"
+    << "  speckle_window_size: " << s.speckle_window_size << "\n"
+    << "  speckle_range: " << s.speckle_range << "\n"
+    << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
+    << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
+    << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
+    << "  acso_smoothness_strong: " << s.acso_smoothness_strong << "\n"
+    << "  acso_smoothness_weak: " << s.acso_smoothness_weak << "\n"
+    << "  acso_gamma_s: " << s.acso_gamma_s << "\n";
+  y << "triangulation:\n"
+    << "  min_range_m: " << c.triangulation.min_range_m << "\n"
+    << "  max_range_m: " << c.triangulation.max_range_m << "\n";
+  y << "normals:\n"
+    << "  method: " << NormalMethodName(c.normals.method) << "\n"
+    << "  smoothing_size_px: " << c.normals.smoothing_size_px << "\n"
+    << "  max_depth_change_factor: " << c.normals.max_depth_change_factor << "\n"
+    << "  depth_dependent_smoothing: " << c.normals.depth_dependent_smoothing << "\n";
+  y << "segmentation:\n"
+    << "  roughness_deg: " << c.segmentation.roughness_deg << "\n"
+    << "  max_disparity_jump_px: " << c.segmentation.max_disparity_jump_px << "\n";
+  y << "analysis:\n"
+    << "  inliers_min_ratio: " << c.analysis.inliers_min_ratio << "\n"
+    << "  paper_small_segments: " << c.analysis.paper_small_segments << "\n"
+    << "  min_plane_points: " << c.analysis.min_plane_points << "\n"
+    << "  min_ground_share: " << c.analysis.min_ground_share << "\n"
+    << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n";
+  y << "gravity:\n"
+    << "  source: " << GravitySourceName(c.gravity.source) << "\n"
+    << "  imu_window_s: " << c.gravity.imu_window_s << "\n"
+    << "  up_camera: [" << c.gravity.up_camera.x() << ", " << c.gravity.up_camera.y() << ", "
+    << c.gravity.up_camera.z() << "]\n";
+  return y.str();
+}
+
+}  // namespace ssta

@@ -1,0 +1,96 @@
+#include "ssta/pipeline/frame_pipeline.h"
+
+#include <chrono>
+
+#include "ssta/geometry/normal_estimator.h"
+#include "ssta/geometry/segmenter.h"
+#include "ssta/stereo/rectifier.h"
+#include "ssta/stereo/stereo_matcher.h"
+#include "ssta/stereo/triangulator.h"
+
+namespace ssta {
+namespace {
+
+class Stopwatch {
+ public:
+  double LapMs() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - last_).count();
+    last_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
+};
+
+Config Validated(const Config& config) {
+  std::string error;
+  if (!config.IsValid(&error)) throw Error("config: " + error);
+  return config;
+}
+
+}  // namespace
+
+struct FramePipeline::Stages {
+  Stages(const StereoCalibration& calibration, const Config& config)
+      : rectifier(calibration, config.rectification), matcher(config.stereo), normals(config.normals) {}
+  Rectifier rectifier;
+  StereoMatcher matcher;
+  NormalEstimator normals;
+};
+
+FramePipeline::FramePipeline(const StereoCalibration& calibration, const Config& config)
+    : config_(Validated(config)), calibration_(calibration),
+      stages_(std::make_unique<Stages>(calibration, config_)) {}
+
+FramePipeline::~FramePipeline() = default;
+
+const RectifiedGeometry& FramePipeline::geometry() const { return stages_->rectifier.geometry(); }
+
+Eigen::Vector3d FramePipeline::UpInCamera(const Eigen::Vector3d& up_body) const {
+  return (calibration_.left.body_T_camera.linear().transpose() * up_body).normalized();
+}
+
+FrameResult FramePipeline::Process(const ImageU8& left, const ImageU8& right,
+                                   const Eigen::Vector3d& up_camera) {
+  SSTA_CHECK(up_camera.allFinite() && up_camera.norm() > 1e-9, "up_camera must be finite and non-zero");
+  FrameResult out;
+  Stopwatch clock;
+  const RectifiedGeometry& g = stages_->rectifier.geometry();
+
+  RectifiedPair pair = stages_->rectifier.Rectify(left, right);
+  out.timings.rectify_ms = clock.LapMs();
+
+  out.disparity = stages_->matcher.Compute(pair.left, pair.right);
+  out.timings.match_ms = clock.LapMs();
+
+  const Image3f cloud = Triangulate(out.disparity, g, config_.triangulation);
+  out.timings.triangulate_ms = clock.LapMs();
+
+  const Image3f& normals = stages_->normals.Compute(cloud);
+  out.timings.normals_ms = clock.LapMs();
+
+  const Segmentation segmentation = SegmentNormals(normals, &out.disparity, config_.segmentation);
+  out.num_segments = static_cast<int>(segmentation.sizes.size());
+  out.timings.segment_ms = clock.LapMs();
+
+  out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
+  out.analysis = AnalyzeSurfaces(cloud, segmentation.labels, out.num_segments, out.up_rectified,
+                                 config_.vehicle, config_.analysis);
+  out.timings.analyze_ms = clock.LapMs();
+
+  // Labels keep the full rectified size; outside the common area they stay unknown (0).
+  out.labels = ImageU8(g.full_width, g.full_height, static_cast<std::uint8_t>(TravClass::kUnknown));
+  for (int v = 0; v < g.crop_height; ++v) {
+    const std::uint8_t* src = out.analysis.labels.row(v);
+    std::copy(src, src + g.crop_width, out.labels.row(v + g.crop_v0) + g.crop_u0);
+  }
+  out.left_rectified = std::move(pair.left_full);
+  const StageTimings& t = out.timings;
+  out.timings.total_ms = t.rectify_ms + t.match_ms + t.triangulate_ms + t.normals_ms + t.segment_ms +
+                         t.analyze_ms + clock.LapMs();
+  return out;
+}
+
+}  // namespace ssta

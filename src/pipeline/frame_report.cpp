@@ -1,0 +1,113 @@
+#include "ssta/pipeline/frame_report.h"
+
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include <opencv2/imgproc.hpp>
+
+#include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+
+namespace ssta {
+namespace {
+
+std::string Escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+// Finite numbers as they are, NaN/inf as null (JSON has no NaN).
+std::string Num(double x) {
+  if (!std::isfinite(x)) return "null";
+  std::ostringstream s;
+  s << std::setprecision(6) << x;
+  return s.str();
+}
+
+template <typename Vec>
+std::string Array(const Vec& v) {
+  std::string out = "[";
+  for (int i = 0; i < v.size(); ++i) out += (i ? ", " : "") + Num(v[i]);
+  return out + "]";
+}
+
+ImageRgb FalseColourDisparity(const ImageF& disparity) {
+  float max_d = 1.0f;
+  for (std::size_t i = 0; i < disparity.size(); ++i) max_d = std::max(max_d, disparity[i]);
+  cv::Mat grey(disparity.height(), disparity.width(), CV_8UC1);
+  for (int v = 0; v < disparity.height(); ++v) {
+    for (int u = 0; u < disparity.width(); ++u) {
+      grey.at<std::uint8_t>(v, u) = static_cast<std::uint8_t>(std::lround(255.0f * disparity(v, u) / max_d));
+    }
+  }
+  cv::Mat colour;
+  cv::applyColorMap(grey, colour, cv::COLORMAP_TURBO);
+  ImageRgb out(disparity.width(), disparity.height());
+  for (int v = 0; v < disparity.height(); ++v) {
+    for (int u = 0; u < disparity.width(); ++u) {
+      const auto bgr = colour.at<cv::Vec3b>(v, u);
+      out(v, u) = disparity(v, u) > 0 ? Rgb8{bgr[2], bgr[1], bgr[0]} : Rgb8{0, 0, 0};
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string FrameReportJson(const FrameResult& f, const std::string& name) {
+  const AnalysisResult& a = f.analysis;
+  std::ostringstream j;
+  j << "{\n  \"frame\": \"" << Escape(name) << "\",\n  \"timestamp_ns\": " << f.timestamp_ns << ",\n";
+  j << "  \"up_camera\": " << Array(f.up_rectified) << ",\n";
+  j << "  \"depth_pixels\": " << a.depth_pixels << ",\n  \"inliers_min\": " << a.inliers_min << ",\n";
+  j << "  \"quality\": {\"passed\": " << (a.quality.passed ? "true" : "false") << ", \"reason\": \""
+    << Escape(a.quality.reason) << "\"},\n";
+  j << "  \"ground_plane\": ";
+  if (a.ground.found) {
+    j << "{\"segment\": " << a.ground.segment_id << ", \"plane\": " << Array(a.ground.plane)
+      << ", \"camera_height_m\": " << Num(a.ground.camera_height_m) << ", \"rms_m\": " << Num(a.ground.rms_m)
+      << ", \"share\": " << Num(a.ground.share) << "},\n";
+  } else {
+    j << "null,\n";
+  }
+  const StageTimings& t = f.timings;
+  j << "  \"timings_ms\": {\"rectify\": " << Num(t.rectify_ms) << ", \"match\": " << Num(t.match_ms)
+    << ", \"triangulate\": " << Num(t.triangulate_ms) << ", \"normals\": " << Num(t.normals_ms)
+    << ", \"segment\": " << Num(t.segment_ms) << ", \"analyze\": " << Num(t.analyze_ms)
+    << ", \"total\": " << Num(t.total_ms) << "},\n";
+  j << "  \"segments\": [";
+  bool first = true;
+  for (const SegmentResult& s : a.segments) {
+    if (s.inliers == 0) continue;
+    j << (first ? "\n" : ",\n") << "    {\"id\": " << s.id << ", \"inliers\": " << s.inliers;
+    first = false;
+    if (s.has_plane) {
+      j << ", \"centroid\": " << Array(s.centroid) << ", \"normal\": " << Array(s.normal)
+        << ", \"plane\": " << Array(s.plane) << ", \"rms_m\": " << Num(s.rms_m)
+        << ", \"slope_deg\": " << Num(s.slope_deg) << ", \"step_m\": " << Num(s.step_m);
+    }
+    j << ", \"class\": " << static_cast<int>(s.verdict) << ", \"class_name\": \"" << ClassName(s.verdict)
+      << "\", \"ground\": " << (s.ground ? "true" : "false") << ", \"reason\": \"" << Escape(s.reason) << "\"}";
+  }
+  j << "\n  ]\n}\n";
+  return j.str();
+}
+
+void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, const std::string& name,
+                       bool disparity) {
+  for (const char* sub : {"labels", "overlay", "frames"}) MakeDirectories(out_dir + "/" + sub);
+  WriteImage(frame.labels, out_dir + "/labels/" + name + ".png");
+  WriteImage(MakeOverlay(frame.left_rectified, frame.labels), out_dir + "/overlay/" + name + ".png");
+  WriteTextAtomically(out_dir + "/frames/" + name + ".json", FrameReportJson(frame, name));
+  if (disparity) {
+    MakeDirectories(out_dir + "/disparity");
+    WriteImage(FalseColourDisparity(frame.disparity), out_dir + "/disparity/" + name + ".png");
+  }
+}
+
+}  // namespace ssta

@@ -1,0 +1,171 @@
+#include "ssta/pipeline/sequence_classifier.h"
+
+#include <chrono>
+#include <iomanip>
+#include <sstream>
+
+#include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+#include "ssta/pipeline/frame_report.h"
+
+namespace ssta {
+namespace {
+
+std::string Escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+void Accumulate(const StageTimings& t, StageTimings* sum) {
+  sum->rectify_ms += t.rectify_ms;
+  sum->match_ms += t.match_ms;
+  sum->triangulate_ms += t.triangulate_ms;
+  sum->normals_ms += t.normals_ms;
+  sum->segment_ms += t.segment_ms;
+  sum->analyze_ms += t.analyze_ms;
+  sum->total_ms += t.total_ms;
+}
+
+void Scale(double k, StageTimings* t) {
+  for (double* x : {&t->rectify_ms, &t->match_ms, &t->triangulate_ms, &t->normals_ms, &t->segment_ms,
+                    &t->analyze_ms, &t->total_ms}) {
+    *x *= k;
+  }
+}
+
+}  // namespace
+
+bool ClassifyOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (out_dir.empty()) return fail("out: an output folder is required");
+  if (max_frames < 0) return fail("max-frames: must not be negative");
+  if (every < 1) return fail("every: must be at least 1");
+  return true;
+}
+
+Eigen::Vector3d FrameUpInCamera(const AslSequence& sequence, std::int64_t t, const GravityOptions& gravity,
+                                std::string* source_used) {
+  const Eigen::Matrix3d camera_R_body = sequence.calibration().left.body_T_camera.linear().transpose();
+  auto answer = [&](const Eigen::Vector3d& up_body, const char* name) {
+    if (source_used) *source_used = name;
+    return (camera_R_body * up_body).normalized();
+  };
+  const GravitySource s = gravity.source;
+  if (s == GravitySource::kFixed) {
+    if (source_used) *source_used = "fixed";
+    return gravity.up_camera.normalized();
+  }
+  if (s == GravitySource::kImu || s == GravitySource::kAuto) {
+    if (auto up = sequence.UpInBodyFromImu(t, gravity.imu_window_s)) return answer(*up, "imu");
+    if (s == GravitySource::kImu) throw Error("gravity.source is 'imu' but there are no IMU samples around frame " + std::to_string(t));
+  }
+  if (s == GravitySource::kPose || s == GravitySource::kAuto) {
+    if (auto pose = sequence.WorldTBodyAt(t)) return answer(pose->linear().transpose() * Eigen::Vector3d::UnitZ(), "pose");
+    if (s == GravitySource::kPose) throw Error("gravity.source is 'pose' but there is no pose at frame " + std::to_string(t));
+  }
+  return answer(Eigen::Vector3d::UnitZ(), "level");
+}
+
+ClassifySummary ClassifySequence(const AslSequence& sequence, const Config& config,
+                                 const ClassifyOptions& options, const ProgressCallback& progress) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error(error);
+  FramePipeline pipeline(sequence.calibration(), config);
+  MakeDirectories(options.out_dir);
+
+  std::vector<StereoFrame> todo;
+  for (std::size_t i = 0; i < sequence.frames().size(); i += options.every) {
+    if (options.max_frames > 0 && static_cast<int>(todo.size()) >= options.max_frames) break;
+    todo.push_back(sequence.frames()[i]);
+  }
+
+  ClassifySummary summary;
+  summary.frames_total = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
+  summary.skipped = sequence.skipped();
+  const auto start = std::chrono::steady_clock::now();
+  int done = 0;
+  for (const StereoFrame& frame : todo) {
+    const std::string name = std::to_string(frame.timestamp_ns);
+    try {
+      const ImageU8 left = ReadGreyImage(frame.left_path);
+      const ImageU8 right = ReadGreyImage(frame.right_path);
+      const Eigen::Vector3d up = FrameUpInCamera(sequence, frame.timestamp_ns, config.gravity, nullptr);
+      FrameResult result = pipeline.Process(left, right, up);
+      result.timestamp_ns = frame.timestamp_ns;
+      WriteFrameOutputs(result, options.out_dir, name, options.write_disparity);
+      ++summary.frames_classified;
+      Accumulate(result.timings, &summary.mean_timings);
+      for (std::size_t i = 0; i < result.labels.size(); ++i) {
+        if (result.labels[i] < 5) ++summary.class_pixels[result.labels[i]];
+      }
+      if (!result.analysis.quality.passed) {
+        summary.quality_failed.push_back({frame.timestamp_ns, result.analysis.quality.reason});
+      }
+    } catch (const Error& e) {
+      // A frame whose images cannot be read or have the wrong size is skipped, not fatal.
+      summary.skipped.push_back({frame.timestamp_ns, e.what()});
+    }
+    if (progress) progress(++done, static_cast<int>(todo.size()));
+  }
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary.frames_classified > 0) Scale(1.0 / summary.frames_classified, &summary.mean_timings);
+  WriteTextAtomically(options.out_dir + "/summary.json", summary.Json());
+  return summary;
+}
+
+std::string ClassifySummary::BriefReport() const {
+  std::ostringstream r;
+  r << std::fixed << std::setprecision(1);
+  r << "frames: " << frames_classified << " classified, " << skipped.size() << " skipped, "
+    << quality_failed.size() << " failed the quality check (of " << frames_total << " listed)\n";
+  for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
+  for (const auto& s : quality_failed) r << "  undecided " << s.timestamp_ns << ": " << s.reason << "\n";
+  std::int64_t total = 0;
+  for (auto n : class_pixels) total += n;
+  if (total > 0) {
+    r << "pixels:";
+    for (int c = 0; c < 5; ++c) {
+      r << " " << ClassName(static_cast<TravClass>(c)) << " " << 100.0 * class_pixels[c] / total << "%";
+    }
+    r << "\n";
+  }
+  const StageTimings& t = mean_timings;
+  r << "mean ms/frame: rectify " << t.rectify_ms << ", match " << t.match_ms << ", triangulate "
+    << t.triangulate_ms << ", normals " << t.normals_ms << ", segment " << t.segment_ms << ", analyze "
+    << t.analyze_ms << ", total " << t.total_ms << " (wall " << wall_s << " s)\n";
+  return r.str();
+}
+
+std::string ClassifySummary::Json() const {
+  std::ostringstream j;
+  j << "{\n  \"frames_total\": " << frames_total << ",\n  \"frames_classified\": " << frames_classified
+    << ",\n  \"skipped\": [";
+  for (std::size_t i = 0; i < skipped.size(); ++i) {
+    j << (i ? ", " : "") << "{\"timestamp_ns\": " << skipped[i].timestamp_ns << ", \"reason\": \""
+      << Escape(skipped[i].reason) << "\"}";
+  }
+  j << "],\n  \"quality_failed\": [";
+  for (std::size_t i = 0; i < quality_failed.size(); ++i) {
+    j << (i ? ", " : "") << "{\"timestamp_ns\": " << quality_failed[i].timestamp_ns << ", \"reason\": \""
+      << Escape(quality_failed[i].reason) << "\"}";
+  }
+  j << "],\n  \"class_pixels\": {";
+  for (int c = 0; c < 5; ++c) {
+    j << (c ? ", " : "") << "\"" << ClassName(static_cast<TravClass>(c)) << "\": " << class_pixels[c];
+  }
+  const StageTimings& t = mean_timings;
+  j << "},\n  \"mean_timings_ms\": {\"rectify\": " << t.rectify_ms << ", \"match\": " << t.match_ms
+    << ", \"triangulate\": " << t.triangulate_ms << ", \"normals\": " << t.normals_ms << ", \"segment\": "
+    << t.segment_ms << ", \"analyze\": " << t.analyze_ms << ", \"total\": " << t.total_ms << "},\n"
+    << "  \"wall_s\": " << wall_s << "\n}\n";
+  return j.str();
+}
+
+}  // namespace ssta
