@@ -14,7 +14,8 @@ namespace ssta::cli {
 namespace {
 
 struct ClassifyArgs {
-  std::string sequence, left, right, calib0, calib1, config;
+  std::string sequence, left, right, calib0, calib1;
+  std::vector<std::string> config;
   std::vector<double> up;
   ClassifyOptions options;
   bool quiet = false;
@@ -72,7 +73,7 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_option("--up", args->up, "single-pair mode: up direction in cam0 (x right, y down, z forward); "
                                     "default: a level body through cam0's T_BS")->expected(3)->delimiter(',');
   cmd->add_option("--out", args->options.out_dir, "output folder")->required();
-  cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); overrides the sequence's vehicle.yaml");
+  cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); repeatable, later files win; overrides the sequence's vehicle.yaml");
   cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png in false colour");

@@ -1,17 +1,19 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "ssta/io/asl_sequence.h"
 #include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 
-/// Defaults, then the sequence's own vehicle.yaml (if it ships one), then --config FILE.
-inline Config LoadLayeredConfig(const AslSequence* sequence, const std::string& config_file) {
+/// Defaults, then the sequence's own vehicle.yaml (if it ships one), then each --config FILE in
+/// the order given (later files override earlier ones).
+inline Config LoadLayeredConfig(const AslSequence* sequence, const std::vector<std::string>& config_files) {
   Config config;
   if (sequence && sequence->vehicle_config()) ApplyConfigFile(*sequence->vehicle_config(), &config);
-  if (!config_file.empty()) ApplyConfigFile(config_file, &config);
+  for (const auto& file : config_files) ApplyConfigFile(file, &config);
   return config;
 }
 

@@ -1,0 +1,90 @@
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "ssta/core/error.h"
+#include "ssta/pipeline/config.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+std::string ErrorOf(const std::string& yaml) {
+  testing::TempDir dir;
+  std::ofstream(dir / "c.yaml") << yaml;
+  try {
+    LoadConfig(dir / "c.yaml");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, ShippedDefaultYamlEqualsTheBuiltInDefaults) {
+  // config/default.yaml documents every key; it must say what the code does.
+  const Config shipped = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/default.yaml");
+  EXPECT_EQ(ConfigToYaml(shipped), ConfigToYaml(Config{}));
+}
+
+TEST(Config, VehicleProfilesLoadAndDiffer) {
+  const Config small = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/vehicles/small_ugv.yaml");
+  const Config large = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/vehicles/large_ugv.yaml");
+  EXPECT_LT(small.vehicle.max_step_m, large.vehicle.max_step_m);
+  EXPECT_LT(small.vehicle.max_slope_deg, large.vehicle.max_slope_deg);
+  EXPECT_EQ(ConfigToYaml(Config{}).find("vehicle"), ConfigToYaml(small).find("vehicle"));
+}
+
+TEST(Config, PaperProfileRestoresThePaperExactly) {
+  const Config paper = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/paper.yaml");
+  EXPECT_TRUE(paper.analysis.paper_small_segments);
+  EXPECT_EQ(paper.segmentation.max_disparity_jump_px, 0.0);
+  EXPECT_DOUBLE_EQ(paper.analysis.inliers_min_ratio, 0.02);
+}
+
+TEST(Config, PartialFileKeepsTheOtherDefaults) {
+  testing::TempDir dir;
+  std::ofstream(dir / "v.yaml") << "vehicle:\n  max_step_m: 0.35\n";
+  const Config c = LoadConfig(dir / "v.yaml");
+  EXPECT_DOUBLE_EQ(c.vehicle.max_step_m, 0.35);
+  EXPECT_DOUBLE_EQ(c.vehicle.semi_step_m, Config{}.vehicle.semi_step_m);
+  EXPECT_EQ(c.stereo.num_disparities, Config{}.stereo.num_disparities);
+}
+
+TEST(Config, LaterFilesOverrideEarlierOnes) {
+  testing::TempDir dir;
+  std::ofstream(dir / "a.yaml") << "vehicle:\n  max_step_m: 0.35\n  semi_step_m: 0.2\n";
+  std::ofstream(dir / "b.yaml") << "vehicle:\n  max_step_m: 0.25\n";
+  Config c;
+  ApplyConfigFile(dir / "a.yaml", &c);
+  ApplyConfigFile(dir / "b.yaml", &c);
+  EXPECT_DOUBLE_EQ(c.vehicle.max_step_m, 0.25);
+  EXPECT_DOUBLE_EQ(c.vehicle.semi_step_m, 0.2);
+}
+
+TEST(Config, ErrorsNameTheKey) {
+  EXPECT_NE(ErrorOf("vehicle:\n  max_slop_deg: 3\n").find("vehicle.max_slop_deg: unknown key"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicles:\n  max_slope_deg: 3\n").find("vehicles: unknown key"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicle:\n  max_slope_deg: steep\n").find("vehicle.max_slope_deg: wrong type"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicle:\n  semi_slope_deg: 40\n").find("vehicle.semi_slope_deg"), std::string::npos);
+  EXPECT_NE(ErrorOf("stereo:\n  num_disparities: 50\n").find("stereo.num_disparities"), std::string::npos);
+  EXPECT_NE(ErrorOf("stereo:\n  algorithm: magic\n").find("stereo.algorithm"), std::string::npos);
+  EXPECT_NE(ErrorOf("normals:\n  method: guess\n").find("normals.method"), std::string::npos);
+  EXPECT_NE(ErrorOf("segmentation:\n  roughness_deg: -1\n").find("segmentation.roughness_deg"), std::string::npos);
+  EXPECT_NE(ErrorOf("analysis:\n  inliers_min_ratio: 2\n").find("analysis.inliers_min_ratio"), std::string::npos);
+  EXPECT_NE(ErrorOf("gravity:\n  source: moon\n").find("gravity.source"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicle: [1, 2]\n").find("expected a mapping"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicle:\n  max_slope_deg: [\n").find("YAML syntax error"), std::string::npos);
+}
+
+TEST(Config, YamlDumpReadsBackToTheSameConfig) {
+  Config c;
+  c.vehicle.max_slope_deg = 31;
+  c.stereo.algorithm = MatcherType::kPclAdaptiveCost;
+  c.gravity.source = GravitySource::kLevel;
+  testing::TempDir dir;
+  std::ofstream(dir / "dump.yaml") << ConfigToYaml(c);
+  EXPECT_EQ(ConfigToYaml(LoadConfig(dir / "dump.yaml")), ConfigToYaml(c));
+}
+
+}  // namespace
+}  // namespace ssta
