@@ -22,7 +22,7 @@ struct ClassifyArgs {
 };
 
 void RunSequence(const ClassifyArgs& a) {
-  const AslSequence sequence = AslSequence::Open(a.sequence);
+  const Sequence sequence = Sequence::Open(a.sequence);
   const Config config = LoadLayeredConfig(&sequence, a.config);
   ProgressLine progress("classify", !a.quiet);
   const ClassifySummary summary = ClassifySequence(

@@ -5,4 +5,5 @@ target_sources(ssta PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/image_io.cpp
   ${CMAKE_CURRENT_LIST_DIR}/yaml_reader.cpp)
 target_sources(ssta PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/asl_sequence.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/sequence.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/kitti_raw.cpp)

@@ -50,7 +50,7 @@ bool ClassifyOptions::IsValid(std::string* error) const {
   return true;
 }
 
-Eigen::Vector3d FrameUpInCamera(const AslSequence& sequence, std::int64_t t, const GravityOptions& gravity,
+Eigen::Vector3d FrameUpInCamera(const Sequence& sequence, std::int64_t t, const GravityOptions& gravity,
                                 std::string* source_used) {
   const Eigen::Matrix3d camera_R_body = sequence.calibration().left.body_T_camera.linear().transpose();
   auto answer = [&](const Eigen::Vector3d& up_body, const char* name) {
@@ -73,7 +73,7 @@ Eigen::Vector3d FrameUpInCamera(const AslSequence& sequence, std::int64_t t, con
   return answer(Eigen::Vector3d::UnitZ(), "level");
 }
 
-ClassifySummary ClassifySequence(const AslSequence& sequence, const Config& config,
+ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
                                  const ClassifyOptions& options, const ProgressCallback& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);

@@ -1,3 +1,4 @@
 ssta_add_test(io_test
   ${CMAKE_CURRENT_LIST_DIR}/camera_calibration_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/asl_sequence_test.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/sequence_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/kitti_raw_test.cpp)

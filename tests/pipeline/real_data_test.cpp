@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include "ssta/io/asl_sequence.h"
+#include "ssta/io/sequence.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/frame_pipeline.h"
 #include "ssta/pipeline/sequence_classifier.h"
@@ -39,7 +39,7 @@ std::string Describe(const std::array<double, 5>& s) {
 }
 
 FrameResult ClassifyFirstFrame(const std::string& sequence_dir, const std::string& config_file) {
-  const AslSequence seq = AslSequence::Open(sequence_dir);
+  const Sequence seq = Sequence::Open(sequence_dir);
   const Config config = LoadConfig(config_file);
   FramePipeline pipeline(seq.calibration(), config);
   const StereoFrame& f = seq.frames().front();

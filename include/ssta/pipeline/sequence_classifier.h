@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "ssta/io/asl_sequence.h"
+#include "ssta/io/sequence.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
 
@@ -44,13 +44,13 @@ using ProgressCallback = std::function<void(int done, int total)>;
 
 /// Up in the original cam0 frame for the frame at `t`, as `gravity` asks (IMU, pose, level
 /// body or fixed). `source_used` says which one answered (the auto source falls back).
-Eigen::Vector3d FrameUpInCamera(const AslSequence& sequence, std::int64_t t, const GravityOptions& gravity,
+Eigen::Vector3d FrameUpInCamera(const Sequence& sequence, std::int64_t t, const GravityOptions& gravity,
                                 std::string* source_used);
 
 /// Classifies every usable frame of `sequence` and writes the per-frame outputs and
 /// summary.json. Frames that cannot be read are skipped with a reason; bad config or
 /// calibration throw ssta::Error before any work.
-ClassifySummary ClassifySequence(const AslSequence& sequence, const Config& config,
+ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
                                  const ClassifyOptions& options, const ProgressCallback& progress = {});
 
 }  // namespace ssta

@@ -5,7 +5,7 @@
 #include <iomanip>
 
 #include "ssta/core/error.h"
-#include "ssta/io/asl_sequence.h"
+#include "ssta/io/sequence.h"
 #include "ssta/io/image_io.h"
 #include "temp_dir.h"
 
@@ -48,7 +48,7 @@ class AslFixture : public ::testing::Test {
 };
 
 TEST_F(AslFixture, PairsWithinOneMillisecondAndReportsWhatItSkips) {
-  const AslSequence seq = AslSequence::Open(root_.path().string());
+  const Sequence seq = Sequence::Open(root_.path().string());
   ASSERT_EQ(seq.frames().size(), 2u);
   EXPECT_EQ(seq.frames()[0].timestamp_ns, 0);
   EXPECT_EQ(seq.frames()[1].timestamp_ns, 200'000'000);
@@ -61,7 +61,7 @@ TEST_F(AslFixture, PairsWithinOneMillisecondAndReportsWhatItSkips) {
 TEST_F(AslFixture, FindsTheMav0SubFolder) {
   testing::TempDir outer;
   fs::copy(root_.path(), outer.path() / "mav0", fs::copy_options::recursive);
-  const AslSequence seq = AslSequence::Open(outer.path().string());
+  const Sequence seq = Sequence::Open(outer.path().string());
   EXPECT_EQ(seq.frames().size(), 2u);
   EXPECT_NE(seq.root().find("mav0"), std::string::npos);
 }
@@ -69,7 +69,7 @@ TEST_F(AslFixture, FindsTheMav0SubFolder) {
 TEST_F(AslFixture, OutOfOrderTimestampsNameTheLine) {
   std::ofstream(root_ / "cam0/data.csv") << "#timestamp [ns],filename\n100,100.png\n50,50.png\n";
   try {
-    AslSequence::Open(root_.path().string());
+    Sequence::Open(root_.path().string());
     FAIL() << "expected an error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cam0/data.csv:3"), std::string::npos) << e.what();
@@ -83,7 +83,7 @@ TEST_F(AslFixture, InterpolatesPosesLinearlyAndWithSlerp) {
   std::ofstream(root_ / "pose0/data.csv") << std::setprecision(17) << "#timestamp [ns],p_x [m],p_y,p_z,q_w,q_x,q_y,q_z\n"
                                           << "0,0,0,0,1,0,0,0\n"
                                           << "1000000000,2,0,0," << q1.w() << ",0,0," << q1.z() << "\n";
-  const AslSequence seq = AslSequence::Open(root_.path().string());
+  const Sequence seq = Sequence::Open(root_.path().string());
   const auto pose = seq.WorldTBodyAt(250'000'000);
   ASSERT_TRUE(pose.has_value());
   EXPECT_NEAR(pose->translation().x(), 0.5, 1e-12);
@@ -97,16 +97,16 @@ TEST_F(AslFixture, UpFromTheAccelerometerAtRest) {
   csv << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y,w_RS_S_z,a_RS_S_x [m s^-2],a_RS_S_y,a_RS_S_z\n";
   for (int i = 0; i < 100; ++i) csv << i * 5'000'000LL << ",0,0,0,9.81,0," << (i % 2 ? 0.1 : -0.1) << "\n";
   csv.close();
-  const AslSequence seq = AslSequence::Open(root_.path().string());
+  const Sequence seq = Sequence::Open(root_.path().string());
   const auto up = seq.UpInBodyFromImu(250'000'000, 0.2);
   ASSERT_TRUE(up.has_value());
   EXPECT_NEAR(up->x(), 1.0, 1e-4);
   EXPECT_FALSE(seq.UpInBodyFromImu(10'000'000'000, 0.2).has_value());
 }
 
-TEST(AslSequence, MissingFolderIsAnErrorNamingIt) {
+TEST(Sequence, MissingFolderIsAnErrorNamingIt) {
   try {
-    AslSequence::Open("/nonexistent/seq");
+    Sequence::Open("/nonexistent/seq");
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/seq"), std::string::npos);

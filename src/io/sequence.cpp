@@ -1,4 +1,4 @@
-#include "ssta/io/asl_sequence.h"
+#include "ssta/io/sequence.h"
 
 #include <algorithm>
 #include <cmath>
@@ -118,16 +118,27 @@ std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
   return rows;
 }
 
-AslSequence AslSequence::Open(const std::string& path) {
+Sequence::Sequence(SequenceData data) : data_(std::move(data)) {}
+
+Sequence Sequence::Open(const std::string& path) {
   if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
-  AslSequence seq;
-  seq.root_ = fs::is_directory(fs::path(path) / "mav0") ? (fs::path(path) / "mav0").string() : path;
-  const std::string cam0 = seq.root_ + "/cam0";
-  const std::string cam1 = seq.root_ + "/cam1";
+  if (fs::is_directory(fs::path(path) / "image_00") && fs::is_directory(fs::path(path) / "oxts")) {
+    return OpenKittiRaw(path);
+  }
+  return OpenAsl(path);
+}
+
+Sequence Sequence::OpenAsl(const std::string& path) {
+  if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
+  SequenceData seq;
+  seq.format = "asl";
+  seq.root = fs::is_directory(fs::path(path) / "mav0") ? (fs::path(path) / "mav0").string() : path;
+  const std::string cam0 = seq.root + "/cam0";
+  const std::string cam1 = seq.root + "/cam1";
   for (const auto& dir : {cam0, cam1}) {
     if (!fs::is_directory(dir)) throw Error(dir + ": camera folder not found (expected the ASL layout, INTERFACES section 2)");
   }
-  seq.calibration_ = LoadStereoCalibration(cam0 + "/sensor.yaml", cam1 + "/sensor.yaml");
+  seq.calibration = LoadStereoCalibration(cam0 + "/sensor.yaml", cam1 + "/sensor.yaml");
 
   const auto left = ReadImageList(cam0);
   const auto right = ReadImageList(cam1);
@@ -139,30 +150,30 @@ AslSequence AslSequence::Open(const std::string& path) {
       ++j;
     }
     if (right.empty() || std::llabs(right[j].timestamp_ns - l.timestamp_ns) > kPairToleranceNs) {
-      seq.skipped_.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
+      seq.skipped.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
       continue;
     }
     if (!fs::exists(l.file)) {
-      seq.skipped_.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
+      seq.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
       continue;
     }
     if (!fs::exists(right[j].file)) {
-      seq.skipped_.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
+      seq.skipped.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
       continue;
     }
-    seq.frames_.push_back({l.timestamp_ns, l.file, right[j].file});
+    seq.frames.push_back({l.timestamp_ns, l.file, right[j].file});
   }
 
-  const std::string imu_csv = seq.root_ + "/imu0/data.csv";
+  const std::string imu_csv = seq.root + "/imu0/data.csv";
   if (fs::exists(imu_csv)) {
     for (const auto& row : ReadAslNumericCsv(imu_csv, 7)) {
       ImuSample s;
       s.timestamp_ns = row.timestamp_ns;
       s.angular_rate = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
       s.specific_force = Eigen::Vector3d(row.values[3], row.values[4], row.values[5]);
-      seq.imu_.push_back(s);
+      seq.imu.push_back(s);
     }
-    const std::string imu_yaml = seq.root_ + "/imu0/sensor.yaml";
+    const std::string imu_yaml = seq.root + "/imu0/sensor.yaml";
     if (fs::exists(imu_yaml)) {
       const YAML::Node root = internal::ParseYaml(ReadTextFile(imu_yaml), imu_yaml);
       if (root["T_BS"] && root["T_BS"]["data"]) {
@@ -175,13 +186,13 @@ AslSequence AslSequence::Open(const std::string& path) {
         if (!(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-4)) {
           throw Error(imu_yaml + ": T_BS: not a rigid transform");
         }
-        seq.body_T_imu_.matrix() = mat;
+        seq.body_T_imu.matrix() = mat;
       }
     }
   }
 
-  std::string pose_csv = seq.root_ + "/pose0/data.csv";
-  if (!fs::exists(pose_csv)) pose_csv = seq.root_ + "/state_groundtruth_estimate0/data.csv";
+  std::string pose_csv = seq.root + "/pose0/data.csv";
+  if (!fs::exists(pose_csv)) pose_csv = seq.root + "/state_groundtruth_estimate0/data.csv";
   if (fs::exists(pose_csv)) {
     std::ifstream probe(pose_csv);
     std::string header;
@@ -198,27 +209,27 @@ AslSequence AslSequence::Open(const std::string& path) {
       if (q.norm() < 1e-6) throw Error(pose_csv + ":" + std::to_string(row.line) + ": zero quaternion");
       q.normalize();
       p.world_q_body = q;
-      seq.poses_.push_back(p);
+      seq.poses.push_back(p);
     }
   }
 
-  for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(seq.root_) / "vehicle.yaml"}) {
+  for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(seq.root) / "vehicle.yaml"}) {
     if (fs::exists(candidate)) {
-      seq.vehicle_config_ = candidate.string();
+      seq.vehicle_config = candidate.string();
       break;
     }
   }
-  return seq;
+  return Sequence(std::move(seq));
 }
 
-std::optional<Eigen::Isometry3d> AslSequence::WorldTBodyAt(std::int64_t t) const {
-  if (poses_.empty() || t < poses_.front().timestamp_ns || t > poses_.back().timestamp_ns) {
+std::optional<Eigen::Isometry3d> Sequence::WorldTBodyAt(std::int64_t t) const {
+  if (data_.poses.empty() || t < data_.poses.front().timestamp_ns || t > data_.poses.back().timestamp_ns) {
     return std::nullopt;
   }
-  const auto it = std::lower_bound(poses_.begin(), poses_.end(), t,
+  const auto it = std::lower_bound(data_.poses.begin(), data_.poses.end(), t,
                                    [](const PoseSample& p, std::int64_t time) { return p.timestamp_ns < time; });
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-  if (it->timestamp_ns == t || it == poses_.begin()) {
+  if (it->timestamp_ns == t || it == data_.poses.begin()) {
     out.linear() = it->world_q_body.toRotationMatrix();
     out.translation() = it->world_p_body;
     return out;
@@ -231,15 +242,15 @@ std::optional<Eigen::Isometry3d> AslSequence::WorldTBodyAt(std::int64_t t) const
   return out;
 }
 
-std::optional<Eigen::Vector3d> AslSequence::UpInBodyFromImu(std::int64_t t, double window_s) const {
+std::optional<Eigen::Vector3d> Sequence::UpInBodyFromImu(std::int64_t t, double window_s) const {
   const auto half = static_cast<std::int64_t>(window_s * 0.5e9);
-  const auto lo = std::lower_bound(imu_.begin(), imu_.end(), t - half,
+  const auto lo = std::lower_bound(data_.imu.begin(), data_.imu.end(), t - half,
                                    [](const ImuSample& s, std::int64_t time) { return s.timestamp_ns < time; });
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   int n = 0;
-  for (auto it = lo; it != imu_.end() && it->timestamp_ns <= t + half; ++it, ++n) sum += it->specific_force;
+  for (auto it = lo; it != data_.imu.end() && it->timestamp_ns <= t + half; ++it, ++n) sum += it->specific_force;
   if (n == 0 || sum.norm() < 1e-9) return std::nullopt;
-  return (body_T_imu_.linear() * (sum / n)).normalized();
+  return (data_.body_T_imu.linear() * (sum / n)).normalized();
 }
 
 }  // namespace ssta

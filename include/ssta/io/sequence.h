@@ -1,0 +1,113 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "ssta/io/camera_calibration.h"
+
+namespace ssta {
+
+/// One stereo frame of a sequence: the paired left/right image files.
+struct StereoFrame {
+  std::int64_t timestamp_ns = 0;  ///< left image time
+  std::string left_path;
+  std::string right_path;
+};
+
+/// A frame that cannot be used, with the reason (reported, never guessed).
+struct SkippedFrame {
+  std::int64_t timestamp_ns = 0;
+  std::string reason;
+};
+
+/// One IMU sample in the IMU sensor frame (ASL imu0/data.csv).
+struct ImuSample {
+  std::int64_t timestamp_ns = 0;
+  Eigen::Vector3d angular_rate = Eigen::Vector3d::Zero();    ///< [rad/s]
+  Eigen::Vector3d specific_force = Eigen::Vector3d::Zero();  ///< [m/s^2], +9.81 up at rest
+};
+
+/// One body pose T_WB (ASL pose0/data.csv or EuRoC's ground-truth estimate).
+struct PoseSample {
+  std::int64_t timestamp_ns = 0;
+  Eigen::Vector3d world_p_body = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond world_q_body = Eigen::Quaterniond::Identity();
+};
+
+/// Everything a sequence reader produces; a Sequence wraps it.
+struct SequenceData {
+  std::string root;     ///< folder the files were read from
+  std::string format;   ///< "asl" or "kitti_raw"
+  StereoCalibration calibration;
+  std::vector<StereoFrame> frames;
+  std::vector<SkippedFrame> skipped;
+  std::vector<ImuSample> imu;
+  std::vector<PoseSample> poses;
+  Eigen::Isometry3d body_T_imu = Eigen::Isometry3d::Identity();
+  std::optional<std::string> vehicle_config;
+};
+
+/// A recorded stereo sequence, read at open: calibration, frame list (left/right paired by
+/// timestamp), IMU and poses when present. Images are read on demand by the caller.
+/// Immutable after opening; safe for concurrent readers.
+class Sequence {
+ public:
+  explicit Sequence(SequenceData data);
+
+  /// Opens `path` as a KITTI raw drive when it has `image_00/` and `oxts/`, else as an ASL /
+  /// EuRoC sequence (INTERFACES section 2). Throws ssta::Error naming the file (and line).
+  static Sequence Open(const std::string& path);
+
+  /// The ASL / EuRoC layout (the folder, or the folder holding `mav0/`). Left/right frames are
+  /// paired exactly or to the nearest within 1 ms. Throws ssta::Error naming the file and line
+  /// for a missing folder, a malformed CSV row, timestamps out of order or duplicated, or an
+  /// invalid calibration. Frames whose image files are missing are skipped with a reason.
+  static Sequence OpenAsl(const std::string& path);
+
+  /// A KITTI raw drive (`..._sync` folder: image_00 and image_01 grey rectified, oxts/,
+  /// timestamps), with `calib_cam_to_cam.txt`, `calib_velo_to_cam.txt` and
+  /// `calib_imu_to_velo.txt` in the drive folder or its parent. OXTS GPS/IMU readings become
+  /// local metric poses T_WB (body = the OXTS IMU frame, x forward, z up) the way KITTI's
+  /// development kit converts them: Mercator projection scaled at the first latitude, the
+  /// first pose at the origin.
+  static Sequence OpenKittiRaw(const std::string& path);
+
+  const std::string& root() const { return data_.root; }
+  const std::string& format() const { return data_.format; }
+  const StereoCalibration& calibration() const { return data_.calibration; }
+  const std::vector<StereoFrame>& frames() const { return data_.frames; }
+  const std::vector<SkippedFrame>& skipped() const { return data_.skipped; }
+  const std::vector<ImuSample>& imu() const { return data_.imu; }
+  const std::vector<PoseSample>& poses() const { return data_.poses; }
+  /// Pose of the IMU in the body frame (imu0/sensor.yaml T_BS; identity when absent).
+  const Eigen::Isometry3d& body_T_imu() const { return data_.body_T_imu; }
+  /// `vehicle.yaml` shipped with the sequence, if any (a config file with a vehicle section).
+  const std::optional<std::string>& vehicle_config() const { return data_.vehicle_config; }
+
+  /// T_WB at `t`, interpolated (linear position, slerp rotation); nullopt outside the pose
+  /// time range or when the sequence has no poses.
+  std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
+
+  /// Up direction in the body frame from the accelerometer: the mean specific force over
+  /// [t - window/2, t + window/2], normalised. Valid for a platform at rest or at constant
+  /// velocity. nullopt without IMU samples in the window.
+  std::optional<Eigen::Vector3d> UpInBodyFromImu(std::int64_t t, double window_s) const;
+
+ private:
+  SequenceData data_;
+};
+
+/// Reads a numeric ASL CSV (`#` header line, comma separated, first column int64 ns).
+/// Each row must have `columns` values. Throws ssta::Error naming file and line.
+struct CsvRow {
+  std::int64_t timestamp_ns = 0;
+  std::vector<double> values;  ///< the columns after the timestamp
+  int line = 0;
+};
+std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns);
+
+}  // namespace ssta
