@@ -242,15 +242,4 @@ std::optional<Eigen::Isometry3d> Sequence::WorldTBodyAt(std::int64_t t) const {
   return out;
 }
 
-std::optional<Eigen::Vector3d> Sequence::UpInBodyFromImu(std::int64_t t, double window_s) const {
-  const auto half = static_cast<std::int64_t>(window_s * 0.5e9);
-  const auto lo = std::lower_bound(data_.imu.begin(), data_.imu.end(), t - half,
-                                   [](const ImuSample& s, std::int64_t time) { return s.timestamp_ns < time; });
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  int n = 0;
-  for (auto it = lo; it != data_.imu.end() && it->timestamp_ns <= t + half; ++it, ++n) sum += it->specific_force;
-  if (n == 0 || sum.norm() < 1e-9) return std::nullopt;
-  return (data_.body_T_imu.linear() * (sum / n)).normalized();
-}
-
 }  // namespace ssta

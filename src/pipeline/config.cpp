@@ -87,7 +87,6 @@ void ReadNormals(YamlSection s, NormalOptions* o) {
 void ReadGravity(YamlSection s, GravityOptions* o) {
   if (s.Has("source")) o->source = ParseGravitySource(s.Require<std::string>("source"), s.Name("source"));
   s.Ignore("source");
-  s.Read("imu_window_s", &o->imu_window_s);
   std::vector<double> up;
   s.ReadList("up_camera", &up, 3);
   if (!up.empty()) o->up_camera = Eigen::Vector3d(up[0], up[1], up[2]);
@@ -97,7 +96,6 @@ void ReadGravity(YamlSection s, GravityOptions* o) {
 }  // namespace
 
 bool GravityOptions::IsValid(std::string* error) const {
-  if (!(imu_window_s > 0 && imu_window_s <= 10)) return Fail(error, "imu_window_s: must be in (0, 10] seconds");
   if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
     return Fail(error, "up_camera: must be a finite, non-zero vector");
   }
@@ -108,7 +106,8 @@ bool Config::IsValid(std::string* error) const {
   return CheckSection(vehicle, "vehicle", error) && CheckSection(rectification, "rectification", error) &&
          CheckSection(stereo, "stereo", error) && CheckSection(triangulation, "triangulation", error) &&
          CheckSection(normals, "normals", error) && CheckSection(segmentation, "segmentation", error) &&
-         CheckSection(analysis, "analysis", error) && CheckSection(gravity, "gravity", error);
+         CheckSection(analysis, "analysis", error) && CheckSection(gravity, "gravity", error) &&
+         CheckSection(attitude, "attitude", error);
 }
 
 void ApplyConfigFile(const std::string& path, Config* config) {
@@ -144,6 +143,14 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.RejectUnknownKeys();
   }
   ReadGravity(root.Child("gravity"), &c.gravity);
+  {
+    YamlSection s = root.Child("attitude");
+    s.Read("kp", &c.attitude.kp);
+    s.Read("ki", &c.attitude.ki);
+    s.Read("accel_gate", &c.attitude.accel_gate);
+    s.Read("init_window_s", &c.attitude.init_window_s);
+    s.RejectUnknownKeys();
+  }
   root.RejectUnknownKeys();
   std::string error;
   if (!c.IsValid(&error)) throw Error(path + ": " + error);
@@ -214,9 +221,13 @@ std::string ConfigToYaml(const Config& c) {
     << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"
-    << "  imu_window_s: " << c.gravity.imu_window_s << "\n"
     << "  up_camera: [" << c.gravity.up_camera.x() << ", " << c.gravity.up_camera.y() << ", "
     << c.gravity.up_camera.z() << "]\n";
+  y << "attitude:\n"
+    << "  kp: " << c.attitude.kp << "\n"
+    << "  ki: " << c.attitude.ki << "\n"
+    << "  accel_gate: " << c.attitude.accel_gate << "\n"
+    << "  init_window_s: " << c.attitude.init_window_s << "\n";
   return y.str();
 }
 

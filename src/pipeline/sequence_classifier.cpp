@@ -6,6 +6,7 @@
 
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/pipeline/gravity_provider.h"
 #include "ssta/pipeline/frame_report.h"
 
 namespace ssta {
@@ -50,34 +51,12 @@ bool ClassifyOptions::IsValid(std::string* error) const {
   return true;
 }
 
-Eigen::Vector3d FrameUpInCamera(const Sequence& sequence, std::int64_t t, const GravityOptions& gravity,
-                                std::string* source_used) {
-  const Eigen::Matrix3d camera_R_body = sequence.calibration().left.body_T_camera.linear().transpose();
-  auto answer = [&](const Eigen::Vector3d& up_body, const char* name) {
-    if (source_used) *source_used = name;
-    return (camera_R_body * up_body).normalized();
-  };
-  const GravitySource s = gravity.source;
-  if (s == GravitySource::kFixed) {
-    if (source_used) *source_used = "fixed";
-    return gravity.up_camera.normalized();
-  }
-  if (s == GravitySource::kImu || s == GravitySource::kAuto) {
-    if (auto up = sequence.UpInBodyFromImu(t, gravity.imu_window_s)) return answer(*up, "imu");
-    if (s == GravitySource::kImu) throw Error("gravity.source is 'imu' but there are no IMU samples around frame " + std::to_string(t));
-  }
-  if (s == GravitySource::kPose || s == GravitySource::kAuto) {
-    if (auto pose = sequence.WorldTBodyAt(t)) return answer(pose->linear().transpose() * Eigen::Vector3d::UnitZ(), "pose");
-    if (s == GravitySource::kPose) throw Error("gravity.source is 'pose' but there is no pose at frame " + std::to_string(t));
-  }
-  return answer(Eigen::Vector3d::UnitZ(), "level");
-}
-
 ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
                                  const ClassifyOptions& options, const ProgressCallback& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
   FramePipeline pipeline(sequence.calibration(), config);
+  const GravityProvider gravity(sequence, config.gravity, config.attitude);
   MakeDirectories(options.out_dir);
 
   std::vector<StereoFrame> todo;
@@ -96,7 +75,7 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
     try {
       const ImageU8 left = ReadGreyImage(frame.left_path);
       const ImageU8 right = ReadGreyImage(frame.right_path);
-      const Eigen::Vector3d up = FrameUpInCamera(sequence, frame.timestamp_ns, config.gravity, nullptr);
+      const Eigen::Vector3d up = gravity.UpInCamera(frame.timestamp_ns);
       FrameResult result = pipeline.Process(left, right, up);
       result.timestamp_ns = frame.timestamp_ns;
       WriteFrameOutputs(result, options.out_dir, name, options.write_disparity);

@@ -1,5 +1,6 @@
 # Sources of the pipeline module.
 target_sources(ssta PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/attitude_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/config.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_pipeline.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_report.cpp

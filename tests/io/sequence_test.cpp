@@ -91,19 +91,6 @@ TEST_F(AslFixture, InterpolatesPosesLinearlyAndWithSlerp) {
   EXPECT_FALSE(seq.WorldTBodyAt(2'000'000'000).has_value());
 }
 
-TEST_F(AslFixture, UpFromTheAccelerometerAtRest) {
-  fs::create_directories(root_ / "imu0");
-  std::ofstream csv(root_ / "imu0/data.csv");
-  csv << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y,w_RS_S_z,a_RS_S_x [m s^-2],a_RS_S_y,a_RS_S_z\n";
-  for (int i = 0; i < 100; ++i) csv << i * 5'000'000LL << ",0,0,0,9.81,0," << (i % 2 ? 0.1 : -0.1) << "\n";
-  csv.close();
-  const Sequence seq = Sequence::Open(root_.path().string());
-  const auto up = seq.UpInBodyFromImu(250'000'000, 0.2);
-  ASSERT_TRUE(up.has_value());
-  EXPECT_NEAR(up->x(), 1.0, 1e-4);
-  EXPECT_FALSE(seq.UpInBodyFromImu(10'000'000'000, 0.2).has_value());
-}
-
 TEST(Sequence, MissingFolderIsAnErrorNamingIt) {
   try {
     Sequence::Open("/nonexistent/seq");

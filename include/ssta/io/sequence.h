@@ -92,11 +92,6 @@ class Sequence {
   /// time range or when the sequence has no poses.
   std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
 
-  /// Up direction in the body frame from the accelerometer: the mean specific force over
-  /// [t - window/2, t + window/2], normalised. Valid for a platform at rest or at constant
-  /// velocity. nullopt without IMU samples in the window.
-  std::optional<Eigen::Vector3d> UpInBodyFromImu(std::int64_t t, double window_s) const;
-
  private:
   SequenceData data_;
 };

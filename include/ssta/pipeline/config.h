@@ -7,6 +7,7 @@
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/analysis/vehicle_options.h"
 #include "ssta/geometry/normal_estimator.h"
+#include "ssta/pipeline/attitude_filter.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/stereo/rectifier.h"
 #include "ssta/stereo/stereo_matcher.h"
@@ -26,7 +27,6 @@ enum class GravitySource {
 /// YAML section `gravity`.
 struct GravityOptions {
   GravitySource source = GravitySource::kAuto;
-  double imu_window_s = 0.5;  ///< accelerometer averaging window around each frame [s]
   Eigen::Vector3d up_camera{0.0, -1.0, 0.0};  ///< for source "fixed": up in cam0 (y down)
   bool IsValid(std::string* error) const;
 };
@@ -42,6 +42,7 @@ struct Config {
   SegmenterOptions segmentation;
   AnalysisOptions analysis;
   GravityOptions gravity;
+  AttitudeFilterOptions attitude;
 
   /// Validates every section; on failure the message reads "section.key: ...".
   bool IsValid(std::string* error) const;

@@ -42,11 +42,6 @@ struct ClassifySummary {
 /// Called after each frame: (frames done, frames to do).
 using ProgressCallback = std::function<void(int done, int total)>;
 
-/// Up in the original cam0 frame for the frame at `t`, as `gravity` asks (IMU, pose, level
-/// body or fixed). `source_used` says which one answered (the auto source falls back).
-Eigen::Vector3d FrameUpInCamera(const Sequence& sequence, std::int64_t t, const GravityOptions& gravity,
-                                std::string* source_used);
-
 /// Classifies every usable frame of `sequence` and writes the per-frame outputs and
 /// summary.json. Frames that cannot be read are skipped with a reason; bad config or
 /// calibration throw ssta::Error before any work.

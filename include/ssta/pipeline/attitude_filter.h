@@ -1,0 +1,49 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "ssta/io/sequence.h"
+
+namespace ssta {
+
+/// YAML section `attitude`: a Mahony-style complementary filter on gyro + accelerometer.
+struct AttitudeFilterOptions {
+  double kp = 1.0;    ///< [1/s] proportional gain pulling the estimate to the accelerometer's up
+  double ki = 0.1;    ///< [1/s^2] integral gain (estimates the gyro bias; time constant kp/ki)
+  /// Accelerometer readings whose magnitude differs from 9.81 by more than this share are not
+  /// trusted (the vehicle is accelerating): the filter integrates the gyro alone then.
+  double accel_gate = 0.15;
+  double init_window_s = 0.2;  ///< [s] accelerometer samples averaged for the initial attitude
+  bool IsValid(std::string* error) const;
+};
+
+/// Up direction (unit, opposite to gravity) in the body frame over time, from the IMU.
+/// Thread-safe for concurrent readers once built.
+class GravityTrack {
+ public:
+  /// Runs the filter over `imu` (IMU sensor frame) and expresses its up in the body through
+  /// `body_T_imu`. Precondition: samples sorted by time (Sequence guarantees it).
+  GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isometry3d& body_T_imu,
+               const AttitudeFilterOptions& options);
+
+  /// Up in the body at `t`, interpolated between filter samples; nullopt outside the IMU time
+  /// range or without samples.
+  std::optional<Eigen::Vector3d> UpInBodyAt(std::int64_t t) const;
+  std::size_t size() const { return times_.size(); }
+
+ private:
+  std::vector<std::int64_t> times_;
+  std::vector<Eigen::Vector3d> up_body_;
+};
+
+/// Roll and pitch from `up_body` (the body's up, from the IMU), position and yaw from
+/// `world_T_body` (odometry): the gravity-corrected pose. Yaw is the Z angle of a Z-Y-X
+/// decomposition. Precondition: up_body is a unit vector.
+Eigen::Isometry3d CorrectRollPitch(const Eigen::Isometry3d& world_T_body, const Eigen::Vector3d& up_body);
+
+}  // namespace ssta

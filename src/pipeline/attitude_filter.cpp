@@ -1,0 +1,96 @@
+#include "ssta/pipeline/attitude_filter.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "ssta/core/error.h"
+
+namespace ssta {
+namespace {
+
+constexpr double kGravity = 9.81;
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
+}  // namespace
+
+bool AttitudeFilterOptions::IsValid(std::string* error) const {
+  if (!(kp >= 0 && kp <= 100)) return Fail(error, "kp: must be in [0, 100] 1/s");
+  if (!(ki >= 0 && ki <= 10)) return Fail(error, "ki: must be in [0, 10] 1/s^2");
+  if (!(accel_gate > 0 && accel_gate <= 1)) return Fail(error, "accel_gate: must be in (0, 1]");
+  if (!(init_window_s > 0 && init_window_s <= 10)) return Fail(error, "init_window_s: must be in (0, 10] s");
+  return true;
+}
+
+GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isometry3d& body_T_imu,
+                           const AttitudeFilterOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error("attitude." + error);
+  if (imu.empty()) return;
+
+  // Initial attitude: the mean accelerometer direction over the first window is up.
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  const auto init_end = imu.front().timestamp_ns + static_cast<std::int64_t>(options.init_window_s * 1e9);
+  int n = 0;
+  for (const ImuSample& s : imu) {
+    if (s.timestamp_ns > init_end && n > 0) break;
+    mean += s.specific_force;
+    ++n;
+  }
+  // world_q_imu maps IMU vectors into a world frame with z up (yaw is arbitrary).
+  Eigen::Quaterniond world_q_imu = mean.norm() > 1e-6
+                                       ? Eigen::Quaterniond::FromTwoVectors(mean.normalized(), Eigen::Vector3d::UnitZ())
+                                       : Eigen::Quaterniond::Identity();
+  Eigen::Vector3d integral = Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d body_R_imu = body_T_imu.linear();
+
+  times_.reserve(imu.size());
+  up_body_.reserve(imu.size());
+  for (std::size_t i = 0; i < imu.size(); ++i) {
+    const ImuSample& s = imu[i];
+    const double dt = i == 0 ? 0.0 : 1e-9 * static_cast<double>(s.timestamp_ns - imu[i - 1].timestamp_ns);
+    Eigen::Vector3d omega = s.angular_rate;
+    const double a_norm = s.specific_force.norm();
+    if (std::abs(a_norm - kGravity) < options.accel_gate * kGravity) {
+      // Error between measured and estimated up, in the IMU frame: rotating the estimate by
+      // (measured x estimated) turns it towards the measurement.
+      const Eigen::Vector3d up_estimate = world_q_imu.conjugate() * Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d e = (s.specific_force / a_norm).cross(up_estimate);
+      integral += options.ki * e * dt;
+      omega += options.kp * e + integral;
+    }
+    const double angle = omega.norm() * dt;
+    if (angle > 0) world_q_imu = (world_q_imu * Eigen::Quaterniond(Eigen::AngleAxisd(angle, omega.normalized()))).normalized();
+    times_.push_back(s.timestamp_ns);
+    up_body_.push_back(body_R_imu * (world_q_imu.conjugate() * Eigen::Vector3d::UnitZ()));
+  }
+}
+
+std::optional<Eigen::Vector3d> GravityTrack::UpInBodyAt(std::int64_t t) const {
+  if (times_.empty() || t < times_.front() || t > times_.back()) return std::nullopt;
+  const auto it = std::lower_bound(times_.begin(), times_.end(), t);
+  const std::size_t j = static_cast<std::size_t>(it - times_.begin());
+  if (*it == t || j == 0) return up_body_[j];
+  const double s = static_cast<double>(t - times_[j - 1]) / static_cast<double>(times_[j] - times_[j - 1]);
+  return ((1.0 - s) * up_body_[j - 1] + s * up_body_[j]).normalized();
+}
+
+Eigen::Isometry3d CorrectRollPitch(const Eigen::Isometry3d& world_T_body, const Eigen::Vector3d& up_body) {
+  SSTA_CHECK(std::abs(up_body.norm() - 1.0) < 1e-6, "up_body must be a unit vector");
+  const Eigen::Matrix3d r = world_T_body.linear();
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  // For R = Rz(yaw) Ry(pitch) Rx(roll): up in the body = (-sin p, sin r cos p, cos r cos p).
+  const double pitch = std::atan2(-up_body.x(), std::hypot(up_body.y(), up_body.z()));
+  const double roll = std::atan2(up_body.y(), up_body.z());
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  out.translation() = world_T_body.translation();
+  return out;
+}
+
+}  // namespace ssta

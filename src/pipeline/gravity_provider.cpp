@@ -1,0 +1,56 @@
+#include "ssta/pipeline/gravity_provider.h"
+
+namespace ssta {
+
+GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions& gravity,
+                                 const AttitudeFilterOptions& attitude)
+    : sequence_(sequence), gravity_(gravity) {
+  if (!sequence.imu().empty() && gravity.source != GravitySource::kPose && gravity.source != GravitySource::kLevel) {
+    track_ = std::make_unique<GravityTrack>(sequence.imu(), sequence.body_T_imu(), attitude);
+  }
+}
+
+Eigen::Vector3d GravityProvider::UpInBody(std::int64_t t, std::string* source_used) const {
+  const GravitySource s = gravity_.source;
+  auto answer = [&](const Eigen::Vector3d& up, const char* name) {
+    if (source_used) *source_used = name;
+    return up.normalized();
+  };
+  if (s == GravitySource::kImu || s == GravitySource::kAuto) {
+    if (track_) {
+      if (auto up = track_->UpInBodyAt(t)) return answer(*up, "imu");
+    }
+    if (s == GravitySource::kImu) {
+      throw Error("gravity.source is 'imu' but there are no IMU samples at frame " + std::to_string(t));
+    }
+  }
+  if (s == GravitySource::kPose || s == GravitySource::kAuto) {
+    if (auto pose = sequence_.WorldTBodyAt(t)) return answer(pose->linear().transpose() * Eigen::Vector3d::UnitZ(), "pose");
+    if (s == GravitySource::kPose) throw Error("gravity.source is 'pose' but there is no pose at frame " + std::to_string(t));
+  }
+  if (s == GravitySource::kFixed) {
+    const Eigen::Matrix3d body_R_camera = sequence_.calibration().left.body_T_camera.linear();
+    return answer(body_R_camera * gravity_.up_camera, "fixed");
+  }
+  return answer(Eigen::Vector3d::UnitZ(), "level");
+}
+
+Eigen::Vector3d GravityProvider::UpInCamera(std::int64_t t, std::string* source_used) const {
+  if (gravity_.source == GravitySource::kFixed) {
+    if (source_used) *source_used = "fixed";
+    return gravity_.up_camera.normalized();
+  }
+  const Eigen::Matrix3d camera_R_body = sequence_.calibration().left.body_T_camera.linear().transpose();
+  return (camera_R_body * UpInBody(t, source_used)).normalized();
+}
+
+std::optional<Eigen::Isometry3d> GravityProvider::WorldTBodyAt(std::int64_t t) const {
+  const auto pose = sequence_.WorldTBodyAt(t);
+  if (!pose) return std::nullopt;
+  if (track_ && gravity_.source != GravitySource::kPose) {
+    if (auto up = track_->UpInBodyAt(t)) return CorrectRollPitch(*pose, *up);
+  }
+  return pose;
+}
+
+}  // namespace ssta

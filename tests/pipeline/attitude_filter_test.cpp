@@ -1,0 +1,93 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ssta/pipeline/attitude_filter.h"
+
+namespace ssta {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// Body attitude over time: roll and pitch swing (as on rough ground) while yawing slowly.
+Eigen::Quaterniond TrueAttitude(double t) {
+  const double roll = 8 * kDeg * std::sin(0.7 * t), pitch = 5 * kDeg * std::sin(1.1 * t + 0.3), yaw = 0.2 * t;
+  return Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(roll, Eigen::Vector3d::UnitX());
+}
+
+// A 200 Hz IMU on that body (IMU = body frame), no translation: specific force is gravity's
+// reaction; gyro = body rate + bias.
+std::vector<ImuSample> SimulateImu(double seconds, const Eigen::Vector3d& gyro_bias) {
+  std::vector<ImuSample> out;
+  const double dt = 0.005;
+  for (int i = 0; i * dt <= seconds; ++i) {
+    const double t = i * dt;
+    const Eigen::Quaterniond q0 = TrueAttitude(t - 1e-4), q1 = TrueAttitude(t + 1e-4);
+    const Eigen::AngleAxisd delta(q0.conjugate() * q1);
+    ImuSample s;
+    s.timestamp_ns = static_cast<std::int64_t>(std::llround(t * 1e9));
+    s.angular_rate = delta.axis() * delta.angle() / 2e-4 + gyro_bias;
+    s.specific_force = TrueAttitude(t).conjugate() * Eigen::Vector3d(0, 0, 9.81);
+    out.push_back(s);
+  }
+  return out;
+}
+
+double UpErrorDeg(const GravityTrack& track, double t) {
+  const Eigen::Vector3d truth = TrueAttitude(t).conjugate() * Eigen::Vector3d::UnitZ();
+  const auto up = track.UpInBodyAt(static_cast<std::int64_t>(t * 1e9));
+  return std::acos(std::clamp(up->dot(truth), -1.0, 1.0)) / kDeg;
+}
+
+TEST(GravityTrack, FollowsRollAndPitchDespiteAGyroBias) {
+  const auto imu = SimulateImu(60.0, Eigen::Vector3d(0.01, -0.008, 0.005));  // ~0.5 deg/s bias
+  const GravityTrack track(imu, Eigen::Isometry3d::Identity(), AttitudeFilterOptions{});
+  double worst = 0;
+  for (double t = 20; t < 60; t += 0.37) worst = std::max(worst, UpErrorDeg(track, t));
+  EXPECT_LT(worst, 0.5);
+}
+
+TEST(GravityTrack, GyroAloneDriftsWhichIsWhyTheAccelerometerIsUsed) {
+  const auto imu = SimulateImu(60.0, Eigen::Vector3d(0.01, -0.008, 0.005));
+  AttitudeFilterOptions gyro_only;
+  gyro_only.kp = 0;
+  gyro_only.ki = 0;
+  const GravityTrack drifting(imu, Eigen::Isometry3d::Identity(), gyro_only);
+  const GravityTrack filtered(imu, Eigen::Isometry3d::Identity(), AttitudeFilterOptions{});
+  double worst_drifting = 0, worst_filtered = 0;
+  for (double t = 20; t < 60; t += 0.37) {
+    worst_drifting = std::max(worst_drifting, UpErrorDeg(drifting, t));
+    worst_filtered = std::max(worst_filtered, UpErrorDeg(filtered, t));
+  }
+  EXPECT_GT(worst_drifting, 1.0);
+  EXPECT_GT(worst_drifting, 5 * worst_filtered);
+}
+
+TEST(GravityTrack, OutsideTheImuTimeRangeThereIsNoAnswer) {
+  const GravityTrack track(SimulateImu(1.0, Eigen::Vector3d::Zero()), Eigen::Isometry3d::Identity(), {});
+  EXPECT_FALSE(track.UpInBodyAt(-1).has_value());
+  EXPECT_FALSE(track.UpInBodyAt(2'000'000'000).has_value());
+  EXPECT_TRUE(track.UpInBodyAt(500'000'000).has_value());
+}
+
+TEST(CorrectRollPitch, KeepsPositionAndYawAndTakesRollPitchFromUp) {
+  const Eigen::Quaterniond truth = TrueAttitude(2.0);
+  Eigen::Isometry3d drifted = Eigen::Isometry3d::Identity();
+  // Odometry with 3 degrees of extra roll and pitch but the right yaw and position.
+  drifted.linear() = (truth * Eigen::AngleAxisd(3 * kDeg, Eigen::Vector3d::UnitX()) *
+                      Eigen::AngleAxisd(3 * kDeg, Eigen::Vector3d::UnitY())).toRotationMatrix();
+  const Eigen::Matrix3d d = drifted.linear();
+  // Give the drifted pose exactly the true yaw (Z-Y-X), as odometry would.
+  const double true_yaw = 0.4;
+  drifted.linear() = Eigen::AngleAxisd(true_yaw - std::atan2(d(1, 0), d(0, 0)), Eigen::Vector3d::UnitZ()) * d;
+  drifted.translation() = Eigen::Vector3d(1, 2, 3);
+  const Eigen::Vector3d up_body = truth.conjugate() * Eigen::Vector3d::UnitZ();
+  const Eigen::Isometry3d fixed = CorrectRollPitch(drifted, up_body);
+  EXPECT_TRUE(fixed.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
+  EXPECT_TRUE((fixed.linear().transpose() * Eigen::Vector3d::UnitZ()).isApprox(up_body, 1e-9));
+  EXPECT_NEAR(std::atan2(fixed.linear()(1, 0), fixed.linear()(0, 0)), true_yaw, 1e-9);
+}
+
+}  // namespace
+}  // namespace ssta
