@@ -34,10 +34,12 @@ Config Validated(const Config& config) {
 
 struct FramePipeline::Stages {
   Stages(const StereoCalibration& calibration, const Config& config)
-      : rectifier(calibration, config.rectification), matcher(config.stereo), normals(config.normals) {}
+      : rectifier(calibration, config.rectification), matcher(config.stereo), normals(config.normals),
+        segmenter(config.segmentation) {}
   Rectifier rectifier;
   StereoMatcher matcher;
   NormalEstimator normals;
+  Segmenter segmenter;
 };
 
 FramePipeline::FramePipeline(const StereoCalibration& calibration, const Config& config)
@@ -71,8 +73,8 @@ FrameResult FramePipeline::Process(const ImageU8& left, const ImageU8& right,
   const Image3f& normals = stages_->normals.Compute(cloud);
   out.timings.normals_ms = clock.LapMs();
 
-  const Segmentation segmentation = SegmentNormals(normals, &out.disparity, config_.segmentation);
-  out.num_segments = static_cast<int>(segmentation.sizes.size());
+  const Segmentation& segmentation = stages_->segmenter.Compute(normals, &out.disparity);
+  out.num_segments = segmentation.num_segments();
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
