@@ -1,0 +1,108 @@
+#include "ssta/eval/grid_evaluator.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "eval/class_ids.h"
+#include "eval/json_writer.h"
+#include "eval/metrics_json.h"
+#include "ssta/core/classes.h"
+
+namespace ssta {
+namespace {
+
+bool IsVerdict(std::uint8_t c) { return c >= 1 && c <= 3; }
+
+void WriteGridJson(const ClassGrid& grid, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("width");
+  json->Integer(grid.classes.width());
+  json->Key("height");
+  json->Integer(grid.classes.height());
+  json->Key("resolution");
+  json->Number(grid.resolution_m);
+  json->Key("origin");
+  json->BeginInlineArray();
+  json->Number(grid.origin_m.x());
+  json->Number(grid.origin_m.y());
+  json->Number(0.0);
+  json->EndArray();
+  json->EndObject();
+}
+
+std::string GridText(const ClassGrid& grid) {
+  char line[200];
+  std::snprintf(line, sizeof line, "%dx%d cells of %.4g m, lower-left corner (%.4g, %.4g) m",
+                grid.classes.width(), grid.classes.height(), grid.resolution_m, grid.origin_m.x(),
+                grid.origin_m.y());
+  return line;
+}
+
+}  // namespace
+
+ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted) {
+  internal::CheckTruthIds(truth.classes, truth.source);
+  internal::CheckPredictedIds(predicted.classes, predicted.source);
+  ConfusionMatrix matrix;
+  for (int row = 0; row < truth.classes.height(); ++row) {
+    for (int col = 0; col < truth.classes.width(); ++col) {
+      const Eigen::Vector2d centre = truth.CellCentre({row, col});
+      matrix.Add(truth.classes(row, col), predicted.ClassAt(centre));
+    }
+  }
+  return matrix;
+}
+
+GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence) {
+  GridEvalSummary summary;
+  summary.truth_grid = ReadGroundTruthGrid(sequence);
+  summary.predicted_grid = ReadClassGrid(prefix + ".yaml", prefix + "_classes.png");
+  summary.truth = summary.truth_grid.source;
+  summary.prediction = summary.predicted_grid.source;
+  summary.matrix = ScoreGrid(summary.truth_grid, summary.predicted_grid);
+  const ClassGrid& truth = summary.truth_grid;
+  for (int row = 0; row < truth.classes.height(); ++row) {
+    for (int col = 0; col < truth.classes.width(); ++col) {
+      if (IsVerdict(truth.classes(row, col)) &&
+          !summary.predicted_grid.CellAt(truth.CellCentre({row, col}))) {
+        ++summary.scored_cells_outside_prediction;
+      }
+    }
+  }
+  return summary;
+}
+
+std::string GridEvalSummary::BriefReport() const {
+  std::string out = "eval grid: " + prediction + " against " + truth + "\n";
+  out += "truth grid:      " + GridText(truth_grid) + "\n";
+  out += "predicted grid:  " + GridText(predicted_grid) + "\n";
+  out += "scored truth cells outside the predicted grid (scored as unknown): " +
+         std::to_string(scored_cells_outside_prediction) + "\n";
+  out += matrix.BriefReport("cells");
+  return out;
+}
+
+std::string GridEvalSummary::ToJson() const {
+  internal::JsonWriter json;
+  json.BeginObject();
+  json.Key("kind");
+  json.String("grid");
+  json.Key("unit");
+  json.String("cells");
+  json.Key("prediction");
+  json.String(prediction);
+  json.Key("truth");
+  json.String(truth);
+  json.Key("truth_grid");
+  WriteGridJson(truth_grid, &json);
+  json.Key("prediction_grid");
+  WriteGridJson(predicted_grid, &json);
+  json.Key("scored_cells_outside_prediction");
+  json.Integer(scored_cells_outside_prediction);
+  json.Key("metrics");
+  internal::WriteMetricsJson(matrix, &json);
+  json.EndObject();
+  return json.Take();
+}
+
+}  // namespace ssta
