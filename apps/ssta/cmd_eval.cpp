@@ -2,15 +2,19 @@
 // truth of a synthetic sequence (INTERFACES section 6). Prints a report; --json writes the
 // machine-readable summary.
 
+#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <string>
+
+#include <unistd.h>
 
 #include "commands.h"
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/eval/query_evaluator.h"
 #include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
 
 namespace ssta::cli {
 namespace {
@@ -20,6 +24,7 @@ struct EvalArguments {
   std::string sequence;
   std::string json_path;
   std::string pictures_dir;
+  std::string picture_path;
   bool skip_missing = false;
 };
 
@@ -29,6 +34,15 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
                       "synthetic sequence folder holding gt/ (or mav0/gt/)")
       ->required();
   command->add_option("--json", args->json_path, "also write the summary as JSON to this file");
+}
+
+// Progress on stderr when it is a terminal; one line, rewritten in place.
+void ShowProgress(int done, int total) {
+  static const bool is_terminal = ::isatty(STDERR_FILENO) != 0;
+  if (!is_terminal) return;
+  std::fprintf(stderr, "\rscoring frame %d / %d", done, total);
+  if (done == total) std::fprintf(stderr, "\r%*s\r", 40, "");
+  std::fflush(stderr);
 }
 
 template <typename Summary>
@@ -65,6 +79,7 @@ void RegisterEval(CLI::App& app) {
   labels->callback([labels_args] {
     LabelEvalOptions options;
     options.pictures_dir = labels_args->pictures_dir;
+    options.progress = ShowProgress;
     options.missing_prediction = labels_args->skip_missing ? MissingPrediction::kSkip
                                                            : MissingPrediction::kScoreAsUnknown;
     Report(EvaluateLabelFolders(labels_args->prediction, labels_args->sequence, options),
@@ -78,8 +93,16 @@ void RegisterEval(CLI::App& app) {
   CLI::App* grid = eval->add_subcommand(
       "grid", "Score an exported grid (ssta export --format grid) against gt/grid_classes.png");
   AddCommon(grid, grid_args.get(), "export prefix: reads PREFIX_classes.png and PREFIX.yaml");
+  grid->add_option("--picture", grid_args->picture_path,
+                   "write a truth | prediction | errors PNG on the truth grid (north up)");
   grid->callback([grid_args] {
-    Report(EvaluateExportedGrid(grid_args->prediction, grid_args->sequence), *grid_args);
+    const GridEvalSummary summary = EvaluateExportedGrid(grid_args->prediction, grid_args->sequence);
+    Report(summary, *grid_args);
+    if (!grid_args->picture_path.empty()) {
+      WriteImage(MakeGridComparisonPicture(summary.truth_grid, summary.predicted_grid),
+                 grid_args->picture_path);
+      std::cout << "picture: " << grid_args->picture_path << "\n";
+    }
   });
 
   auto query_args = std::make_shared<EvalArguments>();

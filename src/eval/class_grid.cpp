@@ -81,6 +81,10 @@ std::string FindGroundTruthDir(const std::string& sequence) {
   for (const fs::path& candidate : {fs::path(sequence) / "gt", fs::path(sequence) / "mav0" / "gt"}) {
     if (fs::is_directory(candidate)) return candidate.string();
   }
+  // Also accept the gt folder itself.
+  fs::path normal = fs::path(sequence).lexically_normal();
+  if (normal.filename().empty()) normal = normal.parent_path();  // trailing slash
+  if (normal.filename() == "gt" && fs::is_directory(normal)) return normal.string();
   throw Error(sequence + ": no ground truth (looked for " + (fs::path(sequence) / "gt").string() +
               " and " + (fs::path(sequence) / "mav0" / "gt").string() + ")");
 }

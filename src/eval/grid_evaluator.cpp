@@ -1,5 +1,6 @@
 #include "ssta/eval/grid_evaluator.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -7,6 +8,7 @@
 #include "eval/json_writer.h"
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
+#include "ssta/eval/label_evaluator.h"
 
 namespace ssta {
 namespace {
@@ -40,17 +42,41 @@ std::string GridText(const ClassGrid& grid) {
 
 }  // namespace
 
-ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted) {
-  internal::CheckTruthIds(truth.classes, truth.source);
-  internal::CheckPredictedIds(predicted.classes, predicted.source);
-  ConfusionMatrix matrix;
-  for (int row = 0; row < truth.classes.height(); ++row) {
-    for (int col = 0; col < truth.classes.width(); ++col) {
-      const Eigen::Vector2d centre = truth.CellCentre({row, col});
-      matrix.Add(truth.classes(row, col), predicted.ClassAt(centre));
+ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth) {
+  ImageU8 out(truth.classes.width(), truth.classes.height());
+  for (int row = 0; row < out.height(); ++row) {
+    for (int col = 0; col < out.width(); ++col) {
+      out(row, col) = predicted.ClassAt(truth.CellCentre({row, col}));
     }
   }
-  return matrix;
+  return out;
+}
+
+ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted) {
+  // Checked before resampling so that a bad value is reported at its own cell.
+  internal::CheckTruthIds(truth.classes, truth.source);
+  internal::CheckPredictedIds(predicted.classes, predicted.source);
+  return ScoreLabels(truth.classes, ResampleToGrid(predicted, truth), truth.source,
+                     predicted.source + " (resampled to the truth grid)");
+}
+
+ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted) {
+  constexpr int kMinHeight = 240;  // [px] wanted panel height
+  constexpr int kMaxWidth = 4096;  // [px] panel width not to exceed by enlarging
+  internal::CheckTruthIds(truth.classes, truth.source);
+  internal::CheckPredictedIds(predicted.classes, predicted.source);
+  const ImageU8 resampled = ResampleToGrid(predicted, truth);
+  const int h = std::max(1, truth.classes.height());
+  const int w = std::max(1, truth.classes.width());
+  const int scale = std::max(1, std::min((kMinHeight + h - 1) / h, kMaxWidth / w));
+  auto enlarge = [scale](const ImageU8& in) {
+    ImageU8 out(in.width() * scale, in.height() * scale);
+    for (int v = 0; v < out.height(); ++v) {
+      for (int u = 0; u < out.width(); ++u) out(v, u) = in(v / scale, u / scale);
+    }
+    return out;
+  };
+  return MakeComparisonPicture(enlarge(truth.classes), enlarge(resampled));
 }
 
 GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence) {

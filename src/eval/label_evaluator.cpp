@@ -1,6 +1,7 @@
 #include "ssta/eval/label_evaluator.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 
@@ -74,7 +75,14 @@ ConfusionMatrix ScoreLabels(const ImageU8& truth, const ImageU8& predicted,
 }
 
 bool LabelEvalOptions::IsValid(std::string* error) const {
-  (void)error;
+  auto fail = [error](const std::string& message) {
+    if (error != nullptr) *error = message;
+    return false;
+  };
+  if (!pictures_dir.empty() && fs::exists(pictures_dir) && !fs::is_directory(pictures_dir)) {
+    return fail("pictures_dir: " + pictures_dir + " exists and is not a folder");
+  }
+  if (worst_frames_listed < 0) return fail("worst_frames_listed: must be >= 0");
   return true;
 }
 
@@ -85,6 +93,7 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
 
   LabelEvalSummary summary;
   summary.missing_prediction_policy = options.missing_prediction;
+  summary.worst_frames_listed = options.worst_frames_listed;
   const fs::path pred_dir = PredictionFolder(prediction);
   const fs::path truth_dir = fs::path(FindGroundTruthDir(sequence)) / "labels";
   if (!fs::is_directory(truth_dir)) throw Error(truth_dir.string() + ": truth label folder not found");
@@ -93,6 +102,11 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
 
   const auto predicted_files = ListPngs(pred_dir);
   const auto truth_files = ListPngs(truth_dir);
+  if (truth_files.empty()) throw Error(truth_dir.string() + ": no truth label PNGs in the folder");
+  if (predicted_files.empty()) {
+    throw Error(prediction + ": no label PNGs (looked in " + pred_dir.string() +
+                "; expected DIR/labels/<ts>.png or DIR/<ts>.png)");
+  }
   for (const auto& [name, path] : predicted_files) {
     if (truth_files.count(name) == 0) summary.missing_truth.push_back(name);
   }
@@ -120,6 +134,9 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
     }
     summary.total += frame.matrix;
     summary.frames.push_back(std::move(frame));
+    if (options.progress) {
+      options.progress(static_cast<int>(summary.frames.size()), static_cast<int>(truth_files.size()));
+    }
   }
   return summary;
 }
@@ -142,6 +159,25 @@ std::string LabelEvalSummary::BriefReport() const {
   };
   list("missing prediction:", missing_prediction);
   list("missing truth:", missing_truth);
+  // Worst frames first: the ones a person should look at.
+  std::vector<const FrameScore*> ranked;
+  for (const auto& frame : frames) {
+    if (!frame.prediction_missing && frame.matrix.Scored() > 0) ranked.push_back(&frame);
+  }
+  std::stable_sort(ranked.begin(), ranked.end(), [](const FrameScore* a, const FrameScore* b) {
+    return a->matrix.Accuracy() < b->matrix.Accuracy();
+  });
+  const std::size_t listed = std::min<std::size_t>(ranked.size(), static_cast<std::size_t>(std::max(0, worst_frames_listed)));
+  if (listed > 0 && ranked.size() > 1) {
+    out += "worst frames by accuracy:";
+    char item[128];
+    for (std::size_t i = 0; i < listed; ++i) {
+      std::snprintf(item, sizeof item, " %s (%.3f)", ranked[i]->name.c_str(),
+                    ranked[i]->matrix.Accuracy());
+      out += item;
+    }
+    out += "\n";
+  }
   out += total.BriefReport("pixels");
   return out;
 }

@@ -131,6 +131,21 @@ TEST(eval_ScoreGrid, FinerPredictionIsSampledAtTruthCentres) {
   EXPECT_DOUBLE_EQ(ScoreGrid(truth, flipped).Accuracy(), 0.0);
 }
 
+TEST(eval_ScoreGrid, ResampledPredictionAndPictureLiveOnTheTruthGrid) {
+  const ClassGrid truth = MakeGrid(MakeLabels({{1, 1, 2, 2}, {1, 3, 3, 255}}), 1.0, 0.0, 0.0, "t");
+  const ClassGrid predicted = MakeGrid(MakeLabels({{1, 3}}), 2.0, 1.0, 0.0, "p");
+  const ImageU8 resampled = ResampleToGrid(predicted, truth);
+  const ImageU8 expected = MakeLabels({{0, 1, 1, 3}, {0, 1, 1, 3}});
+  ASSERT_EQ(resampled.width(), 4);
+  ASSERT_EQ(resampled.height(), 2);
+  for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(resampled[i], expected[i]) << i;
+  // 2 rows enlarged to 120 px each; truth cell (0, 0) is traversable green at the panel start.
+  const ImageRgb picture = MakeGridComparisonPicture(truth, predicted);
+  EXPECT_EQ(picture.height(), 18 + 240 + 4 + 22);
+  EXPECT_EQ(picture(18 + 119, 4 + 119), (Rgb8{0, 255, 0}));
+  EXPECT_EQ(picture(18 + 120, 4 + 120), (Rgb8{255, 0, 0}));  // truth cell (1, 1): non-traversable
+}
+
 TEST(eval_ScoreGrid, RejectsPredictedValuesAboveFour) {
   const ClassGrid truth = MakeGrid(ImageU8(2, 2, 1), 1.0, 0.0, 0.0, "gt/grid_classes.png");
   const ClassGrid predicted = MakeGrid(MakeLabels({{1, 7}}), 1.0, 0.0, 0.0, "map_classes.png");

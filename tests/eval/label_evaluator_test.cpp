@@ -162,3 +162,54 @@ TEST(eval_ComparisonPicture, ShowsDontCareWhiteAndNoVerdictOrange) {
 
 }  // namespace
 }  // namespace ssta
+
+namespace ssta {
+namespace {
+
+TEST(eval_LabelFoldersEdges, EmptyFoldersAreErrorsNotScores) {
+  TempDir dir;
+  WriteLabels(dir / "seq/gt/labels/a.png", MakeLabels({{1}}));
+  std::filesystem::create_directories(dir / "out/labels");
+  try {
+    EvaluateLabelFolders(dir / "out", dir / "seq");
+    FAIL() << "expected ssta::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no label PNGs"), std::string::npos) << e.what();
+  }
+  std::filesystem::create_directories(dir / "seq2/gt/labels");
+  EXPECT_THROW(EvaluateLabelFolders(dir / "seq/gt/labels", dir / "seq2"), Error);
+}
+
+TEST(eval_LabelFoldersEdges, AcceptsTheGtFolderItselfAndReportsProgressAndWorstFrames) {
+  TempDir dir;
+  WriteLabels(dir / "seq/gt/labels/a.png", MakeLabels({{1, 1}}));
+  WriteLabels(dir / "seq/gt/labels/b.png", MakeLabels({{1, 1}}));
+  WriteLabels(dir / "out/a.png", MakeLabels({{1, 1}}));
+  WriteLabels(dir / "out/b.png", MakeLabels({{1, 3}}));
+  LabelEvalOptions options;
+  std::vector<std::pair<int, int>> calls;
+  options.progress = [&calls](int done, int total) { calls.emplace_back(done, total); };
+  const LabelEvalSummary s = EvaluateLabelFolders(dir / "out", dir / "seq/gt/", options);
+  EXPECT_EQ(calls, (std::vector<std::pair<int, int>>{{1, 2}, {2, 2}}));
+  const std::string report = s.BriefReport();
+  EXPECT_NE(report.find("worst frames by accuracy: b.png (0.500) a.png (1.000)"), std::string::npos)
+      << report;
+}
+
+TEST(eval_LabelFoldersEdges, OptionsValidation) {
+  TempDir dir;
+  test::WriteText(dir / "file", "x");
+  LabelEvalOptions options;
+  std::string error;
+  EXPECT_TRUE(options.IsValid(&error));
+  options.pictures_dir = dir / "file";
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("pictures_dir"), std::string::npos) << error;
+  options.pictures_dir.clear();
+  options.worst_frames_listed = -1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("worst_frames_listed"), std::string::npos) << error;
+}
+
+}  // namespace
+}  // namespace ssta

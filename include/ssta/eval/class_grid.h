@@ -45,8 +45,9 @@ struct ClassGrid {
 /// [x, y, yaw] with yaw 0 (rotated grids are not supported), or the image is not 8-bit grey.
 ClassGrid ReadClassGrid(const std::string& yaml_path, const std::string& classes_png);
 
-/// The ground-truth folder of a synthetic sequence: SEQ/gt, or SEQ/mav0/gt as EuRoC nests it.
-/// Throws ssta::Error naming both places when neither exists.
+/// The ground-truth folder of a synthetic sequence: SEQ/gt, or SEQ/mav0/gt as EuRoC nests it;
+/// a path to a folder named gt is taken as it is. Throws ssta::Error naming both places when
+/// neither exists.
 std::string FindGroundTruthDir(const std::string& sequence);
 
 /// Reads SEQ/gt/grid_classes.png with SEQ/gt/grid.yaml (INTERFACES section 6). Throws

@@ -16,6 +16,16 @@ namespace ssta {
 /// other than 0..4 or 255 or the prediction a value other than 0..4.
 ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted);
 
+/// The predicted classes sampled at the centres of the truth cells, 0 (unknown) where a centre
+/// lies outside the prediction: an image the size of truth.classes, the prediction ScoreGrid
+/// compares cell by cell.
+ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth);
+
+/// MakeComparisonPicture of the truth grid and the resampled prediction (north up: image row 0
+/// is the largest y), cells enlarged to whole pixel blocks so that small grids are at least
+/// 240 pixels high (unless a panel would grow wider than 4096 pixels). Throws ssta::Error on invalid class values as ScoreGrid.
+ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted);
+
 /// Result of EvaluateExportedGrid.
 struct GridEvalSummary {
   std::string prediction;  ///< predicted class image

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,14 @@ struct LabelEvalOptions {
   /// is written to this folder under the frame's file name; the folder is created.
   std::string pictures_dir;
 
-  /// Always true today (every combination is valid); kept for the Options convention.
+  /// Called after each truth frame with the number done and the total; may be empty. Lets a
+  /// command line show progress; called on the calling thread.
+  std::function<void(int done, int total)> progress;
+  /// How many of the worst frames (lowest accuracy) BriefReport lists; >= 0.
+  int worst_frames_listed = 5;
+
+  /// False, with a message naming the field, when pictures_dir names an existing non-folder or
+  /// worst_frames_listed is negative.
   bool IsValid(std::string* error) const;
 };
 
@@ -59,8 +67,10 @@ struct LabelEvalSummary {
   std::vector<std::string> missing_prediction;  ///< truth frames without a prediction
   std::vector<std::string> missing_truth;       ///< predictions without a truth frame (unscored)
   MissingPrediction missing_prediction_policy = MissingPrediction::kScoreAsUnknown;
+  int worst_frames_listed = 5;  ///< copied from the options, for BriefReport
 
-  /// Frame counts, missing frames and the aggregate ConfusionMatrix::BriefReport.
+  /// Frame counts, missing frames, the worst frames by accuracy and the aggregate
+  /// ConfusionMatrix::BriefReport.
   std::string BriefReport() const;
   /// JSON document; "metrics" objects as described at ConfusionMatrix:
   /// {"kind": "labels", "unit": "pixels", "prediction", "truth", "frames_truth",
@@ -74,7 +84,8 @@ struct LabelEvalSummary {
 /// `prediction` is the output folder of `ssta classify` (PNGs under prediction/labels/) or a
 /// folder holding the PNGs directly. Truth is SEQ/gt/labels/ (or SEQ/mav0/gt/labels/). Frames
 /// are matched by file name (*.png). Throws ssta::Error naming the file or folder: a missing
-/// folder, unreadable image, size mismatch or invalid class value.
+/// folder, a folder without any PNG (nothing to score is a wrong path, not a score), an
+/// unreadable image, a size mismatch or an invalid class value.
 LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::string& sequence,
                                       const LabelEvalOptions& options = {});
 
