@@ -106,6 +106,17 @@ TEST(eval_ConfusionMatrix, ClassPredictedButAbsentFromTruthIsPresentWithIouZero)
   EXPECT_NEAR(m.MeanIou(), (0.5 + 0.0) / 2.0, kTol);
 }
 
+TEST(eval_ConfusionMatrix, PredictionsOnUnscoredPixelsDoNotMakeAClassPresent) {
+  // Non-traversable is predicted only where the truth is don't care, unknown or undecided.
+  const ImageU8 truth = MakeLabels({{1, 255, 0, 4}});
+  const ImageU8 predicted = MakeLabels({{1, 3, 3, 3}});
+  const ConfusionMatrix m = ScoreLabels(truth, predicted);
+  EXPECT_FALSE(m.IsPresent(TravClass::kNonTraversable));
+  EXPECT_EQ(m.PresentClasses(), 1);
+  EXPECT_DOUBLE_EQ(m.MeanIou(), 1.0);
+  EXPECT_DOUBLE_EQ(m.Accuracy(), 1.0);
+}
+
 TEST(eval_ConfusionMatrix, NothingScoredGivesNaN) {
   const ConfusionMatrix m = ScoreLabels(MakeLabels({{255, 0}}), MakeLabels({{1, 1}}));
   EXPECT_EQ(m.Scored(), 0);
