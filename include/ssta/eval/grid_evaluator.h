@@ -1,0 +1,51 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "ssta/eval/class_grid.h"
+#include "ssta/eval/confusion_matrix.h"
+
+namespace ssta {
+
+/// Scores a predicted world grid against a truth grid. Every truth cell is one sample: its
+/// truth class against the predicted class of the predicted cell that contains the truth
+/// cell's centre; a centre outside the predicted grid counts as predicted 0 (unknown), which
+/// lowers accuracy and coverage. The grids may differ in origin, extent and resolution.
+/// Throws ssta::Error naming `truth.source` / `predicted.source` when the truth holds a value
+/// other than 0..4 or 255 or the prediction a value other than 0..4.
+ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted);
+
+/// The predicted classes sampled at the centres of the truth cells, 0 (unknown) where a centre
+/// lies outside the prediction: an image the size of truth.classes, the prediction ScoreGrid
+/// compares cell by cell.
+ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth);
+
+/// MakeComparisonPicture of the truth grid and the resampled prediction (north up: image row 0
+/// is the largest y), cells enlarged to whole pixel blocks so that small grids are at least
+/// 240 pixels high (unless a panel would grow wider than 4096 pixels). Throws ssta::Error on invalid class values as ScoreGrid.
+ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted);
+
+/// Result of EvaluateExportedGrid.
+struct GridEvalSummary {
+  std::string prediction;  ///< predicted class image
+  std::string truth;       ///< truth class image
+  ConfusionMatrix matrix;  ///< one sample per truth cell
+  /// Scored truth cells (truth 1..3) whose centre lies outside the predicted grid.
+  std::int64_t scored_cells_outside_prediction = 0;
+  ClassGrid truth_grid;      ///< as read (for reports)
+  ClassGrid predicted_grid;  ///< as read (for reports)
+
+  std::string BriefReport() const;
+  /// {"kind": "grid", "unit": "cells", "prediction", "truth", "truth_grid": {width, height,
+  ///  resolution, origin}, "prediction_grid": {...}, "scored_cells_outside_prediction",
+  ///  "metrics": {...}} with "metrics" as described at ConfusionMatrix.
+  std::string ToJson() const;
+};
+
+/// Scores a grid exported by `ssta export --format grid --out PREFIX` (PREFIX_classes.png and
+/// PREFIX.yaml) against SEQ/gt/grid_classes.png and SEQ/gt/grid.yaml. Throws ssta::Error
+/// naming the file at fault.
+GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence);
+
+}  // namespace ssta

@@ -1,0 +1,51 @@
+#include "eval/metrics_json.h"
+
+namespace ssta::internal {
+
+void WriteMetricsJson(const ConfusionMatrix& matrix, JsonWriter* json) {
+  json->BeginObject();
+  json->Key("scored");
+  json->Integer(matrix.Scored());
+  json->Key("correct");
+  json->Integer(matrix.Correct());
+  json->Key("decided");
+  json->Integer(matrix.Decided());
+  json->Key("not_scored");
+  json->BeginObject();
+  json->Key("dont_care");
+  json->Integer(matrix.dont_care());
+  json->Key("truth_unknown");
+  json->Integer(matrix.TruthTotal(0));
+  json->Key("truth_undecided");
+  json->Integer(matrix.TruthTotal(4));
+  json->EndObject();
+  json->Key("accuracy");
+  json->Number(matrix.Accuracy());
+  json->Key("coverage");
+  json->Number(matrix.Coverage());
+  json->Key("decided_accuracy");
+  json->Number(matrix.DecidedAccuracy());
+  json->Key("mean_iou");
+  json->Number(matrix.MeanIou());
+  json->Key("present_classes");
+  json->Integer(matrix.PresentClasses());
+  json->Key("iou");
+  json->BeginObject();
+  for (int c = 1; c <= 3; ++c) {
+    const auto cls = static_cast<TravClass>(c);
+    json->Key(ClassName(cls));
+    json->Number(matrix.Iou(cls));
+  }
+  json->EndObject();
+  json->Key("confusion");
+  json->BeginArray();
+  for (int t = 0; t < ConfusionMatrix::kSize; ++t) {
+    json->BeginInlineArray();
+    for (int p = 0; p < ConfusionMatrix::kSize; ++p) json->Integer(matrix.Count(t, p));
+    json->EndArray();
+  }
+  json->EndArray();
+  json->EndObject();
+}
+
+}  // namespace ssta::internal

@@ -1,0 +1,95 @@
+// End to end through the built `ssta` binary (skipped when the CLI target is not built).
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+
+#include "eval_test_helpers.h"
+#include "ssta/io/file_util.h"
+
+namespace ssta {
+namespace {
+
+using test::GridYaml;
+using test::MakeLabels;
+using test::TempDir;
+using test::WriteLabels;
+using test::WriteText;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr
+};
+
+RunResult RunSsta(const std::string& arguments) {
+  RunResult result;
+  const std::string command = std::string(SSTA_BINARY) + " " + arguments + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  if (pipe == nullptr) return result;
+  std::array<char, 512> buffer{};
+  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
+  const int status = ::pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+class eval_Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::string(SSTA_BINARY).empty()) GTEST_SKIP() << "ssta CLI not built";
+    WriteLabels(dir_ / "seq/gt/labels/100.png", MakeLabels({{1, 1}, {2, 3}}));
+    WriteLabels(dir_ / "out/labels/100.png", MakeLabels({{1, 1}, {2, 1}}));
+    WriteLabels(dir_ / "seq/gt/grid_classes.png", MakeLabels({{1, 2}, {3, 3}}));
+    WriteText(dir_ / "seq/gt/grid.yaml", GridYaml("grid_classes.png", 1.0, 0.0, 0.0));
+  }
+  TempDir dir_;
+};
+
+TEST_F(eval_Cli, LabelsPrintsReportAndWritesJsonAndPictures) {
+  const RunResult r = RunSsta("eval labels --pred " + (dir_ / "out") + " --gt " + (dir_ / "seq") +
+                              " --json " + (dir_ / "s.json") + " --pictures " + (dir_ / "pics"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("accuracy 0.7500"), std::string::npos) << r.output;
+  const std::string json = ReadTextFile(dir_ / "s.json");
+  EXPECT_NE(json.find("\"accuracy\": 0.75"), std::string::npos) << json;
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "pics/100.png"));
+}
+
+TEST_F(eval_Cli, GridAndQueryRun) {
+  WriteLabels(dir_ / "map_classes.png", MakeLabels({{1, 2}, {3, 0}}));
+  WriteText(dir_ / "map.yaml", GridYaml("map.pgm", 1.0, 0.0, 0.0));
+  RunResult r = RunSsta("eval grid --pred " + (dir_ / "map") + " --gt " + (dir_ / "seq") +
+                        " --json " + (dir_ / "g.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("accuracy 0.7500"), std::string::npos) << r.output;
+  EXPECT_NE(ReadTextFile(dir_ / "g.json").find("\"coverage\": 0.75"), std::string::npos);
+
+  WriteText(dir_ / "q.csv",
+            "x,y,z,class,cost,probability,slope_deg,step_m,observations\n"
+            "0.5,1.5,0,1,0,1,0,0,1\n");
+  r = RunSsta("eval query --pred " + (dir_ / "q.csv") + " --gt " + (dir_ / "seq"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("accuracy 1.0000"), std::string::npos) << r.output;
+}
+
+TEST_F(eval_Cli, BadInputExitsNonZeroNamingTheFile) {
+  WriteText(dir_ / "bad.csv", "x,y,z,class\n0.5,1.5,0,9\n");
+  const RunResult r = RunSsta("eval query --pred " + (dir_ / "bad.csv") + " --gt " + (dir_ / "seq"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("bad.csv:2"), std::string::npos) << r.output;
+}
+
+TEST_F(eval_Cli, HelpListsTheSubCommands) {
+  const RunResult r = RunSsta("eval --help");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* name : {"labels", "grid", "query"}) {
+    EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace ssta
