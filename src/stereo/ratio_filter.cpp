@@ -91,7 +91,7 @@ void ApplyRatioFilter(const ImageU8& left, const ImageU8& right, int radius, int
     if (best[i] == kNone) {
       d_best = -1;  // the match itself leaves the right image: not a trustworthy disparity
     } else if (second[i] != kNone &&
-               best[i] * 100 > static_cast<std::int64_t>(100 - ratio_percent) * second[i]) {
+               best[i] * 100 >= static_cast<std::int64_t>(100 - ratio_percent) * second[i]) {
       d_best = -1;
     }
   }

@@ -215,6 +215,19 @@ TEST(Rectifier, InvalidCalibrationOrOptionsThrow) {
   bad.right.body_T_camera = bad.left.body_T_camera;  // zero baseline
   EXPECT_THROW(Rectifier(bad, RectifierOptions{}), Error);
 
+  // cam1 turned 80 degrees outwards about its y axis: the two views no longer overlap.
+  StereoCalibration diverged = EurocCalibration();
+  Eigen::Isometry3d turn = Eigen::Isometry3d::Identity();
+  turn.linear() = Eigen::AngleAxisd(80.0 * M_PI / 180.0, Eigen::Vector3d::UnitY()).matrix();
+  diverged.right.body_T_camera = diverged.right.body_T_camera * turn;
+  ASSERT_TRUE(diverged.IsValid(nullptr));
+  try {
+    Rectifier rectifier(diverged, RectifierOptions{});
+    FAIL() << "a rig without overlap was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("no common valid area"), std::string::npos) << e.what();
+  }
+
   RectifierOptions options;
   options.alpha = 1.5;
   std::string error;

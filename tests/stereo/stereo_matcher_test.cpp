@@ -74,6 +74,28 @@ TEST_P(EachMatcher, RecoversPlaneAndNearerSquare) {
   EXPECT_LT(abs_error / n, 0.25);
 }
 
+TEST_P(EachMatcher, RecoversSlantedFloorWithSubPixelAccuracy) {
+  // Disparity 12 px at the top row to 40 px at the bottom: a floor receding to the horizon.
+  const SyntheticPair floor = testing::MakeFloor(320, 240, 12.0, 40.0, 8, 72);
+  const ImageF disparity = StereoMatcher(OptionsFor(GetParam())).Compute(floor.left, floor.right);
+  const Score s = ScoreDisparity(disparity, floor);
+  double abs_error = 0.0;
+  long n = 0;
+  for (std::size_t i = 0; i < disparity.size(); ++i) {
+    if (floor.evaluate[i] && disparity[i] > 0.0f &&
+        std::abs(disparity[i] - floor.truth[i]) <= 1.0f) {
+      abs_error += std::abs(disparity[i] - floor.truth[i]);
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 0);
+  std::cout << MatcherTypeName(GetParam()) << " floor: correct " << s.correct << ", wrong "
+            << s.wrong << ", mean |error| of correct " << abs_error / n << " px\n";
+  EXPECT_GT(s.correct, 0.85);
+  EXPECT_LT(s.wrong, 0.03);
+  EXPECT_LT(abs_error / n, 0.3);
+}
+
 TEST_P(EachMatcher, ConcurrentComputeGivesTheSameResult) {
   const SyntheticPair pair = MakePair(200, 120, 12, 24, 100, 30, 50, 8, 72);
   const StereoMatcher matcher(OptionsFor(GetParam()));

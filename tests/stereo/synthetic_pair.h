@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <random>
 
@@ -35,8 +36,10 @@ inline cv::Mat RandomTexture(int width, int height, unsigned seed, double blur_s
 /// coordinates) at `d_square` when side > 0. Pixels near the square's edges, the background strip
 /// it hides in the right image, `border` px at the image edges and the columns u < min_valid_u
 /// are excluded from `evaluate`.
+/// Both images get independent uniform noise of +-`noise` grey levels, as a camera would add.
 inline SyntheticPair MakePair(int width, int height, int d_background, int d_square, int u0,
-                              int v0, int side, int border, int min_valid_u, unsigned seed = 7) {
+                              int v0, int side, int border, int min_valid_u, unsigned seed = 7,
+                              int noise = 3) {
   const cv::Mat bg = RandomTexture(width + 256, height, seed);
   const cv::Mat fg = RandomTexture(width + 256, height, seed + 1);
   auto in_square = [&](int v, int u_left) {
@@ -55,6 +58,13 @@ inline SyntheticPair MakePair(int width, int height, int d_background, int d_squ
                                : bg.at<std::uint8_t>(v, u + d_background);
     }
   }
+  std::mt19937 rng(seed + 2);
+  std::uniform_int_distribution<int> jitter(-noise, noise);
+  for (ImageU8* image : {&p.left, &p.right}) {
+    for (std::size_t i = 0; i < image->size(); ++i) {
+      (*image)[i] = static_cast<std::uint8_t>(std::clamp((*image)[i] + jitter(rng), 0, 255));
+    }
+  }
   // Pixels whose matching window straddles two depths, or that the square hides in the right
   // image (the background strip of width d_square - d_background left of it), are not scored.
   constexpr int kMargin = 6;
@@ -66,6 +76,41 @@ inline SyntheticPair MakePair(int width, int height, int d_background, int d_squ
       const bool inside_square = side > 0 && v >= v0 + kMargin && v < v0 + side - kMargin &&
                                  u >= u0 + kMargin && u < u0 + side - kMargin;
       p.evaluate(v, u) = (near_square && !inside_square) ? 0 : 1;
+    }
+  }
+  return p;
+}
+
+}  // namespace ssta::testing
+
+namespace ssta::testing {
+
+/// A floor seen by a level camera: the disparity grows linearly from `d_top` in row 0 to
+/// `d_bottom` in the last row (constant along each row), so most rows have a fractional
+/// disparity. The right image is resampled from the texture with linear interpolation;
+/// `border` px and the columns u < min_valid_u are excluded from `evaluate`.
+inline SyntheticPair MakeFloor(int width, int height, double d_top, double d_bottom, int border,
+                               int min_valid_u, unsigned seed = 21, int noise = 2) {
+  const cv::Mat texture = RandomTexture(width + 256, height, seed, 1.2);
+  std::mt19937 rng(seed + 1);
+  std::uniform_int_distribution<int> jitter(-noise, noise);
+  const auto pixel = [&](double value) {
+    return static_cast<std::uint8_t>(std::clamp(static_cast<int>(std::lround(value)) + jitter(rng), 0, 255));
+  };
+  SyntheticPair p{ImageU8(width, height), ImageU8(width, height), ImageF(width, height),
+                  ImageU8(width, height, 0)};
+  for (int v = 0; v < height; ++v) {
+    const double d = d_top + (d_bottom - d_top) * v / (height - 1);
+    const std::uint8_t* t = texture.ptr<std::uint8_t>(v);
+    for (int u = 0; u < width; ++u) {
+      p.left(v, u) = pixel(t[u]);
+      const double x = u + d;  // texture column seen at right u
+      const int x0 = static_cast<int>(std::floor(x));
+      const double a = x - x0;
+      p.right(v, u) = pixel((1.0 - a) * t[x0] + a * t[x0 + 1]);
+      p.truth(v, u) = static_cast<float>(d);
+      p.evaluate(v, u) = v >= border && v < height - border && u >= std::max(border, min_valid_u) &&
+                         u < width - border;
     }
   }
   return p;
