@@ -14,40 +14,57 @@ enum class MatcherType {
   kPclAdaptiveCost,   ///< "pcl_acso": PCL AdaptiveCostSOStereoMatching (the paper's ACSO)
 };
 
-/// Parses "bm", "sgbm", "pcl_bb", "pcl_acso"; throws ssta::Error otherwise.
+/// Parses "bm", "sgbm", "pcl_bb", "pcl_acso"; throws ssta::Error (message starts with
+/// "algorithm:") otherwise.
 MatcherType ParseMatcherType(const std::string& name);
+/// The YAML name of `type` (inverse of ParseMatcherType).
 std::string MatcherTypeName(MatcherType type);
 
 /// YAML section `stereo`.
 struct StereoMatcherOptions {
   MatcherType algorithm = MatcherType::kSemiGlobal;
-  int min_disparity = 0;       ///< [px]
+  int min_disparity = 0;       ///< smallest disparity searched [px], >= 0
   int num_disparities = 64;    ///< search range [px], a positive multiple of 16
-  int block_size = 7;          ///< matching window side [px], odd, >= 3 (>= 5 for bm)
-  int uniqueness_ratio = 10;   ///< [%] best cost must beat the second best by this margin
-  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees
+  int block_size = 7;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
+                               ///< pcl_acso the length of the aggregation column
+  int uniqueness_ratio = 10;   ///< [%] bm/sgbm: best cost must beat the second best by this margin
+  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (all)
   int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check
-  int speckle_window_size = 100;  ///< [px] blobs smaller than this are removed; 0 disables
-  int speckle_range = 2;          ///< [px] max disparity variation inside one blob
+  int speckle_window_size = 100;  ///< [px] blobs smaller than this are removed (all); 0 disables
+  int speckle_range = 2;          ///< [px] max disparity step between neighbours of one blob
   // PCL matchers only.
-  int pcl_ratio_filter = 20;   ///< [%] PCL ratio filter, 0 disables
-  int pcl_peak_filter = 0;     ///< PCL peak filter, 0 disables
-  bool pcl_preprocessing = true;  ///< PCL's x-Sobel-like image pre-processing
-  int acso_smoothness_strong = 100;  ///< ACSO smoothness penalty, strong
-  int acso_smoothness_weak = 20;     ///< ACSO smoothness penalty, weak
-  double acso_gamma_s = 10.0;        ///< ACSO spatial bandwidth of the adaptive weights
+  /// [%] ratio filter: reject a pixel whose best window cost (sum of absolute differences,
+  /// block_size window) is not below (100 - value)% of the best cost at least 2 px away;
+  /// 0 disables. Applied by SSTA, not PCL, because PCL 1.13's filter crashes at the ends of
+  /// the range. For pcl_acso it tests the local window cost, not the optimised one.
+  int pcl_ratio_filter = 20;
+  int pcl_peak_filter = 0;     ///< PCL peak filter (cost curvature threshold), 0 disables
+  bool pcl_preprocessing = true;  ///< PCL's local mean removal (9x9) and clamping of both images
+  int acso_smoothness_strong = 100;  ///< ACSO smoothness penalty for jumps > 1 px, >= weak
+  int acso_smoothness_weak = 20;     ///< ACSO smoothness penalty for 1 px steps
+  double acso_gamma_s = 10.0;        ///< ACSO spatial bandwidth of the adaptive weights [px],
+                                     ///< a whole number (PCL takes an int)
+  double acso_gamma_c = 25.0;        ///< ACSO grey-level bandwidth of the adaptive weights,
+                                     ///< a whole number (PCL takes an int)
 
+  /// On failure writes a message that starts with the key name (e.g. "num_disparities: ...")
+  /// and returns false.
   bool IsValid(std::string* error) const;
 };
 
 /// Computes a disparity image of the left image of a rectified pair.
-/// Output: disparity in pixels (sub-pixel where the algorithm gives it), 0 where invalid.
-/// Thread-safe: Compute() may run concurrently on one matcher.
+/// Output: disparity in pixels (sub-pixel where the algorithm gives it; 1/16 px steps), 0 where
+/// invalid: not matched, rejected by a filter, or u < min_disparity + num_disparities for the
+/// PCL matchers (search range outside the right image). The PCL matchers cannot report the
+/// smallest disparity of the range (PCL stores it as 0 = invalid).
+/// Thread-safe: Compute() may run concurrently on one matcher (each call builds its own
+/// OpenCV / PCL matcher object).
 class StereoMatcher {
  public:
-  /// Throws ssta::Error when the options are invalid.
+  /// Throws ssta::Error (the IsValid message) when the options are invalid.
   explicit StereoMatcher(const StereoMatcherOptions& options);
-  /// Precondition (ssta::Error): same size, at least num_disparities + block_size wide.
+  /// Precondition (ssta::Error naming the sizes): same size, at least
+  /// min_disparity + num_disparities + block_size wide and block_size high.
   ImageF Compute(const ImageU8& left, const ImageU8& right) const;
   const StereoMatcherOptions& options() const { return options_; }
 

@@ -11,12 +11,16 @@ namespace ssta {
 struct TriangulationOptions {
   double min_range_m = 0.3;   ///< points nearer than this (depth Z) become NaN [m]
   double max_range_m = 25.0;  ///< points farther than this (depth Z) become NaN [m]
+  /// Requires 0 <= min_range_m < max_range_m, both finite. On failure writes a message that
+  /// starts with the key name and returns false.
   bool IsValid(std::string* error) const;
 };
 
 /// Organized point cloud of the left (cropped, rectified) image in the rectified camera frame:
 /// Z = f*b/d, X = (u-cu)*Z/f, Y = (v-cv)*Z/f; NaN where d <= 0 or Z is out of range.
-/// Precondition: disparity has the geometry's crop size.
+/// Units: disparity [px], points [m]. One pass, no per-pixel allocation; pure function,
+/// thread-safe. Preconditions (SSTA_CHECK, a programmer error): disparity has the geometry's
+/// crop size, f > 0, baseline_m > 0, and options are valid.
 Image3f Triangulate(const ImageF& disparity, const RectifiedGeometry& geometry,
                     const TriangulationOptions& options);
 

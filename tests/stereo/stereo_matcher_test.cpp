@@ -1,0 +1,290 @@
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <iostream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "ssta/core/error.h"
+#include "ssta/stereo/stereo_matcher.h"
+#include "stereo/synthetic_pair.h"
+
+namespace ssta {
+namespace {
+
+using testing::MakePair;
+using testing::SyntheticPair;
+
+struct Score {
+  double correct = 0.0;  ///< scored pixels with a disparity within 1 px of the truth
+  double wrong = 0.0;    ///< valid scored pixels off by more than 1 px, over all valid scored
+  double valid = 0.0;    ///< scored pixels with any disparity
+};
+
+Score ScoreDisparity(const ImageF& disparity, const SyntheticPair& pair) {
+  long scored = 0, valid = 0, correct = 0;
+  for (std::size_t i = 0; i < disparity.size(); ++i) {
+    if (!pair.evaluate[i]) continue;
+    ++scored;
+    if (disparity[i] <= 0.0f) continue;
+    ++valid;
+    if (std::abs(disparity[i] - pair.truth[i]) <= 1.0f) ++correct;
+  }
+  Score s;
+  s.correct = scored ? static_cast<double>(correct) / scored : 0.0;
+  s.valid = scored ? static_cast<double>(valid) / scored : 0.0;
+  s.wrong = valid ? static_cast<double>(valid - correct) / valid : 0.0;
+  return s;
+}
+
+StereoMatcherOptions OptionsFor(MatcherType type) {
+  StereoMatcherOptions o;
+  o.algorithm = type;
+  o.num_disparities = 64;
+  o.block_size = 7;
+  return o;
+}
+
+class EachMatcher : public ::testing::TestWithParam<MatcherType> {};
+
+TEST_P(EachMatcher, RecoversPlaneAndNearerSquare) {
+  // Background 20 px, square 36 px; columns u < 64 + 8 cannot see the whole search range.
+  const SyntheticPair pair = MakePair(320, 240, 20, 36, 150, 70, 90, 8, 72);
+  const StereoMatcher matcher(OptionsFor(GetParam()));
+  const ImageF disparity = matcher.Compute(pair.left, pair.right);
+  ASSERT_EQ(disparity.width(), 320);
+  ASSERT_EQ(disparity.height(), 240);
+  const Score s = ScoreDisparity(disparity, pair);
+  std::cout << MatcherTypeName(GetParam()) << ": correct " << s.correct << ", valid " << s.valid
+            << ", wrong among valid " << s.wrong << "\n";
+  EXPECT_GT(s.correct, 0.90);
+  EXPECT_LT(s.wrong, 0.02);
+  // Sub-pixel values on an integer-disparity scene stay close to the integer.
+  double abs_error = 0.0;
+  long n = 0;
+  for (std::size_t i = 0; i < disparity.size(); ++i) {
+    if (pair.evaluate[i] && disparity[i] > 0.0f && std::abs(disparity[i] - pair.truth[i]) <= 1.0f) {
+      abs_error += std::abs(disparity[i] - pair.truth[i]);
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 0);
+  EXPECT_LT(abs_error / n, 0.25);
+}
+
+TEST_P(EachMatcher, RecoversSlantedFloorWithSubPixelAccuracy) {
+  // Disparity 12 px at the top row to 40 px at the bottom: a floor receding to the horizon.
+  const SyntheticPair floor = testing::MakeFloor(320, 240, 12.0, 40.0, 8, 72);
+  const ImageF disparity = StereoMatcher(OptionsFor(GetParam())).Compute(floor.left, floor.right);
+  const Score s = ScoreDisparity(disparity, floor);
+  double abs_error = 0.0;
+  long n = 0;
+  for (std::size_t i = 0; i < disparity.size(); ++i) {
+    if (floor.evaluate[i] && disparity[i] > 0.0f &&
+        std::abs(disparity[i] - floor.truth[i]) <= 1.0f) {
+      abs_error += std::abs(disparity[i] - floor.truth[i]);
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 0);
+  std::cout << MatcherTypeName(GetParam()) << " floor: correct " << s.correct << ", wrong "
+            << s.wrong << ", mean |error| of correct " << abs_error / n << " px\n";
+  EXPECT_GT(s.correct, 0.85);
+  EXPECT_LT(s.wrong, 0.03);
+  EXPECT_LT(abs_error / n, 0.3);
+}
+
+TEST_P(EachMatcher, ConcurrentComputeGivesTheSameResult) {
+  const SyntheticPair pair = MakePair(200, 120, 12, 24, 100, 30, 50, 8, 72);
+  const StereoMatcher matcher(OptionsFor(GetParam()));
+  const ImageF reference = matcher.Compute(pair.left, pair.right);
+  ImageF a, b;
+  std::thread t1([&] { a = matcher.Compute(pair.left, pair.right); });
+  std::thread t2([&] { b = matcher.Compute(pair.left, pair.right); });
+  t1.join();
+  t2.join();
+  long differ = 0;
+  for (std::size_t i = 0; i < reference.size(); ++i) {
+    differ += (a[i] != reference[i]) + (b[i] != reference[i]);
+  }
+  EXPECT_EQ(differ, 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Stereo, EachMatcher,
+                         ::testing::Values(MatcherType::kBlockMatching, MatcherType::kSemiGlobal,
+                                           MatcherType::kPclBlockBased,
+                                           MatcherType::kPclAdaptiveCost),
+                         [](const ::testing::TestParamInfo<MatcherType>& info) {
+                           return MatcherTypeName(info.param);
+                         });
+
+/// PCL 1.13's own ratio filter walks off its cost array when the best disparity is the first
+/// or the last of the range; the wrapper must survive exactly those pixels.
+class PclEndOfRange : public ::testing::TestWithParam<MatcherType> {};
+
+TEST_P(PclEndOfRange, BestDisparityAtEitherEndDoesNotCrash) {
+  for (const int min_disparity : {0, 16}) {
+    StereoMatcherOptions o = OptionsFor(GetParam());
+    o.min_disparity = min_disparity;
+    o.num_disparities = 32;
+    o.pcl_ratio_filter = 20;
+    const int first = min_disparity;
+    const int last = min_disparity + 31;
+    const int min_u = min_disparity + 32 + 8;
+    const StereoMatcher matcher(o);
+
+    // Whole scene at the last disparity of the range (index maxdisp - 1 inside PCL).
+    const SyntheticPair at_last = MakePair(240, 120, last, 0, 0, 0, 0, 8, min_u, 11);
+    const ImageF d_last = matcher.Compute(at_last.left, at_last.right);
+    const Score s_last = ScoreDisparity(d_last, at_last);
+    std::cout << MatcherTypeName(GetParam()) << " min " << min_disparity << " at last " << last
+              << ": correct " << s_last.correct << ", wrong " << s_last.wrong << "\n";
+    EXPECT_GT(s_last.correct, 0.9);
+    EXPECT_LT(s_last.wrong, 0.01);
+
+    // Whole scene at the first disparity (index 0): PCL stores index 0 as 0 = invalid, so
+    // every scored pixel must be invalid or right.
+    const SyntheticPair at_first = MakePair(240, 120, first, 0, 0, 0, 0, 8, min_u, 12);
+    const ImageF d_first = matcher.Compute(at_first.left, at_first.right);
+    const Score s_first = ScoreDisparity(d_first, at_first);
+    std::cout << MatcherTypeName(GetParam()) << " min " << min_disparity << " at first "
+              << first << ": valid " << s_first.valid << ", wrong " << s_first.wrong << "\n";
+    EXPECT_LT(s_first.wrong, 0.01);
+
+    // Textureless pair: every cost ties and PCL picks index 0, the classic crash.
+    const ImageU8 flat(240, 120, 128);
+    const ImageF d_flat = matcher.Compute(flat, flat);
+    long valid = 0;
+    for (std::size_t i = 0; i < d_flat.size(); ++i) valid += d_flat[i] > 0.0f;
+    EXPECT_EQ(valid, 0);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Stereo, PclEndOfRange,
+                         ::testing::Values(MatcherType::kPclBlockBased,
+                                           MatcherType::kPclAdaptiveCost),
+                         [](const ::testing::TestParamInfo<MatcherType>& info) {
+                           return MatcherTypeName(info.param);
+                         });
+
+TEST(StereoMatcher, PclRatioFilterRejectsRepetitiveTexture) {
+  // Vertical stripes repeating every 8 px at a true disparity of 26: costs tie at 2, 10, ...,
+  // 58, and PCL's block matcher takes the first (2), which is wrong. Camera-like noise keeps
+  // the best cost above 0 (a zero best cost passes any ratio test); the stripes have low
+  // contrast so that PCL's pre-processing (which clamps at +-31) does not flatten the noise.
+  const int width = 240, height = 120, period = 8, truth = 26;
+  const cv::Mat texture = testing::RandomTexture(period, height, 5, 0.0);
+  std::mt19937 rng(4);
+  std::uniform_int_distribution<int> noise(-2, 2);
+  const auto pixel = [&](int value) {
+    return static_cast<std::uint8_t>(std::clamp(value + noise(rng), 0, 255));
+  };
+  ImageU8 left(width, height), right(width, height);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      left(v, u) = pixel(108 + texture.at<std::uint8_t>(v, u % period) / 6);
+      right(v, u) = pixel(108 + texture.at<std::uint8_t>(v, (u + truth) % period) / 6);
+    }
+  }
+  StereoMatcherOptions o = OptionsFor(MatcherType::kPclBlockBased);
+  o.speckle_window_size = 0;
+  o.pcl_ratio_filter = 0;
+  const ImageF unfiltered = StereoMatcher(o).Compute(left, right);
+  o.pcl_ratio_filter = 20;
+  const ImageF filtered = StereoMatcher(o).Compute(left, right);
+  long scored = 0, wrong_unfiltered = 0, wrong_filtered = 0;
+  for (int v = 10; v < height - 10; ++v) {
+    for (int u = 64 + 10; u < width - 10; ++u) {
+      ++scored;
+      wrong_unfiltered += unfiltered(v, u) > 0.0f && std::abs(unfiltered(v, u) - truth) > 1.0f;
+      wrong_filtered += filtered(v, u) > 0.0f && std::abs(filtered(v, u) - truth) > 1.0f;
+    }
+  }
+  std::cout << "repetitive texture: wrong without ratio filter "
+            << static_cast<double>(wrong_unfiltered) / scored << ", with "
+            << static_cast<double>(wrong_filtered) / scored << "\n";
+  EXPECT_GT(static_cast<double>(wrong_unfiltered) / scored, 0.3);
+  EXPECT_LT(static_cast<double>(wrong_filtered) / scored, 0.02);
+}
+
+TEST(StereoMatcher, InvalidOptionsNameTheKey) {
+  const auto error_of = [](const StereoMatcherOptions& o) {
+    std::string error;
+    EXPECT_FALSE(o.IsValid(&error));
+    return error;
+  };
+  StereoMatcherOptions o;
+  std::string error;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+  o.num_disparities = 40;
+  EXPECT_EQ(error_of(o).rfind("num_disparities: must be a positive multiple of 16", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.block_size = 8;
+  EXPECT_EQ(error_of(o).rfind("block_size:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.algorithm = MatcherType::kBlockMatching;
+  o.block_size = 3;
+  EXPECT_EQ(error_of(o).rfind("block_size:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.min_disparity = -1;
+  EXPECT_EQ(error_of(o).rfind("min_disparity:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.uniqueness_ratio = 101;
+  EXPECT_EQ(error_of(o).rfind("uniqueness_ratio:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.pcl_ratio_filter = 100;
+  EXPECT_EQ(error_of(o).rfind("pcl_ratio_filter:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.acso_gamma_s = 2.5;
+  EXPECT_EQ(error_of(o).rfind("acso_gamma_s:", 0), 0u);
+  o = StereoMatcherOptions{};
+  o.acso_smoothness_strong = 5;
+  EXPECT_EQ(error_of(o).rfind("acso_smoothness_strong:", 0), 0u);
+
+  o = StereoMatcherOptions{};
+  o.num_disparities = 0;
+  try {
+    StereoMatcher matcher(o);
+    FAIL() << "invalid options accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("num_disparities:", 0), 0u) << e.what();
+  }
+}
+
+TEST(StereoMatcher, ParsesAlgorithmNames) {
+  for (const MatcherType t : {MatcherType::kBlockMatching, MatcherType::kSemiGlobal,
+                              MatcherType::kPclBlockBased, MatcherType::kPclAdaptiveCost}) {
+    EXPECT_EQ(ParseMatcherType(MatcherTypeName(t)), t);
+  }
+  EXPECT_EQ(ParseMatcherType("pcl_acso"), MatcherType::kPclAdaptiveCost);
+  try {
+    ParseMatcherType("census");
+    FAIL() << "unknown name accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("algorithm:", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("census"), std::string::npos);
+  }
+}
+
+TEST(StereoMatcher, BadImageSizesThrowAndNameTheSizes) {
+  const StereoMatcher matcher(StereoMatcherOptions{});
+  try {
+    matcher.Compute(ImageU8(200, 100), ImageU8(199, 100));
+    FAIL() << "size mismatch accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("200x100"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("199x100"), std::string::npos) << e.what();
+  }
+  try {
+    matcher.Compute(ImageU8(60, 100), ImageU8(60, 100));  // narrower than 64 + 7
+    FAIL() << "too narrow images accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("60x100"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("71"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ssta
