@@ -73,6 +73,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("acso_smoothness_strong", &o->acso_smoothness_strong);
   s.Read("acso_smoothness_weak", &o->acso_smoothness_weak);
   s.Read("acso_gamma_s", &o->acso_gamma_s);
+  s.Read("acso_gamma_c", &o->acso_gamma_c);
   s.RejectUnknownKeys();
 }
 
@@ -117,6 +118,7 @@ void ApplyConfigFile(const std::string& path, Config* config) {
   {
     YamlSection s = root.Child("rectification");
     s.Read("crop_to_common_area", &c.rectification.crop_to_common_area);
+    s.Read("alpha", &c.rectification.alpha);
     s.RejectUnknownKeys();
   }
   ReadStereo(root.Child("stereo"), &c.stereo);
@@ -184,7 +186,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  semi_step_m: " << c.vehicle.semi_step_m << "\n"
     << "  min_camera_height_m: " << c.vehicle.min_camera_height_m << "\n"
     << "  max_camera_height_m: " << c.vehicle.max_camera_height_m << "\n";
-  y << "rectification:\n  crop_to_common_area: " << c.rectification.crop_to_common_area << "\n";
+  y << "rectification:\n  crop_to_common_area: " << c.rectification.crop_to_common_area << "\n"
+    << "  alpha: " << c.rectification.alpha << "\n";
   const auto& s = c.stereo;
   y << "stereo:\n"
     << "  algorithm: " << MatcherTypeName(s.algorithm) << "\n"
@@ -201,7 +204,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
     << "  acso_smoothness_strong: " << s.acso_smoothness_strong << "\n"
     << "  acso_smoothness_weak: " << s.acso_smoothness_weak << "\n"
-    << "  acso_gamma_s: " << s.acso_gamma_s << "\n";
+    << "  acso_gamma_s: " << s.acso_gamma_s << "\n"
+    << "  acso_gamma_c: " << s.acso_gamma_c << "\n";
   y << "triangulation:\n"
     << "  min_range_m: " << c.triangulation.min_range_m << "\n"
     << "  max_range_m: " << c.triangulation.max_range_m << "\n";
