@@ -1,0 +1,118 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ssta/core/image.h"
+
+namespace ssta {
+
+/// How per-pixel normals are computed from integral images (paper, section "Feature
+/// extraction"). All three cost O(1) per pixel whatever the window size.
+enum class NormalMethod {
+  /// Smallest eigenvector of the 3x3 covariance of the window's points (9 sums + a count).
+  /// The most accurate and the most robust to noise; the paper's choice.
+  kCovarianceMatrix,
+  /// Cross product of the smoothed horizontal and vertical 3D gradients, each the difference of
+  /// the mean points of two window halves (3 sums + a count).
+  kAverage3dGradient,
+  /// Normals from the average change of inverse depth across window halves (1 sum + a count),
+  /// turned into 3D tangents with the pixel's own viewing ray. The fastest, least robust.
+  kAverageDepthChange,
+};
+
+/// Parses the YAML / command-line name: "covariance", "average_3d_gradient" or
+/// "average_depth_change". Throws ssta::Error naming the value and the accepted names.
+NormalMethod ParseNormalMethod(const std::string& name);
+
+/// The name ParseNormalMethod accepts for `method`.
+const char* NormalMethodName(NormalMethod method);
+
+/// Options of the normal estimator (YAML section `normals`).
+struct NormalOptions {
+  NormalMethod method = NormalMethod::kCovarianceMatrix;
+
+  /// Side of the square averaging window [px]; the window spans +-smoothing_size_px / 2
+  /// (integer division) around the pixel, so 12 and 13 both give a 13 x 13 window. Default 13:
+  /// at 640 x 480 and f ~ 450 px it covers 0.06 m x 0.06 m at 2 m and 0.3 m across at 10 m,
+  /// enough points to average stereo depth noise while staying smaller than the obstacles that
+  /// matter (a 0.2 m step at 5 m spans ~18 rows).
+  int smoothing_size_px = 13;
+
+  /// Depth-edge threshold in inverse depth [1/m]. Two neighbouring points (4-neighbours, or the
+  /// valid points at both ends of a gap of invalid pixels shorter than the window) are a depth
+  /// edge when |1/Z_a - 1/Z_b| > max_depth_change_factor * sqrt(1 + gap_px). Inverse depth is
+  /// disparity divided by f * b, so the threshold is a disparity jump of factor * f * b pixels:
+  /// the default 0.02 is ~1.1 px for f = 450 px, b = 0.12 m. Why inverse depth: stereo noise
+  /// is constant in disparity (grows with Z^2 in depth), and 1/Z is linear in (u, v) on any
+  /// plane, so a plane is cut only where it passes closer than |n_xy| / (f * factor) to the
+  /// camera centre (0.11 m here) - never far ground at a grazing angle, which a relative
+  /// |dZ| > factor * Z test cuts. The sqrt(1 + gap) term lets occlusion bands (a gap as wide
+  /// as the disparity jump) still separate foreground from background.
+  /// A pixel's window never reaches past the nearest edge pixel, nor past the image border.
+  double max_depth_change_factor = 0.02;
+
+  /// When true, the window side scales with depth as smoothing_size_px * sqrt(Z / 5 m),
+  /// clamped to [0.5, 2] x smoothing_size_px: the normal error from depth noise sigma_Z ~ Z^2
+  /// over a window of s x s pixels grows as Z / s^2, so s ~ sqrt(Z) keeps it roughly constant
+  /// (finer near the camera, smoother far away). Off by default: fixed windows are predictable
+  /// and far ground at a grazing angle already spans metres per window.
+  bool depth_dependent_smoothing = false;
+
+  /// On failure writes a message starting with the offending key (e.g.
+  /// "smoothing_size_px: must be in [3, 201]") to *error when error is not null.
+  bool IsValid(std::string* error) const;
+};
+
+/// Estimates per-pixel unit normals of an organized point cloud with integral images.
+///
+/// Input: an organized cloud in the rectified left camera frame (x right, y down, z forward,
+/// metres), from a pinhole camera (X/Z linear in u, Y/Z linear in v - true for triangulated
+/// rectified stereo), all-NaN where there is no point. Points with Z <= 0 are treated as invalid.
+/// Output: unit normals in the same frame, oriented towards the camera (n . p < 0), all-NaN
+/// where the point is invalid, the window holds too few valid points, or the window is cut by a
+/// depth edge or the image border to less than 3 x 3 pixels.
+///
+/// Keeps its buffers between calls, so a sequence of equally sized frames does not reallocate.
+/// Not thread-safe: use one estimator per thread.
+class NormalEstimator {
+ public:
+  /// Throws ssta::Error (message from NormalOptions::IsValid) on invalid options.
+  explicit NormalEstimator(const NormalOptions& options);
+
+  /// Normals of `cloud_camera`; the reference stays valid until the next Compute call.
+  const Image3f& Compute(const Image3f& cloud_camera);
+
+  /// Window half-size [px] used at each pixel by the last Compute: the window is
+  /// (2r+1) x (2r+1); 0 where no normal was computed.
+  const ImageU8& window_radius_px() const { return radius_; }
+
+  const NormalOptions& options() const { return options_; }
+
+ private:
+  void ComputeWindowRadii(const Image3f& cloud);
+  void ComputeCovariance(const Image3f& cloud);
+  void ComputeAverage3dGradient(const Image3f& cloud);
+  void ComputeAverageDepthChange(const Image3f& cloud);
+
+  NormalOptions options_;
+  Image3f normals_;
+  ImageU8 radius_;    // per-pixel window radius [px]
+  ImageU8 distance_;  // chessboard distance to the nearest depth-edge pixel [px], capped
+  std::vector<std::int32_t> last_valid_row_;  // per column, for the vertical edge scan
+  std::vector<float> last_inverse_depth_;     // per column, 1/Z at last_valid_row_ [1/m]
+  std::vector<std::uint64_t> integral_u64_;   // covariance sums (fixed point, modular)
+  std::vector<double> integral_f64_;          // gradient / depth-change sums
+  double max_abs_coordinate_m_ = 0.0;         // of the last frame's valid points
+  int max_radius_px_ = 0;                     // largest window radius any pixel may use
+  // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
+  double fx_px_ = 0.0;
+  double fy_px_ = 0.0;
+};
+
+/// One-shot convenience: NormalEstimator(options).Compute(cloud_camera), returned by value.
+/// Throws ssta::Error on invalid options. Thread-safe (no shared state).
+Image3f EstimateNormals(const Image3f& cloud_camera, const NormalOptions& options);
+
+}  // namespace ssta

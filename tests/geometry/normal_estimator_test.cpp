@@ -1,0 +1,326 @@
+#include "ssta/geometry/normal_estimator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "geometry/smallest_eigenvector.h"
+#include "geometry/synthetic_scene.h"
+
+namespace ssta {
+namespace {
+
+using test::AngleDeg;
+using test::PinholeCamera;
+using test::Scene;
+
+constexpr NormalMethod kAllMethods[] = {NormalMethod::kCovarianceMatrix,
+                                        NormalMethod::kAverage3dGradient,
+                                        NormalMethod::kAverageDepthChange};
+
+// Angular error statistics over the pixels selected by `use` that have a true normal.
+struct ErrorStats {
+  int selected = 0;     // selected pixels with a true normal
+  int estimated = 0;    // ... of which have an estimated normal
+  double mean_deg = 0;  // over the estimated ones
+  double max_deg = 0;
+  double Coverage() const { return selected ? static_cast<double>(estimated) / selected : 0.0; }
+};
+
+ErrorStats Compare(const Image3f& estimated, const Image3f& truth,
+                   const std::function<bool(int v, int u)>& use) {
+  ErrorStats stats;
+  double sum = 0.0;
+  for (int v = 0; v < truth.height(); ++v) {
+    for (int u = 0; u < truth.width(); ++u) {
+      if (!IsFinite(truth(v, u)) || !use(v, u)) continue;
+      ++stats.selected;
+      if (!IsFinite(estimated(v, u))) continue;
+      ++stats.estimated;
+      const double e = AngleDeg(estimated(v, u), truth(v, u));
+      sum += e;
+      stats.max_deg = std::max(stats.max_deg, e);
+    }
+  }
+  if (stats.estimated) stats.mean_deg = sum / stats.estimated;
+  return stats;
+}
+
+// A plane facing the camera at an angle, through (0, 0, 5) m.
+Scene TiltedPlaneScene() {
+  Scene scene;
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, -0.8).normalized();
+  scene.AddPlane(n, -n.dot(Eigen::Vector3d(0, 0, 5)));
+  return scene;
+}
+
+NormalOptions OptionsFor(NormalMethod method) {
+  NormalOptions options;
+  options.method = method;
+  return options;
+}
+
+TEST(NormalEstimator, EachMethodRecoversATiltedPlane) {
+  const PinholeCamera camera;
+  Image3f truth;
+  const Image3f cloud = TiltedPlaneScene().Render(camera, &truth);
+  for (const NormalMethod method : kAllMethods) {
+    SCOPED_TRACE(NormalMethodName(method));
+    NormalEstimator estimator(OptionsFor(method));
+    const Image3f& normals = estimator.Compute(cloud);
+    const int r = estimator.options().smoothing_size_px / 2;
+    // Interior: full windows fit inside the image.
+    const ErrorStats interior = Compare(normals, truth, [&](int v, int u) {
+      return v >= r && u >= r && v < camera.height - r && u < camera.width - r;
+    });
+    EXPECT_GT(interior.selected, 250000);
+    EXPECT_EQ(interior.estimated, interior.selected);
+    EXPECT_LT(interior.max_deg, 0.2);
+    // Near the border the window shrinks but the normal stays right.
+    const ErrorStats all = Compare(normals, truth, [](int, int) { return true; });
+    EXPECT_LT(all.max_deg, 0.5);
+    RecordProperty(std::string(NormalMethodName(method)) + "_max_deg", std::to_string(all.max_deg));
+    // Oriented towards the camera.
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (IsFinite(normals[i])) {
+        ASSERT_LT(normals[i].dot(cloud[i]), 0.0f);
+        ASSERT_NEAR(normals[i].norm(), 1.0f, 1e-5f);
+      }
+    }
+  }
+}
+
+TEST(NormalEstimator, GroundAtGrazingAnglesUpTo20mIsExact) {
+  const PinholeCamera camera;
+  Image3f truth;
+  const Image3f cloud = test::GroundScene(1.0).Render(camera, &truth, 20.0);
+  for (const NormalMethod method : kAllMethods) {
+    SCOPED_TRACE(NormalMethodName(method));
+    const Image3f normals = EstimateNormals(cloud, OptionsFor(method));
+    const ErrorStats stats = Compare(normals, truth, [](int, int) { return true; });
+    // Only the far edge of the ground (Z = 20 m, cut by the range limit) and the image
+    // border lose their normals.
+    EXPECT_GT(stats.Coverage(), 0.95);
+    EXPECT_LT(stats.max_deg, 0.5);
+  }
+}
+
+TEST(NormalEstimator, InvalidPointsGiveNanAndBarelyDisturbNeighbours) {
+  const PinholeCamera camera;
+  Image3f truth;
+  Image3f cloud = TiltedPlaneScene().Render(camera, &truth);
+  // A 9 x 9 hole and a scatter of single invalid pixels.
+  Image<std::uint8_t> invalid(camera.width, camera.height, 0);
+  for (int v = 200; v < 209; ++v) {
+    for (int u = 300; u < 309; ++u) invalid(v, u) = 1;
+  }
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<int> pick_v(0, camera.height - 1), pick_u(0, camera.width - 1);
+  for (int i = 0; i < 3000; ++i) invalid(pick_v(rng), pick_u(rng)) = 1;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (invalid[i]) cloud[i] = NanVector3f();
+  }
+  for (const NormalMethod method : kAllMethods) {
+    SCOPED_TRACE(NormalMethodName(method));
+    const Image3f normals = EstimateNormals(cloud, OptionsFor(method));
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (invalid[i]) {
+        ASSERT_FALSE(IsFinite(normals[i]));
+      }
+    }
+    const ErrorStats stats = Compare(normals, truth, [&](int v, int u) { return !invalid(v, u); });
+    EXPECT_GT(stats.Coverage(), 0.97);
+    // Exact for the point-based methods; the depth-change method assumes balanced halves.
+    EXPECT_LT(stats.max_deg, method == NormalMethod::kAverageDepthChange ? 2.0 : 0.2);
+    RecordProperty(std::string(NormalMethodName(method)) + "_max_deg", std::to_string(stats.max_deg));
+  }
+}
+
+// A 1 m box whose front face is 3 m away, in front of a wall at 10 m.
+Scene BoxBeforeWallScene() {
+  Scene scene;
+  scene.AddPlane({0, 0, -1}, 10.0);
+  scene.AddBox({-0.5, -0.5, 3.0}, {0.5, 0.5, 3.5});
+  return scene;
+}
+
+TEST(NormalEstimator, WindowsDoNotStraddleDepthEdges) {
+  const PinholeCamera camera;
+  Image3f truth;
+  const Image3f cloud = BoxBeforeWallScene().Render(camera, &truth);
+  // Front-face pixels within 6 px of its silhouette (the face spans 150 x 150 px).
+  auto near_silhouette = [&](int v, int u) {
+    if (!IsFinite(cloud(v, u)) || cloud(v, u).z() > 3.01f) return false;
+    for (int dv = -6; dv <= 6; ++dv) {
+      for (int du = -6; du <= 6; ++du) {
+        if (!cloud.Contains(v + dv, u + du) || cloud(v + dv, u + du).z() > 3.01f) return true;
+      }
+    }
+    return false;
+  };
+  auto on_face = [&](int v, int u) { return cloud(v, u).z() < 3.01f; };
+  for (const NormalMethod method : kAllMethods) {
+    SCOPED_TRACE(NormalMethodName(method));
+    NormalEstimator estimator(OptionsFor(method));
+    const Image3f& normals = estimator.Compute(cloud);
+    const ErrorStats edge = Compare(normals, truth, near_silhouette);
+    EXPECT_GT(edge.selected, 3000);
+    EXPECT_LT(edge.max_deg, 0.5);
+    EXPECT_GT(Compare(normals, truth, on_face).Coverage(), 0.94);  // only 2 px lost per side
+    // The wall around the box is right too.
+    const ErrorStats wall =
+        Compare(normals, truth, [&](int v, int u) { return cloud(v, u).z() > 9.9f; });
+    EXPECT_LT(wall.max_deg, 0.5);
+  }
+  // Without edge handling the same pixels are badly off: the check above can fail.
+  NormalOptions blind;
+  blind.max_depth_change_factor = 100.0;
+  const ErrorStats straddled = Compare(EstimateNormals(cloud, blind), truth, near_silhouette);
+  EXPECT_GT(straddled.max_deg, 20.0);
+}
+
+TEST(NormalEstimator, CovarianceNormalsOfNoisyStereoGroundStayClose) {
+  const PinholeCamera camera;
+  Image3f truth;
+  Image3f cloud = test::GroundScene(1.0).Render(camera, &truth, 20.0);
+  // 0.15 px disparity noise: sigma_Z = 0.15 / (f b) * Z^2 (0.28 m at 10 m).
+  const double k = 0.15 / (camera.f_px * camera.baseline_m);
+  test::AddDepthNoise(k, 42, &cloud);
+  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
+  auto in_range = [&](double z_min, double z_max) {
+    return [&, z_min, z_max](int v, int u) {
+      return IsFinite(cloud(v, u)) && cloud(v, u).z() >= z_min && cloud(v, u).z() < z_max;
+    };
+  };
+  const ErrorStats all = Compare(normals, truth, [](int, int) { return true; });
+  const ErrorStats near = Compare(normals, truth, in_range(0.0, 5.0));
+  const ErrorStats far = Compare(normals, truth, in_range(10.0, 20.0));
+  RecordProperty("mean_deg", std::to_string(all.mean_deg));
+  RecordProperty("near_mean_deg", std::to_string(near.mean_deg));
+  RecordProperty("far_mean_deg", std::to_string(far.mean_deg));
+  EXPECT_GT(all.Coverage(), 0.9);  // noise must not fake depth edges everywhere
+  // Near the camera the noise along the rays is large against the window's metric size and
+  // tilts the total-least-squares fit most; far away the window spans metres of ground.
+  EXPECT_LT(all.mean_deg, 3.5);
+  EXPECT_LT(near.mean_deg, 4.5);
+  EXPECT_LT(far.mean_deg, 2.5);
+
+  // Depth-dependent smoothing trades near detail for far accuracy.
+  NormalOptions adaptive;
+  adaptive.depth_dependent_smoothing = true;
+  const Image3f adaptive_normals = EstimateNormals(cloud, adaptive);
+  const ErrorStats adaptive_far = Compare(adaptive_normals, truth, in_range(10.0, 20.0));
+  RecordProperty("adaptive_far_mean_deg", std::to_string(adaptive_far.mean_deg));
+  EXPECT_LT(adaptive_far.mean_deg, 0.8 * far.mean_deg);
+}
+
+TEST(NormalEstimator, ReusesBuffersAcrossFrameSizes) {
+  PinholeCamera big;
+  PinholeCamera small;
+  small.width = 160;
+  small.height = 120;
+  small.cu_px = 79.5;
+  small.cv_px = 59.5;
+  small.f_px = 112.5;
+  Image3f truth_big, truth_small;
+  const Image3f cloud_big = TiltedPlaneScene().Render(big, &truth_big);
+  const Image3f cloud_small = TiltedPlaneScene().Render(small, &truth_small);
+  NormalEstimator estimator(NormalOptions{});
+  for (int i = 0; i < 2; ++i) {
+    const ErrorStats a = Compare(estimator.Compute(cloud_big), truth_big, [](int, int) { return true; });
+    const ErrorStats b = Compare(estimator.Compute(cloud_small), truth_small, [](int, int) { return true; });
+    EXPECT_LT(a.max_deg, 0.5);
+    EXPECT_LT(b.max_deg, 0.5);
+    EXPECT_GT(b.Coverage(), 0.9);
+  }
+  const Image3f all_invalid(8, 8, NanVector3f());
+  const Image3f& none = estimator.Compute(all_invalid);
+  EXPECT_EQ(none.width(), 8);
+  for (std::size_t i = 0; i < none.size(); ++i) EXPECT_FALSE(IsFinite(none[i]));
+}
+
+TEST(NormalEstimator, WindowRadiusIsReportedAndCutAtEdges) {
+  const PinholeCamera camera;
+  const Image3f cloud = BoxBeforeWallScene().Render(camera);
+  NormalEstimator estimator(NormalOptions{});
+  estimator.Compute(cloud);
+  const ImageU8& radius = estimator.window_radius_px();
+  EXPECT_EQ(radius(240, 320), 6);  // box centre: full 13 x 13 window
+  EXPECT_EQ(radius(0, 0), 0);      // image corner
+  // Walking left from the box centre, the radius shrinks to 0 at the silhouette.
+  int u = 320;
+  while (cloud(240, u - 1).z() < 3.01f) --u;  // u: leftmost box pixel in row 240
+  EXPECT_EQ(radius(240, u), 0);
+  EXPECT_EQ(radius(240, u + 1), 0);
+  EXPECT_EQ(radius(240, u + 2), 1);
+  EXPECT_EQ(radius(240, u + 7), 6);
+  EXPECT_EQ(radius(240, u - 1), 0);
+}
+
+TEST(NormalOptions, ValidationNamesTheKey) {
+  std::string error;
+  EXPECT_TRUE(NormalOptions{}.IsValid(&error));
+  NormalOptions options;
+  options.smoothing_size_px = 1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("smoothing_size_px:", 0), 0u) << error;
+  options = NormalOptions{};
+  options.max_depth_change_factor = 0.0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("max_depth_change_factor:", 0), 0u) << error;
+  options.max_depth_change_factor = std::nan("");
+  EXPECT_FALSE(options.IsValid(nullptr));
+  try {
+    NormalEstimator estimator(options);
+    FAIL() << "expected ssta::Error";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("max_depth_change_factor:", 0), 0u);
+  }
+}
+
+TEST(NormalMethod, NamesRoundTripAndUnknownNamesAreErrors) {
+  for (const NormalMethod method : kAllMethods) {
+    EXPECT_EQ(ParseNormalMethod(NormalMethodName(method)), method);
+  }
+  EXPECT_EQ(ParseNormalMethod("covariance"), NormalMethod::kCovarianceMatrix);
+  try {
+    ParseNormalMethod("pca");
+    FAIL() << "expected ssta::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'pca'"), std::string::npos);
+    EXPECT_EQ(std::string(e.what()).rfind("method:", 0), 0u);
+  }
+}
+
+TEST(SmallestEigenvector, AgreesWithEigenOnRandomFlatCovariances) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), ratio(0.0, 0.2), scale(1e-4, 1e2);
+  double worst_deg = 0.0;
+  for (int i = 0; i < 10000; ++i) {
+    const Eigen::Matrix3d rotation =
+        Eigen::Quaterniond(Eigen::Vector4d(unit(rng), unit(rng), unit(rng), unit(rng)).normalized())
+            .toRotationMatrix();
+    const double l3 = scale(rng), l2 = l3 * (0.05 + 0.95 * (unit(rng) + 1) / 2), l1 = l2 * ratio(rng);
+    const Eigen::Matrix3d c = rotation * Eigen::Vector3d(l1, l2, l3).asDiagonal() * rotation.transpose();
+    Eigen::Vector3d n;
+    ASSERT_TRUE(internal::SmallestEigenvector(c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2), &n));
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+    solver.computeDirect(c);
+    const double cosine = std::min(1.0, std::abs(n.dot(solver.eigenvectors().col(0))));
+    worst_deg = std::max(worst_deg, std::acos(cosine) * 180.0 / M_PI);
+  }
+  RecordProperty("worst_deg", std::to_string(worst_deg));
+  EXPECT_LT(worst_deg, 0.1);
+  // Collinear points have no normal.
+  Eigen::Vector3d n;
+  EXPECT_FALSE(internal::SmallestEigenvector(1, 1, 1, 1, 1, 1, &n));
+  EXPECT_FALSE(internal::SmallestEigenvector(0, 0, 0, 0, 0, 0, &n));
+}
+
+}  // namespace
+}  // namespace ssta
