@@ -54,6 +54,11 @@ void PlaneAccumulator::Add(const Eigen::Vector3d& p) {
   sum_sq_.noalias() += p * p.transpose();
 }
 
+Eigen::Vector3d PlaneAccumulator::Mean() const {
+  SSTA_CHECK(count_ >= 1, "the mean of no points");
+  return sum_ / count_;
+}
+
 PlaneFit PlaneAccumulator::Fit() const {
   SSTA_CHECK(count_ >= 3, "a plane fit needs at least 3 points");
   PlaneFit fit;
@@ -78,6 +83,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
   AnalysisResult result;
   result.inliers_min = static_cast<int>(
       std::ceil(options.inliers_min_ratio * cloud.width() * cloud.height()));
+  result.min_plane_points = options.min_plane_points;
 
   // Moments per segment in one pass over the pixels.
   std::vector<PlaneAccumulator> moments(num_segments);
@@ -100,8 +106,9 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     s.inliers = moments[id].count();
     s.small = s.inliers < result.inliers_min;
     s.step_m = std::numeric_limits<double>::quiet_NaN();
-    const int min_points = std::max(3, s.small ? options.min_plane_points : 3);
-    if (s.inliers < min_points) {
+    if (s.inliers == 0) continue;
+    s.centroid = moments[id].Mean();
+    if (s.inliers < 3) {
       s.reason = "too few points for a plane";
       continue;
     }
@@ -160,15 +167,25 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
       s.reason = "frame failed the quality check";
       continue;
     }
-    if (!s.has_plane) continue;  // undecided, reason already given
     s.ground = s.id == ground.segment_id;
     s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
     s.step_class = vehicle.ClassifyStep(s.step_m);
+    if (!s.has_plane) {
+      // One or two points: no slope, but their height above the ground still tells an obstacle.
+      const bool obstacle = !options.paper_small_segments && s.step_class == TravClass::kNonTraversable;
+      s.verdict = obstacle ? TravClass::kNonTraversable : TravClass::kUndecided;
+      if (obstacle) s.reason = "small segment, obstacle: step " + std::to_string(s.step_m) + " m";
+      continue;
+    }
     const TravClass worst = Worse(s.slope_class, s.step_class);
     if (!s.small) {
       s.verdict = worst;
       s.reason = ClassReason(s);
-    } else if (!options.paper_small_segments && worst == TravClass::kNonTraversable) {
+    } else if (!options.paper_small_segments && s.step_class == TravClass::kNonTraversable) {
+      s.verdict = TravClass::kNonTraversable;
+      s.reason = "small segment, obstacle: " + ClassReason(s);
+    } else if (!options.paper_small_segments && s.inliers >= options.min_plane_points &&
+               s.slope_class == TravClass::kNonTraversable) {
       s.verdict = TravClass::kNonTraversable;
       s.reason = "small segment, obstacle: " + ClassReason(s);
     } else {

@@ -1,5 +1,6 @@
 #include "ssta/pipeline/frame_report.h"
 
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -80,10 +81,25 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
     << ", \"triangulate\": " << Num(t.triangulate_ms) << ", \"normals\": " << Num(t.normals_ms)
     << ", \"segment\": " << Num(t.segment_ms) << ", \"analyze\": " << Num(t.analyze_ms)
     << ", \"total\": " << Num(t.total_ms) << "},\n";
+  // Segments of fewer than min_plane_points points are fragments of noisy surfaces: listing
+  // each (tens of thousands on real stereo) would make the report huge, so they are summed up.
+  std::array<long, kNumClasses> fragment_pixels{};
+  long fragments = 0;
+  for (const SegmentResult& s : a.segments) {
+    if (s.inliers > 0 && s.inliers < a.min_plane_points) {
+      ++fragments;
+      fragment_pixels[static_cast<int>(s.verdict)] += s.inliers;
+    }
+  }
+  j << "  \"fragments\": {\"segments\": " << fragments << ", \"pixels_by_class\": {";
+  for (int c = 0; c < kNumClasses; ++c) {
+    j << (c ? ", " : "") << "\"" << ClassName(static_cast<TravClass>(c)) << "\": " << fragment_pixels[c];
+  }
+  j << "}},\n";
   j << "  \"segments\": [";
   bool first = true;
   for (const SegmentResult& s : a.segments) {
-    if (s.inliers == 0) continue;
+    if (s.inliers == 0 || s.inliers < a.min_plane_points) continue;
     j << (first ? "\n" : ",\n") << "    {\"id\": " << s.id << ", \"inliers\": " << s.inliers;
     first = false;
     if (s.has_plane) {

@@ -133,6 +133,22 @@ TEST(SurfaceAnalyzer, SmallObstacleIsFlaggedUnlessPaperExact) {
   EXPECT_EQ(exact.labels(5, 5), static_cast<std::uint8_t>(TravClass::kUndecided));
 }
 
+TEST(SurfaceAnalyzer, TinySegmentsAreJudgedByHeightButNotBySlope) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  // 10 points of a horizontal patch 0.5 m above the floor: its centroid is enough to tell.
+  w.Paint(1, 0, 2, 0, 5, {0.0, 0.5, 3.0}, {1, 0, 0}, {0, 0, 1});
+  // 10 points of a vertical patch touching the floor: too few for its slope to be trusted.
+  w.Paint(2, 2, 4, 0, 5, {0.0, 1.0, 3.0}, {1, 0, 0}, {0, -1, 0}, 0.01);
+  const AnalysisResult r = w.Analyze();
+  ASSERT_TRUE(r.quality.passed);
+  EXPECT_NEAR(r.segments[1].step_m, 0.5, 1e-6);
+  EXPECT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);
+  EXPECT_NEAR(r.segments[2].slope_deg, 90.0, 1e-3);
+  EXPECT_LT(r.segments[2].step_m, 0.02);
+  EXPECT_EQ(r.segments[2].verdict, TravClass::kUndecided);
+}
+
 TEST(SurfaceAnalyzer, GroundAboveTheCameraIsRejected) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 100, -0.5);  // a ceiling-like plane 0.5 m above the camera

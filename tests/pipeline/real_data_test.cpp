@@ -9,6 +9,7 @@
 #include "ssta/io/sequence.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/frame_pipeline.h"
+#include "ssta/pipeline/gravity_provider.h"
 #include "ssta/pipeline/sequence_classifier.h"
 
 namespace ssta {
@@ -43,7 +44,8 @@ FrameResult ClassifyFirstFrame(const std::string& sequence_dir, const std::strin
   const Config config = LoadConfig(config_file);
   FramePipeline pipeline(seq.calibration(), config);
   const StereoFrame& f = seq.frames().front();
-  const Eigen::Vector3d up = FrameUpInCamera(seq, f.timestamp_ns, config.gravity, nullptr);
+  const GravityProvider gravity(seq, config.gravity, config.attitude);
+  const Eigen::Vector3d up = gravity.UpInCamera(f.timestamp_ns);
   return pipeline.Process(ReadGreyImage(f.left_path), ReadGreyImage(f.right_path), up);
 }
 

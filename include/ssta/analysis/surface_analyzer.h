@@ -16,12 +16,13 @@ struct AnalysisOptions {
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
   /// their own in the paper.
   double inliers_min_ratio = 0.02;
-  /// false (default): a small segment with at least `min_plane_points` points that is steeper
-  /// than max_slope_deg or stands more than max_step_m off the ground is still an obstacle
-  /// (non-traversable); the rest stay undecided. true: the paper exactly, every small segment
-  /// is undecided.
+  /// false (default): a small segment whose centroid stands more than max_step_m off the
+  /// ground plane, or that has at least `min_plane_points` points and is steeper than
+  /// max_slope_deg, is still an obstacle (non-traversable); the rest stay undecided. A centroid
+  /// is robust even for a few points, a slope is not. true: the paper exactly, every small
+  /// segment is undecided.
   bool paper_small_segments = false;
-  /// Fewest points for a plane fit of a small segment [points].
+  /// Fewest points for the slope of a small segment to count [points].
   int min_plane_points = 30;
   /// Quality check of the dominant ground plane: least share of the frame's depth pixels that
   /// must lie on it, and the largest RMS point-to-plane distance [m].
@@ -35,14 +36,14 @@ struct AnalysisOptions {
 struct SegmentResult {
   int id = -1;           ///< segment id in the segmentation label image
   int inliers = 0;       ///< pixels with a valid point
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mean point, camera frame [m]
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< mean point, camera frame [m] (inliers >= 1)
   /// Unit normal (smallest PCA eigenvector), oriented to the up side (n . up >= 0).
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< A, B, C, D with (A,B,C) = normal
   double rms_m = 0.0;       ///< RMS point-to-plane distance [m]
   double slope_deg = 0.0;   ///< angle between the normal and up [deg]
   double step_m = 0.0;      ///< |distance| of the centroid to the ground plane [m]; NaN without one
-  bool has_plane = false;   ///< enough points for a plane fit (else no geometry, undecided)
+  bool has_plane = false;   ///< at least 3 points: centroid, PCA plane and slope are set
   bool small = false;       ///< fewer inliers than inliers_min
   bool ground = false;      ///< this is the dominant ground plane
   TravClass slope_class = TravClass::kUndecided;
@@ -73,6 +74,7 @@ struct AnalysisResult {
   GroundPlane ground;
   QualityCheck quality;
   int inliers_min = 0;       ///< the eq. 4 threshold used [px]
+  int min_plane_points = 0;  ///< AnalysisOptions::min_plane_points used
   int depth_pixels = 0;      ///< pixels with a valid 3D point
   /// Class per pixel (image size): 0 without depth, 4 undecided, else the segment's verdict.
   ImageU8 labels;
@@ -104,6 +106,8 @@ class PlaneAccumulator {
  public:
   void Add(const Eigen::Vector3d& p);
   int count() const { return count_; }
+  /// Mean point. Precondition: count() >= 1.
+  Eigen::Vector3d Mean() const;
   /// Precondition: count() >= 3.
   PlaneFit Fit() const;
 
