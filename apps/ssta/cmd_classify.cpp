@@ -77,6 +77,8 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png in false colour");
+  cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
+                "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
   cmd->callback([args] {
     std::string error;

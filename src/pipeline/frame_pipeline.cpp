@@ -56,6 +56,21 @@ Eigen::Vector3d FramePipeline::UpInCamera(const Eigen::Vector3d& up_body) const 
 
 FrameResult FramePipeline::Process(const ImageU8& left, const ImageU8& right,
                                    const Eigen::Vector3d& up_camera) {
+  return Run(left, right, nullptr, up_camera);
+}
+
+FrameResult FramePipeline::ProcessWithDisparity(const ImageU8& left, const ImageU8& right, ImageF disparity,
+                                                const Eigen::Vector3d& up_camera) {
+  const RectifiedGeometry& g = stages_->rectifier.geometry();
+  if (disparity.width() != g.crop_width || disparity.height() != g.crop_height) {
+    throw Error("given disparity is " + std::to_string(disparity.width()) + "x" + std::to_string(disparity.height()) +
+                ", the rectified common area " + std::to_string(g.crop_width) + "x" + std::to_string(g.crop_height));
+  }
+  return Run(left, right, &disparity, up_camera);
+}
+
+FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const ImageF* disparity,
+                               const Eigen::Vector3d& up_camera) {
   SSTA_CHECK(up_camera.allFinite() && up_camera.norm() > 1e-9, "up_camera must be finite and non-zero");
   FrameResult out;
   Stopwatch clock;
@@ -64,7 +79,7 @@ FrameResult FramePipeline::Process(const ImageU8& left, const ImageU8& right,
   RectifiedPair pair = stages_->rectifier.Rectify(left, right);
   out.timings.rectify_ms = clock.LapMs();
 
-  out.disparity = stages_->matcher.Compute(pair.left, pair.right);
+  out.disparity = disparity ? *disparity : stages_->matcher.Compute(pair.left, pair.right);
   out.timings.match_ms = clock.LapMs();
 
   const Image3f cloud = Triangulate(out.disparity, g, config_.triangulation);

@@ -1,6 +1,7 @@
 #include "ssta/pipeline/sequence_classifier.h"
 
 #include <chrono>
+#include <filesystem>
 #include <iomanip>
 #include <sstream>
 
@@ -36,6 +37,16 @@ void Scale(double k, StageTimings* t) {
                     &t->analyze_ms, &t->total_ms}) {
     *x *= k;
   }
+}
+
+ImageF ReadOracleDisparity(const Sequence& sequence, const std::string& name) {
+  namespace fs = std::filesystem;
+  fs::path gt = fs::path(sequence.root()) / "gt" / "disparity" / (name + ".png");
+  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / "disparity" / (name + ".png");
+  const ImageU16 raw = ReadImageU16(gt.string());
+  ImageF disparity(raw.width(), raw.height());
+  for (std::size_t i = 0; i < raw.size(); ++i) disparity[i] = raw[i] / 256.0f;
+  return disparity;
 }
 
 }  // namespace
@@ -76,7 +87,9 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
       const ImageU8 left = ReadGreyImage(frame.left_path);
       const ImageU8 right = ReadGreyImage(frame.right_path);
       const Eigen::Vector3d up = gravity.UpInCamera(frame.timestamp_ns);
-      FrameResult result = pipeline.Process(left, right, up);
+      FrameResult result = options.oracle_disparity
+                               ? pipeline.ProcessWithDisparity(left, right, ReadOracleDisparity(sequence, name), up)
+                               : pipeline.Process(left, right, up);
       result.timestamp_ns = frame.timestamp_ns;
       WriteFrameOutputs(result, options.out_dir, name, options.write_disparity);
       ++summary.frames_classified;

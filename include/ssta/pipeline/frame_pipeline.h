@@ -45,6 +45,13 @@ class FramePipeline {
   /// rectified) cam0 frame. Throws ssta::Error when the images have the wrong size.
   FrameResult Process(const ImageU8& left, const ImageU8& right, const Eigen::Vector3d& up_camera);
 
+  /// Like Process, but with a given disparity of the rectified, cropped left image [px, 0
+  /// invalid] in place of stereo matching: an oracle for measuring the analysis apart from
+  /// the matcher (e.g. with a synthetic sequence's gt/disparity). Throws ssta::Error when the
+  /// disparity does not have the crop size.
+  FrameResult ProcessWithDisparity(const ImageU8& left, const ImageU8& right, ImageF disparity,
+                                   const Eigen::Vector3d& up_camera);
+
   /// Up in the cam0 frame for a body whose up direction is `up_body` (via cam0's T_BS).
   Eigen::Vector3d UpInCamera(const Eigen::Vector3d& up_body) const;
 
@@ -53,6 +60,8 @@ class FramePipeline {
 
  private:
   struct Stages;
+  FrameResult Run(const ImageU8& left, const ImageU8& right, const ImageF* disparity,
+                  const Eigen::Vector3d& up_camera);
   Config config_;
   StereoCalibration calibration_;
   std::unique_ptr<Stages> stages_;
