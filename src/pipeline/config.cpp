@@ -67,6 +67,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("left_right_max_diff", &o->left_right_max_diff);
   s.Read("speckle_window_size", &o->speckle_window_size);
   s.Read("speckle_range", &o->speckle_range);
+  s.Read("min_texture", &o->min_texture);
   s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
   s.Read("pcl_peak_filter", &o->pcl_peak_filter);
   s.Read("pcl_preprocessing", &o->pcl_preprocessing);
@@ -199,6 +200,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  left_right_max_diff: " << s.left_right_max_diff << "\n"
     << "  speckle_window_size: " << s.speckle_window_size << "\n"
     << "  speckle_range: " << s.speckle_range << "\n"
+    << "  min_texture: " << s.min_texture << "\n"
     << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
     << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"

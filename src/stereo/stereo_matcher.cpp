@@ -4,6 +4,7 @@
 #include <cstdint>
 
 #include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
 #include <opencv2/core.hpp>
 
 #include "pcl_stereo.h"
@@ -89,6 +90,25 @@ void FilterSpeckles(int window, int range, ImageF* disparity) {
   }
 }
 
+/// Invalidates the disparity where the left image's standard deviation over a block x block
+/// window is below `min_std` grey levels (box filters of I and I^2: O(1) per pixel).
+void DropTexturelessPixels(const ImageU8& left, int block, double min_std, ImageF* disparity) {
+  cv::Mat image;
+  WrapConst(left).convertTo(image, CV_32F);
+  cv::Mat mean, mean_sq;
+  cv::boxFilter(image, mean, CV_32F, cv::Size(block, block));
+  cv::boxFilter(image.mul(image), mean_sq, CV_32F, cv::Size(block, block));
+  const float min_var = static_cast<float>(min_std * min_std);
+  for (int v = 0; v < disparity->height(); ++v) {
+    const float* m = mean.ptr<float>(v);
+    const float* m2 = mean_sq.ptr<float>(v);
+    float* d = disparity->row(v);
+    for (int u = 0; u < disparity->width(); ++u) {
+      if (m2[u] - m[u] * m[u] < min_var) d[u] = 0.0f;
+    }
+  }
+}
+
 }  // namespace
 
 MatcherType ParseMatcherType(const std::string& name) {
@@ -148,6 +168,7 @@ bool StereoMatcherOptions::IsValid(std::string* error) const {
         acso_gamma_c == std::floor(acso_gamma_c))) {
     return Fail(error, "acso_gamma_c: must be a whole number in [1, 1000] (PCL takes an int)");
   }
+  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
   return true;
 }
 
@@ -182,6 +203,7 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
       break;
   }
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
+  if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
   return disparity;
 }
 

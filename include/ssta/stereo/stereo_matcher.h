@@ -32,6 +32,9 @@ struct StereoMatcherOptions {
   int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check
   int speckle_window_size = 100;  ///< [px] blobs smaller than this are removed (all); 0 disables
   int speckle_range = 2;          ///< [px] max disparity step between neighbours of one blob
+  /// [grey levels] pixels whose left-image standard deviation over the block window is below
+  /// this get no disparity: sensor noise on a textureless sky or wall matches anywhere. 0: off.
+  double min_texture = 0.0;
   // PCL matchers only.
   /// [%] ratio filter: reject a pixel whose best window cost (sum of absolute differences,
   /// block_size window) is not below (100 - value)% of the best cost at least 2 px away;
