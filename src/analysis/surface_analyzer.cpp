@@ -36,6 +36,22 @@ std::string ClassReason(const SegmentResult& s) {
 
 }  // namespace
 
+SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name) {
+  if (name == "paper") return SmallSegmentPolicy::kPaper;
+  if (name == "obstacles") return SmallSegmentPolicy::kObstacles;
+  if (name == "all") return SmallSegmentPolicy::kAll;
+  throw Error("unknown small-segment policy '" + name + "' (paper, obstacles, all)");
+}
+
+std::string SmallSegmentPolicyName(SmallSegmentPolicy policy) {
+  switch (policy) {
+    case SmallSegmentPolicy::kPaper: return "paper";
+    case SmallSegmentPolicy::kObstacles: return "obstacles";
+    case SmallSegmentPolicy::kAll: return "all";
+  }
+  return "obstacles";
+}
+
 bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(inliers_min_ratio >= 0 && inliers_min_ratio < 1)) {
     return Fail(error, "inliers_min_ratio: must be in [0, 1)");
@@ -172,20 +188,24 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     s.step_class = vehicle.ClassifyStep(s.step_m);
     if (!s.has_plane) {
       // One or two points: no slope, but their height above the ground still tells an obstacle.
-      const bool obstacle = !options.paper_small_segments && s.step_class == TravClass::kNonTraversable;
+      const bool obstacle =
+          options.small_segments != SmallSegmentPolicy::kPaper && s.step_class == TravClass::kNonTraversable;
       s.verdict = obstacle ? TravClass::kNonTraversable : TravClass::kUndecided;
       if (obstacle) s.reason = "small segment, obstacle: step " + std::to_string(s.step_m) + " m";
       continue;
     }
     const TravClass worst = Worse(s.slope_class, s.step_class);
+    const bool planar = s.inliers >= options.min_plane_points;  // its slope can be trusted
+    const SmallSegmentPolicy policy = options.small_segments;
     if (!s.small) {
       s.verdict = worst;
       s.reason = ClassReason(s);
-    } else if (!options.paper_small_segments && s.step_class == TravClass::kNonTraversable) {
-      s.verdict = TravClass::kNonTraversable;
-      s.reason = "small segment, obstacle: " + ClassReason(s);
-    } else if (!options.paper_small_segments && s.inliers >= options.min_plane_points &&
-               s.slope_class == TravClass::kNonTraversable) {
+    } else if (policy == SmallSegmentPolicy::kAll && planar) {
+      s.verdict = worst;
+      s.reason = "small segment: " + ClassReason(s);
+    } else if (policy != SmallSegmentPolicy::kPaper &&
+               (s.step_class == TravClass::kNonTraversable ||
+                (planar && s.slope_class == TravClass::kNonTraversable))) {
       s.verdict = TravClass::kNonTraversable;
       s.reason = "small segment, obstacle: " + ClassReason(s);
     } else {

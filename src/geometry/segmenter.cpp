@@ -41,6 +41,9 @@ bool SegmenterOptions::IsValid(std::string* error) const {
   if (!(max_disparity_jump_px >= 0.0 && std::isfinite(max_disparity_jump_px))) {
     return Fail(error, "max_disparity_jump_px: must be >= 0 pixels (0 disables the test)");
   }
+  if (!(max_segment_angle_deg >= 0.0 && max_segment_angle_deg < 90.0)) {
+    return Fail(error, "max_segment_angle_deg: must be in [0, 90) degrees (0 disables the test)");
+  }
   return true;
 }
 
@@ -63,6 +66,8 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   const bool use_disparity = disparity != nullptr && options_.max_disparity_jump_px > 0.0;
   const float cos_min = static_cast<float>(std::cos(options_.roughness_deg * kPi / 180.0));
   const float max_jump = static_cast<float>(options_.max_disparity_jump_px);
+  const bool use_segment_angle = options_.max_segment_angle_deg > 0.0;
+  const float cos_segment = static_cast<float>(std::cos(options_.max_segment_angle_deg * kPi / 180.0));
 
   Segmentation& out = result_;
   if (out.labels.width() != width || out.labels.height() != height) {
@@ -73,6 +78,24 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   out.pixel_indices.clear();
   parent_.resize(static_cast<std::size_t>(width) * height);
   std::int32_t* parent = parent_.data();
+  if (use_segment_angle) normal_sum_.resize(parent_.size());
+  Eigen::Vector3f* normal_sum = normal_sum_.data();
+
+  // Joins the sets of a and b; with the segment test, only while their mean normals agree.
+  auto merge = [&](std::int32_t a, std::int32_t b) {
+    if (!use_segment_angle) {
+      Union(parent, a, b);
+      return;
+    }
+    const std::int32_t ra = Find(parent, a), rb = Find(parent, b);
+    if (ra == rb) return;
+    const Eigen::Vector3f& sa = normal_sum[ra];
+    const Eigen::Vector3f& sb = normal_sum[rb];
+    if (sa.dot(sb) < cos_segment * sa.norm() * sb.norm()) return;
+    const std::int32_t root = std::min(ra, rb), child = std::max(ra, rb);
+    parent[child] = root;
+    normal_sum[root] = sa + sb;
+  };
 
   // Pass 1: join each valid pixel with its left and upper neighbours.
   auto joins = [&](std::int32_t a, std::int32_t b) {
@@ -94,8 +117,9 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
         continue;
       }
       parent[i] = i;
-      if (u > 0 && joins(i, i - 1)) Union(parent, i, i - 1);
-      if (v > 0 && joins(i, i - width)) Union(parent, i, i - width);
+      if (use_segment_angle) normal_sum[i] = normals[i];
+      if (u > 0 && joins(i, i - 1)) merge(i, i - 1);
+      if (v > 0 && joins(i, i - width)) merge(i, i - width);
     }
   }
 

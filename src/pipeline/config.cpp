@@ -134,12 +134,14 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     YamlSection s = root.Child("segmentation");
     s.Read("roughness_deg", &c.segmentation.roughness_deg);
     s.Read("max_disparity_jump_px", &c.segmentation.max_disparity_jump_px);
+    s.Read("max_segment_angle_deg", &c.segmentation.max_segment_angle_deg);
     s.RejectUnknownKeys();
   }
   {
     YamlSection s = root.Child("analysis");
     s.Read("inliers_min_ratio", &c.analysis.inliers_min_ratio);
-    s.Read("paper_small_segments", &c.analysis.paper_small_segments);
+    ReadEnum(s, "small_segments", &c.analysis.small_segments,
+             [](const std::string& n) { return ParseSmallSegmentPolicy(n); });
     s.Read("min_plane_points", &c.analysis.min_plane_points);
     s.Read("min_ground_share", &c.analysis.min_ground_share);
     s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
@@ -218,10 +220,11 @@ std::string ConfigToYaml(const Config& c) {
     << "  depth_dependent_smoothing: " << c.normals.depth_dependent_smoothing << "\n";
   y << "segmentation:\n"
     << "  roughness_deg: " << c.segmentation.roughness_deg << "\n"
-    << "  max_disparity_jump_px: " << c.segmentation.max_disparity_jump_px << "\n";
+    << "  max_disparity_jump_px: " << c.segmentation.max_disparity_jump_px << "\n"
+    << "  max_segment_angle_deg: " << c.segmentation.max_segment_angle_deg << "\n";
   y << "analysis:\n"
     << "  inliers_min_ratio: " << c.analysis.inliers_min_ratio << "\n"
-    << "  paper_small_segments: " << c.analysis.paper_small_segments << "\n"
+    << "  small_segments: " << SmallSegmentPolicyName(c.analysis.small_segments) << "\n"
     << "  min_plane_points: " << c.analysis.min_plane_points << "\n"
     << "  min_ground_share: " << c.analysis.min_ground_share << "\n"
     << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n";

@@ -127,7 +127,7 @@ TEST(SurfaceAnalyzer, SmallObstacleIsFlaggedUnlessPaperExact) {
   EXPECT_EQ(ours.segments[1].verdict, TravClass::kNonTraversable);
   EXPECT_EQ(ours.segments[2].verdict, TravClass::kUndecided);  // small and harmless: no verdict
   AnalysisOptions paper;
-  paper.paper_small_segments = true;
+  paper.small_segments = SmallSegmentPolicy::kPaper;
   const AnalysisResult exact = w.Analyze({}, paper);
   EXPECT_EQ(exact.segments[1].verdict, TravClass::kUndecided);
   EXPECT_EQ(exact.labels(5, 5), static_cast<std::uint8_t>(TravClass::kUndecided));

@@ -36,7 +36,8 @@ TEST(Config, VehicleProfilesLoadAndDiffer) {
 
 TEST(Config, PaperProfileRestoresThePaperExactly) {
   const Config paper = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/paper.yaml");
-  EXPECT_TRUE(paper.analysis.paper_small_segments);
+  EXPECT_EQ(paper.analysis.small_segments, SmallSegmentPolicy::kPaper);
+  EXPECT_EQ(paper.segmentation.max_segment_angle_deg, 0.0);
   EXPECT_EQ(paper.segmentation.max_disparity_jump_px, 0.0);
   EXPECT_DOUBLE_EQ(paper.analysis.inliers_min_ratio, 0.02);
 }

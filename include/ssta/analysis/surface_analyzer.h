@@ -11,17 +11,30 @@
 
 namespace ssta {
 
+/// What segments smaller than inliers_min get (YAML `analysis.small_segments`).
+enum class SmallSegmentPolicy {
+  kPaper,      ///< "paper": no verdict, undecided (the paper, eq. 4)
+  /// "obstacles": a small segment whose centroid stands more than max_step_m off the ground
+  /// plane, or that has at least min_plane_points points and is steeper than max_slope_deg, is
+  /// non-traversable; the rest stay undecided. A centroid is robust even for a few points, a
+  /// slope is not.
+  kObstacles,
+  /// "all": as obstacles, and a small segment with at least min_plane_points points gets its own
+  /// slope/step class whatever it is.
+  kAll,
+};
+
+/// Parses "paper", "obstacles", "all"; throws ssta::Error otherwise.
+SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name);
+std::string SmallSegmentPolicyName(SmallSegmentPolicy policy);
+
 /// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E).
 struct AnalysisOptions {
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
   /// their own in the paper.
   double inliers_min_ratio = 0.02;
-  /// false (default): a small segment whose centroid stands more than max_step_m off the
-  /// ground plane, or that has at least `min_plane_points` points and is steeper than
-  /// max_slope_deg, is still an obstacle (non-traversable); the rest stay undecided. A centroid
-  /// is robust even for a few points, a slope is not. true: the paper exactly, every small
-  /// segment is undecided.
-  bool paper_small_segments = false;
+  /// What small segments get; see SmallSegmentPolicy.
+  SmallSegmentPolicy small_segments = SmallSegmentPolicy::kObstacles;
   /// Fewest points for the slope of a small segment to count [points].
   int min_plane_points = 30;
   /// Quality check of the dominant ground plane: least share of the frame's depth pixels that

@@ -27,6 +27,13 @@ struct SegmenterOptions {
   /// box at 5 m jumps by ~3 px to the ground behind it (f = 450 px, b = 0.12 m, h = 1 m).
   double max_disparity_jump_px = 1.0;
 
+  /// Maximum angle between the mean normals of two segments that join [deg]; 0 disables the
+  /// test, restoring the paper's pure neighbour criterion. Why: eq. 1 compares neighbours only,
+  /// so a crease smoothed over the normal window (ground into a 20-degree ramp) is crossed in
+  /// steps each below roughness_deg and the ramp joins the ground. Comparing whole segments
+  /// stops that chaining, and lets roughness_deg be loose enough for stereo noise.
+  double max_segment_angle_deg = 0.0;
+
   /// On failure writes a message starting with the offending key (e.g.
   /// "roughness_deg: must be in (0, 90) degrees") to *error when error is not null.
   bool IsValid(std::string* error) const;
@@ -51,7 +58,9 @@ struct Segmentation {
 /// 4-connected connected-components segmentation of per-pixel normals (paper section
 /// "Image segmentation", after Trevor et al. 2012): two 4-neighbours with finite normals join
 /// while n1 . n2 >= cos(roughness_deg) and, when the disparity test is on and `disparity` is
-/// given, |d1 - d2| <= max_disparity_jump_px (an invalid disparity, <= 0 or NaN, fails it).
+/// given, |d1 - d2| <= max_disparity_jump_px (an invalid disparity, <= 0 or NaN, fails it),
+/// and, when max_segment_angle_deg > 0, the mean normals of their two segments so far differ
+/// by less than it (pixels are visited in raster order).
 /// Union-find over a reused parent array; no per-pixel allocation.
 ///
 /// Inputs: unit normals (any frame, all-NaN where invalid) and optionally the matching
@@ -72,6 +81,7 @@ class Segmenter {
   SegmenterOptions options_;
   Segmentation result_;
   std::vector<std::int32_t> parent_;
+  std::vector<Eigen::Vector3f> normal_sum_;  // per root: sum of its pixels' normals
   std::vector<int> cursor_;
 };
 
