@@ -54,8 +54,10 @@ void WriteStreamAtomically(const std::string& path, Fill&& fill) {
 
 /// Widens `box` outwards to multiples of `res` (so pixels coincide with map columns).
 Eigen::AlignedBox2d SnapOutwards(const Eigen::AlignedBox2d& box, double res) {
-  const Eigen::Vector2d lo = (box.min() / res).array().floor() * res;
-  const Eigen::Vector2d hi = (box.max() / res).array().ceil() * res;
+  // The tolerance keeps bounds that are multiples of res up to rounding (-1.0000000000000002)
+  // from growing by a whole pixel.
+  const Eigen::Vector2d lo = ((box.min() / res).array() + 1e-6).floor() * res;
+  const Eigen::Vector2d hi = ((box.max() / res).array() - 1e-6).ceil() * res;
   Eigen::AlignedBox2d snapped(lo, hi);
   for (int i = 0; i < 2; ++i) {
     if (snapped.max()[i] - snapped.min()[i] < 0.5 * res) snapped.max()[i] = snapped.min()[i] + res;
