@@ -18,8 +18,8 @@
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
-#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <streambuf>
@@ -88,42 +88,53 @@ class MemoryStreamBuf : public std::streambuf {
   std::size_t consumed() const { return static_cast<std::size_t>(gptr() - eback()); }
 };
 
+/// The shortest decimal text that reads back as exactly `v` ("0.1", not "0.10000000000000001").
+std::string ShortestDecimal(double v) {
+  char buffer[32];
+  for (int precision = 1; precision <= 17; ++precision) {
+    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, v);
+    if (std::strtod(buffer, nullptr) == v) break;
+  }
+  return buffer;
+}
+
 std::string MetadataYaml(const TraversabilityMap& map) {
   const MapOptions& o = map.options();
   const MapMetadata& m = map.metadata();
   YAML::Emitter out;
-  out.SetDoublePrecision(17);
+  // Doubles go out as their shortest exact decimal text (plain scalars, read back as doubles).
+  const auto num = [](double v) { return ShortestDecimal(v); };
   out << YAML::BeginMap;
   out << YAML::Key << "format_version" << YAML::Value << kMapFormatVersion;
   out << YAML::Key << "software_version" << YAML::Value << SSTA_VERSION;
   out << YAML::Key << "frames_inserted" << YAML::Value << map.frames_inserted();
   out << YAML::Key << "last_timestamp_ns" << YAML::Value << map.last_timestamp_ns();
   out << YAML::Key << "map_options" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "resolution_m" << YAML::Value << o.resolution_m;
-  out << YAML::Key << "max_range_m" << YAML::Value << o.max_range_m;
-  out << YAML::Key << "occupancy_hit_prob" << YAML::Value << o.occupancy_hit_prob;
-  out << YAML::Key << "occupancy_miss_prob" << YAML::Value << o.occupancy_miss_prob;
-  out << YAML::Key << "occupancy_clamp_min_prob" << YAML::Value << o.occupancy_clamp_min_prob;
-  out << YAML::Key << "occupancy_clamp_max_prob" << YAML::Value << o.occupancy_clamp_max_prob;
-  out << YAML::Key << "occupied_threshold_prob" << YAML::Value << o.occupied_threshold_prob;
-  out << YAML::Key << "class_hit_log_odds" << YAML::Value << o.class_hit_log_odds;
-  out << YAML::Key << "class_miss_log_odds" << YAML::Value << o.class_miss_log_odds;
-  out << YAML::Key << "class_free_decay_log_odds" << YAML::Value << o.class_free_decay_log_odds;
-  out << YAML::Key << "class_clamp_min" << YAML::Value << o.class_clamp_min;
-  out << YAML::Key << "class_clamp_max" << YAML::Value << o.class_clamp_max;
+  out << YAML::Key << "resolution_m" << YAML::Value << num(o.resolution_m);
+  out << YAML::Key << "max_range_m" << YAML::Value << num(o.max_range_m);
+  out << YAML::Key << "occupancy_hit_prob" << YAML::Value << num(o.occupancy_hit_prob);
+  out << YAML::Key << "occupancy_miss_prob" << YAML::Value << num(o.occupancy_miss_prob);
+  out << YAML::Key << "occupancy_clamp_min_prob" << YAML::Value << num(o.occupancy_clamp_min_prob);
+  out << YAML::Key << "occupancy_clamp_max_prob" << YAML::Value << num(o.occupancy_clamp_max_prob);
+  out << YAML::Key << "occupied_threshold_prob" << YAML::Value << num(o.occupied_threshold_prob);
+  out << YAML::Key << "class_hit_log_odds" << YAML::Value << num(o.class_hit_log_odds);
+  out << YAML::Key << "class_miss_log_odds" << YAML::Value << num(o.class_miss_log_odds);
+  out << YAML::Key << "class_free_decay_log_odds" << YAML::Value << num(o.class_free_decay_log_odds);
+  out << YAML::Key << "class_clamp_min" << YAML::Value << num(o.class_clamp_min);
+  out << YAML::Key << "class_clamp_max" << YAML::Value << num(o.class_clamp_max);
   out << YAML::EndMap;
   const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "max_slope_deg" << YAML::Value << v.max_slope_deg;
-  out << YAML::Key << "semi_slope_deg" << YAML::Value << v.semi_slope_deg;
-  out << YAML::Key << "max_step_m" << YAML::Value << v.max_step_m;
-  out << YAML::Key << "semi_step_m" << YAML::Value << v.semi_step_m;
-  out << YAML::Key << "min_camera_height_m" << YAML::Value << v.min_camera_height_m;
-  out << YAML::Key << "max_camera_height_m" << YAML::Value << v.max_camera_height_m;
+  out << YAML::Key << "max_slope_deg" << YAML::Value << num(v.max_slope_deg);
+  out << YAML::Key << "semi_slope_deg" << YAML::Value << num(v.semi_slope_deg);
+  out << YAML::Key << "max_step_m" << YAML::Value << num(v.max_step_m);
+  out << YAML::Key << "semi_step_m" << YAML::Value << num(v.semi_step_m);
+  out << YAML::Key << "min_camera_height_m" << YAML::Value << num(v.min_camera_height_m);
+  out << YAML::Key << "max_camera_height_m" << YAML::Value << num(v.max_camera_height_m);
   out << YAML::EndMap;
   out << YAML::Key << "calibration_summary" << YAML::Value << YAML::DoubleQuoted
       << m.calibration_summary;
-  out << YAML::Key << "sequences" << YAML::Value << YAML::BeginSeq;
+  out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const std::string& s : m.sequences) out << YAML::DoubleQuoted << s;
   out << YAML::EndSeq;
   out << YAML::EndMap;
@@ -277,8 +288,7 @@ void TraversabilityMap::Save(const std::string& path) const {
     }
     out << "id " << tree.getTreeType() << '\n'
         << "size " << tree.size() << '\n'
-        << "res " << std::setprecision(std::numeric_limits<double>::max_digits10)
-        << tree.getResolution() << '\n'
+        << "res " << ShortestDecimal(tree.getResolution()) << '\n'
         << "data\n";
     tree.writeData(out);
     out.flush();

@@ -85,6 +85,7 @@ MapMetadata SomeMetadata() {
 TraversabilityMap BuildMap(int frames) {
   MapOptions options;
   options.max_range_m = 12.0;
+  options.class_hit_log_odds = 0.1 + 0.2;  // 0.30000000000000004: must come back exactly
   TraversabilityMap map(options, SomeMetadata());
   const auto all = Frames(frames);
   for (int f = 0; f < frames; ++f) map.InsertFrame(all[f], FrameOrigin(f), 1000 + f);
@@ -128,6 +129,7 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(loaded.options().max_range_m, 12.0);
   EXPECT_EQ(loaded.options().resolution_m, 0.1);
   EXPECT_EQ(loaded.options().class_miss_log_odds, map.options().class_miss_log_odds);
+  EXPECT_EQ(loaded.options().class_hit_log_odds, 0.1 + 0.2);
   EXPECT_EQ(loaded.frames_inserted(), 4u);
   EXPECT_EQ(loaded.last_timestamp_ns(), 1003);
   EXPECT_EQ(loaded.software_version(), map.software_version());

@@ -1,7 +1,6 @@
 #pragma once
 
 #include <cstdint>
-#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -114,8 +113,8 @@ class TraversabilityMap {
   std::uint64_t frames_inserted() const;
   /// Timestamp of the last inserted frame [ns]; 0 before the first.
   std::int64_t last_timestamp_ns() const;
-  /// The ssta version that created (or last loaded) this map: this build's for a new map, the
-  /// file's for a loaded one until it is saved again.
+  /// For a loaded map, the ssta version that saved the file; for a new map, this build's.
+  /// (Save always records this build's version.)
   const std::string& software_version() const;
   /// Number of octree nodes (inner and leaves); a size indicator.
   std::size_t NumNodes() const;
