@@ -1,0 +1,53 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ssta/analysis/vehicle_options.h"
+
+namespace ssta {
+
+/// How a TraversabilityMap fuses frames. The defaults are OctoMap's sensor model for occupancy
+/// and a matching one for the class evidence; they suit stereo at 0.1 m voxels.
+///
+/// Occupancy is one log-odds per voxel (OctoMap's); class evidence is three more log-odds per
+/// voxel, one for each of traversable, semi-traversable and non-traversable (INTERFACES
+/// section 3). These options travel with the map file, so a resumed map fuses exactly as the
+/// run that created it.
+struct MapOptions {
+  double resolution_m = 0.10;  ///< voxel edge [m], in (0.005, 10]
+  /// Free space is carved only up to this distance from the sensor [m]; points farther away
+  /// are not inserted as hits, their rays clear space up to this range only.
+  double max_range_m = 15.0;
+
+  double occupancy_hit_prob = 0.7;         ///< P(occupied | endpoint in voxel), in (0.5, 1)
+  double occupancy_miss_prob = 0.4;        ///< P(occupied | ray passes through), in (0, 0.5)
+  double occupancy_clamp_min_prob = 0.1192;  ///< occupancy clamped below here, in (0, 0.5)
+  double occupancy_clamp_max_prob = 0.971;   ///< occupancy clamped above here, in (0.5, 1)
+  /// A voxel is occupied when P(occupied) >= this; strictly between the two clamps.
+  double occupied_threshold_prob = 0.5;
+
+  /// Added to the log-odds of the observed class when a frame's verdict for a voxel is that
+  /// class; > 0.
+  double class_hit_log_odds = 0.85;
+  /// Added to the log-odds of each of the two other classes in that update; <= 0.
+  double class_miss_log_odds = -0.4;
+  /// When a ray passes through a voxel, each class log-odds moves this much towards 0 (no
+  /// evidence), never past it; >= 0. Free space so forgets what moved away.
+  double class_free_decay_log_odds = 0.4;
+  double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
+  double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
+
+  /// True when every field is in range; otherwise `*error` (when not null) gets a message that
+  /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
+  bool IsValid(std::string* error) const;
+};
+
+/// What a map remembers about how it was made. It is written into the map file with the voxels.
+struct MapMetadata {
+  VehicleOptions vehicle;           ///< the vehicle whose limits gave the classes (and costs)
+  std::string calibration_summary;  ///< free text or YAML describing the stereo calibration
+  std::vector<std::string> sequences;  ///< names of the sequences fused, in fusion order
+};
+
+}  // namespace ssta

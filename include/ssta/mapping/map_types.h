@@ -1,0 +1,133 @@
+#pragma once
+
+// Value types that go in and out of a TraversabilityMap. World frame W throughout: right-handed,
+// z up, metres (INTERFACES section 1). Angles in these structs are degrees only where the name
+// says so (`slope_deg`); `yaw` is radians.
+
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ssta/core/classes.h"
+#include "ssta/core/image.h"
+
+namespace ssta {
+
+/// One classified 3D point of a frame, as the per-frame classifier produces it.
+struct ClassifiedPoint {
+  Eigen::Vector3f world_p = Eigen::Vector3f::Zero();  ///< position in W [m]
+  TravClass cls = TravClass::kUnknown;  ///< verdict; only 1..3 add class evidence
+  float slope_deg = 0.0f;  ///< surface slope at the point [deg]; non-finite: not averaged
+  float step_m = 0.0f;     ///< step to the dominant ground plane [m]; non-finite: not averaged
+};
+
+/// What one InsertFrame call did.
+struct InsertStats {
+  std::size_t points_in = 0;           ///< points given
+  std::size_t points_hit = 0;          ///< points within range that marked their voxel occupied
+  std::size_t points_beyond_range = 0; ///< points beyond max_range_m (free space only)
+  std::size_t points_rejected = 0;     ///< non-finite or outside the map's addressable cube
+  std::size_t voxels_hit = 0;          ///< distinct voxels updated as occupied
+  std::size_t voxels_with_class = 0;   ///< of those, voxels that got a class verdict
+  std::size_t voxels_freed = 0;        ///< distinct voxels updated as free
+  bool inserted = true;                ///< false when the frame was skipped (see `reason`)
+  std::string reason;                  ///< why the frame was skipped; empty otherwise
+};
+
+/// What the map knows about one voxel (or, for column queries, the top surface voxel).
+/// Unknown numeric values are NaN.
+struct CellInfo {
+  /// The voxel has been seen (hit or passed through by a ray). For TopSurfaceAt: a surface
+  /// (occupied voxel) was found in the column.
+  bool observed = false;
+  bool occupied = false;  ///< P(occupied) >= MapOptions::occupied_threshold_prob
+  /// Voxel centre in W [m]. For an unobserved column from TopSurfaceAt, z is NaN.
+  Eigen::Vector3d center = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// kUnknown: not observed, or free space. kUndecided: occupied but without class evidence
+  /// (only undecided/unknown points hit it). Otherwise the class with the largest evidence.
+  TravClass cls = TravClass::kUnknown;
+  /// Planning cost in [0, 1] (see TraversabilityMap); NaN unless cls is 1..3.
+  double cost = std::numeric_limits<double>::quiet_NaN();
+  /// Probability of `cls` (softmax of the class log-odds); NaN unless cls is 1..3.
+  double probability = std::numeric_limits<double>::quiet_NaN();
+  double occupancy = std::numeric_limits<double>::quiet_NaN();  ///< P(occupied); NaN unobserved
+  double slope_deg = std::numeric_limits<double>::quiet_NaN();  ///< mean slope [deg]
+  double step_m = std::numeric_limits<double>::quiet_NaN();     ///< mean (signed) step [m]
+  double max_step_m = std::numeric_limits<double>::quiet_NaN(); ///< largest |step| seen [m]
+  std::uint32_t observations = 0;  ///< frames that gave this voxel a class verdict
+  std::int64_t last_seen_ns = 0;   ///< timestamp of the last frame that hit it; 0 if never
+};
+
+/// A rectangular vehicle footprint on the ground, centred at (x, y) in W, its length along the
+/// heading `yaw` [rad, from +x towards +y].
+struct FootprintQuery {
+  double x = 0.0;
+  double y = 0.0;
+  double yaw = 0.0;
+  double length_m = 0.0;
+  double width_m = 0.0;
+};
+
+/// The ground under a footprint: one top-surface cell per map column whose centre lies inside
+/// the rectangle (the column under (x, y) when none does).
+struct FootprintResult {
+  TravClass worst = TravClass::kUnknown;  ///< worst of the 1..3 verdicts; kUnknown if none
+  /// Mean cost over the observed cells that have one (class 1..3); NaN when there are none.
+  double mean_cost = std::numeric_limits<double>::quiet_NaN();
+  double max_cost = std::numeric_limits<double>::quiet_NaN();  ///< NaN when no cell has a cost
+  double fraction_observed = 0.0;  ///< observed columns / columns, in [0, 1]
+  int cells = 0;                   ///< columns under the footprint
+  int observed_cells = 0;          ///< of those, columns with an observed surface
+};
+
+/// One sample along a path: the worst top-surface cell across the path's width there.
+struct PathSample {
+  Eigen::Vector2d point = Eigen::Vector2d::Zero();  ///< on the polyline, in W [m]
+  double distance_m = 0.0;                          ///< arc length from the first vertex [m]
+  TravClass cls = TravClass::kUnknown;  ///< worst 1..3 verdict across the width; else kUnknown
+  double cost = std::numeric_limits<double>::quiet_NaN();  ///< max cost across the width
+  double fraction_observed = 0.0;  ///< observed lateral cells / lateral cells
+  CellInfo cell;                   ///< the cell that set `cls` (the centre cell if none did)
+};
+
+/// A polyline checked against the map.
+struct PathResult {
+  std::vector<PathSample> samples;  ///< every resolution/2 along the polyline, ends included
+  TravClass worst = TravClass::kUnknown;  ///< worst sample verdict; kUnknown if none
+  /// Mean of the sample costs that are finite; NaN when none is.
+  double mean_cost = std::numeric_limits<double>::quiet_NaN();
+  double fraction_observed = 0.0;  ///< mean of the samples' fraction_observed
+  double length_m = 0.0;           ///< polyline length [m]
+  bool blocked = false;            ///< some sample is non-traversable
+  /// The first non-traversable sample point (NaN when not blocked) and its arc length.
+  Eigen::Vector2d first_non_traversable =
+      Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double first_non_traversable_distance_m = std::numeric_limits<double>::quiet_NaN();
+};
+
+/// The top surface projected onto a 2D grid. Image convention: row 0 is the largest y, column
+/// 0 the smallest x; pixel (v, u) covers x in [origin.x + u r, origin.x + (u + 1) r) and
+/// y in [origin.y + (H - 1 - v) r, origin.y + (H - v) r), r = resolution_m.
+struct GridProjection {
+  Eigen::Vector2d origin = Eigen::Vector2d::Zero();  ///< lower-left corner of pixel (H-1, 0) [m]
+  double resolution_m = 0.0;                         ///< pixel edge [m]
+  ImageU8 classes;    ///< class ids (0 where no surface was observed)
+  ImageF cost;        ///< cost in [0, 1]; NaN where unknown
+  ImageF height_m;    ///< z of the top surface voxel centre [m]; NaN where unobserved
+  ImageF slope_deg;   ///< mean slope [deg]; NaN where unobserved
+  ImageF step_m;      ///< mean step [m]; NaN where unobserved
+
+  int width() const { return classes.width(); }
+  int height() const { return classes.height(); }
+  /// Centre of pixel (v, u) in W [m].
+  Eigen::Vector2d PixelCenter(int v, int u) const {
+    return {origin.x() + (u + 0.5) * resolution_m,
+            origin.y() + (height() - 1 - v + 0.5) * resolution_m};
+  }
+};
+
+}  // namespace ssta

@@ -1,0 +1,205 @@
+#include "ssta/mapping/map_export.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include <octomap/ColorOcTree.h>
+
+#include "mapping/map_impl.h"
+#include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+
+namespace ssta {
+namespace {
+
+/// The colour exports use: class colours, undecided grey (as ColourizeLabels).
+Rgb8 ExportColour(TravClass c) {
+  if (c == TravClass::kUndecided) return Rgb8{128, 128, 128};
+  return ClassColour(c);
+}
+
+/// PGM value of a class for map_server (negate 0): occupied 0, free 254, unknown 205.
+std::uint8_t NavValue(std::uint8_t cls) {
+  switch (static_cast<TravClass>(cls)) {
+    case TravClass::kNonTraversable: return 0;
+    case TravClass::kTraversable:
+    case TravClass::kSemiTraversable: return 254;
+    default: return 205;
+  }
+}
+
+std::string Format(const char* fmt, double v) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), fmt, v);
+  return buffer;
+}
+
+/// Writes `text` produced by `fill` to `path` atomically, errors naming the file.
+template <typename Fill>
+void WriteStreamAtomically(const std::string& path, Fill&& fill) {
+  WriteFileAtomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw Error(path + ": cannot open for writing");
+    fill(out);
+    out.flush();
+    if (!out) throw Error(path + ": write failed (disk full?)");
+  });
+}
+
+/// Widens `box` outwards to multiples of `res` (so pixels coincide with map columns).
+Eigen::AlignedBox2d SnapOutwards(const Eigen::AlignedBox2d& box, double res) {
+  // The tolerance keeps bounds that are multiples of res up to rounding (-1.0000000000000002)
+  // from growing by a whole pixel.
+  const Eigen::Vector2d lo = ((box.min() / res).array() + 1e-6).floor() * res;
+  const Eigen::Vector2d hi = ((box.max() / res).array() - 1e-6).ceil() * res;
+  Eigen::AlignedBox2d snapped(lo, hi);
+  for (int i = 0; i < 2; ++i) {
+    if (snapped.max()[i] - snapped.min()[i] < 0.5 * res) snapped.max()[i] = snapped.min()[i] + res;
+  }
+  return snapped;
+}
+
+}  // namespace
+
+std::string QueryCsvRow(const CellInfo& cell) {
+  std::string row;
+  row += Format("%.4f", cell.center.x()) + ',' + Format("%.4f", cell.center.y()) + ',' +
+         Format("%.4f", cell.center.z()) + ',';
+  row += std::to_string(static_cast<int>(cell.cls)) + ',';
+  row += Format("%.4f", cell.cost) + ',' + Format("%.4f", cell.probability) + ',';
+  row += Format("%.2f", cell.slope_deg) + ',' + Format("%.3f", cell.step_m) + ',';
+  row += std::to_string(cell.observations);
+  return row;
+}
+
+GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
+                          const GridExportOptions& options) {
+  const double res = options.resolution_m > 0.0 ? options.resolution_m : map.options().resolution_m;
+  Eigen::AlignedBox2d region = options.region;
+  if (region.isEmpty()) {
+    const Eigen::AlignedBox3d bounds = map.SurfaceBounds();
+    if (bounds.isEmpty()) {
+      throw Error(prefix + ".pgm: the map has no observed surface to export (give a region)");
+    }
+    region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
+  }
+  const GridProjection grid = map.Project(SnapOutwards(region, res), res);
+
+  ImageU8 nav(grid.width(), grid.height());
+  for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);
+
+  WriteImage(ColourizeLabels(grid.classes), prefix + ".png");
+  WriteImage(grid.classes, prefix + "_classes.png");
+  const std::string pgm = prefix + ".pgm";
+  WriteStreamAtomically(pgm, [&](std::ostream& out) {
+    out << "P5\n# SSTA navigation grid: 0 non-traversable, 254 traversable, 205 unknown\n"
+        << nav.width() << ' ' << nav.height() << "\n255\n";
+    out.write(reinterpret_cast<const char*>(nav.data()), static_cast<std::streamsize>(nav.size()));
+  });
+  const std::string image_name = std::filesystem::path(pgm).filename().string();
+  std::ostringstream yaml;
+  yaml << "# map_server map of an SSTA traversability map; origin is the lower-left corner of\n"
+       << "# the lower-left pixel, row 0 of the image is the largest y.\n"
+       << "image: " << image_name << '\n'
+       << "resolution: " << Format("%.9g", grid.resolution_m) << '\n'
+       << "origin: [" << Format("%.9g", grid.origin.x()) << ", " << Format("%.9g", grid.origin.y())
+       << ", 0.0]\n"
+       << "negate: 0\n"
+       << "occupied_thresh: 0.65\n"
+       << "free_thresh: 0.196\n"
+       << "mode: trinary\n";
+  WriteTextAtomically(prefix + ".yaml", yaml.str());
+  return grid;
+}
+
+void ExportOctovis(const TraversabilityMap& map, const std::string& path) {
+  const internal::TravOcTree& tree = internal::TraversabilityMapAccess::Tree(map);
+  octomap::ColorOcTree colour(tree.getResolution());
+  colour.setOccupancyThres(map.options().occupied_threshold_prob);
+  colour.setClampingThresMin(map.options().occupancy_clamp_min_prob);
+  colour.setClampingThresMax(map.options().occupancy_clamp_max_prob);
+  for (const CellInfo& cell : map.SurfaceCells()) {
+    octomap::OcTreeKey key;
+    if (!colour.coordToKeyChecked(cell.center.x(), cell.center.y(), cell.center.z(), key)) continue;
+    const Rgb8 rgb = ExportColour(cell.cls);
+    colour.setNodeValue(key, static_cast<float>(octomap::logodds(cell.occupancy)), true);
+    colour.setNodeColor(key, rgb.r, rgb.g, rgb.b);
+  }
+  colour.updateInnerOccupancy();
+  WriteFileAtomically(path, [&](const std::string& tmp) {
+    if (!colour.write(tmp)) throw Error(path + ": cannot write the ColorOcTree file");
+  });
+}
+
+namespace {
+
+/// Calls `row(cell, colour)` for every surface voxel.
+template <typename Row>
+void ForEachSurfaceCell(const TraversabilityMap& map, Row&& row) {
+  for (const CellInfo& cell : map.SurfaceCells()) row(cell, ExportColour(cell.cls));
+}
+
+std::string Numbers(const CellInfo& cell) {
+  return std::to_string(static_cast<int>(cell.cls)) + ' ' + Format("%.6g", cell.cost) + ' ' +
+         Format("%.6g", cell.probability) + ' ' + Format("%.6g", cell.slope_deg) + ' ' +
+         Format("%.6g", cell.step_m) + ' ' + std::to_string(cell.observations);
+}
+
+std::string Xyz(const CellInfo& cell) {
+  return Format("%.9g", cell.center.x()) + ' ' + Format("%.9g", cell.center.y()) + ' ' +
+         Format("%.9g", cell.center.z());
+}
+
+}  // namespace
+
+void ExportPly(const TraversabilityMap& map, const std::string& path) {
+  const std::size_t n = map.SurfaceCells().size();
+  WriteStreamAtomically(path, [&](std::ostream& out) {
+    out << "ply\nformat ascii 1.0\ncomment SSTA traversability map voxels (centres, world frame, m)\n"
+        << "element vertex " << n << '\n'
+        << "property float x\nproperty float y\nproperty float z\n"
+        << "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        << "property uchar class\nproperty float cost\nproperty float probability\n"
+        << "property float slope_deg\nproperty float step_m\nproperty uint observations\n"
+        << "end_header\n";
+    ForEachSurfaceCell(map, [&](const CellInfo& cell, const Rgb8& c) {
+      out << Xyz(cell) << ' ' << int(c.r) << ' ' << int(c.g) << ' ' << int(c.b) << ' '
+          << Numbers(cell) << '\n';
+    });
+  });
+}
+
+void ExportPcd(const TraversabilityMap& map, const std::string& path) {
+  const std::size_t n = map.SurfaceCells().size();
+  WriteStreamAtomically(path, [&](std::ostream& out) {
+    out << "# .PCD v0.7 - SSTA traversability map voxels (centres, world frame, m)\n"
+        << "VERSION 0.7\n"
+        << "FIELDS x y z rgb class cost probability slope_deg step_m observations\n"
+        << "SIZE 4 4 4 4 1 4 4 4 4 4\n"
+        << "TYPE F F F F U F F F F U\n"
+        << "COUNT 1 1 1 1 1 1 1 1 1 1\n"
+        << "WIDTH " << n << "\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\n"
+        << "POINTS " << n << "\nDATA ascii\n";
+    ForEachSurfaceCell(map, [&](const CellInfo& cell, const Rgb8& c) {
+      const std::uint32_t packed = (std::uint32_t(c.r) << 16) | (std::uint32_t(c.g) << 8) | c.b;
+      float rgb;
+      std::memcpy(&rgb, &packed, sizeof(rgb));
+      out << Xyz(cell) << ' ' << Format("%.9g", rgb) << ' ' << Numbers(cell) << '\n';
+    });
+  });
+}
+
+void ExportCsv(const TraversabilityMap& map, const std::string& path) {
+  WriteStreamAtomically(path, [&](std::ostream& out) {
+    out << kQueryCsvHeader << '\n';
+    ForEachSurfaceCell(map, [&](const CellInfo& cell, const Rgb8&) { out << QueryCsvRow(cell) << '\n'; });
+  });
+}
+
+}  // namespace ssta

@@ -1,0 +1,335 @@
+// Save and Load of TraversabilityMap. The layout (maps/README.md) is one OctoMap .ot file:
+//
+//   # Octomap OcTree file                      <- OctoMap's required first line
+//   # SSTA traversability map ...              <- comment
+//   #@ssta format_version: 1                   <- metadata, YAML, one line per comment line
+//   #@ssta ...
+//   id SstaTravOcTree
+//   size <nodes>
+//   res <resolution>
+//   data
+//   <OctoMap binary node stream>               <- TravNode::writeData per node, depth first
+//   \n# ssta-map-end bytes <N> fnv1a64 <hash>\n  <- trailer: N bytes before it, their hash
+//
+// OctoMap's reader skips '#' lines in the header and ignores bytes after the tree, so the file
+// stays a valid .ot file; the trailer lets Load reject truncated or damaged files before
+// OctoMap's recursive reader (which does not check its stream) touches them.
+
+#include <cinttypes>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <streambuf>
+
+#include <yaml-cpp/yaml.h>
+
+#include "io/yaml_reader.h"
+#include "mapping/map_impl.h"
+#include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
+
+#ifndef SSTA_VERSION
+#define SSTA_VERSION "unknown"
+#endif
+
+namespace ssta {
+namespace {
+
+constexpr char kFirstLine[] = "# Octomap OcTree file";
+constexpr char kMetaPrefix[] = "#@ssta";
+constexpr char kTrailerTag[] = "\n# ssta-map-end bytes ";
+constexpr std::uint64_t kFnvOffset = 14695981039346656037ull;
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+std::uint64_t Fnv1a(std::uint64_t h, const char* data, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= kFnvPrime;
+  }
+  return h;
+}
+
+/// Forwards everything to `sink` while counting bytes and hashing them (FNV-1a, 64 bit).
+class HashingStreamBuf : public std::streambuf {
+ public:
+  explicit HashingStreamBuf(std::streambuf* sink) : sink_(sink) {}
+  std::uint64_t bytes() const { return bytes_; }
+  std::uint64_t hash() const { return hash_; }
+
+ protected:
+  int_type overflow(int_type c) override {
+    if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
+    const char ch = traits_type::to_char_type(c);
+    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+  }
+  std::streamsize xsputn(const char* s, std::streamsize n) override {
+    hash_ = Fnv1a(hash_, s, static_cast<std::size_t>(n));
+    bytes_ += static_cast<std::uint64_t>(n);
+    return sink_->sputn(s, n);
+  }
+  int sync() override { return sink_->pubsync(); }
+
+ private:
+  std::streambuf* sink_;
+  std::uint64_t bytes_ = 0;
+  std::uint64_t hash_ = kFnvOffset;
+};
+
+/// Read-only stream buffer over memory (no copy of the file).
+class MemoryStreamBuf : public std::streambuf {
+ public:
+  MemoryStreamBuf(const char* begin, const char* end) {
+    char* b = const_cast<char*>(begin);
+    setg(b, b, const_cast<char*>(end));
+  }
+  std::size_t consumed() const { return static_cast<std::size_t>(gptr() - eback()); }
+};
+
+/// The shortest decimal text that reads back as exactly `v` ("0.1", not "0.10000000000000001").
+std::string ShortestDecimal(double v) {
+  char buffer[32];
+  for (int precision = 1; precision <= 17; ++precision) {
+    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, v);
+    if (std::strtod(buffer, nullptr) == v) break;
+  }
+  return buffer;
+}
+
+std::string MetadataYaml(const TraversabilityMap& map) {
+  const MapOptions& o = map.options();
+  const MapMetadata& m = map.metadata();
+  YAML::Emitter out;
+  // Doubles go out as their shortest exact decimal text (plain scalars, read back as doubles).
+  const auto num = [](double v) { return ShortestDecimal(v); };
+  out << YAML::BeginMap;
+  out << YAML::Key << "format_version" << YAML::Value << kMapFormatVersion;
+  out << YAML::Key << "software_version" << YAML::Value << SSTA_VERSION;
+  out << YAML::Key << "frames_inserted" << YAML::Value << map.frames_inserted();
+  out << YAML::Key << "last_timestamp_ns" << YAML::Value << map.last_timestamp_ns();
+  out << YAML::Key << "map_options" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "resolution_m" << YAML::Value << num(o.resolution_m);
+  out << YAML::Key << "max_range_m" << YAML::Value << num(o.max_range_m);
+  out << YAML::Key << "occupancy_hit_prob" << YAML::Value << num(o.occupancy_hit_prob);
+  out << YAML::Key << "occupancy_miss_prob" << YAML::Value << num(o.occupancy_miss_prob);
+  out << YAML::Key << "occupancy_clamp_min_prob" << YAML::Value << num(o.occupancy_clamp_min_prob);
+  out << YAML::Key << "occupancy_clamp_max_prob" << YAML::Value << num(o.occupancy_clamp_max_prob);
+  out << YAML::Key << "occupied_threshold_prob" << YAML::Value << num(o.occupied_threshold_prob);
+  out << YAML::Key << "class_hit_log_odds" << YAML::Value << num(o.class_hit_log_odds);
+  out << YAML::Key << "class_miss_log_odds" << YAML::Value << num(o.class_miss_log_odds);
+  out << YAML::Key << "class_free_decay_log_odds" << YAML::Value << num(o.class_free_decay_log_odds);
+  out << YAML::Key << "class_clamp_min" << YAML::Value << num(o.class_clamp_min);
+  out << YAML::Key << "class_clamp_max" << YAML::Value << num(o.class_clamp_max);
+  out << YAML::EndMap;
+  const VehicleOptions& v = m.vehicle;
+  out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "max_slope_deg" << YAML::Value << num(v.max_slope_deg);
+  out << YAML::Key << "semi_slope_deg" << YAML::Value << num(v.semi_slope_deg);
+  out << YAML::Key << "max_step_m" << YAML::Value << num(v.max_step_m);
+  out << YAML::Key << "semi_step_m" << YAML::Value << num(v.semi_step_m);
+  out << YAML::Key << "min_camera_height_m" << YAML::Value << num(v.min_camera_height_m);
+  out << YAML::Key << "max_camera_height_m" << YAML::Value << num(v.max_camera_height_m);
+  out << YAML::EndMap;
+  out << YAML::Key << "calibration_summary" << YAML::Value << YAML::DoubleQuoted
+      << m.calibration_summary;
+  out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const std::string& s : m.sequences) out << YAML::DoubleQuoted << s;
+  out << YAML::EndSeq;
+  out << YAML::EndMap;
+  if (!out.good()) throw InternalError(std::string("map metadata YAML: ") + out.GetLastError());
+  return out.c_str();
+}
+
+/// What the text header of a map file says.
+struct Header {
+  std::string id;
+  std::uint64_t size = 0;
+  double resolution = 0.0;
+  std::string metadata_yaml;
+  std::size_t data_begin = 0;  // offset of the binary node stream
+};
+
+bool StartsWith(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+Header ParseHeader(const std::string& bytes, const std::string& path) {
+  const std::size_t first_end = bytes.find('\n');
+  if (first_end == std::string::npos || !StartsWith(bytes, kFirstLine)) {
+    throw Error(path + ": not an OctoMap .ot file (the first line is not '" + kFirstLine + "')");
+  }
+  Header header;
+  std::size_t pos = first_end + 1;
+  bool have_data = false, have_size = false, have_res = false;
+  while (pos < bytes.size()) {
+    std::size_t end = bytes.find('\n', pos);
+    if (end == std::string::npos) break;
+    std::string line = bytes.substr(pos, end - pos);
+    pos = end + 1;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (StartsWith(line, kMetaPrefix)) {
+      std::string text = line.substr(sizeof(kMetaPrefix) - 1);
+      if (!text.empty() && text[0] == ' ') text.erase(0, 1);
+      header.metadata_yaml += text + '\n';
+      continue;
+    }
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream tokens(line);
+    std::string keyword;
+    tokens >> keyword;
+    if (keyword == "data") {
+      have_data = true;
+      break;
+    }
+    if (keyword == "id") {
+      tokens >> header.id;
+    } else if (keyword == "size") {
+      have_size = static_cast<bool>(tokens >> header.size);
+    } else if (keyword == "res") {
+      have_res = static_cast<bool>(tokens >> header.resolution);
+    }
+  }
+  if (!have_data) throw Error(path + ": truncated or corrupt map (the OctoMap header has no 'data' line)");
+  if (header.id.empty()) header.id = "OcTree";  // OctoMap's default for old files
+  if (header.id != internal::TravOcTree::kTreeType) {
+    throw Error(path + ": OctoMap tree type '" + header.id +
+                "' is not an SSTA traversability map (expected '" +
+                internal::TravOcTree::kTreeType + "', as written by ssta build-map)");
+  }
+  if (!have_size || !have_res || !(header.resolution > 0.0)) {
+    throw Error(path + ": corrupt map header (missing or bad 'size' or 'res')");
+  }
+  header.data_begin = pos;
+  return header;
+}
+
+/// Checks the trailer and returns the offset where it starts (= end of the node stream).
+std::size_t VerifyTrailer(const std::string& bytes, const std::string& path) {
+  const std::size_t tag = bytes.rfind(kTrailerTag);
+  const std::string truncated = path + ": truncated or corrupt map (";
+  if (tag == std::string::npos) throw Error(truncated + "no end marker; was the save interrupted?)");
+  unsigned long long count = 0;
+  char hash_text[17] = {0};
+  const std::string trailer = bytes.substr(tag + sizeof(kTrailerTag) - 1);
+  if (std::sscanf(trailer.c_str(), "%llu fnv1a64 %16[0-9a-f]", &count, hash_text) != 2 ||
+      count != tag || trailer.empty() || trailer.back() != '\n') {
+    throw Error(truncated + "bad end marker)");
+  }
+  char expected[17];
+  std::snprintf(expected, sizeof(expected), "%016" PRIx64, Fnv1a(kFnvOffset, bytes.data(), tag));
+  if (std::string(expected) != hash_text) throw Error(truncated + "checksum mismatch)");
+  return tag;
+}
+
+void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* options,
+                  MapMetadata* metadata, std::uint64_t* frames, std::int64_t* last_ts,
+                  std::string* software_version) {
+  internal::YamlSection root(internal::ParseYaml(yaml, path), path, "");
+  if (!root.Has("format_version")) {
+    throw Error(path + ": not an SSTA map (its header has no '#@ssta format_version')");
+  }
+  const int version = root.Require<int>("format_version");
+  if (version > kMapFormatVersion) {
+    throw Error(path + ": map format version " + std::to_string(version) +
+                " is newer than this ssta reads (" + std::to_string(kMapFormatVersion) +
+                "); use a newer ssta");
+  }
+  if (version < 1) throw Error(root.Name("format_version") + ": must be >= 1");
+  *software_version = root.Require<std::string>("software_version");
+  *frames = root.Require<std::uint64_t>("frames_inserted");
+  *last_ts = root.Require<std::int64_t>("last_timestamp_ns");
+
+  internal::YamlSection o = root.Child("map_options");
+  options->resolution_m = o.Require<double>("resolution_m");
+  options->max_range_m = o.Require<double>("max_range_m");
+  options->occupancy_hit_prob = o.Require<double>("occupancy_hit_prob");
+  options->occupancy_miss_prob = o.Require<double>("occupancy_miss_prob");
+  options->occupancy_clamp_min_prob = o.Require<double>("occupancy_clamp_min_prob");
+  options->occupancy_clamp_max_prob = o.Require<double>("occupancy_clamp_max_prob");
+  options->occupied_threshold_prob = o.Require<double>("occupied_threshold_prob");
+  options->class_hit_log_odds = o.Require<double>("class_hit_log_odds");
+  options->class_miss_log_odds = o.Require<double>("class_miss_log_odds");
+  options->class_free_decay_log_odds = o.Require<double>("class_free_decay_log_odds");
+  options->class_clamp_min = o.Require<double>("class_clamp_min");
+  options->class_clamp_max = o.Require<double>("class_clamp_max");
+  std::string error;
+  if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
+
+  internal::YamlSection v = root.Child("vehicle");
+  VehicleOptions& vehicle = metadata->vehicle;
+  vehicle.max_slope_deg = v.Require<double>("max_slope_deg");
+  vehicle.semi_slope_deg = v.Require<double>("semi_slope_deg");
+  vehicle.max_step_m = v.Require<double>("max_step_m");
+  vehicle.semi_step_m = v.Require<double>("semi_step_m");
+  vehicle.min_camera_height_m = v.Require<double>("min_camera_height_m");
+  vehicle.max_camera_height_m = v.Require<double>("max_camera_height_m");
+  if (!vehicle.IsValid(&error)) throw Error(path + ": vehicle." + error);
+
+  metadata->calibration_summary = root.Require<std::string>("calibration_summary");
+  metadata->sequences = root.Require<std::vector<std::string>>("sequences");
+}
+
+}  // namespace
+
+void TraversabilityMap::Save(const std::string& path) const {
+  const std::string metadata = MetadataYaml(*this);
+  const internal::TravOcTree& tree = *impl_->tree;
+  WriteFileAtomically(path, [&](const std::string& tmp) {
+    std::ofstream file(tmp, std::ios::binary);
+    if (!file) throw Error(path + ": cannot open for writing");
+    HashingStreamBuf hashing(file.rdbuf());
+    std::ostream out(&hashing);
+    out << kFirstLine << '\n'
+        << "# SSTA traversability map; lines starting with '" << kMetaPrefix
+        << "' hold its metadata (YAML), see maps/README.md\n";
+    std::istringstream lines(metadata);
+    for (std::string line; std::getline(lines, line);) {
+      out << kMetaPrefix << (line.empty() ? "" : " ") << line << '\n';
+    }
+    out << "id " << tree.getTreeType() << '\n'
+        << "size " << tree.size() << '\n'
+        << "res " << ShortestDecimal(tree.getResolution()) << '\n'
+        << "data\n";
+    tree.writeData(out);
+    out.flush();
+    if (!out) throw Error(path + ": write failed (disk full?)");
+    char trailer[96];
+    std::snprintf(trailer, sizeof(trailer), "%s%" PRIu64 " fnv1a64 %016" PRIx64 "\n", kTrailerTag,
+                  hashing.bytes(), hashing.hash());
+    file << trailer;
+    file.flush();
+    if (!file) throw Error(path + ": write failed (disk full?)");
+  });
+}
+
+TraversabilityMap TraversabilityMap::Load(const std::string& path) {
+  const std::string bytes = ReadTextFile(path);  // binary-safe; throws naming the file
+  const Header header = ParseHeader(bytes, path);
+
+  auto impl = std::make_unique<Impl>();
+  // The metadata (and with it the format version) is read before the node stream is trusted.
+  ReadMetadata(header.metadata_yaml, path, &impl->options, &impl->metadata,
+               &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version);
+  const std::size_t data_end = VerifyTrailer(bytes, path);
+  if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
+  if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
+    throw Error(path + ": corrupt map (header res " + std::to_string(header.resolution) +
+                " differs from map_options.resolution_m)");
+  }
+
+  impl->tree = internal::MakeTree(impl->options);
+  if (header.size > 0) {
+    MemoryStreamBuf buffer(bytes.data() + header.data_begin, bytes.data() + data_end);
+    std::istream in(&buffer);
+    impl->tree->readData(in);
+    if (!in || buffer.consumed() != data_end - header.data_begin ||
+        impl->tree->size() != header.size) {
+      throw Error(path + ": corrupt map (the node stream does not match its header)");
+    }
+  } else if (data_end != header.data_begin) {
+    throw Error(path + ": corrupt map (node data after an empty tree)");
+  }
+  return internal::TraversabilityMapAccess::FromImpl(std::move(impl));
+}
+
+}  // namespace ssta

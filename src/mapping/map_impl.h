@@ -1,0 +1,44 @@
+#pragma once
+
+// Private: the state behind TraversabilityMap, shared by its translation units (fusion and
+// queries, file I/O) and reachable from the exporters and tests through
+// TraversabilityMapAccess.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "mapping/trav_octree.h"
+#include "ssta/mapping/traversability_map.h"
+
+namespace ssta {
+
+struct TraversabilityMap::Impl {
+  MapOptions options;
+  MapMetadata metadata;
+  std::unique_ptr<internal::TravOcTree> tree;
+  std::uint64_t frames_inserted = 0;
+  std::int64_t last_timestamp_ns = 0;
+  std::string software_version;
+};
+
+namespace internal {
+
+/// A tree configured with the sensor model of `options` (precondition: options valid).
+std::unique_ptr<TravOcTree> MakeTree(const MapOptions& options);
+
+/// Cell description of `node` (null: unobserved) at the full-resolution voxel `key`.
+CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, const TravNode* node,
+                      const octomap::OcTreeKey& key);
+
+struct TraversabilityMapAccess {
+  static const TravOcTree& Tree(const TraversabilityMap& map) { return *map.impl_->tree; }
+  static TraversabilityMap::Impl& Impl(TraversabilityMap& map) { return *map.impl_; }
+  static const TraversabilityMap::Impl& Impl(const TraversabilityMap& map) { return *map.impl_; }
+  static TraversabilityMap FromImpl(std::unique_ptr<TraversabilityMap::Impl> impl) {
+    return TraversabilityMap(std::move(impl));
+  }
+};
+
+}  // namespace internal
+}  // namespace ssta

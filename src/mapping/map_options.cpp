@@ -1,0 +1,55 @@
+#include "ssta/mapping/map_options.h"
+
+#include <cmath>
+
+namespace ssta {
+namespace {
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
+bool InOpen(double v, double lo, double hi) { return v > lo && v < hi; }
+
+}  // namespace
+
+bool MapOptions::IsValid(std::string* error) const {
+  if (!(resolution_m > 0.005 && resolution_m <= 10.0)) {
+    return Fail(error, "resolution_m: must be in (0.005, 10] metres");
+  }
+  if (!(max_range_m > 0.0 && max_range_m <= 1000.0)) {
+    return Fail(error, "max_range_m: must be in (0, 1000] metres");
+  }
+  if (!InOpen(occupancy_hit_prob, 0.5, 1.0)) return Fail(error, "occupancy_hit_prob: must be in (0.5, 1)");
+  if (!InOpen(occupancy_miss_prob, 0.0, 0.5)) return Fail(error, "occupancy_miss_prob: must be in (0, 0.5)");
+  if (!InOpen(occupancy_clamp_min_prob, 0.0, 0.5)) {
+    return Fail(error, "occupancy_clamp_min_prob: must be in (0, 0.5)");
+  }
+  if (!InOpen(occupancy_clamp_max_prob, 0.5, 1.0)) {
+    return Fail(error, "occupancy_clamp_max_prob: must be in (0.5, 1)");
+  }
+  if (!InOpen(occupied_threshold_prob, occupancy_clamp_min_prob, occupancy_clamp_max_prob)) {
+    return Fail(error,
+                "occupied_threshold_prob: must lie strictly between occupancy_clamp_min_prob and "
+                "occupancy_clamp_max_prob");
+  }
+  if (!(class_hit_log_odds > 0.0 && std::isfinite(class_hit_log_odds))) {
+    return Fail(error, "class_hit_log_odds: must be a positive number");
+  }
+  if (!(class_miss_log_odds <= 0.0 && std::isfinite(class_miss_log_odds))) {
+    return Fail(error, "class_miss_log_odds: must be zero or negative");
+  }
+  if (!(class_free_decay_log_odds >= 0.0 && std::isfinite(class_free_decay_log_odds))) {
+    return Fail(error, "class_free_decay_log_odds: must be zero or positive");
+  }
+  if (!(class_clamp_min < 0.0 && class_clamp_min > -50.0)) {
+    return Fail(error, "class_clamp_min: must be in (-50, 0)");
+  }
+  if (!(class_clamp_max > 0.0 && class_clamp_max < 50.0)) {
+    return Fail(error, "class_clamp_max: must be in (0, 50)");
+  }
+  return true;
+}
+
+}  // namespace ssta

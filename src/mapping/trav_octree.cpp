@@ -1,0 +1,103 @@
+#include "mapping/trav_octree.h"
+
+#include <cstring>
+#include <istream>
+#include <ostream>
+
+namespace ssta::internal {
+namespace {
+
+template <typename T>
+void WriteRaw(std::ostream& s, const T& v) {
+  s.write(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+
+template <typename T>
+void ReadRaw(std::istream& s, T* v) {
+  s.read(reinterpret_cast<char*>(v), sizeof(T));
+}
+
+bool SameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
+
+}  // namespace
+
+TravNode::TravNode(const TravNode& rhs) : octomap::OcTreeNode() {
+  copyData(rhs);
+  if (rhs.children != nullptr) {
+    allocChildren();
+    for (unsigned i = 0; i < 8; ++i) {
+      if (rhs.children[i] != nullptr) {
+        children[i] = new TravNode(*static_cast<const TravNode*>(rhs.children[i]));
+      }
+    }
+  }
+}
+
+bool TravNode::operator==(const TravNode& rhs) const {
+  // Bitwise float comparison: pruning must be lossless, and +0/-0 or NaN must not merge.
+  return SameBits(value, rhs.value) && SameBits(class_log_odds[0], rhs.class_log_odds[0]) &&
+         SameBits(class_log_odds[1], rhs.class_log_odds[1]) &&
+         SameBits(class_log_odds[2], rhs.class_log_odds[2]) && SameBits(slope_deg, rhs.slope_deg) &&
+         SameBits(step_m, rhs.step_m) && SameBits(max_step_m, rhs.max_step_m) &&
+         observations == rhs.observations && last_seen_ns == rhs.last_seen_ns;
+}
+
+void TravNode::copyData(const TravNode& from) {
+  octomap::OcTreeNode::copyData(from);
+  class_log_odds = from.class_log_odds;
+  slope_deg = from.slope_deg;
+  step_m = from.step_m;
+  max_step_m = from.max_step_m;
+  observations = from.observations;
+  last_seen_ns = from.last_seen_ns;
+}
+
+std::istream& TravNode::readData(std::istream& s) {
+  ReadRaw(s, &value);
+  for (float& l : class_log_odds) ReadRaw(s, &l);
+  ReadRaw(s, &slope_deg);
+  ReadRaw(s, &step_m);
+  ReadRaw(s, &max_step_m);
+  ReadRaw(s, &observations);
+  ReadRaw(s, &last_seen_ns);
+  return s;
+}
+
+std::ostream& TravNode::writeData(std::ostream& s) const {
+  WriteRaw(s, value);
+  for (const float l : class_log_odds) WriteRaw(s, l);
+  WriteRaw(s, slope_deg);
+  WriteRaw(s, step_m);
+  WriteRaw(s, max_step_m);
+  WriteRaw(s, observations);
+  WriteRaw(s, last_seen_ns);
+  return s;
+}
+
+TravOcTree::StaticMemberInitializer TravOcTree::registration_;
+
+TravOcTree::StaticMemberInitializer::StaticMemberInitializer() {
+  // OctoMap's factory keeps (and owns) one prototype per tree type.
+  auto* prototype = new TravOcTree(0.1);
+  prototype->clearKeyRays();
+  octomap::AbstractOcTree::registerTreeType(prototype);
+}
+
+TravOcTree::TravOcTree(double resolution) : octomap::OccupancyOcTreeBase<TravNode>(resolution) {
+  registration_.EnsureLinking();
+}
+
+bool TravOcTree::isNodeCollapsible(const TravNode* node) const {
+  // Same rule as OctoMap's, spelled out so that it visibly compares the whole payload.
+  if (!nodeChildExists(node, 0)) return false;
+  const TravNode* first = getNodeChild(node, 0);
+  if (nodeHasChildren(first)) return false;
+  for (unsigned i = 1; i < 8; ++i) {
+    if (!nodeChildExists(node, i)) return false;
+    const TravNode* child = getNodeChild(node, i);
+    if (nodeHasChildren(child) || !(*child == *first)) return false;
+  }
+  return true;
+}
+
+}  // namespace ssta::internal

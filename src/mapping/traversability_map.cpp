@@ -1,0 +1,561 @@
+#include "ssta/mapping/traversability_map.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <utility>
+
+#include "mapping/map_impl.h"
+#include "ssta/core/error.h"
+
+#ifndef SSTA_VERSION
+#define SSTA_VERSION "unknown"
+#endif
+
+namespace ssta {
+
+using internal::TravNode;
+using internal::TravOcTree;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// Per-voxel accumulator of one frame's in-range points.
+struct VoxelAccumulator {
+  Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
+  std::uint32_t points = 0;
+  std::array<std::uint32_t, 3> votes{};  // classes 1..3
+  double slope_sum = 0.0;
+  std::uint32_t slope_count = 0;
+  double step_sum = 0.0;
+  std::uint32_t step_count = 0;
+  double max_abs_step = -1.0;  // < 0: none
+};
+
+/// Accumulator of one frame's points beyond range (ray direction only).
+struct FarAccumulator {
+  Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
+  std::uint32_t points = 0;
+};
+
+/// Majority vote of the 1..3 verdicts, ties to the worse class; -1 when there are none.
+int MajorityClassIndex(const std::array<std::uint32_t, 3>& votes) {
+  int best = -1;
+  std::uint32_t best_votes = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (votes[k] > 0 && votes[k] >= best_votes) {
+      best = k;
+      best_votes = votes[k];
+    }
+  }
+  return best;
+}
+
+float Clamp(double v, double lo, double hi) { return static_cast<float>(std::min(hi, std::max(lo, v))); }
+
+float DecayTowardsZero(float l, double decay) {
+  if (l > 0.0f) return static_cast<float>(std::max(0.0, l - decay));
+  if (l < 0.0f) return static_cast<float>(std::min(0.0, l + decay));
+  return l;
+}
+
+bool NodeOccupied(const TravOcTree& tree, const TravNode& node) {
+  return node.getLogOdds() >= tree.getOccupancyThresLog();
+}
+
+double KeyCenter(const TravOcTree& tree, octomap::key_type k) { return tree.keyToCoord(k); }
+
+Eigen::Vector3d KeyCenter(const TravOcTree& tree, const octomap::OcTreeKey& key) {
+  return {tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key[2])};
+}
+
+/// The highest occupied voxel of column (kx, ky) below `node`, which covers z keys
+/// [z_base, z_base + 2^(16 - depth)). Inner occupancy is the max over the children, so a
+/// subtree whose root is not occupied holds no occupied voxel and is skipped.
+const TravNode* FindTopOccupied(const TravOcTree& tree, const TravNode* node, unsigned depth,
+                                octomap::key_type kx, octomap::key_type ky, unsigned z_base,
+                                octomap::key_type* kz) {
+  const unsigned tree_depth = tree.getTreeDepth();
+  if (!NodeOccupied(tree, *node)) return nullptr;
+  if (!tree.nodeHasChildren(node)) {
+    *kz = static_cast<octomap::key_type>(z_base + (1u << (tree_depth - depth)) - 1u);
+    return node;
+  }
+  const unsigned bit = tree_depth - 1 - depth;
+  const unsigned xy = ((kx >> bit) & 1u) | (((ky >> bit) & 1u) << 1);
+  for (const unsigned zb : {1u, 0u}) {
+    const unsigned pos = xy | (zb << 2);
+    if (!tree.nodeChildExists(node, pos)) continue;
+    const TravNode* found = FindTopOccupied(tree, tree.getNodeChild(node, pos), depth + 1, kx, ky,
+                                            z_base + (zb << bit), kz);
+    if (found != nullptr) return found;
+  }
+  return nullptr;
+}
+
+int Severity(TravClass c) {
+  switch (c) {
+    case TravClass::kTraversable: return 1;
+    case TravClass::kSemiTraversable: return 2;
+    case TravClass::kNonTraversable: return 3;
+    default: return 0;
+  }
+}
+
+double Clamp01(double v) { return std::min(1.0, std::max(0.0, v)); }
+
+/// How far `value` lies into the band (semi, max]: 0 at or below semi, 1 at or above max.
+double BandFraction(double value, double semi, double max) {
+  if (!std::isfinite(value)) return 0.0;
+  if (max > semi) return Clamp01((value - semi) / (max - semi));
+  return value > semi ? 1.0 : 0.0;
+}
+
+}  // namespace
+
+namespace internal {
+
+std::unique_ptr<TravOcTree> MakeTree(const MapOptions& options) {
+  auto tree = std::make_unique<TravOcTree>(options.resolution_m);
+  tree->setProbHit(options.occupancy_hit_prob);
+  tree->setProbMiss(options.occupancy_miss_prob);
+  tree->setClampingThresMin(options.occupancy_clamp_min_prob);
+  tree->setClampingThresMax(options.occupancy_clamp_max_prob);
+  tree->setOccupancyThres(options.occupied_threshold_prob);
+  return tree;
+}
+
+CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, const TravNode* node,
+                      const octomap::OcTreeKey& key) {
+  CellInfo cell;
+  cell.center = KeyCenter(tree, key);
+  if (node == nullptr) return cell;
+  cell.observed = true;
+  cell.occupancy = octomap::probability(node->getLogOdds());
+  cell.occupied = NodeOccupied(tree, *node);
+  cell.observations = node->observations;
+  cell.last_seen_ns = node->last_seen_ns;
+  if (node->observations > 0) {
+    cell.slope_deg = node->slope_deg;
+    cell.step_m = node->step_m;
+    cell.max_step_m = node->max_step_m;
+  }
+  if (!cell.occupied) return cell;  // free space has no class
+
+  const auto& l = node->class_log_odds;
+  const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
+  if (!has_evidence) {
+    cell.cls = TravClass::kUndecided;
+    return cell;
+  }
+  int best = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (l[k] >= l[best]) best = k;  // ties to the worse class
+  }
+  double denominator = 0.0;
+  for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
+  cell.cls = static_cast<TravClass>(best + 1);
+  cell.probability = std::exp(static_cast<double>(l[best])) / denominator;
+  cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m);
+  return cell;
+}
+
+}  // namespace internal
+
+TraversabilityMap::TraversabilityMap(const MapOptions& options, MapMetadata metadata)
+    : impl_(std::make_unique<Impl>()) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error("map options: " + error);
+  if (!metadata.vehicle.IsValid(&error)) throw Error("map vehicle: " + error);
+  impl_->options = options;
+  impl_->metadata = std::move(metadata);
+  impl_->tree = internal::MakeTree(options);
+  impl_->software_version = SSTA_VERSION;
+}
+
+TraversabilityMap::TraversabilityMap(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+TraversabilityMap::~TraversabilityMap() = default;
+TraversabilityMap::TraversabilityMap(TraversabilityMap&&) noexcept = default;
+TraversabilityMap& TraversabilityMap::operator=(TraversabilityMap&&) noexcept = default;
+
+InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& points,
+                                           const Eigen::Vector3d& sensor_origin_world,
+                                           std::int64_t timestamp_ns) {
+  TravOcTree& tree = *impl_->tree;
+  const MapOptions& opt = impl_->options;
+  InsertStats stats;
+  stats.points_in = points.size();
+
+  octomap::OcTreeKey origin_key;
+  if (!sensor_origin_world.allFinite() ||
+      !tree.coordToKeyChecked(sensor_origin_world.x(), sensor_origin_world.y(),
+                              sensor_origin_world.z(), origin_key)) {
+    stats.inserted = false;
+    stats.reason = "sensor origin is not finite or lies outside the map's addressable cube";
+    stats.points_rejected = points.size();
+    return stats;
+  }
+
+  // 1. Thin the points: one accumulator per voxel.
+  std::unordered_map<octomap::OcTreeKey, VoxelAccumulator, octomap::OcTreeKey::KeyHash> hits;
+  std::unordered_map<octomap::OcTreeKey, FarAccumulator, octomap::OcTreeKey::KeyHash> far;
+  hits.reserve(points.size() / 4 + 16);
+  for (const ClassifiedPoint& point : points) {
+    const Eigen::Vector3d p = point.world_p.cast<double>();
+    octomap::OcTreeKey key;
+    if (!p.allFinite() || !tree.coordToKeyChecked(p.x(), p.y(), p.z(), key)) {
+      ++stats.points_rejected;
+      continue;
+    }
+    if ((p - sensor_origin_world).norm() > opt.max_range_m) {
+      FarAccumulator& acc = far[key];
+      acc.sum_p += p;
+      ++acc.points;
+      ++stats.points_beyond_range;
+      continue;
+    }
+    VoxelAccumulator& acc = hits[key];
+    acc.sum_p += p;
+    ++acc.points;
+    ++stats.points_hit;
+    const int c = static_cast<int>(point.cls);
+    if (c < 1 || c > 3) continue;  // unknown, undecided, don't-care: occupancy only
+    ++acc.votes[c - 1];
+    if (std::isfinite(point.slope_deg)) {
+      acc.slope_sum += point.slope_deg;
+      ++acc.slope_count;
+    }
+    if (std::isfinite(point.step_m)) {
+      acc.step_sum += point.step_m;
+      ++acc.step_count;
+      acc.max_abs_step = std::max(acc.max_abs_step, static_cast<double>(std::abs(point.step_m)));
+    }
+  }
+
+  // 2. Free space: each voxel once, occupied voxels of this frame win.
+  octomap::KeySet free_keys;
+  octomap::KeyRay ray;
+  const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
+                                static_cast<float>(sensor_origin_world.y()),
+                                static_cast<float>(sensor_origin_world.z()));
+  auto cast = [&](const Eigen::Vector3d& end) {
+    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
+                             static_cast<float>(end.z()));
+    if (tree.computeRayKeys(origin, e, ray)) free_keys.insert(ray.begin(), ray.end());
+  };
+  for (const auto& [key, acc] : hits) cast(acc.sum_p / acc.points);
+  for (const auto& [key, acc] : far) {
+    const Eigen::Vector3d direction = (acc.sum_p / acc.points - sensor_origin_world).normalized();
+    cast(sensor_origin_world + direction * opt.max_range_m);
+  }
+  for (const auto& [key, acc] : hits) free_keys.erase(key);
+
+  // 3. Updates.
+  const double decay = opt.class_free_decay_log_odds;
+  for (const octomap::OcTreeKey& key : free_keys) {
+    tree.UpdateLeaf(key, [&](TravNode& node) {
+      tree.integrateMiss(&node);
+      for (float& l : node.class_log_odds) l = DecayTowardsZero(l, decay);
+    });
+  }
+  stats.voxels_freed = free_keys.size();
+
+  for (const auto& [key, acc] : hits) {
+    const int winner = MajorityClassIndex(acc.votes);
+    if (winner >= 0) ++stats.voxels_with_class;
+    tree.UpdateLeaf(key, [&](TravNode& node) {
+      tree.integrateHit(&node);
+      node.last_seen_ns = timestamp_ns;
+      if (winner < 0) return;
+      for (int k = 0; k < 3; ++k) {
+        const double delta = k == winner ? opt.class_hit_log_odds : opt.class_miss_log_odds;
+        node.class_log_odds[k] =
+            Clamp(node.class_log_odds[k] + delta, opt.class_clamp_min, opt.class_clamp_max);
+      }
+      ++node.observations;
+      const double n = node.observations;
+      if (acc.slope_count > 0) {
+        const double v = acc.slope_sum / acc.slope_count;
+        node.slope_deg = static_cast<float>(node.slope_deg + (v - node.slope_deg) / n);
+      }
+      if (acc.step_count > 0) {
+        const double v = acc.step_sum / acc.step_count;
+        node.step_m = static_cast<float>(node.step_m + (v - node.step_m) / n);
+        node.max_step_m = std::max(node.max_step_m, static_cast<float>(acc.max_abs_step));
+      }
+    });
+  }
+  stats.voxels_hit = hits.size();
+  ++impl_->frames_inserted;
+  impl_->last_timestamp_ns = timestamp_ns;
+  return stats;
+}
+
+CellInfo TraversabilityMap::CellAt(const Eigen::Vector3d& p_world) const {
+  const TravOcTree& tree = *impl_->tree;
+  octomap::OcTreeKey key;
+  if (!p_world.allFinite() || !tree.coordToKeyChecked(p_world.x(), p_world.y(), p_world.z(), key)) {
+    CellInfo cell;
+    cell.center = p_world;
+    return cell;
+  }
+  return internal::DescribeCell(*this, tree, tree.search(key), key);
+}
+
+CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
+  const TravOcTree& tree = *impl_->tree;
+  octomap::OcTreeKey key;
+  CellInfo unobserved;
+  if (!std::isfinite(x) || !std::isfinite(y) || !tree.coordToKeyChecked(x, y, 0.0, key)) {
+    unobserved.center = {x, y, kNaN};
+    return unobserved;
+  }
+  unobserved.center = {KeyCenter(tree, key[0]), KeyCenter(tree, key[1]), kNaN};
+  const TravNode* root = tree.getRoot();
+  if (root == nullptr) return unobserved;
+  octomap::key_type kz = 0;
+  const TravNode* node = FindTopOccupied(tree, root, 0, key[0], key[1], 0, &kz);
+  if (node == nullptr) return unobserved;
+  key[2] = kz;
+  return internal::DescribeCell(*this, tree, node, key);
+}
+
+FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q) const {
+  if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.yaw) && q.length_m >= 0.0 &&
+        q.width_m >= 0.0 && std::isfinite(q.length_m) && std::isfinite(q.width_m))) {
+    throw Error("footprint query: x, y, yaw must be finite and length_m, width_m >= 0");
+  }
+  const TravOcTree& tree = *impl_->tree;
+  const double c = std::cos(q.yaw), s = std::sin(q.yaw);
+  const double half_l = 0.5 * q.length_m, half_w = 0.5 * q.width_m;
+  const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
+  const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
+
+  std::vector<Eigen::Vector2d> columns;
+  octomap::OcTreeKey lo, hi;
+  if (tree.coordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, lo) &&
+      tree.coordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, hi)) {
+    for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
+      for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
+        const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
+        const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
+        const double dx = cx - q.x, dy = cy - q.y;
+        const double along = c * dx + s * dy, across = -s * dx + c * dy;
+        if (std::abs(along) <= half_l && std::abs(across) <= half_w) columns.emplace_back(cx, cy);
+      }
+    }
+  }
+  if (columns.empty()) columns.emplace_back(q.x, q.y);
+
+  FootprintResult result;
+  double cost_sum = 0.0;
+  int cost_count = 0;
+  for (const Eigen::Vector2d& col : columns) {
+    const CellInfo cell = TopSurfaceAt(col.x(), col.y());
+    ++result.cells;
+    if (!cell.observed) continue;
+    ++result.observed_cells;
+    if (Severity(cell.cls) > Severity(result.worst)) result.worst = cell.cls;
+    if (std::isfinite(cell.cost)) {
+      cost_sum += cell.cost;
+      ++cost_count;
+      result.max_cost = std::isnan(result.max_cost) ? cell.cost : std::max(result.max_cost, cell.cost);
+    }
+  }
+  if (cost_count > 0) result.mean_cost = cost_sum / cost_count;
+  result.fraction_observed = static_cast<double>(result.observed_cells) / result.cells;
+  return result;
+}
+
+PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& polyline_world,
+                                        double width_m) const {
+  if (polyline_world.empty()) throw Error("path query: the polyline has no vertices");
+  if (!(width_m >= 0.0 && std::isfinite(width_m))) throw Error("path query: width_m must be >= 0");
+  for (const auto& v : polyline_world) {
+    if (!v.allFinite()) throw Error("path query: polyline vertices must be finite");
+  }
+  const double res = impl_->options.resolution_m;
+  const double spacing = 0.5 * res;
+
+  // Sample points with their direction of travel.
+  struct Station {
+    Eigen::Vector2d p;
+    Eigen::Vector2d dir;
+    double s;
+  };
+  std::vector<Station> stations;
+  double s = 0.0;
+  Eigen::Vector2d last_dir(1.0, 0.0);
+  for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) {
+    const Eigen::Vector2d a = polyline_world[i], b = polyline_world[i + 1];
+    const double len = (b - a).norm();
+    if (len <= 0.0) continue;
+    last_dir = (b - a) / len;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
+    for (int k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / n;
+      stations.push_back({a + t * (b - a), last_dir, s + t * len});
+    }
+    s += len;
+  }
+  stations.push_back({polyline_world.back(), last_dir, s});
+
+  const int lateral = width_m > 0.0 ? static_cast<int>(std::ceil(width_m / res)) + 1 : 1;
+  PathResult result;
+  result.length_m = s;
+  double cost_sum = 0.0, observed_sum = 0.0;
+  int cost_count = 0;
+  for (const Station& st : stations) {
+    PathSample sample;
+    sample.point = st.p;
+    sample.distance_m = st.s;
+    const Eigen::Vector2d normal(-st.dir.y(), st.dir.x());
+    int observed = 0;
+    bool have_cell = false;
+    for (int j = 0; j < lateral; ++j) {
+      const double offset = lateral == 1 ? 0.0 : -0.5 * width_m + j * width_m / (lateral - 1);
+      const Eigen::Vector2d q = st.p + offset * normal;
+      const CellInfo cell = TopSurfaceAt(q.x(), q.y());
+      if (j == lateral / 2 && !have_cell) sample.cell = cell;
+      if (!cell.observed) continue;
+      ++observed;
+      if (Severity(cell.cls) > Severity(sample.cls)) {
+        sample.cls = cell.cls;
+        sample.cell = cell;
+        have_cell = true;
+      }
+      if (std::isfinite(cell.cost)) {
+        sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
+      }
+    }
+    sample.fraction_observed = static_cast<double>(observed) / lateral;
+    observed_sum += sample.fraction_observed;
+    if (std::isfinite(sample.cost)) {
+      cost_sum += sample.cost;
+      ++cost_count;
+    }
+    if (Severity(sample.cls) > Severity(result.worst)) result.worst = sample.cls;
+    if (sample.cls == TravClass::kNonTraversable && !result.blocked) {
+      result.blocked = true;
+      result.first_non_traversable = sample.point;
+      result.first_non_traversable_distance_m = sample.distance_m;
+    }
+    result.samples.push_back(std::move(sample));
+  }
+  if (cost_count > 0) result.mean_cost = cost_sum / cost_count;
+  result.fraction_observed = observed_sum / static_cast<double>(result.samples.size());
+  return result;
+}
+
+GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
+                                          double resolution_m) const {
+  if (!(resolution_m > 0.0 && std::isfinite(resolution_m))) {
+    throw Error("grid projection: resolution must be positive");
+  }
+  if (region.isEmpty() || !region.min().allFinite() || !region.max().allFinite() ||
+      !(region.sizes().array() > 0.0).all()) {
+    throw Error("grid projection: the region is empty");
+  }
+  const Eigen::Vector2d cells = (region.sizes() / resolution_m).array() - 1e-9;
+  const double w = std::max(1.0, std::ceil(cells.x()));
+  const double h = std::max(1.0, std::ceil(cells.y()));
+  if (w * h > static_cast<double>(1 << 28)) {
+    throw Error("grid projection: more than 2^28 pixels; use a coarser resolution or a smaller region");
+  }
+  GridProjection grid;
+  grid.origin = region.min();
+  grid.resolution_m = resolution_m;
+  const int width = static_cast<int>(w), height = static_cast<int>(h);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  grid.classes = ImageU8(width, height, 0);
+  grid.cost = ImageF(width, height, nan);
+  grid.height_m = ImageF(width, height, nan);
+  grid.slope_deg = ImageF(width, height, nan);
+  grid.step_m = ImageF(width, height, nan);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector2d c = grid.PixelCenter(v, u);
+      const CellInfo cell = TopSurfaceAt(c.x(), c.y());
+      if (!cell.observed) continue;
+      grid.classes(v, u) = static_cast<std::uint8_t>(cell.cls);
+      grid.cost(v, u) = static_cast<float>(cell.cost);
+      grid.height_m(v, u) = static_cast<float>(cell.center.z());
+      grid.slope_deg(v, u) = static_cast<float>(cell.slope_deg);
+      grid.step_m(v, u) = static_cast<float>(cell.step_m);
+    }
+  }
+  return grid;
+}
+
+std::vector<CellInfo> TraversabilityMap::SurfaceCells() const {
+  const TravOcTree& tree = *impl_->tree;
+  const double res = tree.getResolution();
+  std::vector<CellInfo> cells;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!NodeOccupied(tree, *it)) continue;
+    const double half = 0.5 * it.getSize();
+    octomap::OcTreeKey base;
+    if (!tree.coordToKeyChecked(it.getX() - half + 0.5 * res, it.getY() - half + 0.5 * res,
+                                it.getZ() - half + 0.5 * res, base)) {
+      continue;
+    }
+    const unsigned n = 1u << (tree.getTreeDepth() - it.getDepth());
+    for (unsigned i = 0; i < n; ++i) {
+      for (unsigned j = 0; j < n; ++j) {
+        for (unsigned k = 0; k < n; ++k) {
+          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + i),
+                                       static_cast<octomap::key_type>(base[1] + j),
+                                       static_cast<octomap::key_type>(base[2] + k));
+          cells.push_back(internal::DescribeCell(*this, tree, &*it, key));
+        }
+      }
+    }
+  }
+  return cells;
+}
+
+Eigen::AlignedBox3d TraversabilityMap::SurfaceBounds() const {
+  const TravOcTree& tree = *impl_->tree;
+  Eigen::AlignedBox3d box;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!NodeOccupied(tree, *it)) continue;
+    const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5 * it.getSize());
+    box.extend(c - half);
+    box.extend(c + half);
+  }
+  return box;
+}
+
+double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m) const {
+  const VehicleOptions& v = impl_->metadata.vehicle;
+  switch (cls) {
+    case TravClass::kTraversable: return 0.0;
+    case TravClass::kNonTraversable: return 1.0;
+    case TravClass::kSemiTraversable: {
+      const double f = std::max(BandFraction(slope_deg, v.semi_slope_deg, v.max_slope_deg),
+                                BandFraction(std::abs(step_m), v.semi_step_m, v.max_step_m));
+      return 0.25 + 0.5 * f;
+    }
+    default: return kNaN;
+  }
+}
+
+const MapOptions& TraversabilityMap::options() const { return impl_->options; }
+const MapMetadata& TraversabilityMap::metadata() const { return impl_->metadata; }
+
+void TraversabilityMap::set_metadata(MapMetadata metadata) {
+  std::string error;
+  if (!metadata.vehicle.IsValid(&error)) throw Error("map vehicle: " + error);
+  impl_->metadata = std::move(metadata);
+}
+
+std::uint64_t TraversabilityMap::frames_inserted() const { return impl_->frames_inserted; }
+std::int64_t TraversabilityMap::last_timestamp_ns() const { return impl_->last_timestamp_ns; }
+const std::string& TraversabilityMap::software_version() const { return impl_->software_version; }
+std::size_t TraversabilityMap::NumNodes() const { return impl_->tree->size(); }
+
+}  // namespace ssta

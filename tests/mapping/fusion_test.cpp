@@ -1,0 +1,211 @@
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "map_test_util.h"
+
+namespace ssta {
+namespace {
+
+using testing::NodeAt;
+using testing::Pt;
+using testing::Softmax;
+
+// One axis-aligned ray: the sensor in voxel (0, 0, 0), target voxel A two metres along x and B
+// behind it on the same ray.
+const Eigen::Vector3d kOrigin(0.05, 0.05, 0.05);
+const Eigen::Vector3d kA(2.05, 0.05, 0.05);
+const Eigen::Vector3d kB(4.05, 0.05, 0.05);
+
+std::vector<ClassifiedPoint> At(const Eigen::Vector3d& p, TravClass c, float slope = 0.0f, float step = 0.0f) {
+  return {Pt(p.x(), p.y(), p.z(), c, slope, step)};
+}
+
+/// The class log-odds after the given verdicts (index 0..2), by the documented update.
+std::array<float, 3> ExpectedLogOdds(const std::vector<int>& verdicts, const MapOptions& o) {
+  std::array<float, 3> l{};
+  for (const int v : verdicts) {
+    for (int k = 0; k < 3; ++k) {
+      const double delta = k == v ? o.class_hit_log_odds : o.class_miss_log_odds;
+      l[k] = static_cast<float>(std::min(o.class_clamp_max, std::max(o.class_clamp_min, l[k] + delta)));
+    }
+  }
+  return l;
+}
+
+TEST(Fusion, RepeatedObservationsRaiseTheClassProbabilityMonotonicallyToTheClamp) {
+  TraversabilityMap map;
+  const MapOptions& o = map.options();
+  double previous = 0.0;
+  int strictly_rising = 0;
+  for (int frame = 0; frame < 12; ++frame) {
+    map.InsertFrame(At(kA, TravClass::kTraversable), kOrigin, frame);
+    const CellInfo cell = map.CellAt(kA);
+    ASSERT_EQ(cell.cls, TravClass::kTraversable);
+    ASSERT_GE(cell.probability, previous);
+    if (cell.probability > previous) ++strictly_rising;
+    previous = cell.probability;
+    EXPECT_EQ(cell.observations, static_cast<std::uint32_t>(frame + 1));
+    EXPECT_EQ(cell.last_seen_ns, frame);
+  }
+  // L1: 0.85, 1.7, 2.55, 3.4, then the 3.5 clamp; L2 = L3 reach -2.0 at the fifth frame.
+  EXPECT_EQ(strictly_rising, 5);
+  const double at_clamp = std::exp(3.5) / (std::exp(3.5) + 2.0 * std::exp(-2.0));
+  EXPECT_NEAR(previous, at_clamp, 1e-7);
+  EXPECT_NEAR(previous, 0.991893, 1e-6);
+  const CellInfo cell = map.CellAt(kA);
+  EXPECT_NEAR(cell.occupancy, o.occupancy_clamp_max_prob, 1e-4);
+  EXPECT_EQ(cell.cost, 0.0);
+}
+
+TEST(Fusion, AVoxelSeenThroughLosesOccupancyAndItsClass) {
+  TraversabilityMap map;
+  map.InsertFrame(At(kA, TravClass::kTraversable), kOrigin, 1);
+  ASSERT_TRUE(map.CellAt(kA).occupied);
+  // The surface is gone: now the rays run through A to B. Log-odds after one hit and n misses:
+  // logodds(0.7) + n logodds(0.4) = 0.847 - 0.405 n: occupied for n <= 2, free from n = 3.
+  for (int n = 1; n <= 3; ++n) {
+    map.InsertFrame(At(kB, TravClass::kTraversable), kOrigin, 1 + n);
+    const double expected = std::log(0.7 / 0.3) + n * std::log(0.4 / 0.6);
+    EXPECT_NEAR(NodeAt(map, kA)->getLogOdds(), expected, 1e-6) << n;
+    EXPECT_EQ(map.CellAt(kA).occupied, n <= 2) << n;
+  }
+  const CellInfo a = map.CellAt(kA);
+  EXPECT_TRUE(a.observed);
+  EXPECT_EQ(a.cls, TravClass::kUnknown);  // free space has no class
+  EXPECT_TRUE(std::isnan(a.cost));
+  EXPECT_LT(a.occupancy, 0.5);
+  // The class evidence decayed to exactly zero: 0.85 -> 0.45 -> 0.05 -> 0, -0.4 -> 0.
+  for (const float l : NodeAt(map, kA)->class_log_odds) EXPECT_EQ(l, 0.0f);
+  EXPECT_EQ(a.observations, 1u);   // history is kept
+  EXPECT_EQ(a.last_seen_ns, 1);
+  // Many more misses: occupancy settles at the lower clamp.
+  for (int n = 0; n < 10; ++n) map.InsertFrame(At(kB, TravClass::kTraversable), kOrigin, 10 + n);
+  EXPECT_NEAR(map.CellAt(kA).occupancy, map.options().occupancy_clamp_min_prob, 1e-4);
+  // B itself is now confidently traversable and the column top at A's x is empty.
+  EXPECT_EQ(map.CellAt(kB).cls, TravClass::kTraversable);
+  EXPECT_FALSE(map.TopSurfaceAt(kA.x(), kA.y()).observed);
+}
+
+TEST(Fusion, ThreeNonTraversableViewsOutvoteOneTraversable) {
+  TraversabilityMap map;
+  for (int i = 0; i < 3; ++i) map.InsertFrame(At(kA, TravClass::kNonTraversable), kOrigin, i);
+  map.InsertFrame(At(kA, TravClass::kTraversable), kOrigin, 3);
+  const CellInfo cell = map.CellAt(kA);
+  EXPECT_EQ(cell.cls, TravClass::kNonTraversable);
+  const auto expected = ExpectedLogOdds({2, 2, 2, 0}, map.options());  // 2.15, -0.35, -1.6
+  EXPECT_EQ(NodeAt(map, kA)->class_log_odds, expected);
+  EXPECT_NEAR(expected[2], 2.15f, 1e-5);
+  EXPECT_NEAR(cell.probability, Softmax(expected, 2), 1e-12);
+  EXPECT_NEAR(cell.probability, 0.904484, 1e-6);
+  EXPECT_EQ(cell.cost, 1.0);
+  EXPECT_EQ(cell.observations, 4u);
+}
+
+TEST(Fusion, OneUpdatePerVoxelPerFrameByMajority) {
+  TraversabilityMap map;
+  std::vector<ClassifiedPoint> points;
+  // Seven traversable and three non-traversable points inside voxel A, off-centre.
+  for (int i = 0; i < 7; ++i) points.push_back(Pt(2.01 + 0.01 * i, 0.02, 0.03, TravClass::kTraversable, 10.0f, 0.02f));
+  for (int i = 0; i < 3; ++i) points.push_back(Pt(2.02, 0.08, 0.07, TravClass::kNonTraversable, 40.0f, -0.3f));
+  const InsertStats stats = map.InsertFrame(points, kOrigin, 5);
+  EXPECT_EQ(stats.points_in, 10u);
+  EXPECT_EQ(stats.points_hit, 10u);
+  EXPECT_EQ(stats.voxels_hit, 1u);
+  EXPECT_EQ(stats.voxels_with_class, 1u);
+  EXPECT_EQ(stats.voxels_freed, 20u);  // the 20 voxels from the origin up to A
+  const CellInfo cell = map.CellAt(kA);
+  EXPECT_EQ(cell.cls, TravClass::kTraversable);
+  EXPECT_EQ(cell.observations, 1u);
+  EXPECT_NEAR(cell.probability, Softmax(ExpectedLogOdds({0}, map.options()), 0), 1e-12);
+  EXPECT_NEAR(cell.slope_deg, (7 * 10.0 + 3 * 40.0) / 10.0, 1e-4);
+  EXPECT_NEAR(cell.step_m, (7 * 0.02 - 3 * 0.3) / 10.0, 1e-6);
+  EXPECT_NEAR(cell.max_step_m, 0.3, 1e-6);
+  // A tie goes to the worse class.
+  TraversabilityMap tie;
+  tie.InsertFrame({Pt(kA.x(), 0.05, 0.05, TravClass::kTraversable), Pt(kA.x(), 0.05, 0.05, TravClass::kSemiTraversable)},
+                  kOrigin, 1);
+  EXPECT_EQ(tie.CellAt(kA).cls, TravClass::kSemiTraversable);
+}
+
+TEST(Fusion, SlopeAndStepAreRunningMeansOverFrames) {
+  TraversabilityMap map;
+  map.InsertFrame(At(kA, TravClass::kSemiTraversable, 10.0f, 0.05f), kOrigin, 1);
+  map.InsertFrame(At(kA, TravClass::kSemiTraversable, 20.0f, 0.15f), kOrigin, 2);
+  map.InsertFrame(At(kA, TravClass::kSemiTraversable, NAN, NAN), kOrigin, 3);  // not averaged
+  const CellInfo cell = map.CellAt(kA);
+  EXPECT_EQ(cell.observations, 3u);
+  EXPECT_NEAR(cell.slope_deg, 15.0, 1e-5);
+  EXPECT_NEAR(cell.step_m, 0.10, 1e-6);
+  EXPECT_NEAR(cell.max_step_m, 0.15, 1e-6);
+  // Semi cost: 0.25 + 0.5 max((15 - 15) / 10, (0.10 - 0.10) / 0.10) = 0.25.
+  EXPECT_NEAR(cell.cost, 0.25, 1e-5);
+}
+
+TEST(Fusion, UndecidedPointsUpdateOccupancyButNotClasses) {
+  TraversabilityMap map;
+  map.InsertFrame(At(kA, TravClass::kUndecided), kOrigin, 7);
+  map.InsertFrame(At(kB, TravClass::kUnknown), {4.05, 2.05, 0.05}, 8);
+  for (const auto& p : {kA, kB}) {
+    const CellInfo cell = map.CellAt(p);
+    EXPECT_TRUE(cell.occupied);
+    EXPECT_EQ(cell.cls, TravClass::kUndecided);
+    EXPECT_EQ(cell.observations, 0u);
+    EXPECT_TRUE(std::isnan(cell.cost));
+    EXPECT_TRUE(std::isnan(cell.probability));
+    EXPECT_TRUE(std::isnan(cell.slope_deg));
+    for (const float l : NodeAt(map, p)->class_log_odds) EXPECT_EQ(l, 0.0f);
+  }
+  EXPECT_EQ(map.CellAt(kA).last_seen_ns, 7);
+  EXPECT_EQ(map.TopSurfaceAt(kA.x(), kA.y()).cls, TravClass::kUndecided);
+}
+
+TEST(Fusion, PointsBeyondRangeClearSpaceOnlyUpToTheRange) {
+  TraversabilityMap map;  // max_range_m 15
+  const Eigen::Vector3d far(20.05, 0.05, 0.05);
+  const InsertStats stats = map.InsertFrame(At(far, TravClass::kTraversable), kOrigin, 1);
+  EXPECT_EQ(stats.points_beyond_range, 1u);
+  EXPECT_EQ(stats.voxels_hit, 0u);
+  EXPECT_FALSE(map.CellAt(far).observed);
+  const CellInfo mid = map.CellAt({10.05, 0.05, 0.05});
+  EXPECT_TRUE(mid.observed);
+  EXPECT_FALSE(mid.occupied);
+  EXPECT_TRUE(map.CellAt({14.85, 0.05, 0.05}).observed);
+  EXPECT_FALSE(map.CellAt({15.25, 0.05, 0.05}).observed);
+}
+
+TEST(Fusion, AFrameFromAnInvalidOriginIsSkippedWithAReason) {
+  TraversabilityMap map;
+  const InsertStats stats = map.InsertFrame(At(kA, TravClass::kTraversable), {NAN, 0.0, 0.0}, 1);
+  EXPECT_FALSE(stats.inserted);
+  EXPECT_FALSE(stats.reason.empty());
+  EXPECT_EQ(map.NumNodes(), 0u);
+  EXPECT_EQ(map.frames_inserted(), 0u);
+  const InsertStats bad_points = map.InsertFrame({Pt(NAN, 0, 0, TravClass::kTraversable), Pt(1e9, 0, 0, TravClass::kTraversable)},
+                                                 kOrigin, 2);
+  EXPECT_TRUE(bad_points.inserted);
+  EXPECT_EQ(bad_points.points_rejected, 2u);
+}
+
+TEST(Fusion, OptionsAreValidatedNamingTheKey) {
+  MapOptions options;
+  std::string error;
+  EXPECT_TRUE(options.IsValid(&error));
+  options.resolution_m = 0.0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("resolution_m:", 0), 0u) << error;
+  options = MapOptions{};
+  options.occupancy_hit_prob = 0.4;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("occupancy_hit_prob:", 0), 0u) << error;
+  options = MapOptions{};
+  options.class_clamp_max = -1.0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("class_clamp_max:", 0), 0u) << error;
+  EXPECT_THROW(TraversabilityMap{options}, Error);
+}
+
+}  // namespace
+}  // namespace ssta

@@ -1,0 +1,187 @@
+#include <cmath>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
+#include <opencv2/imgcodecs.hpp>
+#include <yaml-cpp/yaml.h>
+
+#include "map_test_util.h"
+#include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+#include "ssta/mapping/map_export.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+using testing::Pt;
+using testing::TempDir;
+
+/// An asymmetric 5 x 3 patch of floor with its lower-left corner at (-1.0, 2.0):
+///   y 2.2..2.3:  T T T T N      (N non-traversable at the top right)
+///   y 2.1..2.2:  T T . T T      (. never observed)
+///   y 2.0..2.1:  S T T T T      (S semi-traversable at the bottom left)
+TraversabilityMap AsymmetricMap() {
+  std::vector<ClassifiedPoint> points;
+  for (int i = 0; i < 5; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      if (i == 2 && j == 1) continue;
+      TravClass c = TravClass::kTraversable;
+      if (i == 4 && j == 2) c = TravClass::kNonTraversable;
+      if (i == 0 && j == 0) c = TravClass::kSemiTraversable;
+      points.push_back(Pt(-0.95 + 0.1 * i, 2.05 + 0.1 * j, 0.05, c, 18.0f, 0.05f));
+    }
+  }
+  TraversabilityMap map;
+  map.InsertFrame(points, {-0.75, 2.15, 2.0}, 1);
+  return map;
+}
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+TEST(MapExport, GridRowZeroIsTheLargestYAndTheOriginIsTheLowerLeftCorner) {
+  const TempDir dir;
+  const TraversabilityMap map = AsymmetricMap();
+  const std::string prefix = dir / "grid";
+  const GridProjection grid = ExportGrid(map, prefix);
+  ASSERT_EQ(grid.width(), 5);
+  ASSERT_EQ(grid.height(), 3);
+
+  const std::vector<std::vector<int>> expected_classes = {{1, 1, 1, 1, 3}, {1, 1, 0, 1, 1}, {2, 1, 1, 1, 1}};
+  const ImageU8 classes = ReadLabelImage(prefix + "_classes.png");
+  const cv::Mat pgm = cv::imread(prefix + ".pgm", cv::IMREAD_UNCHANGED);
+  const cv::Mat colour = cv::imread(prefix + ".png", cv::IMREAD_COLOR);  // BGR
+  ASSERT_EQ(classes.width(), 5);
+  ASSERT_EQ(pgm.cols, 5);
+  ASSERT_EQ(pgm.rows, 3);
+  ASSERT_EQ(pgm.type(), CV_8UC1);
+  for (int v = 0; v < 3; ++v) {
+    for (int u = 0; u < 5; ++u) {
+      const int c = expected_classes[v][u];
+      EXPECT_EQ(classes(v, u), c) << v << "," << u;
+      const int nav = c == 3 ? 0 : (c == 0 ? 205 : 254);
+      EXPECT_EQ(pgm.at<std::uint8_t>(v, u), nav) << v << "," << u;
+      const Rgb8 rgb = ClassColour(static_cast<TravClass>(c));
+      const cv::Vec3b bgr = colour.at<cv::Vec3b>(v, u);
+      EXPECT_EQ(bgr[2], rgb.r);
+      EXPECT_EQ(bgr[1], rgb.g);
+      EXPECT_EQ(bgr[0], rgb.b);
+    }
+  }
+  EXPECT_EQ(colour.at<cv::Vec3b>(0, 4), cv::Vec3b(0, 0, 255));  // red, top right
+  EXPECT_EQ(colour.at<cv::Vec3b>(2, 0), cv::Vec3b(255, 0, 0));  // blue, bottom left
+
+  const YAML::Node yaml = YAML::LoadFile(prefix + ".yaml");
+  EXPECT_EQ(yaml["image"].as<std::string>(), "grid.pgm");
+  EXPECT_DOUBLE_EQ(yaml["resolution"].as<double>(), 0.1);
+  ASSERT_EQ(yaml["origin"].size(), 3u);
+  EXPECT_NEAR(yaml["origin"][0].as<double>(), -1.0, 1e-9);
+  EXPECT_NEAR(yaml["origin"][1].as<double>(), 2.0, 1e-9);
+  EXPECT_EQ(yaml["origin"][2].as<double>(), 0.0);
+  EXPECT_EQ(yaml["negate"].as<int>(), 0);
+  EXPECT_DOUBLE_EQ(yaml["occupied_thresh"].as<double>(), 0.65);
+  EXPECT_DOUBLE_EQ(yaml["free_thresh"].as<double>(), 0.196);
+  // map_server's trinary reading of the PGM values: p = (255 - v) / 255.
+  EXPECT_GT((255 - 0) / 255.0, 0.65);
+  EXPECT_LT((255 - 254) / 255.0, 0.196);
+  const double unknown = (255 - 205) / 255.0;
+  EXPECT_TRUE(unknown >= 0.196 && unknown <= 0.65);
+}
+
+TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {
+  const TempDir dir;
+  const TraversabilityMap empty;
+  EXPECT_THROW(ExportGrid(empty, dir / "g"), Error);
+  GridExportOptions options;
+  options.region = Eigen::AlignedBox2d(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.3, 0.2));
+  const GridProjection grid = ExportGrid(empty, dir / "g", options);
+  EXPECT_EQ(grid.width(), 3);
+  EXPECT_EQ(grid.height(), 2);
+  const cv::Mat pgm = cv::imread(dir / "g.pgm", cv::IMREAD_UNCHANGED);
+  EXPECT_EQ(cv::countNonZero(pgm == 205), 6);
+}
+
+TEST(MapExport, CsvPlyAndPcdListEveryOccupiedVoxel) {
+  const TempDir dir;
+  const TraversabilityMap map = AsymmetricMap();
+  ExportCsv(map, dir / "m.csv");
+  ExportPly(map, dir / "m.ply");
+  ExportPcd(map, dir / "m.pcd");
+
+  const auto csv = Lines(ReadTextFile(dir / "m.csv"));
+  ASSERT_EQ(csv.size(), 15u);
+  EXPECT_EQ(csv[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations");
+  int non_traversable = 0;
+  for (std::size_t i = 1; i < csv.size(); ++i) {
+    if (csv[i].find(",3,1.0000,") != std::string::npos) {
+      ++non_traversable;
+      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1");
+    }
+  }
+  EXPECT_EQ(non_traversable, 1);
+
+  const auto ply = Lines(ReadTextFile(dir / "m.ply"));
+  EXPECT_EQ(ply[0], "ply");
+  EXPECT_NE(std::find(ply.begin(), ply.end(), "element vertex 14"), ply.end());
+  const auto header_end = std::find(ply.begin(), ply.end(), "end_header");
+  ASSERT_NE(header_end, ply.end());
+  EXPECT_EQ(ply.end() - header_end - 1, 14);
+
+  const auto pcd = Lines(ReadTextFile(dir / "m.pcd"));
+  EXPECT_NE(std::find(pcd.begin(), pcd.end(), "POINTS 14"), pcd.end());
+  const auto data = std::find(pcd.begin(), pcd.end(), "DATA ascii");
+  ASSERT_NE(data, pcd.end());
+  EXPECT_EQ(pcd.end() - data - 1, 14);
+  std::istringstream first(*(data + 1));
+  std::vector<std::string> fields{std::istream_iterator<std::string>(first), {}};
+  EXPECT_EQ(fields.size(), 10u);
+}
+
+TEST(MapExport, OctovisFileIsAColorOcTreeInClassColours) {
+  const TempDir dir;
+  const TraversabilityMap map = AsymmetricMap();
+  ExportOctovis(map, dir / "m.ot");
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(dir / "m.ot"));
+  auto* colour = dynamic_cast<octomap::ColorOcTree*>(tree.get());
+  ASSERT_NE(colour, nullptr);
+  const octomap::ColorOcTreeNode* red = colour->search(-0.55, 2.25, 0.05);
+  ASSERT_NE(red, nullptr);
+  EXPECT_TRUE(colour->isNodeOccupied(red));
+  EXPECT_EQ(red->getColor(), octomap::ColorOcTreeNode::Color(255, 0, 0));
+  const octomap::ColorOcTreeNode* blue = colour->search(-0.95, 2.05, 0.05);
+  ASSERT_NE(blue, nullptr);
+  EXPECT_EQ(blue->getColor(), octomap::ColorOcTreeNode::Color(0, 0, 255));
+  EXPECT_EQ(colour->search(-0.75, 2.15, 0.05), nullptr);
+}
+
+TEST(MapExport, ErrorsNameTheFile) {
+  const TempDir dir;
+  const TraversabilityMap map = AsymmetricMap();
+  const std::string path = dir / "missing/m.csv";
+  try {
+    ExportCsv(map, path);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ExportGrid(map, dir / "missing/grid"), Error);
+}
+
+TEST(MapExport, QueryCsvRowPrintsUnknownAsNaN) {
+  CellInfo unknown;
+  unknown.center = {1.0, 2.0, std::nan("")};
+  EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0");
+}
+
+}  // namespace
+}  // namespace ssta

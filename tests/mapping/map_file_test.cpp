@@ -1,0 +1,245 @@
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <octomap/OcTree.h>
+
+#include "map_test_util.h"
+#include "ssta/io/file_util.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+using internal::TravNode;
+using internal::TravOcTree;
+using testing::Pt;
+using testing::TempDir;
+using testing::Tree;
+
+/// A few frames over the floor-and-box world from different places, with noisy class verdicts
+/// so that the voxels end up with varied payloads.
+std::vector<std::vector<ClassifiedPoint>> Frames(int count) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> jitter(-0.04f, 0.04f);
+  std::uniform_int_distribution<int> flip(0, 9);
+  std::vector<std::vector<ClassifiedPoint>> frames;
+  for (int f = 0; f < count; ++f) {
+    std::vector<ClassifiedPoint> points = testing::FloorAndBox();
+    for (ClassifiedPoint& p : points) {
+      p.world_p += Eigen::Vector3f(jitter(rng), jitter(rng), jitter(rng));
+      p.slope_deg += jitter(rng) * 100.0f;
+      p.step_m += jitter(rng);
+      const int r = flip(rng);
+      if (r == 0) p.cls = TravClass::kSemiTraversable;
+      if (r == 1) p.cls = TravClass::kUndecided;
+    }
+    // Something that moves away: a post present in the first frames only.
+    if (f < 2) {
+      for (int iz = 1; iz < 10; ++iz) points.push_back(Pt(2.55, 0.55, 0.05 + 0.1 * iz, TravClass::kNonTraversable));
+    }
+    frames.push_back(std::move(points));
+  }
+  return frames;
+}
+
+Eigen::Vector3d FrameOrigin(int f) { return {0.3 + 0.5 * f, 0.2 + 0.3 * f, 1.2 + 0.1 * f}; }
+
+/// Every node of both trees, inner ones included, in traversal order: same keys, depths,
+/// occupancy and payload.
+void ExpectSameTrees(const TravOcTree& a, const TravOcTree& b) {
+  ASSERT_EQ(a.size(), b.size());
+  ASSERT_EQ(a.getResolution(), b.getResolution());
+  auto ia = a.begin_tree(), ib = b.begin_tree();
+  std::size_t nodes = 0, leaves = 0;
+  for (; ia != a.end_tree() && ib != b.end_tree(); ++ia, ++ib, ++nodes) {
+    ASSERT_EQ(ia.getKey(), ib.getKey()) << nodes;
+    ASSERT_EQ(ia.getDepth(), ib.getDepth()) << nodes;
+    ASSERT_EQ(ia.isLeaf(), ib.isLeaf()) << nodes;
+    ASSERT_TRUE(*ia == *ib) << "node " << nodes << " at depth " << ia.getDepth();
+    leaves += ia.isLeaf();
+  }
+  EXPECT_TRUE(ia == a.end_tree());
+  EXPECT_TRUE(ib == b.end_tree());
+  EXPECT_EQ(nodes, a.size());
+  EXPECT_GT(leaves, 1000u);
+}
+
+MapMetadata SomeMetadata() {
+  MapMetadata m;
+  m.vehicle.max_slope_deg = 30.0;
+  m.vehicle.semi_slope_deg = 12.5;
+  m.vehicle.max_step_m = 0.25;
+  m.calibration_summary = "cam0: fu 458.654, cu 367.215\nbaseline: 0.110 m\n# not a comment: \"quoted\" 'x'";
+  m.sequences = {"MH_01_easy", "seq with spaces", "x: y"};
+  return m;
+}
+
+TraversabilityMap BuildMap(int frames) {
+  MapOptions options;
+  options.max_range_m = 12.0;
+  options.class_hit_log_odds = 0.1 + 0.2;  // 0.30000000000000004: must come back exactly
+  TraversabilityMap map(options, SomeMetadata());
+  const auto all = Frames(frames);
+  for (int f = 0; f < frames; ++f) map.InsertFrame(all[f], FrameOrigin(f), 1000 + f);
+  return map;
+}
+
+std::string ReadBytes(const std::string& path) { return ReadTextFile(path); }
+
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+}
+
+/// Expects Load(path) to throw ssta::Error whose message names the file and contains `what`.
+void ExpectLoadError(const std::string& path, const std::string& what) {
+  try {
+    TraversabilityMap::Load(path);
+    ADD_FAILURE() << "Load(" << path << ") did not throw";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find(what), std::string::npos) << message;
+  }
+}
+
+TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
+  const TempDir dir;
+  const TraversabilityMap map = BuildMap(4);
+  const std::string path = dir / "map.ot";
+  map.Save(path);
+  const TraversabilityMap loaded = TraversabilityMap::Load(path);
+  ExpectSameTrees(Tree(map), Tree(loaded));
+
+  const MapMetadata& m = loaded.metadata();
+  EXPECT_EQ(m.vehicle.max_slope_deg, 30.0);
+  EXPECT_EQ(m.vehicle.semi_slope_deg, 12.5);
+  EXPECT_EQ(m.vehicle.max_step_m, 0.25);
+  EXPECT_EQ(m.vehicle.semi_step_m, map.metadata().vehicle.semi_step_m);
+  EXPECT_EQ(m.calibration_summary, SomeMetadata().calibration_summary);
+  EXPECT_EQ(m.sequences, SomeMetadata().sequences);
+  EXPECT_EQ(loaded.options().max_range_m, 12.0);
+  EXPECT_EQ(loaded.options().resolution_m, 0.1);
+  EXPECT_EQ(loaded.options().class_miss_log_odds, map.options().class_miss_log_odds);
+  EXPECT_EQ(loaded.options().class_hit_log_odds, 0.1 + 0.2);
+  EXPECT_EQ(loaded.frames_inserted(), 4u);
+  EXPECT_EQ(loaded.last_timestamp_ns(), 1003);
+  EXPECT_EQ(loaded.software_version(), map.software_version());
+  // Saving the loaded map again gives the same bytes.
+  loaded.Save(dir / "again.ot");
+  EXPECT_EQ(ReadBytes(dir / "again.ot"), ReadBytes(path));
+  // No temporary files are left behind.
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
+}
+
+TEST(MapFile, IsAnOctoMapFileThatOctoMapsFactoryReads) {
+  const TempDir dir;
+  const TraversabilityMap map = BuildMap(2);
+  map.Save(dir / "map.ot");
+  std::unique_ptr<octomap::AbstractOcTree> tree(octomap::AbstractOcTree::read(dir / "map.ot"));
+  ASSERT_NE(tree, nullptr);
+  EXPECT_EQ(tree->getTreeType(), "SstaTravOcTree");
+  auto* trav = dynamic_cast<TravOcTree*>(tree.get());
+  ASSERT_NE(trav, nullptr);
+  ExpectSameTrees(Tree(map), *trav);
+}
+
+TEST(MapFile, EmptyMapRoundTrips) {
+  const TempDir dir;
+  const TraversabilityMap map;
+  map.Save(dir / "empty.ot");
+  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "empty.ot");
+  EXPECT_EQ(loaded.NumNodes(), 0u);
+  EXPECT_FALSE(loaded.TopSurfaceAt(0, 0).observed);
+}
+
+TEST(MapFile, MissingTruncatedOrDamagedFilesAreErrorsNamingTheFile) {
+  const TempDir dir;
+  ExpectLoadError(dir / "missing.ot", "not found");
+  const TraversabilityMap map = BuildMap(2);
+  const std::string good = dir / "good.ot";
+  map.Save(good);
+  const std::string bytes = ReadBytes(good);
+  const std::string bad = dir / "bad.ot";
+  for (const double keep : {0.0, 0.01, 0.05, 0.5, 0.99}) {
+    WriteBytes(bad, bytes.substr(0, static_cast<std::size_t>(keep * bytes.size())));
+    EXPECT_THROW(TraversabilityMap::Load(bad), Error) << keep;
+  }
+  WriteBytes(bad, bytes.substr(0, bytes.size() / 2));
+  ExpectLoadError(bad, "truncated");
+  WriteBytes(bad, bytes.substr(0, bytes.size() - 1));
+  ExpectLoadError(bad, "truncated");
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] = static_cast<char>(flipped[bytes.size() / 2] ^ 0x5a);
+  WriteBytes(bad, flipped);
+  ExpectLoadError(bad, "checksum");
+  WriteBytes(bad, "hello\n");
+  ExpectLoadError(bad, "not an OctoMap");
+}
+
+TEST(MapFile, APlainOcTreeFileIsTheWrongTreeType) {
+  const TempDir dir;
+  octomap::OcTree plain(0.1);
+  plain.updateNode(octomap::point3d(1.0f, 2.0f, 0.5f), true);
+  const std::string path = dir / "plain.ot";
+  ASSERT_TRUE(plain.write(path));
+  ExpectLoadError(path, "tree type 'OcTree'");
+}
+
+TEST(MapFile, ANewerFormatVersionIsAnError) {
+  const TempDir dir;
+  const std::string path = dir / "map.ot";
+  BuildMap(1).Save(path);
+  std::string bytes = ReadBytes(path);
+  const std::string tag = "#@ssta format_version: 1\n";
+  const std::size_t at = bytes.find(tag);
+  ASSERT_NE(at, std::string::npos);
+  bytes.replace(at, tag.size(), "#@ssta format_version: 2\n");
+  WriteBytes(path, bytes);
+  ExpectLoadError(path, "newer");
+}
+
+TEST(MapFile, ResumingEqualsOnePass) {
+  const auto frames = Frames(6);
+  MapOptions options;
+  options.max_range_m = 12.0;
+  TraversabilityMap one_pass(options, SomeMetadata());
+  for (int f = 0; f < 6; ++f) one_pass.InsertFrame(frames[f], FrameOrigin(f), 1000 + f);
+
+  const TempDir dir;
+  {
+    TraversabilityMap first(options, SomeMetadata());
+    for (int f = 0; f < 3; ++f) first.InsertFrame(frames[f], FrameOrigin(f), 1000 + f);
+    first.Save(dir / "part.ot");
+  }
+  TraversabilityMap resumed = TraversabilityMap::Load(dir / "part.ot");
+  for (int f = 3; f < 6; ++f) resumed.InsertFrame(frames[f], FrameOrigin(f), 1000 + f);
+
+  ExpectSameTrees(Tree(one_pass), Tree(resumed));
+  EXPECT_EQ(resumed.frames_inserted(), 6u);
+  one_pass.Save(dir / "one.ot");
+  resumed.Save(dir / "resumed.ot");
+  EXPECT_EQ(ReadBytes(dir / "one.ot"), ReadBytes(dir / "resumed.ot"));
+}
+
+TEST(MapFile, SaveIntoAMissingFolderNamesTheFile) {
+  const TempDir dir;
+  const std::string path = dir / "no/such/dir/map.ot";
+  try {
+    TraversabilityMap().Save(path);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ssta

@@ -1,0 +1,78 @@
+#pragma once
+
+// Hand-built worlds for the mapping tests, with answers known by construction.
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mapping/map_impl.h"
+#include "ssta/mapping/traversability_map.h"
+
+namespace ssta::testing {
+
+inline ClassifiedPoint Pt(double x, double y, double z, TravClass cls, float slope_deg = 0.0f,
+                          float step_m = 0.0f) {
+  ClassifiedPoint p;
+  p.world_p = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+  p.cls = cls;
+  p.slope_deg = slope_deg;
+  p.step_m = step_m;
+  return p;
+}
+
+/// Voxel centre along one axis for index i at 0.1 m: 0.05 + 0.1 i.
+inline double C(int i) { return 0.05 + 0.1 * i; }
+
+/// The box of the floor-and-box world: columns x, y in [1.0, 1.3), voxels z in [0, 0.3).
+inline bool InBoxColumn(int ix, int iy) { return ix >= 10 && ix < 13 && iy >= 10 && iy < 13; }
+
+/// A flat traversable floor, one voxel thick at z in [0, 0.1), over x in [0, 3) and y in
+/// [0, 2.5) at 0.1 m, with a 0.3 m cube of non-traversable voxels on x, y in [1.0, 1.3)
+/// (no floor under it: a camera cannot see there). One point per voxel centre.
+inline std::vector<ClassifiedPoint> FloorAndBox() {
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 30; ++ix) {
+    for (int iy = 0; iy < 25; ++iy) {
+      if (InBoxColumn(ix, iy)) {
+        for (int iz = 0; iz < 3; ++iz) {
+          points.push_back(Pt(C(ix), C(iy), C(iz), TravClass::kNonTraversable, 80.0f, 0.3f));
+        }
+      } else {
+        points.push_back(Pt(C(ix), C(iy), C(0), TravClass::kTraversable, 2.0f, 0.01f));
+      }
+    }
+  }
+  return points;
+}
+
+/// Sensor origin high above the middle of the floor-and-box world.
+inline Eigen::Vector3d FloorAndBoxOrigin() { return {1.5, 1.25, 3.0}; }
+
+inline TraversabilityMap FloorAndBoxMap() {
+  TraversabilityMap map;
+  map.InsertFrame(FloorAndBox(), FloorAndBoxOrigin(), 1000);
+  return map;
+}
+
+/// Softmax probability of class index `c` given float class log-odds.
+inline double Softmax(const std::array<float, 3>& l, int c) {
+  double d = 0.0;
+  for (float v : l) d += std::exp(static_cast<double>(v));
+  return std::exp(static_cast<double>(l[c])) / d;
+}
+
+/// The internal octree of a map.
+inline const internal::TravOcTree& Tree(const TraversabilityMap& map) {
+  return internal::TraversabilityMapAccess::Tree(map);
+}
+
+/// The leaf node holding `p` (null when unobserved).
+inline const internal::TravNode* NodeAt(const TraversabilityMap& map, const Eigen::Vector3d& p) {
+  return Tree(map).search(p.x(), p.y(), p.z());
+}
+
+}  // namespace ssta::testing

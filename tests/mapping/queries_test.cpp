@@ -1,0 +1,207 @@
+#include <cmath>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "map_test_util.h"
+#include "ssta/mapping/map_export.h"
+
+namespace ssta {
+namespace {
+
+using testing::FloorAndBoxMap;
+
+constexpr double kPi = 3.14159265358979323846;
+
+class FloorAndBoxQueries : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { map_ = new TraversabilityMap(FloorAndBoxMap()); }
+  static void TearDownTestSuite() {
+    delete map_;
+    map_ = nullptr;
+  }
+  static const TraversabilityMap& map() { return *map_; }
+  /// Probability after one observation: softmax(0.85, -0.4, -0.4).
+  static double OneViewProbability() {
+    return std::exp(0.85) / (std::exp(0.85) + 2.0 * std::exp(-0.4));
+  }
+
+ private:
+  static TraversabilityMap* map_;
+};
+TraversabilityMap* FloorAndBoxQueries::map_ = nullptr;
+
+TEST_F(FloorAndBoxQueries, TopSurfaceOverTheBoxIsTheBoxTop) {
+  const CellInfo top = map().TopSurfaceAt(1.15, 1.12);
+  ASSERT_TRUE(top.observed);
+  EXPECT_EQ(top.cls, TravClass::kNonTraversable);
+  EXPECT_EQ(top.cost, 1.0);
+  EXPECT_NEAR(top.center.x(), 1.15, 1e-9);
+  EXPECT_NEAR(top.center.y(), 1.15, 1e-9);
+  EXPECT_NEAR(top.center.z(), 0.25, 1e-9);  // voxel [0.2, 0.3): the top of the 0.3 m box
+  EXPECT_NEAR(top.slope_deg, 80.0, 1e-4);
+  EXPECT_NEAR(top.probability, OneViewProbability(), 1e-6);
+}
+
+TEST_F(FloorAndBoxQueries, TopSurfaceOnTheFloorIsTheFloor) {
+  const CellInfo floor = map().TopSurfaceAt(0.55, 2.31);
+  ASSERT_TRUE(floor.observed);
+  EXPECT_EQ(floor.cls, TravClass::kTraversable);
+  EXPECT_EQ(floor.cost, 0.0);
+  EXPECT_NEAR(floor.center.z(), 0.05, 1e-9);
+  EXPECT_NEAR(floor.center.y(), 2.35, 1e-9);
+  EXPECT_NEAR(floor.probability, OneViewProbability(), 1e-6);
+  EXPECT_EQ(floor.observations, 1u);
+  EXPECT_EQ(floor.last_seen_ns, 1000);
+}
+
+TEST_F(FloorAndBoxQueries, UnobservedIsClassZeroWithNaNCost) {
+  for (const CellInfo& cell : {map().TopSurfaceAt(50.0, 50.0), map().CellAt({50.0, 50.0, 0.05}),
+                               map().TopSurfaceAt(-0.05, 1.0)}) {
+    EXPECT_FALSE(cell.observed);
+    EXPECT_EQ(cell.cls, TravClass::kUnknown);
+    EXPECT_TRUE(std::isnan(cell.cost));
+    EXPECT_TRUE(std::isnan(cell.probability));
+  }
+  EXPECT_TRUE(std::isnan(map().TopSurfaceAt(50.0, 50.0).center.z()));
+}
+
+TEST_F(FloorAndBoxQueries, CellAtAnswersForEachVoxelOfTheBox) {
+  for (int iz = 0; iz < 3; ++iz) {
+    const CellInfo cell = map().CellAt({1.05, 1.25, 0.05 + 0.1 * iz});
+    EXPECT_TRUE(cell.occupied);
+    EXPECT_EQ(cell.cls, TravClass::kNonTraversable);
+  }
+  EXPECT_FALSE(map().CellAt({1.05, 1.25, 0.35}).occupied);
+}
+
+TEST_F(FloorAndBoxQueries, FootprintOverlappingTheBoxIsNonTraversable) {
+  // x in [0.6, 1.2], y in [0.96, 1.34]: 6 x 3 column centres, 2 x 3 of them on the box.
+  const FootprintResult r = map().QueryFootprint({0.9, 1.15, 0.0, 0.6, 0.38});
+  EXPECT_EQ(r.cells, 18);
+  EXPECT_EQ(r.observed_cells, 18);
+  EXPECT_EQ(r.worst, TravClass::kNonTraversable);
+  EXPECT_NEAR(r.mean_cost, 6.0 / 18.0, 1e-12);
+  EXPECT_EQ(r.max_cost, 1.0);
+  EXPECT_DOUBLE_EQ(r.fraction_observed, 1.0);
+  // The same rectangle turned by 90 degrees (length along y now).
+  const FootprintResult turned = map().QueryFootprint({0.9, 1.15, kPi / 2, 0.38, 0.6});
+  EXPECT_EQ(turned.cells, 18);
+  EXPECT_NEAR(turned.mean_cost, 6.0 / 18.0, 1e-12);
+}
+
+TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {
+  const FootprintResult floor = map().QueryFootprint({0.5, 0.5, 0.3, 0.5, 0.4});
+  EXPECT_EQ(floor.worst, TravClass::kTraversable);
+  EXPECT_EQ(floor.mean_cost, 0.0);
+  // x in [2.7, 3.1]: centres 2.75 .. 3.05, the last off the floor; y centres 0.45, 0.55.
+  const FootprintResult edge = map().QueryFootprint({2.9, 0.5, 0.0, 0.4, 0.18});
+  EXPECT_EQ(edge.cells, 8);
+  EXPECT_EQ(edge.observed_cells, 6);
+  EXPECT_DOUBLE_EQ(edge.fraction_observed, 0.75);
+  // Smaller than a voxel: the column under the centre.
+  const FootprintResult tiny = map().QueryFootprint({1.12, 1.12, 0.0, 0.01, 0.01});
+  EXPECT_EQ(tiny.cells, 1);
+  EXPECT_EQ(tiny.worst, TravClass::kNonTraversable);
+}
+
+TEST_F(FloorAndBoxQueries, PathThroughTheBoxReportsTheFirstNonTraversablePoint) {
+  const PathResult r = map().QueryPath({{0.2, 1.15}, {2.0, 1.15}}, 0.0);
+  EXPECT_EQ(r.samples.size(), 37u);  // every 0.05 m over 1.8 m, both ends
+  EXPECT_NEAR(r.length_m, 1.8, 1e-12);
+  EXPECT_TRUE(r.blocked);
+  EXPECT_EQ(r.worst, TravClass::kNonTraversable);
+  // The box starts at x = 1.0; the first sample inside it is x = 1.0 (or 1.05 by rounding).
+  EXPECT_GE(r.first_non_traversable.x(), 1.0 - 1e-9);
+  EXPECT_LE(r.first_non_traversable.x(), 1.05 + 1e-9);
+  EXPECT_NEAR(r.first_non_traversable.y(), 1.15, 1e-12);
+  EXPECT_NEAR(r.first_non_traversable_distance_m, r.first_non_traversable.x() - 0.2, 1e-9);
+  EXPECT_DOUBLE_EQ(r.fraction_observed, 1.0);
+  EXPECT_GT(r.mean_cost, 0.1);
+  EXPECT_LT(r.mean_cost, 0.25);
+  EXPECT_EQ(r.samples.front().cls, TravClass::kTraversable);
+}
+
+TEST_F(FloorAndBoxQueries, PathWidthDecidesWhetherTheBoxIsTouched) {
+  // Centre line y = 0.75; the box starts at y = 1.0.
+  const PathResult narrow = map().QueryPath({{0.2, 0.75}, {2.0, 0.75}}, 0.4);
+  EXPECT_FALSE(narrow.blocked);
+  EXPECT_EQ(narrow.worst, TravClass::kTraversable);
+  EXPECT_TRUE(std::isnan(narrow.first_non_traversable.x()));
+  const PathResult wide = map().QueryPath({{0.2, 0.75}, {2.0, 0.75}}, 0.8);
+  EXPECT_TRUE(wide.blocked);
+  EXPECT_NEAR(wide.first_non_traversable.y(), 0.75, 1e-12);
+  EXPECT_EQ(wide.samples[wide.samples.size() / 2].cell.cls, TravClass::kNonTraversable);
+  // A path in the unknown.
+  const PathResult unknown = map().QueryPath({{40.0, 40.0}, {41.0, 40.0}}, 0.3);
+  EXPECT_EQ(unknown.worst, TravClass::kUnknown);
+  EXPECT_DOUBLE_EQ(unknown.fraction_observed, 0.0);
+  EXPECT_TRUE(std::isnan(unknown.mean_cost));
+  EXPECT_THROW(map().QueryPath({}, 0.1), Error);
+}
+
+TEST_F(FloorAndBoxQueries, ProjectionPutsTheLargestYInRowZero) {
+  const GridProjection grid = map().Project(Eigen::AlignedBox2d(Eigen::Vector2d(0, 0), Eigen::Vector2d(3.0, 2.5)), 0.1);
+  ASSERT_EQ(grid.width(), 30);
+  ASSERT_EQ(grid.height(), 25);
+  // Column (1.15, 1.15): u = 11, v = 25 - 1 - 11 = 13.
+  EXPECT_EQ(grid.classes(13, 11), 3);
+  EXPECT_NEAR(grid.height_m(13, 11), 0.25, 1e-6);
+  EXPECT_EQ(grid.cost(13, 11), 1.0f);
+  EXPECT_EQ(grid.classes(0, 0), 1);
+  EXPECT_NEAR(grid.PixelCenter(0, 0).y(), 2.45, 1e-12);
+  EXPECT_NEAR(grid.height_m(0, 0), 0.05, 1e-6);
+  int box = 0;
+  for (std::size_t i = 0; i < grid.classes.size(); ++i) box += grid.classes[i] == 3;
+  EXPECT_EQ(box, 9);
+}
+
+TEST_F(FloorAndBoxQueries, SurfaceCellsAndBounds) {
+  EXPECT_EQ(map().SurfaceCells().size(), 30u * 25u - 9u + 27u);
+  const Eigen::AlignedBox3d b = map().SurfaceBounds();
+  EXPECT_NEAR(b.min().x(), 0.0, 1e-9);
+  EXPECT_NEAR(b.max().x(), 3.0, 1e-9);
+  EXPECT_NEAR(b.max().y(), 2.5, 1e-9);
+  EXPECT_NEAR(b.max().z(), 0.3, 1e-9);
+}
+
+TEST_F(FloorAndBoxQueries, ConcurrentReadersGetTheSameAnswers) {
+  auto run_queries = [&]() {
+    std::vector<std::string> answers;
+    for (double x = -0.5; x < 3.5; x += 0.07) {
+      for (double y = -0.5; y < 3.0; y += 0.09) {
+        answers.push_back(QueryCsvRow(map().TopSurfaceAt(x, y)));
+        answers.push_back(QueryCsvRow(map().CellAt({x, y, 0.15})));
+      }
+      const FootprintResult f = map().QueryFootprint({x, 1.1, x, 0.7, 0.5});
+      answers.push_back(std::to_string(f.cells) + " " + std::to_string(f.mean_cost));
+    }
+    const PathResult p = map().QueryPath({{0.0, 0.0}, {3.0, 2.5}, {0.0, 2.5}}, 0.6);
+    answers.push_back(std::to_string(p.mean_cost) + " " + std::to_string(p.first_non_traversable_distance_m));
+    return answers;
+  };
+  const std::vector<std::string> single = run_queries();
+  ASSERT_GT(single.size(), 3000u);
+  std::vector<std::vector<std::string>> results(4);
+  std::vector<std::thread> threads;
+  for (auto& r : results) threads.emplace_back([&r, &run_queries] { r = run_queries(); });
+  for (auto& t : threads) t.join();
+  for (const auto& r : results) EXPECT_EQ(r, single);
+}
+
+TEST(TraversabilityMapCost, SemiTraversableCostGrowsThroughTheBand) {
+  const TraversabilityMap map;  // vehicle defaults: slope 15..25 deg, step 0.10..0.20 m
+  EXPECT_EQ(map.Cost(TravClass::kTraversable, 30.0, 1.0), 0.0);
+  EXPECT_EQ(map.Cost(TravClass::kNonTraversable, 0.0, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(map.Cost(TravClass::kSemiTraversable, 10.0, 0.05), 0.25);
+  EXPECT_DOUBLE_EQ(map.Cost(TravClass::kSemiTraversable, 20.0, 0.05), 0.5);
+  EXPECT_NEAR(map.Cost(TravClass::kSemiTraversable, 10.0, -0.15), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(map.Cost(TravClass::kSemiTraversable, 40.0, 0.0), 0.75);
+  EXPECT_TRUE(std::isnan(map.Cost(TravClass::kUnknown, 0.0, 0.0)));
+  EXPECT_TRUE(std::isnan(map.Cost(TravClass::kUndecided, 0.0, 0.0)));
+}
+
+}  // namespace
+}  // namespace ssta
