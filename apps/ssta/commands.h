@@ -10,5 +10,8 @@ namespace ssta::cli {
 void RegisterClassify(CLI::App& app);
 void RegisterSynth(CLI::App& app);
 void RegisterEval(CLI::App& app);
+void RegisterBuildMap(CLI::App& app);
+void RegisterQuery(CLI::App& app);
+void RegisterExport(CLI::App& app);
 
 }  // namespace ssta::cli

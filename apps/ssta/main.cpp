@@ -14,6 +14,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ssta::cli::RegisterClassify(app);
   ssta::cli::RegisterSynth(app);
+  ssta::cli::RegisterBuildMap(app);
+  ssta::cli::RegisterQuery(app);
+  ssta::cli::RegisterExport(app);
   ssta::cli::RegisterEval(app);
   try {
     app.parse(argc, argv);

@@ -104,12 +104,19 @@ bool GravityOptions::IsValid(std::string* error) const {
   return true;
 }
 
+bool MappingOptions::IsValid(std::string* error) const {
+  if (!fusion.IsValid(error)) return false;
+  if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
+  if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
+  return true;
+}
+
 bool Config::IsValid(std::string* error) const {
   return CheckSection(vehicle, "vehicle", error) && CheckSection(rectification, "rectification", error) &&
          CheckSection(stereo, "stereo", error) && CheckSection(triangulation, "triangulation", error) &&
          CheckSection(normals, "normals", error) && CheckSection(segmentation, "segmentation", error) &&
          CheckSection(analysis, "analysis", error) && CheckSection(gravity, "gravity", error) &&
-         CheckSection(attitude, "attitude", error);
+         CheckSection(attitude, "attitude", error) && CheckSection(map, "map", error);
 }
 
 void ApplyConfigFile(const std::string& path, Config* config) {
@@ -154,6 +161,25 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.Read("ki", &c.attitude.ki);
     s.Read("accel_gate", &c.attitude.accel_gate);
     s.Read("init_window_s", &c.attitude.init_window_s);
+    s.RejectUnknownKeys();
+  }
+  {
+    YamlSection s = root.Child("map");
+    MapOptions& f = c.map.fusion;
+    s.Read("resolution_m", &f.resolution_m);
+    s.Read("max_range_m", &f.max_range_m);
+    s.Read("occupancy_hit_prob", &f.occupancy_hit_prob);
+    s.Read("occupancy_miss_prob", &f.occupancy_miss_prob);
+    s.Read("occupancy_clamp_min_prob", &f.occupancy_clamp_min_prob);
+    s.Read("occupancy_clamp_max_prob", &f.occupancy_clamp_max_prob);
+    s.Read("occupied_threshold_prob", &f.occupied_threshold_prob);
+    s.Read("class_hit_log_odds", &f.class_hit_log_odds);
+    s.Read("class_miss_log_odds", &f.class_miss_log_odds);
+    s.Read("class_free_decay_log_odds", &f.class_free_decay_log_odds);
+    s.Read("class_clamp_min", &f.class_clamp_min);
+    s.Read("class_clamp_max", &f.class_clamp_max);
+    s.Read("pixel_stride", &c.map.pixel_stride);
+    s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
     s.RejectUnknownKeys();
   }
   root.RejectUnknownKeys();
@@ -237,6 +263,22 @@ std::string ConfigToYaml(const Config& c) {
     << "  ki: " << c.attitude.ki << "\n"
     << "  accel_gate: " << c.attitude.accel_gate << "\n"
     << "  init_window_s: " << c.attitude.init_window_s << "\n";
+  const MapOptions& f = c.map.fusion;
+  y << "map:\n"
+    << "  resolution_m: " << f.resolution_m << "\n"
+    << "  max_range_m: " << f.max_range_m << "\n"
+    << "  occupancy_hit_prob: " << f.occupancy_hit_prob << "\n"
+    << "  occupancy_miss_prob: " << f.occupancy_miss_prob << "\n"
+    << "  occupancy_clamp_min_prob: " << f.occupancy_clamp_min_prob << "\n"
+    << "  occupancy_clamp_max_prob: " << f.occupancy_clamp_max_prob << "\n"
+    << "  occupied_threshold_prob: " << f.occupied_threshold_prob << "\n"
+    << "  class_hit_log_odds: " << f.class_hit_log_odds << "\n"
+    << "  class_miss_log_odds: " << f.class_miss_log_odds << "\n"
+    << "  class_free_decay_log_odds: " << f.class_free_decay_log_odds << "\n"
+    << "  class_clamp_min: " << f.class_clamp_min << "\n"
+    << "  class_clamp_max: " << f.class_clamp_max << "\n"
+    << "  pixel_stride: " << c.map.pixel_stride << "\n"
+    << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
   return y.str();
 }
 

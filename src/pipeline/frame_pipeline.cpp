@@ -82,7 +82,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.disparity = disparity ? *disparity : stages_->matcher.Compute(pair.left, pair.right);
   out.timings.match_ms = clock.LapMs();
 
-  const Image3f cloud = Triangulate(out.disparity, g, config_.triangulation);
+  out.cloud = Triangulate(out.disparity, g, config_.triangulation);
+  const Image3f& cloud = out.cloud;
   out.timings.triangulate_ms = clock.LapMs();
 
   const Image3f& normals = stages_->normals.Compute(cloud);
@@ -90,6 +91,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
 
   const Segmentation& segmentation = stages_->segmenter.Compute(normals, &out.disparity);
   out.num_segments = segmentation.num_segments();
+  out.segment_ids = segmentation.labels;
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();

@@ -9,6 +9,7 @@
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/pipeline/attitude_filter.h"
 #include "ssta/geometry/segmenter.h"
+#include "ssta/mapping/map_options.h"
 #include "ssta/stereo/rectifier.h"
 #include "ssta/stereo/stereo_matcher.h"
 #include "ssta/stereo/triangulator.h"
@@ -31,6 +32,14 @@ struct GravityOptions {
   bool IsValid(std::string* error) const;
 };
 
+/// YAML section `map`: how frames are fused into a TraversabilityMap.
+struct MappingOptions {
+  MapOptions fusion;            ///< voxel size, range and the log-odds sensor model
+  int pixel_stride = 2;         ///< insert every n-th pixel in u and v (the map thins per voxel)
+  int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
+  bool IsValid(std::string* error) const;
+};
+
 /// Every option of the per-frame pipeline, one struct per stage (one YAML section each).
 /// Defaults are the values documented in config/default.yaml.
 struct Config {
@@ -43,6 +52,7 @@ struct Config {
   AnalysisOptions analysis;
   GravityOptions gravity;
   AttitudeFilterOptions attitude;
+  MappingOptions map;
 
   /// Validates every section; on failure the message reads "section.key: ...".
   bool IsValid(std::string* error) const;

@@ -24,6 +24,8 @@ struct FrameResult {
   std::int64_t timestamp_ns = 0;
   ImageU8 left_rectified;   ///< full rectified left image
   ImageF disparity;         ///< cropped to the common area [px], 0 invalid
+  Image3f cloud;            ///< organized points of the common area, rectified cam0 frame [m]
+  ImageI32 segment_ids;     ///< segment id per pixel of the common area, -1 none
   int num_segments = 0;
   AnalysisResult analysis;  ///< on the cropped area
   /// Class ids at the full rectified size; 0 (unknown) outside the common area.

@@ -1,0 +1,70 @@
+// ssta build-map: fuse a sequence's classified frames into a persistent OctoMap map.
+
+#include <csignal>
+#include <filesystem>
+#include <iostream>
+
+#include "commands.h"
+#include "config_loading.h"
+#include "progress.h"
+#include "ssta/io/file_util.h"
+#include "ssta/pipeline/map_builder.h"
+
+namespace ssta::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+extern "C" void RequestStop(int) { g_stop = true; }
+
+struct BuildMapArgs {
+  std::string sequence, json;
+  std::vector<std::string> config;
+  BuildMapOptions options;
+  bool quiet = false;
+};
+
+void Run(const BuildMapArgs& a) {
+  const Sequence sequence = Sequence::Open(a.sequence);
+  const Config config = LoadLayeredConfig(&sequence, a.config);
+  if (!a.options.resume && std::filesystem::exists(a.options.map_path) && !a.quiet) {
+    std::cerr << "ssta: replacing " << a.options.map_path << " (use --resume to continue it)\n";
+  }
+  // SIGINT / SIGTERM stop after the current frame; the map is saved before exiting.
+  std::signal(SIGINT, RequestStop);
+  std::signal(SIGTERM, RequestStop);
+  ProgressLine progress("build-map", !a.quiet);
+  const std::string name = std::filesystem::path(a.sequence).lexically_normal().filename().string();
+  const BuildMapSummary summary = BuildMap(sequence, name.empty() ? a.sequence : name, config, a.options,
+                                           [&](int done, int total) { progress.Update(done, total); }, &g_stop);
+  progress.Finish();
+  if (!a.quiet) {
+    std::cout << summary.BriefReport() << "map: " << a.options.map_path << "\n";
+  }
+  if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
+  if (summary.frames_used == 0) throw Error(a.sequence + ": no frame could be fused");
+  if (summary.interrupted) throw Error("interrupted; the map holds the frames fused so far (continue with --resume)");
+}
+
+}  // namespace
+
+void RegisterBuildMap(CLI::App& app) {
+  auto args = std::make_shared<BuildMapArgs>();
+  CLI::App* cmd = app.add_subcommand("build-map", "Fuse a sequence's classified frames into a 3D traversability map (OctoMap)");
+  cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
+  cmd->add_option("--map", args->options.map_path, "map file to write (.ot)")->required();
+  cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
+  cmd->add_flag("--resume", args->options.resume, "continue the existing map with this sequence");
+  cmd->add_flag("--static", args->options.static_platform,
+                "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
+  cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");
+  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--json", args->json, "write the run's summary as JSON to this file");
+  cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
+  cmd->callback([args] {
+    std::string error;
+    if (!args->options.IsValid(&error)) throw Error("--" + error);
+    Run(*args);
+  });
+}
+
+}  // namespace ssta::cli

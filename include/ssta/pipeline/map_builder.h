@@ -1,0 +1,66 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "ssta/io/sequence.h"
+#include "ssta/mapping/map_types.h"
+#include "ssta/mapping/traversability_map.h"
+#include "ssta/pipeline/config.h"
+#include "ssta/pipeline/frame_pipeline.h"
+
+namespace ssta {
+
+/// `ssta build-map` options that are not in the config file.
+struct BuildMapOptions {
+  std::string map_path;        ///< the .ot file to write (and to continue with `resume`)
+  bool resume = false;         ///< continue the map at map_path with this sequence
+  /// The platform stands still and the sequence has no poses: every frame is taken at the
+  /// origin, levelled by gravity (IMU, else a level body), yaw 0.
+  bool static_platform = false;
+  int max_frames = 0;          ///< 0: all frames
+  int every = 1;               ///< use every n-th frame
+  bool IsValid(std::string* error) const;
+};
+
+/// What a build-map run did.
+struct BuildMapSummary {
+  int frames_listed = 0;
+  int frames_used = 0;
+  std::vector<SkippedFrame> skipped;         ///< not fused, and why
+  std::vector<SkippedFrame> quality_failed;  ///< fused for free space only: no class verdicts
+  std::size_t map_nodes = 0;
+  std::size_t map_file_bytes = 0;
+  std::size_t points_inserted = 0;
+  double wall_s = 0.0;
+  bool interrupted = false;  ///< stopped early on request; the map holds what was fused
+
+  std::string BriefReport() const;
+  std::string Json() const;
+};
+
+/// Called after each frame: (frames done, frames to do).
+using BuildProgress = std::function<void(int done, int total)>;
+
+/// The classified points of one frame in the world frame, every `stride`-th pixel of the
+/// common area with a 3D point: class (0 without depth is never emitted), the slope and step of
+/// its segment. `world_T_rectified` maps the rectified cam0 frame into the world.
+std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride);
+
+/// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
+/// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
+/// pitch corrected by the IMU attitude filter where there is an IMU (GravityProvider); frames
+/// without a pose are skipped with a reason. The map is saved atomically every
+/// config.map.checkpoint_every_frames frames and at the end, also when `stop` turns true (the
+/// run then ends after the current frame). Throws ssta::Error on bad input before any work.
+BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
+                         const BuildMapOptions& options, const BuildProgress& progress = {},
+                         const std::atomic<bool>* stop = nullptr);
+
+}  // namespace ssta

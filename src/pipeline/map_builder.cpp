@@ -1,0 +1,208 @@
+#include "ssta/pipeline/map_builder.h"
+
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <sstream>
+
+#include "ssta/io/image_io.h"
+#include "ssta/pipeline/gravity_provider.h"
+
+namespace ssta {
+namespace {
+
+std::string Escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeometry& g) {
+  std::ostringstream s;
+  s << std::setprecision(10) << "cam0 " << c.left.width << "x" << c.left.height << " fu " << c.left.fu
+    << " fv " << c.left.fv << " cu " << c.left.cu << " cv " << c.left.cv << "; rectified f " << g.f
+    << " baseline " << g.baseline_m << " m; crop " << g.crop_width << "x" << g.crop_height << "+"
+    << g.crop_u0 << "+" << g.crop_v0;
+  return s.str();
+}
+
+TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
+                          const std::string& calibration) {
+  if (!options.resume) {
+    MapMetadata metadata;
+    metadata.vehicle = config.vehicle;
+    metadata.calibration_summary = calibration;
+    metadata.sequences = {sequence_name};
+    return TraversabilityMap(config.map.fusion, metadata);
+  }
+  TraversabilityMap map = TraversabilityMap::Load(options.map_path);
+  const double resolution = map.options().resolution_m;
+  if (std::abs(resolution - config.map.fusion.resolution_m) > 1e-9) {
+    std::ostringstream m;
+    m << options.map_path << ": map resolution " << resolution << " m differs from map.resolution_m "
+      << config.map.fusion.resolution_m << " m in the config (a resumed map keeps its resolution)";
+    throw Error(m.str());
+  }
+  MapMetadata metadata = map.metadata();
+  metadata.sequences.push_back(sequence_name);
+  map.set_metadata(metadata);
+  return map;
+}
+
+}  // namespace
+
+bool BuildMapOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (map_path.empty()) return fail("map: a map file is required");
+  if (max_frames < 0) return fail("max-frames: must not be negative");
+  if (every < 1) return fail("every: must be at least 1");
+  return true;
+}
+
+std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride) {
+  SSTA_CHECK(stride >= 1, "stride must be at least 1");
+  const Image3f& cloud = frame.cloud;
+  const ImageU8& labels = frame.analysis.labels;
+  std::vector<ClassifiedPoint> points;
+  points.reserve(cloud.size() / (stride * stride) + 1);
+  const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
+  for (int v = 0; v < cloud.height(); v += stride) {
+    for (int u = 0; u < cloud.width(); u += stride) {
+      const Eigen::Vector3f& p = cloud(v, u);
+      if (!IsFinite(p)) continue;
+      ClassifiedPoint out;
+      out.world_p = transform * p;
+      out.cls = static_cast<TravClass>(labels(v, u));
+      const int id = frame.segment_ids(v, u);
+      if (id >= 0) {
+        const SegmentResult& s = frame.analysis.segments[id];
+        out.slope_deg = s.has_plane ? static_cast<float>(s.slope_deg) : std::numeric_limits<float>::quiet_NaN();
+        out.step_m = static_cast<float>(s.step_m);
+      } else {
+        out.slope_deg = out.step_m = std::numeric_limits<float>::quiet_NaN();
+      }
+      points.push_back(out);
+    }
+  }
+  return points;
+}
+
+BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
+                         const BuildMapOptions& options, const BuildProgress& progress,
+                         const std::atomic<bool>* stop) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error(error);
+  if (!config.IsValid(&error)) throw Error("config: " + error);
+  if (!options.static_platform && sequence.poses().empty()) {
+    throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
+                "use --static if the platform stands still");
+  }
+  FramePipeline pipeline(sequence.calibration(), config);
+  const GravityProvider gravity(sequence, config.gravity, config.attitude);
+  TraversabilityMap map = OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), pipeline.geometry()));
+
+  // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
+  Eigen::Isometry3d body_T_rectified = sequence.calibration().left.body_T_camera;
+  body_T_rectified.linear() = body_T_rectified.linear() * pipeline.geometry().rectified_R_camera.transpose();
+
+  std::vector<StereoFrame> todo;
+  for (std::size_t i = 0; i < sequence.frames().size(); i += options.every) {
+    if (options.max_frames > 0 && static_cast<int>(todo.size()) >= options.max_frames) break;
+    todo.push_back(sequence.frames()[i]);
+  }
+  BuildMapSummary summary;
+  summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
+  summary.skipped = sequence.skipped();
+  const auto start = std::chrono::steady_clock::now();
+  int done = 0;
+  for (const StereoFrame& frame : todo) {
+    if (stop && stop->load()) {
+      summary.interrupted = true;
+      break;
+    }
+    const std::int64_t t = frame.timestamp_ns;
+    std::optional<Eigen::Isometry3d> world_T_body;
+    if (options.static_platform) {
+      world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
+    } else {
+      world_T_body = gravity.WorldTBodyAt(t);
+    }
+    if (!world_T_body) {
+      summary.skipped.push_back({t, "no pose at this time (outside the pose time range)"});
+    } else {
+      try {
+        const ImageU8 left = ReadGreyImage(frame.left_path);
+        const ImageU8 right = ReadGreyImage(frame.right_path);
+        const Eigen::Vector3d up_camera =
+            (sequence.calibration().left.body_T_camera.linear().transpose() *
+             (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ())).normalized();
+        FrameResult result = pipeline.Process(left, right, up_camera);
+        result.timestamp_ns = t;
+        const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
+        const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
+        const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
+        if (!stats.inserted) {
+          summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+        } else {
+          ++summary.frames_used;
+          summary.points_inserted += stats.points_hit;
+          if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
+        }
+      } catch (const Error& e) {
+        summary.skipped.push_back({t, e.what()});
+      }
+    }
+    ++done;
+    if (config.map.checkpoint_every_frames > 0 && done % config.map.checkpoint_every_frames == 0) {
+      map.Save(options.map_path);
+    }
+    if (progress) progress(done, static_cast<int>(todo.size()));
+  }
+  map.Save(options.map_path);
+  summary.map_nodes = map.NumNodes();
+  summary.map_file_bytes = std::filesystem::file_size(options.map_path);
+  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+std::string BuildMapSummary::BriefReport() const {
+  std::ostringstream r;
+  r << std::fixed << std::setprecision(1);
+  r << "frames: " << frames_used << " fused, " << skipped.size() << " skipped, " << quality_failed.size()
+    << " failed the quality check (free space only) (of " << frames_listed << " listed)"
+    << (interrupted ? "; interrupted, the map holds what was fused" : "") << "\n";
+  for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
+  for (const auto& s : quality_failed) r << "  no verdicts " << s.timestamp_ns << ": " << s.reason << "\n";
+  r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
+    << " points fused\n";
+  r << "time: " << wall_s << " s (" << (wall_s > 0 ? frames_used / wall_s : 0.0) << " frames/s)\n";
+  return r.str();
+}
+
+std::string BuildMapSummary::Json() const {
+  std::ostringstream j;
+  auto list = [&](const std::vector<SkippedFrame>& v) {
+    j << "[";
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      j << (i ? ", " : "") << "{\"timestamp_ns\": " << v[i].timestamp_ns << ", \"reason\": \"" << Escape(v[i].reason) << "\"}";
+    }
+    j << "]";
+  };
+  j << "{\n  \"frames_listed\": " << frames_listed << ",\n  \"frames_used\": " << frames_used << ",\n  \"skipped\": ";
+  list(skipped);
+  j << ",\n  \"quality_failed\": ";
+  list(quality_failed);
+  j << ",\n  \"map_nodes\": " << map_nodes << ",\n  \"map_file_bytes\": " << map_file_bytes
+    << ",\n  \"points_inserted\": " << points_inserted << ",\n  \"wall_s\": " << wall_s
+    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false") << "\n}\n";
+  return j.str();
+}
+
+}  // namespace ssta
