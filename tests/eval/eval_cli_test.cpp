@@ -1,13 +1,10 @@
-// End to end through the built `ssta` binary (skipped when the CLI target is not built).
+// End to end through the built `ssta` binary.
 
-#include <array>
-#include <cstdio>
 #include <string>
-
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 
+#include "cli_runner.h"
 #include "eval_test_helpers.h"
 #include "ssta/io/file_util.h"
 
@@ -20,27 +17,12 @@ using test::TempDir;
 using test::WriteLabels;
 using test::WriteText;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr
-};
-
-RunResult RunSsta(const std::string& arguments) {
-  RunResult result;
-  const std::string command = std::string(SSTA_BINARY) + " " + arguments + " 2>&1";
-  FILE* pipe = ::popen(command.c_str(), "r");
-  if (pipe == nullptr) return result;
-  std::array<char, 512> buffer{};
-  while (std::fgets(buffer.data(), buffer.size(), pipe) != nullptr) result.output += buffer.data();
-  const int status = ::pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+using testing::RunResult;
+using testing::RunSsta;
 
 class eval_Cli : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (std::string(SSTA_BINARY).empty()) GTEST_SKIP() << "ssta CLI not built";
     WriteLabels(dir_ / "seq/gt/labels/100.png", MakeLabels({{1, 1}, {2, 3}}));
     WriteLabels(dir_ / "out/labels/100.png", MakeLabels({{1, 1}, {2, 1}}));
     WriteLabels(dir_ / "seq/gt/grid_classes.png", MakeLabels({{1, 2}, {3, 3}}));

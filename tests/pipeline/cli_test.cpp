@@ -1,0 +1,103 @@
+// The map and classify commands end to end through the built `ssta` binary: exit status, the
+// one-line error naming the file or key, and the query CSV contract (INTERFACES section 5).
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "cli_runner.h"
+#include "ssta/io/file_util.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+using testing::RunSsta;
+namespace fs = std::filesystem;
+
+const std::string kEuroc = std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini";
+const std::string kEurocConfig = std::string(SSTA_CONFIG_DIR) + "/sensors/euroc.yaml";
+
+std::vector<std::string> Lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream s(text);
+  std::string line;
+  while (std::getline(s, line)) out.push_back(line);
+  return out;
+}
+
+TEST(Cli, MapRoundTripBuildQueryExport) {
+  testing::TempDir dir;
+  const std::string map = dir / "m.ot";
+  auto r = RunSsta("build-map --sequence " + kEuroc + " --static --config " + kEurocConfig + " --map " + map +
+                   " --json " + (dir / "s.json") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(ReadTextFile(dir / "s.json").find("\"frames_used\": 3"), std::string::npos);
+
+  // Unobserved column: class 0, cost empty/NaN, zero observations.
+  r = RunSsta("query --map " + map + " --at 500,500", false);
+  ASSERT_EQ(r.exit_code, 0);
+  auto lines = Lines(r.output);
+  ASSERT_EQ(lines.size(), 2u) << r.output;
+  EXPECT_EQ(lines[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations");
+  EXPECT_EQ(lines[1].substr(0, lines[1].find(',')), "500.0000");
+  EXPECT_NE(lines[1].find(",0,"), std::string::npos) << lines[1];
+
+  // Points file with a header, X,Y and X,Y,Z rows.
+  std::ofstream(dir / "p.csv") << "x,y,z\n500,500\n1,0,-0.9\n";
+  r = RunSsta("query --map " + map + " --points " + (dir / "p.csv"), false);
+  ASSERT_EQ(r.exit_code, 0);
+  EXPECT_EQ(Lines(r.output).size(), 3u) << r.output;
+
+  r = RunSsta("export --map " + map + " --format grid --out " + (dir / "g"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"g.png", "g_classes.png", "g.pgm", "g.yaml"}) EXPECT_TRUE(fs::exists(dir.path() / f)) << f;
+  const std::string yaml = ReadTextFile(dir / "g.yaml");
+  for (const char* key : {"image:", "resolution:", "origin:", "negate:", "occupied_thresh:", "free_thresh:"}) {
+    EXPECT_NE(yaml.find(key), std::string::npos) << key;
+  }
+  for (const char* format : {"octovis", "ply", "pcd", "csv"}) {
+    r = RunSsta("export --map " + map + " --format " + format + " --out " + (dir / "x"));
+    EXPECT_EQ(r.exit_code, 0) << format << ": " << r.output;
+  }
+}
+
+TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
+  testing::TempDir dir;
+  auto r = RunSsta("query --map " + (dir / "missing.ot") + " --at 1,2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
+  EXPECT_NE(r.output.find("missing.ot"), std::string::npos) << r.output;
+
+  std::ofstream(dir / "bad.yaml") << "stereo:\n  num_disparity: 64\n";
+  r = RunSsta("classify --sequence " + kEuroc + " --config " + (dir / "bad.yaml") + " --out " + (dir / "o"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("stereo.num_disparity: unknown key"), std::string::npos) << r.output;
+
+  std::ofstream(dir / "bad.csv") << "x,y\n1,abc\n";
+  std::ofstream(dir / "not_a_map.ot") << "# just text\n";
+  r = RunSsta("query --map " + (dir / "not_a_map.ot") + " --points " + (dir / "bad.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("not_a_map.ot"), std::string::npos) << r.output;
+
+  r = RunSsta("build-map --sequence " + (dir / "nope") + " --map " + (dir / "m.ot"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("nope"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "m.ot"));
+}
+
+TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
+  testing::TempDir dir;
+  const auto r = RunSsta("classify --sequence " + kEuroc + " --config " + kEurocConfig + " --out " + (dir / "o") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t labels = 0;
+  for (const auto& e : fs::directory_iterator(dir.path() / "o" / "labels")) labels += e.path().extension() == ".png";
+  EXPECT_EQ(labels, 3u);
+  EXPECT_TRUE(fs::exists(dir.path() / "o" / "summary.json"));
+  EXPECT_TRUE(fs::exists(dir.path() / "o" / "overlay"));
+}
+
+}  // namespace
+}  // namespace ssta

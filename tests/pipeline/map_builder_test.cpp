@@ -1,0 +1,152 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "ssta/mapping/map_export.h"
+#include "ssta/pipeline/map_builder.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kEuroc = std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini";
+
+Config EurocConfig() { return LoadConfig(std::string(SSTA_CONFIG_DIR) + "/sensors/euroc.yaml"); }
+
+TEST(ClassifiedPointsInWorld, TransformsEveryStrideThPointWithItsSegmentVerdict) {
+  FrameResult f;
+  f.cloud = Image3f(4, 2, NanVector3f());
+  f.segment_ids = ImageI32(4, 2, -1);
+  f.analysis.labels = ImageU8(4, 2, 0);
+  f.analysis.segments.resize(1);
+  f.analysis.segments[0].has_plane = true;
+  f.analysis.segments[0].slope_deg = 12.0;
+  f.analysis.segments[0].step_m = 0.05;
+  f.cloud(0, 0) = Eigen::Vector3f(1, 2, 3);
+  f.segment_ids(0, 0) = 0;
+  f.analysis.labels(0, 0) = 1;
+  f.cloud(0, 2) = Eigen::Vector3f(0, 0, 5);  // no segment: undecided, no slope
+  f.analysis.labels(0, 2) = 4;
+  f.cloud(0, 1) = Eigen::Vector3f(9, 9, 9);  // skipped by stride 2
+  Eigen::Isometry3d world_T_rect = Eigen::Isometry3d::Identity();
+  world_T_rect.translate(Eigen::Vector3d(10, 0, 0));
+  world_T_rect.rotate(Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitZ()));
+  const auto points = ClassifiedPointsInWorld(f, world_T_rect, 2);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_TRUE(points[0].world_p.isApprox(Eigen::Vector3f(8, 1, 3), 1e-6f)) << points[0].world_p.transpose();
+  EXPECT_EQ(points[0].cls, TravClass::kTraversable);
+  EXPECT_FLOAT_EQ(points[0].slope_deg, 12.0f);
+  EXPECT_EQ(points[1].cls, TravClass::kUndecided);
+  EXPECT_TRUE(std::isnan(points[1].slope_deg));
+}
+
+TEST(BuildMap, EurocStaticMapHasATraversableFloor) {
+  testing::TempDir dir;
+  BuildMapOptions options;
+  options.map_path = dir / "euroc.ot";
+  options.static_platform = true;
+  const Sequence seq = Sequence::Open(kEuroc);
+  const BuildMapSummary summary = BuildMap(seq, "euroc-mini", EurocConfig(), options);
+  EXPECT_EQ(summary.frames_used, 3);
+  const TraversabilityMap map = TraversabilityMap::Load(options.map_path);
+  const Eigen::AlignedBox3d bounds = map.SurfaceBounds();
+  ASSERT_FALSE(bounds.isEmpty());
+  const GridProjection top = map.Project(
+      Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>()), map.options().resolution_m);
+  // The floor is the lowest wide surface: top cells within 0.15 m of the lowest decile.
+  std::vector<double> z;
+  for (std::size_t i = 0; i < top.height_m.size(); ++i) {
+    if (std::isfinite(top.height_m[i])) z.push_back(top.height_m[i]);
+  }
+  ASSERT_GT(z.size(), 100u);
+  std::sort(z.begin(), z.end());
+  const double floor_z = z[z.size() / 10];
+  int floor = 0, traversable = 0;
+  for (std::size_t i = 0; i < top.height_m.size(); ++i) {
+    if (!(std::abs(top.height_m[i] - floor_z) <= 0.15)) continue;
+    ++floor;
+    traversable += top.classes[i] == static_cast<std::uint8_t>(TravClass::kTraversable);
+  }
+  EXPECT_GT(floor, 200);
+  EXPECT_GT(static_cast<double>(traversable) / floor, 0.7) << traversable << " of " << floor;
+  // Gravity levels the static map: the floor lies well below the body origin (the IMU).
+  EXPECT_LT(floor_z, -0.3);
+}
+
+// Copies the EuRoC fixture keeping only the cam0/cam1 rows listed (IMU kept whole).
+std::string CopyWithFrames(const testing::TempDir& dir, const std::string& name, std::size_t first, std::size_t last) {
+  const fs::path out = dir.path() / name;
+  fs::copy(kEuroc, out, fs::copy_options::recursive);
+  for (const char* cam : {"cam0", "cam1"}) {
+    const fs::path csv = out / "mav0" / cam / "data.csv";
+    std::ifstream in(csv);
+    std::vector<std::string> rows;
+    std::string line, header;
+    std::getline(in, header);
+    while (std::getline(in, line)) rows.push_back(line);
+    in.close();
+    std::ofstream o(csv);
+    o << header << "\n";
+    for (std::size_t i = first; i <= last && i < rows.size(); ++i) o << rows[i] << "\n";
+  }
+  return out.string();
+}
+
+TEST(BuildMap, ResumeEqualsOnePass) {
+  testing::TempDir dir;
+  const Config config = EurocConfig();
+  BuildMapOptions whole;
+  whole.static_platform = true;
+  whole.map_path = dir / "whole.ot";
+  BuildMap(Sequence::Open(kEuroc), "s", config, whole);
+
+  BuildMapOptions part = whole;
+  part.map_path = dir / "parts.ot";
+  BuildMap(Sequence::Open(CopyWithFrames(dir, "a", 0, 1)), "s", config, part);
+  part.resume = true;
+  BuildMap(Sequence::Open(CopyWithFrames(dir, "b", 2, 2)), "s", config, part);
+
+  ExportCsv(TraversabilityMap::Load(whole.map_path), dir / "whole.csv");
+  ExportCsv(TraversabilityMap::Load(part.map_path), dir / "parts.csv");
+  std::ifstream a(dir / "whole.csv"), b(dir / "parts.csv");
+  const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
+  EXPECT_GT(sa.size(), 1000u);
+  EXPECT_EQ(sa, sb);
+}
+
+TEST(BuildMap, ResumeRefusesAnotherResolution) {
+  testing::TempDir dir;
+  BuildMapOptions options;
+  options.static_platform = true;
+  options.max_frames = 1;
+  options.map_path = dir / "m.ot";
+  Config config = EurocConfig();
+  BuildMap(Sequence::Open(kEuroc), "s", config, options);
+  config.map.fusion.resolution_m = 0.05;
+  options.resume = true;
+  try {
+    BuildMap(Sequence::Open(kEuroc), "s", config, options);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("map.resolution_m"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BuildMap, SequenceWithoutPosesNeedsStatic) {
+  testing::TempDir dir;
+  BuildMapOptions options;
+  options.map_path = dir / "m.ot";
+  try {
+    BuildMap(Sequence::Open(kEuroc), "s", EurocConfig(), options);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--static"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(options.map_path));
+}
+
+}  // namespace
+}  // namespace ssta
