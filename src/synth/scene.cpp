@@ -1,0 +1,729 @@
+#include "ssta/synth/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "ssta/core/error.h"
+#include "synth/random.h"
+
+namespace ssta::synth {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kDeg = kPi / 180.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// World (x, y) relative to a centre, expressed in a frame rotated by yaw (given as cos, sin).
+Eigen::Vector2d ToLocal(double x, double y, double cx, double cy, double c, double s) {
+  const double dx = x - cx, dy = y - cy;
+  return {c * dx + s * dy, -s * dx + c * dy};
+}
+
+Eigen::Vector2d RotateToWorld(const Eigen::Vector2d& v, double c, double s) {
+  return {c * v.x() - s * v.y(), s * v.x() + c * v.y()};
+}
+
+/// Rotation about z by the angle whose cosine and sine are c and s.
+Eigen::Vector3d RotateZ(const Eigen::Vector3d& v, double c, double s) {
+  return {c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z()};
+}
+
+double RampHeight(const GroundRamp& r, double x, double y, Eigen::Vector2d* gradient) {
+  const Eigen::Vector2d l = ToLocal(x, y, r.x, r.y, r.cos_yaw, r.sin_yaw);
+  const double ex = std::max(0.0, std::abs(l.x()) - r.half_x_m);
+  const double ey = std::max(0.0, std::abs(l.y()) - r.half_y_m);
+  const double k = r.tan_slope;
+  const double e = std::max(ex, ey);
+  const double h = r.height_m - k * e;
+  if (h <= 0) return 0;
+  if (gradient && e > 0) {
+    const Eigen::Vector2d g_local = ex >= ey ? Eigen::Vector2d(-k * (l.x() > 0 ? 1 : -1), 0)
+                                             : Eigen::Vector2d(0, -k * (l.y() > 0 ? 1 : -1));
+    *gradient += RotateToWorld(g_local, r.cos_yaw, r.sin_yaw);
+  }
+  return h;
+}
+
+/// Smallest t > t_min where the ray enters the solid, with the outward normal there.
+struct SolidHit {
+  double t = kInf;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+};
+
+SolidHit IntersectBox(const Obstacle& b, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                      double t_min) {
+  const Eigen::Vector3d ol = RotateZ(o - Eigen::Vector3d(b.x, b.y, 0), b.cos_yaw, -b.sin_yaw);
+  const Eigen::Vector3d dl = RotateZ(d, b.cos_yaw, -b.sin_yaw);
+  const double lo[3] = {-b.a, -b.b, b.z_min}, hi[3] = {b.a, b.b, b.z_max};
+  double t_enter = -kInf, t_exit = kInf;
+  int axis = 2;
+  double sign = 1;
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(dl[i]) < 1e-15) {
+      if (ol[i] < lo[i] || ol[i] > hi[i]) return {};
+      continue;
+    }
+    double t0 = (lo[i] - ol[i]) / dl[i], t1 = (hi[i] - ol[i]) / dl[i];
+    double s = -1;
+    if (t0 > t1) {
+      std::swap(t0, t1);
+      s = 1;
+    }
+    if (t0 > t_enter) {
+      t_enter = t0;
+      axis = i;
+      sign = s;
+    }
+    t_exit = std::min(t_exit, t1);
+  }
+  if (t_enter > t_exit || t_enter < t_min) return {};
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  n[axis] = sign;
+  return {t_enter, RotateZ(n, b.cos_yaw, b.sin_yaw)};
+}
+
+SolidHit IntersectCylinder(const Obstacle& c, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                           double t_min) {
+  const double ox = o.x() - c.x, oy = o.y() - c.y;
+  const double qa = d.x() * d.x() + d.y() * d.y();
+  SolidHit best;
+  if (qa > 1e-18) {
+    const double qb = 2 * (ox * d.x() + oy * d.y());
+    const double qc = ox * ox + oy * oy - c.a * c.a;
+    const double disc = qb * qb - 4 * qa * qc;
+    if (disc >= 0) {
+      const double t = (-qb - std::sqrt(disc)) / (2 * qa);
+      const double z = o.z() + t * d.z();
+      if (t >= t_min && z >= c.z_min && z <= c.z_max) {
+        best.t = t;
+        best.normal = Eigen::Vector3d(ox + t * d.x(), oy + t * d.y(), 0).normalized();
+      }
+    }
+  }
+  if (d.z() < 0 && o.z() > c.z_max) {  // the top cap, seen from above
+    const double t = (c.z_max - o.z()) / d.z();
+    const double px = ox + t * d.x(), py = oy + t * d.y();
+    if (t >= t_min && t < best.t && px * px + py * py <= c.a * c.a) {
+      best.t = t;
+      best.normal = Eigen::Vector3d::UnitZ();
+    }
+  }
+  return best;
+}
+
+SolidHit IntersectLog(const Obstacle& g, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                      double t_min) {
+  const Eigen::Vector3d centre(g.x, g.y, g.z_max - g.a);
+  const Eigen::Vector3d ol = RotateZ(o - centre, g.cos_yaw, -g.sin_yaw);
+  const Eigen::Vector3d dl = RotateZ(d, g.cos_yaw, -g.sin_yaw);
+  SolidHit best;
+  const double qa = dl.y() * dl.y() + dl.z() * dl.z();
+  if (qa > 1e-18) {
+    const double qb = 2 * (ol.y() * dl.y() + ol.z() * dl.z());
+    const double qc = ol.y() * ol.y() + ol.z() * ol.z() - g.a * g.a;
+    const double disc = qb * qb - 4 * qa * qc;
+    if (disc >= 0) {
+      const double t = (-qb - std::sqrt(disc)) / (2 * qa);
+      const Eigen::Vector3d p = ol + t * dl;
+      if (t >= t_min && std::abs(p.x()) <= g.b) {
+        best.t = t;
+        best.normal = Eigen::Vector3d(0, p.y(), p.z()).normalized();
+      }
+    }
+  }
+  for (double side : {-1.0, 1.0}) {  // the two end discs
+    if (std::abs(dl.x()) < 1e-15) break;
+    const double t = (side * g.b - ol.x()) / dl.x();
+    const Eigen::Vector3d p = ol + t * dl;
+    if (t >= t_min && t < best.t && dl.x() * side < 0 &&
+        p.y() * p.y() + p.z() * p.z() <= g.a * g.a) {
+      best.t = t;
+      best.normal = Eigen::Vector3d(side, 0, 0);
+    }
+  }
+  if (best.t < kInf) best.normal = RotateZ(best.normal, g.cos_yaw, g.sin_yaw);
+  return best;
+}
+
+SolidHit IntersectEllipsoid(const Obstacle& e, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                            double t_min) {
+  const Eigen::Vector3d centre(e.x, e.y, e.z_min + e.c);
+  const Eigen::Vector3d radii(e.a, e.b, e.c);
+  const Eigen::Vector3d ol = RotateZ(o - centre, e.cos_yaw, -e.sin_yaw).cwiseQuotient(radii);
+  const Eigen::Vector3d dl = RotateZ(d, e.cos_yaw, -e.sin_yaw).cwiseQuotient(radii);
+  const double qa = dl.squaredNorm();
+  const double qb = 2 * ol.dot(dl);
+  const double qc = ol.squaredNorm() - 1;
+  const double disc = qb * qb - 4 * qa * qc;
+  if (disc < 0) return {};
+  const double t = (-qb - std::sqrt(disc)) / (2 * qa);
+  if (t < t_min) return {};
+  const Eigen::Vector3d p = ol + t * dl;  // on the unit sphere
+  const Eigen::Vector3d n_local = p.cwiseQuotient(radii);
+  return {t, RotateZ(n_local, e.cos_yaw, e.sin_yaw).normalized()};
+}
+
+SolidHit IntersectObstacle(const Obstacle& ob, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                           double t_min) {
+  switch (ob.shape) {
+    case Obstacle::Shape::kBox: return IntersectBox(ob, o, d, t_min);
+    case Obstacle::Shape::kCylinder: return IntersectCylinder(ob, o, d, t_min);
+    case Obstacle::Shape::kLog: return IntersectLog(ob, o, d, t_min);
+    case Obstacle::Shape::kEllipsoid: return IntersectEllipsoid(ob, o, d, t_min);
+  }
+  return {};
+}
+
+/// True when the ray can pass within `radius` of `centre` beyond t_min and before t_max.
+bool RayNearSphere(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& centre,
+                   double radius, double t_max) {
+  const Eigen::Vector3d w = centre - o;
+  const double dd = d.squaredNorm();
+  const double tc = std::clamp(w.dot(d) / dd, 0.0, t_max);
+  return (w - tc * d).squaredNorm() <= radius * radius;
+}
+
+}  // namespace
+
+double Scene::BaseHeight(double x, double y) const {
+  double z = plane_gradient.x() * x + plane_gradient.y() * y;
+  for (const GroundBump& b : bumps) {
+    const double r2 = (x - b.x) * (x - b.x) + (y - b.y) * (y - b.y);
+    const double s2 = b.sigma_m * b.sigma_m;
+    if (r2 < 25 * s2) z += b.amplitude_m * std::exp(-0.5 * r2 / s2);
+  }
+  for (const GroundRamp& r : ramps) z += RampHeight(r, x, y, nullptr);
+  return z;
+}
+
+Eigen::Vector2d Scene::BaseGradient(double x, double y) const {
+  Eigen::Vector2d g = plane_gradient;
+  for (const GroundBump& b : bumps) {
+    const double dx = x - b.x, dy = y - b.y;
+    const double s2 = b.sigma_m * b.sigma_m;
+    const double r2 = dx * dx + dy * dy;
+    if (r2 >= 25 * s2) continue;
+    const double e = b.amplitude_m * std::exp(-0.5 * r2 / s2);
+    g += Eigen::Vector2d(-e * dx / s2, -e * dy / s2);
+  }
+  for (const GroundRamp& r : ramps) RampHeight(r, x, y, &g);
+  return g;
+}
+
+int Scene::PitAt(double x, double y) const {
+  for (std::size_t i = 0; i < pits.size(); ++i) {
+    const Pit& p = pits[i];
+    const Eigen::Vector2d l = ToLocal(x, y, p.x, p.y, p.cos_yaw, p.sin_yaw);
+    if (std::abs(l.x()) < p.half_x_m && std::abs(l.y()) < p.half_y_m) return static_cast<int>(i);
+  }
+  return -1;
+}
+
+double Scene::GroundHeight(double x, double y) const {
+  const int pit = PitAt(x, y);
+  return BaseHeight(x, y) - (pit >= 0 ? pits[pit].depth_m : 0.0);
+}
+
+Material Scene::GroundMaterialAt(double x, double y, int pit) const {
+  if (pit >= 0) return Material::kSoil;
+  for (const TexturelessPatch& p : textureless) {
+    if ((x - p.x) * (x - p.x) + (y - p.y) * (y - p.y) < p.radius_m * p.radius_m) {
+      return Material::kTextureless;
+    }
+  }
+  for (const GroundRamp& r : ramps) {
+    if (RampHeight(r, x, y, nullptr) > 1e-9) return Material::kConcrete;
+  }
+  return ground_material;
+}
+
+void Scene::Finish() {
+  for (GroundRamp& r : ramps) {
+    r.cos_yaw = std::cos(r.yaw_rad);
+    r.sin_yaw = std::sin(r.yaw_rad);
+    r.tan_slope = std::tan(r.slope_deg * kDeg);
+  }
+  for (Pit& p : pits) {
+    p.cos_yaw = std::cos(p.yaw_rad);
+    p.sin_yaw = std::sin(p.yaw_rad);
+  }
+  for (Obstacle& ob : obstacles) {
+    ob.cos_yaw = std::cos(ob.yaw_rad);
+    ob.sin_yaw = std::sin(ob.yaw_rad);
+  }
+  double slope = std::hypot(plane_gradient.x(), plane_gradient.y());
+  double x0 = start_xy.x() - 30, x1 = start_xy.x() + 30;
+  double y0 = start_xy.y() - 30, y1 = start_xy.y() + 30;
+  auto cover = [&](double x, double y, double r) {
+    x0 = std::min(x0, x - r);
+    x1 = std::max(x1, x + r);
+    y0 = std::min(y0, y - r);
+    y1 = std::max(y1, y + r);
+  };
+  double bump_slope = 0, ramp_slope = 0;
+  for (const GroundBump& b : bumps) {
+    bump_slope += std::abs(b.amplitude_m) / b.sigma_m * 0.6066;  // max |grad| of a Gaussian bump
+    cover(b.x, b.y, 5 * b.sigma_m);
+  }
+  for (const GroundRamp& r : ramps) {
+    ramp_slope = std::max(ramp_slope, std::tan(r.slope_deg * kDeg));
+    cover(r.x, r.y, std::hypot(r.half_x_m, r.half_y_m) + r.height_m / std::tan(r.slope_deg * kDeg));
+  }
+  for (const Pit& p : pits) cover(p.x, p.y, std::hypot(p.half_x_m, p.half_y_m));
+  slope_bound_ = 1.05 * (slope + bump_slope + ramp_slope) + 0.02;
+
+  bound_x0_ = x0 - bound_cell_;
+  bound_y0_ = y0 - bound_cell_;
+  bound_nx_ = static_cast<int>(std::ceil((x1 - x0) / bound_cell_)) + 2;
+  bound_ny_ = static_cast<int>(std::ceil((y1 - y0) / bound_cell_)) + 2;
+  bound_zmax_.assign(static_cast<std::size_t>(bound_nx_) * bound_ny_, 0.f);
+  constexpr int kSamples = 5;  // per side, edges included
+  const double spacing = bound_cell_ / (kSamples - 1);
+  const double margin = slope_bound_ * spacing * 0.7072 + 1e-4;
+  for (int iy = 0; iy < bound_ny_; ++iy) {
+    for (int ix = 0; ix < bound_nx_; ++ix) {
+      double z = -kInf;
+      for (int j = 0; j < kSamples; ++j) {
+        for (int i = 0; i < kSamples; ++i) {
+          z = std::max(z, BaseHeight(bound_x0_ + ix * bound_cell_ + i * spacing,
+                                     bound_y0_ + iy * bound_cell_ + j * spacing));
+        }
+      }
+      bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix] = static_cast<float>(z + margin);
+    }
+  }
+
+  for (Obstacle& ob : obstacles) {
+    switch (ob.shape) {
+      case Obstacle::Shape::kBox:
+        ob.bound_centre = {ob.x, ob.y, 0.5 * (ob.z_min + ob.z_max)};
+        ob.bound_radius = std::sqrt(ob.a * ob.a + ob.b * ob.b +
+                                    0.25 * (ob.z_max - ob.z_min) * (ob.z_max - ob.z_min));
+        break;
+      case Obstacle::Shape::kCylinder:
+        ob.bound_centre = {ob.x, ob.y, 0.5 * (ob.z_min + ob.z_max)};
+        ob.bound_radius = std::hypot(ob.a, 0.5 * (ob.z_max - ob.z_min));
+        break;
+      case Obstacle::Shape::kLog:
+        ob.bound_centre = {ob.x, ob.y, ob.z_max - ob.a};
+        ob.bound_radius = std::hypot(ob.a, ob.b);
+        break;
+      case Obstacle::Shape::kEllipsoid:
+        ob.bound_centre = {ob.x, ob.y, ob.z_min + ob.c};
+        ob.bound_radius = std::max({ob.a, ob.b, ob.c});
+        break;
+    }
+  }
+}
+
+SurfaceHit Scene::PlaneHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
+                           double t1) const {
+  // o.z + t d.z = g . (o.xy + t d.xy)
+  const double a = o.z() - plane_gradient.dot(o.head<2>());
+  const double b = d.z() - plane_gradient.dot(d.head<2>());
+  if (a <= 0 || b >= 0) return {};
+  const double t = -a / b;
+  if (t < t0 || t > t1) return {};
+  SurfaceHit hit;
+  hit.hit = true;
+  hit.t = t;
+  hit.p_world = o + t * d;
+  hit.normal_world = Eigen::Vector3d(-plane_gradient.x(), -plane_gradient.y(), 1).normalized();
+  hit.material = ground_material;
+  return hit;
+}
+
+SurfaceHit Scene::CastGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                             double t_max) const {
+  const double len = d.norm();
+  const double t_min = 1e-4 / len;
+  // Clip the ray to the bound grid's box.
+  double t_in = t_min, t_out = t_max;
+  const double lo[2] = {bound_x0_, bound_y0_};
+  const double hi[2] = {bound_x0_ + bound_nx_ * bound_cell_, bound_y0_ + bound_ny_ * bound_cell_};
+  for (int a = 0; a < 2; ++a) {
+    if (std::abs(d[a]) < 1e-15) {
+      if (o[a] < lo[a] || o[a] > hi[a]) t_in = kInf;
+      continue;
+    }
+    double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+    if (ta > tb) std::swap(ta, tb);
+    t_in = std::max(t_in, ta);
+    t_out = std::min(t_out, tb);
+  }
+  if (t_in >= t_out) return PlaneHit(o, d, t_min, t_max);
+  if (t_in > t_min) {
+    const SurfaceHit before = PlaneHit(o, d, t_min, t_in);
+    if (before.hit) return before;
+  }
+
+  const double horiz = std::hypot(d.x(), d.y());
+  const double close_rate = slope_bound_ * horiz - d.z();  // fastest the gap can shrink per t
+  auto gap = [&](double tt) {
+    const Eigen::Vector3d p = o + tt * d;
+    return p.z() - GroundHeight(p.x(), p.y());
+  };
+  double t = t_in;
+  if (gap(t) <= 0) return {};  // starts under the ground
+  double t_prev = t;
+  bool crossed = false;
+  while (t <= t_out) {
+    const Eigen::Vector3d p = o + t * d;
+    const int ix = std::clamp(static_cast<int>((p.x() - bound_x0_) / bound_cell_), 0, bound_nx_ - 1);
+    const int iy = std::clamp(static_cast<int>((p.y() - bound_y0_) / bound_cell_), 0, bound_ny_ - 1);
+    double t_cell = t_out;
+    if (d.x() > 0) t_cell = std::min(t_cell, (bound_x0_ + (ix + 1) * bound_cell_ - o.x()) / d.x());
+    if (d.x() < 0) t_cell = std::min(t_cell, (bound_x0_ + ix * bound_cell_ - o.x()) / d.x());
+    if (d.y() > 0) t_cell = std::min(t_cell, (bound_y0_ + (iy + 1) * bound_cell_ - o.y()) / d.y());
+    if (d.y() < 0) t_cell = std::min(t_cell, (bound_y0_ + iy * bound_cell_ - o.y()) / d.y());
+    const double z_low = std::min(p.z(), o.z() + t_cell * d.z());
+    if (z_low > bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix]) {
+      t = std::max(t_cell, t) + 1e-7 / len;  // the ray passes above this whole cell
+      continue;
+    }
+    if (close_rate <= 0) return {};  // the ray climbs faster than any slope: never meets it
+    const double h = p.z() - GroundHeight(p.x(), p.y());
+    if (h <= 0) {
+      crossed = true;
+      break;
+    }
+    t_prev = t;
+    const double min_step = (0.003 + 0.0015 * t * len) / len;
+    t += std::max(0.9 * h / close_rate, min_step);
+  }
+  if (!crossed) {
+    if (t_out >= t_max) return {};
+    return PlaneHit(o, d, t_out, t_max);
+  }
+  return RefineGround(o, d, t_prev, t);
+}
+
+SurfaceHit Scene::RefineGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double lo,
+                               double hi) const {
+  const double len = d.norm();
+  auto gap = [&](double tt) {
+    const Eigen::Vector3d p = o + tt * d;
+    return p.z() - GroundHeight(p.x(), p.y());
+  };
+  // Illinois (modified regula falsi): keeps the bracket, converges fast on smooth ground and
+  // still closes in on the jump of a pit wall.
+  double f_lo = gap(lo), f_hi = gap(hi);
+  int side = 0;
+  for (int i = 0; i < 80 && (hi - lo) * len > 1e-6; ++i) {
+    double m = hi - f_hi * (hi - lo) / (f_hi - f_lo);
+    if (!(m > lo && m < hi)) m = 0.5 * (lo + hi);
+    const double f_m = gap(m);
+    if (f_m > 0) {
+      lo = m;
+      f_lo = f_m;
+      if (side == 1) f_hi *= 0.5;
+      side = 1;
+    } else {
+      hi = m;
+      f_hi = f_m;
+      if (side == -1) f_lo *= 0.5;
+      side = -1;
+    }
+  }
+  SurfaceHit hit;
+  hit.hit = true;
+  hit.t = hi;
+  hit.p_world = o + hi * d;
+  const Eigen::Vector3d p_lo = o + lo * d;
+  const double x = hit.p_world.x(), y = hit.p_world.y();
+  const int pit = PitAt(x, y);
+  const int pit_lo = PitAt(p_lo.x(), p_lo.y());
+  const double jump = GroundHeight(x, y) - GroundHeight(p_lo.x(), p_lo.y());
+  const double base = BaseHeight(x, y);
+  if (pit_lo >= 0 && pit != pit_lo && jump > 1e-4) {
+    // The far wall of a pit, seen from inside it: faces back into the pit.
+    const Pit& p = pits[pit_lo];
+    const Eigen::Vector2d l = ToLocal(p_lo.x(), p_lo.y(), p.x, p.y, p.cos_yaw, p.sin_yaw);
+    const Eigen::Vector2d n_local = (p.half_x_m - std::abs(l.x()) < p.half_y_m - std::abs(l.y()))
+                                        ? Eigen::Vector2d(l.x() > 0 ? -1 : 1, 0)
+                                        : Eigen::Vector2d(0, l.y() > 0 ? -1 : 1);
+    const Eigen::Vector2d n = RotateToWorld(n_local, p.cos_yaw, p.sin_yaw);
+    hit.normal_world = Eigen::Vector3d(n.x(), n.y(), 0);
+    hit.vertical_face = true;
+    hit.step_m = std::min(0.0, hit.p_world.z() - base);
+    hit.material = Material::kSoil;
+    hit.object_id = -(pit_lo + 1);
+    return hit;
+  }
+  const Eigen::Vector2d g = BaseGradient(x, y);
+  hit.normal_world = Eigen::Vector3d(-g.x(), -g.y(), 1).normalized();
+  hit.step_m = pit >= 0 ? -pits[pit].depth_m : 0.0;
+  hit.material = GroundMaterialAt(x, y, pit);
+  hit.object_id = pit >= 0 ? -(pit + 1) : 0;
+  return hit;
+}
+
+SurfaceHit Scene::CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
+                          double t_max) const {
+  const double t_min = 1e-4 / direction.norm();
+  double best_t = t_max;
+  int best = -1;
+  Eigen::Vector3d best_normal;
+  for (std::size_t i = 0; i < obstacles.size(); ++i) {
+    const Obstacle& ob = obstacles[i];
+    if (!RayNearSphere(origin, direction, ob.bound_centre, ob.bound_radius, best_t)) continue;
+    const SolidHit s = IntersectObstacle(ob, origin, direction, t_min);
+    if (s.t < best_t) {
+      best_t = s.t;
+      best = static_cast<int>(i);
+      best_normal = s.normal;
+    }
+  }
+  SurfaceHit ground = CastGround(origin, direction, best_t);
+  if (ground.hit) return ground;
+  if (best < 0) return {};
+  SurfaceHit hit;
+  hit.hit = true;
+  hit.t = best_t;
+  hit.p_world = origin + best_t * direction;
+  hit.normal_world = best_normal;
+  hit.step_m = hit.p_world.z() - BaseHeight(hit.p_world.x(), hit.p_world.y());
+  hit.material = obstacles[best].material;
+  hit.object_id = best + 1;
+  return hit;
+}
+
+TravClass Scene::Classify(const SurfaceHit& hit, const VehicleOptions& vehicle) const {
+  const double slope_deg = std::acos(std::clamp(hit.normal_world.z(), -1.0, 1.0)) / kDeg;
+  return Worse(vehicle.ClassifySlope(slope_deg), vehicle.ClassifyStep(std::abs(hit.step_m)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Scene catalogue. The vehicle starts at the origin heading +x; a corridor |y| < 1 m stays free
+// for the first metres so the default runs never drive into an obstacle.
+
+std::vector<std::string> SceneNames() { return {"yard", "hills", "dropoff", "forest", "ramp"}; }
+
+namespace {
+
+Obstacle MakeBox(double x, double y, double yaw, double half_x, double half_y, double height,
+                 double ground_z, Material material) {
+  Obstacle b;
+  b.shape = Obstacle::Shape::kBox;
+  b.x = x;
+  b.y = y;
+  b.yaw_rad = yaw;
+  b.a = half_x;
+  b.b = half_y;
+  b.z_min = ground_z - 0.5;
+  b.z_max = ground_z + height;
+  b.material = material;
+  return b;
+}
+
+/// A rock: two or three overlapping ellipsoid lobes, partly buried, about `height` tall.
+void AddRock(Scene* s, Rng* rng, double x, double y, double height) {
+  // Rests on the visible ground (a pit floor too) but never straddles a pit's edge.
+  const double ground = s->GroundHeight(x, y);
+  const double sunk = s->BaseHeight(x, y) - ground;
+  const double reach = 2.5 * height + 0.3;
+  for (const auto& [dx, dy] : {std::pair{reach, 0.0}, {-reach, 0.0}, {0.0, reach}, {0.0, -reach}}) {
+    const double sunk_there = s->BaseHeight(x + dx, y + dy) - s->GroundHeight(x + dx, y + dy);
+    if (std::abs(sunk_there - sunk) > 1e-9) return;
+  }
+  const int lobes = 2 + static_cast<int>(rng->Uniform(0, 2));
+  for (int k = 0; k < lobes; ++k) {
+    Obstacle e;
+    e.shape = Obstacle::Shape::kEllipsoid;
+    const double scale = k == 0 ? 1.0 : rng->Uniform(0.5, 0.8);
+    e.x = x + (k == 0 ? 0 : rng->Uniform(-0.5, 0.5) * height * 1.5);
+    e.y = y + (k == 0 ? 0 : rng->Uniform(-0.5, 0.5) * height * 1.5);
+    e.yaw_rad = rng->Uniform(0, kPi);
+    const double h = height * scale;
+    e.c = h / 0.8;  // 80 % of the vertical radius sticks out of the ground
+    e.a = h * rng->Uniform(1.1, 1.8);
+    e.b = h * rng->Uniform(0.9, 1.4);
+    e.z_min = ground + h - 2 * e.c;
+    e.z_max = ground + h;
+    e.material = Material::kRock;
+    s->obstacles.push_back(e);
+  }
+}
+
+/// Uniform position in [x0, x1] x [-y_max, y_max] outside the corridor |y| < y_free.
+Eigen::Vector2d SidePosition(Rng* rng, double x0, double x1, double y_free, double y_max) {
+  const double y = rng->Uniform(y_free, y_max) * (rng->Uniform(0, 1) < 0.5 ? -1 : 1);
+  return {rng->Uniform(x0, x1), y};
+}
+
+Scene MakeYard(std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed * 7919 + 11);
+  s.ground_material = Material::kGravel;
+  // Ramps of graded slope (traversable / semi / non with the default vehicle).
+  s.ramps.push_back({8.0, 4.6, 0.0, 0.8, 0.6, 0.25, 8.0});
+  s.ramps.push_back({8.0, -4.2, 0.3, 0.7, 0.7, 0.45, 18.0});
+  s.ramps.push_back({14.0, -0.5, -0.2, 1.0, 1.2, 0.60, 30.0});
+  s.Finish();  // the base ground is complete: obstacles below are placed on it
+  // Curbs and a step platform of graded height.
+  s.obstacles.push_back(MakeBox(4.0, 2.0, 0.0, 0.15, 0.8, 0.05, 0, Material::kConcrete));
+  s.obstacles.push_back(MakeBox(4.5, -1.8, 0.1, 0.15, 0.7, 0.15, 0, Material::kConcrete));
+  s.obstacles.push_back(MakeBox(12.5, 4.2, 0.0, 1.2, 1.0, 0.30, 0, Material::kBrick));
+  // Crates.
+  s.obstacles.push_back(MakeBox(8.0, -0.6, 0.4, 0.3, 0.3, 0.5, 0, Material::kWood));
+  for (int i = 0; i < 2; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 9, 18, 2.0, 6.0);
+    s.obstacles.push_back(MakeBox(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.2, 0.5),
+                                  rng.Uniform(0.2, 0.5), rng.Uniform(0.3, 0.9), 0, Material::kWood));
+  }
+  // Rocks of several sizes.
+  const double heights[] = {0.06, 0.12, 0.18, 0.25, 0.4, 0.08, 0.3};
+  for (double h : heights) {
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 16.0, 1.1, 5.0);
+    AddRock(&s, &rng, p.x(), p.y(), h);
+  }
+  return s;
+}
+
+Scene MakeHills(std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed * 104729 + 3);
+  s.ground_material = Material::kGrass;
+  for (int i = 0; i < 12; ++i) {
+    GroundBump b;
+    b.x = rng.Uniform(4, 30);
+    b.y = rng.Uniform(-14, 14);
+    b.amplitude_m = rng.Uniform(0.3, 1.4) * (rng.Uniform(0, 1) < 0.3 ? -1 : 1);
+    // Keep each bump's steepest flank between about 5 and 30 degrees.
+    const double max_grad = rng.Uniform(0.1, 0.55);
+    b.sigma_m = std::max(1.5, std::abs(b.amplitude_m) * 0.6066 / max_grad);
+    s.bumps.push_back(b);
+  }
+  // A ditch with vertical walls across the way ahead.
+  s.pits.push_back({9.0, 0.5, 0.15, 0.45, 7.0, 0.45});
+  s.Finish();
+  for (int i = 0; i < 5; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 18.0, 1.2, 7.0);
+    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.4));
+  }
+  return s;
+}
+
+Scene MakeDropoff(std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed * 15485863 + 5);
+  s.ground_material = Material::kSoil;
+  s.bumps.push_back({3.0, 4.0, 0.15, 3.0});
+  // The ground ends 6 m ahead: 0.8 m down to a lower level that runs on (seen from ~12 m).
+  s.pits.push_back({6.0 + 30.0, 0.0, 0.0, 30.0, 40.0, 0.8});
+  // A small hole beside the way.
+  s.pits.push_back({4.5, 2.2, 0.3, 0.4, 0.5, 0.3});
+  s.Finish();
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 5.0, 1.3, 4.0);
+    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
+  }
+  for (int i = 0; i < 4; ++i) {  // rocks down below, on the lower level
+    const Eigen::Vector2d p = SidePosition(&rng, 12.0, 18.0, 0.0, 6.0);
+    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.2, 0.6));
+  }
+  return s;
+}
+
+Scene MakeForest(std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed * 32452843 + 7);
+  s.ground_material = Material::kSoil;
+  for (int i = 0; i < 6; ++i) {
+    s.bumps.push_back({rng.Uniform(0, 25), rng.Uniform(-10, 10), rng.Uniform(-0.2, 0.25),
+                       rng.Uniform(2.0, 4.0)});
+  }
+  s.Finish();
+  for (int i = 0; i < 18; ++i) {  // trunks
+    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 28.0, 1.3, 11.0);
+    Obstacle c;
+    c.shape = Obstacle::Shape::kCylinder;
+    c.x = p.x();
+    c.y = p.y();
+    c.a = rng.Uniform(0.1, 0.35);
+    c.z_min = s.BaseHeight(c.x, c.y) - 0.5;
+    c.z_max = c.z_min + 0.5 + rng.Uniform(6, 12);
+    c.material = Material::kBark;
+    s.obstacles.push_back(c);
+  }
+  auto add_log = [&](double x, double y, double yaw, double radius, double half_length) {
+    Obstacle g;
+    g.shape = Obstacle::Shape::kLog;
+    g.x = x;
+    g.y = y;
+    g.yaw_rad = yaw;
+    g.a = radius;
+    g.b = half_length;
+    // Rest on the higher end of the ground under the log.
+    const Eigen::Vector2d axis(std::cos(yaw), std::sin(yaw));
+    double ground = -kInf;
+    for (double u = -1; u <= 1; u += 0.25) {
+      ground = std::max(ground, s.BaseHeight(x + u * half_length * axis.x(),
+                                             y + u * half_length * axis.y()));
+    }
+    g.z_max = ground + 2 * radius - 0.02;
+    g.z_min = g.z_max - 2 * radius;
+    g.material = Material::kWood;
+    s.obstacles.push_back(g);
+  };
+  add_log(6.5, 0.3, kPi / 2 + 0.15, 0.07, 1.6);  // a thin log across the way (about 0.12 m)
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 4.0, 16.0, 2.0, 7.0);
+    add_log(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.1, 0.25), rng.Uniform(1.0, 2.2));
+  }
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 14.0, 1.2, 6.0);
+    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
+  }
+  return s;
+}
+
+Scene MakeRamp(double slope_deg) {
+  Scene s;
+  s.ground_material = Material::kConcrete;
+  s.plane_gradient = {std::tan(slope_deg * kDeg), 0.0};
+  return s;
+}
+
+}  // namespace
+
+Scene MakeScene(const std::string& name, std::uint64_t seed, double ramp_slope_deg) {
+  Scene s;
+  if (name == "yard") {
+    s = MakeYard(seed);
+  } else if (name == "hills") {
+    s = MakeHills(seed);
+  } else if (name == "dropoff") {
+    s = MakeDropoff(seed);
+  } else if (name == "forest") {
+    s = MakeForest(seed);
+  } else if (name == "ramp") {
+    if (!(ramp_slope_deg >= 0 && ramp_slope_deg < 60)) {
+      throw Error("ramp_slope_deg: must be in [0, 60) degrees");
+    }
+    s = MakeRamp(ramp_slope_deg);
+  } else {
+    throw Error("scene: unknown scene '" + name +
+                "' (expected one of yard, hills, dropoff, forest, ramp)");
+  }
+  s.name = name;
+  s.texture_seed = seed;
+  s.Finish();
+  return s;
+}
+
+void AddTexturelessPatches(Scene* scene, int count, std::uint64_t seed) {
+  Rng rng(seed * 49979687 + 13);
+  for (int i = 0; i < count; ++i) {
+    const double along = rng.Uniform(2.0, 9.0);
+    const double across = rng.Uniform(-3.0, 3.0) * along / 6.0;
+    const Eigen::Vector2d dir(std::cos(scene->start_yaw_rad), std::sin(scene->start_yaw_rad));
+    const Eigen::Vector2d left(-dir.y(), dir.x());
+    const Eigen::Vector2d p = scene->start_xy + along * dir + across * left;
+    scene->textureless.push_back({p.x(), p.y(), rng.Uniform(0.3, 0.8)});
+  }
+  scene->Finish();
+}
+
+}  // namespace ssta::synth
