@@ -189,9 +189,8 @@ bool RayNearSphere(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eig
 double Scene::BaseHeight(double x, double y) const {
   double z = plane_gradient.x() * x + plane_gradient.y() * y;
   for (const GroundBump& b : bumps) {
-    const double r2 = (x - b.x) * (x - b.x) + (y - b.y) * (y - b.y);
-    const double s2 = b.sigma_m * b.sigma_m;
-    if (r2 < 25 * s2) z += b.amplitude_m * std::exp(-0.5 * r2 / s2);
+    const double q = 1 - ((x - b.x) * (x - b.x) + (y - b.y) * (y - b.y)) / (b.radius_m * b.radius_m);
+    if (q > 0) z += b.amplitude_m * q * q * q;
   }
   for (const GroundRamp& r : ramps) z += RampHeight(r, x, y, nullptr);
   return z;
@@ -200,12 +199,11 @@ double Scene::BaseHeight(double x, double y) const {
 Eigen::Vector2d Scene::BaseGradient(double x, double y) const {
   Eigen::Vector2d g = plane_gradient;
   for (const GroundBump& b : bumps) {
-    const double dx = x - b.x, dy = y - b.y;
-    const double s2 = b.sigma_m * b.sigma_m;
-    const double r2 = dx * dx + dy * dy;
-    if (r2 >= 25 * s2) continue;
-    const double e = b.amplitude_m * std::exp(-0.5 * r2 / s2);
-    g += Eigen::Vector2d(-e * dx / s2, -e * dy / s2);
+    const double dx = x - b.x, dy = y - b.y, r2 = b.radius_m * b.radius_m;
+    const double q = 1 - (dx * dx + dy * dy) / r2;
+    if (q <= 0) continue;
+    const double k = -6 * b.amplitude_m * q * q / r2;  // d/dx of A q^3 = 3 A q^2 (-2 dx / R^2)
+    g += Eigen::Vector2d(k * dx, k * dy);
   }
   for (const GroundRamp& r : ramps) RampHeight(r, x, y, &g);
   return g;
@@ -252,7 +250,6 @@ void Scene::Finish() {
     ob.cos_yaw = std::cos(ob.yaw_rad);
     ob.sin_yaw = std::sin(ob.yaw_rad);
   }
-  double slope = std::hypot(plane_gradient.x(), plane_gradient.y());
   double x0 = start_xy.x() - 30, x1 = start_xy.x() + 30;
   double y0 = start_xy.y() - 30, y1 = start_xy.y() + 30;
   auto cover = [&](double x, double y, double r) {
@@ -261,36 +258,80 @@ void Scene::Finish() {
     y0 = std::min(y0, y - r);
     y1 = std::max(y1, y + r);
   };
-  double bump_slope = 0, ramp_slope = 0;
-  for (const GroundBump& b : bumps) {
-    bump_slope += std::abs(b.amplitude_m) / b.sigma_m * 0.6066;  // max |grad| of a Gaussian bump
-    cover(b.x, b.y, 5 * b.sigma_m);
-  }
+  for (const GroundBump& b : bumps) cover(b.x, b.y, b.radius_m);
   for (const GroundRamp& r : ramps) {
-    ramp_slope = std::max(ramp_slope, std::tan(r.slope_deg * kDeg));
-    cover(r.x, r.y, std::hypot(r.half_x_m, r.half_y_m) + r.height_m / std::tan(r.slope_deg * kDeg));
+    cover(r.x, r.y, std::hypot(r.half_x_m, r.half_y_m) + r.height_m / r.tan_slope);
   }
   for (const Pit& p : pits) cover(p.x, p.y, std::hypot(p.half_x_m, p.half_y_m));
-  slope_bound_ = 1.05 * (slope + bump_slope + ramp_slope) + 0.02;
 
+  // Bound grid: sampled maxima of height and slope per cell, made conservative by a margin
+  // and (for the slope) by taking the neighbours' maxima too.
   bound_x0_ = x0 - bound_cell_;
   bound_y0_ = y0 - bound_cell_;
   bound_nx_ = static_cast<int>(std::ceil((x1 - x0) / bound_cell_)) + 2;
   bound_ny_ = static_cast<int>(std::ceil((y1 - y0) / bound_cell_)) + 2;
-  bound_zmax_.assign(static_cast<std::size_t>(bound_nx_) * bound_ny_, 0.f);
+  const std::size_t cells = static_cast<std::size_t>(bound_nx_) * bound_ny_;
+  // Per cell: sampled maxima of the visible ground, the base ground and the slope, and
+  // whether a pit shows in it.
+  std::vector<float> z_sampled(cells), base_sampled(cells), slope_sampled(cells);
+  std::vector<std::uint8_t> pit_sampled(cells, 0);
   constexpr int kSamples = 5;  // per side, edges included
   const double spacing = bound_cell_ / (kSamples - 1);
-  const double margin = slope_bound_ * spacing * 0.7072 + 1e-4;
   for (int iy = 0; iy < bound_ny_; ++iy) {
     for (int ix = 0; ix < bound_nx_; ++ix) {
-      double z = -kInf;
+      double z = -kInf, zb = -kInf, g = 0;
+      bool pit = false;
       for (int j = 0; j < kSamples; ++j) {
         for (int i = 0; i < kSamples; ++i) {
-          z = std::max(z, BaseHeight(bound_x0_ + ix * bound_cell_ + i * spacing,
-                                     bound_y0_ + iy * bound_cell_ + j * spacing));
+          const double x = bound_x0_ + ix * bound_cell_ + i * spacing;
+          const double y = bound_y0_ + iy * bound_cell_ + j * spacing;
+          const double base = BaseHeight(x, y);
+          const double ground = GroundHeight(x, y);
+          z = std::max(z, ground);
+          zb = std::max(zb, base);
+          pit = pit || ground < base;
+          g = std::max(g, BaseGradient(x, y).norm());
         }
       }
-      bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix] = static_cast<float>(z + margin);
+      const std::size_t k = static_cast<std::size_t>(iy) * bound_nx_ + ix;
+      z_sampled[k] = static_cast<float>(z);
+      base_sampled[k] = static_cast<float>(zb);
+      slope_sampled[k] = static_cast<float>(g);
+      pit_sampled[k] = pit ? 1 : 0;
+    }
+  }
+  bound_zmax_.assign(cells, 0.f);
+  bound_slope_.assign(cells, 0.f);
+  for (int iy = 0; iy < bound_ny_; ++iy) {
+    for (int ix = 0; ix < bound_nx_; ++ix) {
+      double g = 0, base_near = -kInf;
+      bool pit_near = false;
+      for (int j = std::max(0, iy - 1); j <= std::min(bound_ny_ - 1, iy + 1); ++j) {
+        for (int i = std::max(0, ix - 1); i <= std::min(bound_nx_ - 1, ix + 1); ++i) {
+          const std::size_t n = static_cast<std::size_t>(j) * bound_nx_ + i;
+          g = std::max(g, static_cast<double>(slope_sampled[n]));
+          base_near = std::max(base_near, static_cast<double>(base_sampled[n]));
+          pit_near = pit_near || pit_sampled[n];
+        }
+      }
+      const std::size_t k = static_cast<std::size_t>(iy) * bound_nx_ + ix;
+      bound_slope_[k] = static_cast<float>(1.25 * g + 0.05);
+      double z = z_sampled[k] + bound_slope_[k] * spacing * 0.7072 + 1e-4;
+      // Near a pit's edge the samples may miss a sliver of higher ground: bound by the base.
+      if (pit_near) z = std::max(z, base_near + bound_slope_[k] * bound_cell_ * 1.5 + 1e-4);
+      bound_zmax_[k] = static_cast<float>(z);
+    }
+  }
+  block_nx_ = (bound_nx_ + kBlockCells - 1) / kBlockCells;
+  block_ny_ = (bound_ny_ + kBlockCells - 1) / kBlockCells;
+  block_zmax_.assign(static_cast<std::size_t>(block_nx_) * block_ny_, -std::numeric_limits<float>::infinity());
+  bound_zmax_all_ = -kInf;
+  for (int iy = 0; iy < bound_ny_; ++iy) {
+    for (int ix = 0; ix < bound_nx_; ++ix) {
+      const float z = bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix];
+      float& b = block_zmax_[static_cast<std::size_t>(iy / kBlockCells) * block_nx_ + ix / kBlockCells];
+      b = std::max(b, z);
+      bound_zmax_all_ = std::max(bound_zmax_all_, static_cast<double>(z));
     }
   }
 
@@ -359,7 +400,6 @@ SurfaceHit Scene::CastGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   }
 
   const double horiz = std::hypot(d.x(), d.y());
-  const double close_rate = slope_bound_ * horiz - d.z();  // fastest the gap can shrink per t
   auto gap = [&](double tt) {
     const Eigen::Vector3d p = o + tt * d;
     return p.z() - GroundHeight(p.x(), p.y());
@@ -368,21 +408,37 @@ SurfaceHit Scene::CastGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
   if (gap(t) <= 0) return {};  // starts under the ground
   double t_prev = t;
   bool crossed = false;
+  // Exit parameter of the square [x0 + ix * size, ...) x [y0 + iy * size, ...) the ray is in.
+  auto exit_of = [&](int ix, int iy, double size) {
+    double te = t_out;
+    if (d.x() > 0) te = std::min(te, (bound_x0_ + (ix + 1) * size - o.x()) / d.x());
+    if (d.x() < 0) te = std::min(te, (bound_x0_ + ix * size - o.x()) / d.x());
+    if (d.y() > 0) te = std::min(te, (bound_y0_ + (iy + 1) * size - o.y()) / d.y());
+    if (d.y() < 0) te = std::min(te, (bound_y0_ + iy * size - o.y()) / d.y());
+    return te;
+  };
+  const double block_size = bound_cell_ * kBlockCells;
   while (t <= t_out) {
     const Eigen::Vector3d p = o + t * d;
-    const int ix = std::clamp(static_cast<int>((p.x() - bound_x0_) / bound_cell_), 0, bound_nx_ - 1);
-    const int iy = std::clamp(static_cast<int>((p.y() - bound_y0_) / bound_cell_), 0, bound_ny_ - 1);
-    double t_cell = t_out;
-    if (d.x() > 0) t_cell = std::min(t_cell, (bound_x0_ + (ix + 1) * bound_cell_ - o.x()) / d.x());
-    if (d.x() < 0) t_cell = std::min(t_cell, (bound_x0_ + ix * bound_cell_ - o.x()) / d.x());
-    if (d.y() > 0) t_cell = std::min(t_cell, (bound_y0_ + (iy + 1) * bound_cell_ - o.y()) / d.y());
-    if (d.y() < 0) t_cell = std::min(t_cell, (bound_y0_ + iy * bound_cell_ - o.y()) / d.y());
-    const double z_low = std::min(p.z(), o.z() + t_cell * d.z());
-    if (z_low > bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix]) {
-      t = std::max(t_cell, t) + 1e-7 / len;  // the ray passes above this whole cell
+    if (p.z() > bound_zmax_all_ && d.z() >= 0) break;  // above everything and rising
+    const int bx = std::clamp(static_cast<int>((p.x() - bound_x0_) / block_size), 0, block_nx_ - 1);
+    const int by = std::clamp(static_cast<int>((p.y() - bound_y0_) / block_size), 0, block_ny_ - 1);
+    const double t_block = exit_of(bx, by, block_size);
+    if (std::min(p.z(), o.z() + t_block * d.z()) > block_zmax_[static_cast<std::size_t>(by) * block_nx_ + bx]) {
+      t = std::max(t_block, t) + 1e-7 / len;  // the ray passes above this whole block
       continue;
     }
-    if (close_rate <= 0) return {};  // the ray climbs faster than any slope: never meets it
+    const int ix = std::clamp(static_cast<int>((p.x() - bound_x0_) / bound_cell_), 0, bound_nx_ - 1);
+    const int iy = std::clamp(static_cast<int>((p.y() - bound_y0_) / bound_cell_), 0, bound_ny_ - 1);
+    const double t_cell = exit_of(ix, iy, bound_cell_);
+    const std::size_t cell = static_cast<std::size_t>(iy) * bound_nx_ + ix;
+    const double z_low = std::min(p.z(), o.z() + t_cell * d.z());
+    // Fastest the gap to the ground can shrink per unit t inside this cell.
+    const double close_rate = bound_slope_[cell] * horiz - d.z();
+    if (z_low > bound_zmax_[cell] || close_rate <= 0) {
+      t = std::max(t_cell, t) + 1e-7 / len;  // the ray cannot meet the ground in this cell
+      continue;
+    }
     const double h = p.z() - GroundHeight(p.x(), p.y());
     if (h <= 0) {
       crossed = true;
@@ -390,7 +446,7 @@ SurfaceHit Scene::CastGround(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
     }
     t_prev = t;
     const double min_step = (0.003 + 0.0015 * t * len) / len;
-    t += std::max(0.9 * h / close_rate, min_step);
+    t = std::min(t + std::max(0.9 * h / close_rate, min_step), std::max(t_cell, t) + 1e-7 / len);
   }
   if (!crossed) {
     if (t_out >= t_max) return {};
@@ -592,7 +648,7 @@ Scene MakeHills(std::uint64_t seed) {
     b.amplitude_m = rng.Uniform(0.3, 1.4) * (rng.Uniform(0, 1) < 0.3 ? -1 : 1);
     // Keep each bump's steepest flank between about 5 and 30 degrees.
     const double max_grad = rng.Uniform(0.1, 0.55);
-    b.sigma_m = std::max(1.5, std::abs(b.amplitude_m) * 0.6066 / max_grad);
+    b.radius_m = std::max(4.0, std::abs(b.amplitude_m) * 1.717 / max_grad);
     s.bumps.push_back(b);
   }
   // A ditch with vertical walls across the way ahead.
@@ -609,7 +665,7 @@ Scene MakeDropoff(std::uint64_t seed) {
   Scene s;
   Rng rng(seed * 15485863 + 5);
   s.ground_material = Material::kSoil;
-  s.bumps.push_back({3.0, 4.0, 0.15, 3.0});
+  s.bumps.push_back({3.0, 4.0, 0.15, 7.0});
   // The ground ends 6 m ahead: 0.8 m down to a lower level that runs on (seen from ~12 m).
   s.pits.push_back({6.0 + 30.0, 0.0, 0.0, 30.0, 40.0, 0.8});
   // A small hole beside the way.
@@ -632,7 +688,7 @@ Scene MakeForest(std::uint64_t seed) {
   s.ground_material = Material::kSoil;
   for (int i = 0; i < 6; ++i) {
     s.bumps.push_back({rng.Uniform(0, 25), rng.Uniform(-10, 10), rng.Uniform(-0.2, 0.25),
-                       rng.Uniform(2.0, 4.0)});
+                       rng.Uniform(5.0, 10.0)});
   }
   s.Finish();
   for (int i = 0; i < 18; ++i) {  // trunks

@@ -16,11 +16,13 @@ enum class Material : std::uint8_t {
   kGrass, kGravel, kConcrete, kSoil, kRock, kBark, kWood, kBrick, kTextureless
 };
 
-/// A smooth bump of the base ground: `amplitude_m * exp(-r^2 / (2 sigma^2))` (negative = dip).
+/// A smooth bump of the base ground: `amplitude_m * (1 - r^2 / radius_m^2)^3` for r < radius_m,
+/// zero beyond (twice continuously differentiable; negative amplitude = dip). Its steepest
+/// slope is 1.717 * |amplitude_m| / radius_m, reached at r = radius_m / sqrt(5).
 struct GroundBump {
   double x = 0, y = 0;         ///< centre in world [m]
   double amplitude_m = 0;      ///< height at the centre [m]
-  double sigma_m = 1;          ///< width [m]
+  double radius_m = 1;         ///< support radius [m]
 };
 
 /// A ramp in the base ground: a truncated pyramid whose flat top (half sizes `half_x_m`,
@@ -127,12 +129,16 @@ class Scene {
   SurfaceHit PlaneHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,
                       double t1) const;
 
-  double slope_bound_ = 1;    ///< upper bound of |grad BaseHeight|
   /// Coarse grid over every ground feature holding an upper bound of the ground height per
   /// cell; rays skip cells they pass above. Outside it the ground is the bare base plane.
   double bound_x0_ = 0, bound_y0_ = 0, bound_cell_ = 0.5;
   int bound_nx_ = 0, bound_ny_ = 0;
   std::vector<float> bound_zmax_;
+  std::vector<float> bound_slope_;  ///< upper bound of |grad BaseHeight| per cell
+  static constexpr int kBlockCells = 8;  ///< bound cells per side of a coarse block
+  int block_nx_ = 0, block_ny_ = 0;
+  std::vector<float> block_zmax_;   ///< max of bound_zmax_ per block
+  double bound_zmax_all_ = 0;       ///< max of bound_zmax_
 };
 
 /// The scene names MakeScene knows: yard, hills, dropoff, forest, ramp.
