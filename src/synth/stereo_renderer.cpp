@@ -47,7 +47,7 @@ MaterialLook LookOf(Material m) {
   switch (m) {
     case Material::kGrass: return {100, 60, 3.0};
     case Material::kGravel: return {128, 65, 4.0};
-    case Material::kConcrete: return {160, 45, 2.5};
+    case Material::kConcrete: return {150, 60, 2.5};
     case Material::kSoil: return {110, 60, 3.0};
     case Material::kRock: return {125, 70, 3.5};
     case Material::kBark: return {80, 55, 5.0};
@@ -76,7 +76,7 @@ double Albedo(Material material, const Eigen::Vector3d& p_world, double footprin
     norm += amplitude;
     if (weight <= 0) break;
     sum += weight * amplitude * ValueNoise(p_world * frequency, mseed + static_cast<std::uint64_t>(k));
-    amplitude *= 0.8;
+    amplitude *= 0.85;
     frequency *= 2.03;
   }
   return look.mean + look.contrast * 2.2 * sum / norm;
