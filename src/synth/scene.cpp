@@ -641,9 +641,9 @@ Scene MakeHills(std::uint64_t seed) {
   Scene s;
   Rng rng(seed * 104729 + 3);
   s.ground_material = Material::kGrass;
-  for (int i = 0; i < 12; ++i) {
+  for (int i = 0; i < 14; ++i) {
     GroundBump b;
-    b.x = rng.Uniform(4, 30);
+    b.x = rng.Uniform(-4, 28);
     b.y = rng.Uniform(-14, 14);
     b.amplitude_m = rng.Uniform(0.3, 1.4) * (rng.Uniform(0, 1) < 0.3 ? -1 : 1);
     // Keep each bump's steepest flank between about 5 and 30 degrees.
@@ -652,7 +652,7 @@ Scene MakeHills(std::uint64_t seed) {
     s.bumps.push_back(b);
   }
   // A ditch with vertical walls across the way ahead.
-  s.pits.push_back({9.0, 0.5, 0.15, 0.45, 7.0, 0.45});
+  s.pits.push_back({6.5, 0.5, 0.15, 0.5, 7.0, 0.5});
   s.Finish();
   for (int i = 0; i < 5; ++i) {
     const Eigen::Vector2d p = SidePosition(&rng, 3.0, 18.0, 1.2, 7.0);
