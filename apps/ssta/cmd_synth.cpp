@@ -48,11 +48,22 @@ void RegisterSynth(CLI::App& app) {
   auto drop_frames = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
       "synth",
-      "Render a synthetic stereo sequence (ASL layout) with exact ground truth in SEQ/gt/.\n"
+      "Render a synthetic stereo sequence (ASL layout) with exact ground truth in SEQ/gt/\n"
+      "(labels, disparity*256, world grid of classes, true extrinsics, faults.yaml).\n"
       "Rig: rectified pinhole pair, 640x480, f = 420 px, principal point at the image centre,\n"
       "baseline 0.12 m, cam0 0.80 m above the ground pitched down 15 deg (horizon near row 127,\n"
-      "largest ground disparity about 51 px), 15 Hz; IMU and pose0 at 200 Hz; vehicle 1 m/s.\n"
-      "Dropped frames (--drop-frames) are missing from cam1 only.");
+      "largest ground disparity about 51 px), 15 Hz; IMU and pose0 at 200 Hz; vehicle 1 m/s\n"
+      "heading +x from the origin with a gentle weave. Default vehicle thresholds: slope\n"
+      "15/25 deg, step 0.10/0.20 m (written to SEQ/vehicle.yaml).\n"
+      "Scenes:\n"
+      "  yard     flat gravel; ramps of 8/18/30 deg; curbs 0.05/0.15 m; a 0.30 m step;\n"
+      "           crates; rocks 0.06-0.4 m\n"
+      "  hills    rolling hills (flanks up to ~30 deg), a 0.5 m deep ditch 6.5 m ahead, rocks\n"
+      "  dropoff  flat ground ending 6 m ahead in a 0.8 m drop; a 0.3 m hole; rocks\n"
+      "  forest   trunks, logs (a 0.12 m log across the way 6.5 m ahead), rocks\n"
+      "  ramp     one plane of --ramp-slope-deg everywhere; the vehicle drives up it\n"
+      "Labels are 255 (don't care) for sky, beyond 20 m, pixels hidden from cam1 and a 1 px\n"
+      "band on class boundaries; vertical faces are non-traversable.");
   cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp")
       ->capture_default_str();
   cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required();
@@ -93,7 +104,8 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option("--imu-gyro-bias", f.imu_gyro_bias, "gyro bias on every axis [rad/s]");
   cmd->add_option("--imu-accel-bias", f.imu_accel_bias, "accel bias on every axis [m/s^2]");
   cmd->add_option("--drop-frames", *drop_frames,
-                  "fraction of frames (0.1) or frame indices (3,7,12) missing from cam1");
+                  "frames missing from cam1 (cam0 and gt keep them): a fraction with a decimal\n"
+                  "point (0.1), or 0-based frame indices (3,7,12)");
   cmd->add_option("--textureless-patches", f.textureless_patches,
                   "number of flat untextured discs on the ground ahead");
   cmd->callback([options, out_dir, drop_frames] {

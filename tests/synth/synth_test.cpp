@@ -451,3 +451,30 @@ TEST(SynthOptions, IsValidNamesTheOffendingOption) {
 
 }  // namespace
 }  // namespace ssta::synth
+
+namespace ssta::synth {
+namespace {
+
+TEST(SynthCli, WritesASequenceAndRejectsBadOptions) {
+  const std::string binary = SSTA_BINARY;
+  if (binary.empty()) GTEST_SKIP() << "the ssta command line is not built";
+  TempDir tmp;
+  const std::string out = tmp.Sub("seq");
+  const std::string common = " synth --width 64 --height 48 --focal 42 --grid-resolution 1";
+  const std::string log = " > " + tmp.Sub("log.txt") + " 2>&1";
+  EXPECT_EQ(std::system((binary + common + " --scene forest --frames 4 --drop-frames 1,2 --out " + out + log).c_str()), 0)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  EXPECT_EQ(FrameNames(out + "/cam0/data.csv").size(), 4u);
+  EXPECT_EQ(FrameNames(out + "/cam1/data.csv").size(), 2u);
+  for (const char* file : {"/vehicle.yaml", "/imu0/sensor.yaml", "/gt/grid.yaml", "/gt/grid_classes.png",
+                           "/gt/extrinsics.yaml", "/gt/faults.yaml", "/pose0/data.csv"}) {
+    EXPECT_TRUE(fs::exists(out + file)) << file;
+  }
+  EXPECT_NE(std::system((binary + common + " --scene moon --out " + tmp.Sub("bad") + log).c_str()), 0);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("scene: unknown scene 'moon'"), std::string::npos);
+  EXPECT_NE(std::system((binary + common + " --drop-frames 0.x --out " + tmp.Sub("bad") + log).c_str()), 0);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("--drop-frames"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ssta::synth
