@@ -62,6 +62,8 @@ void RegisterSynth(CLI::App& app) {
       "  dropoff  flat ground ending 6 m ahead in a 0.8 m drop; a 0.3 m hole; rocks\n"
       "  forest   trunks, logs (a 0.12 m log across the way 6.5 m ahead), rocks\n"
       "  ramp     one plane of --ramp-slope-deg everywhere; the vehicle drives up it\n"
+      "The way ahead is clear for 5.5 m (yard 6.5 m; ramp unlimited): about 80 frames at the\n"
+      "default speed and rate. Longer runs are written with a warning.\n"
       "Labels are 255 (don't care) for sky, beyond 20 m, pixels hidden from cam1 and a 1 px\n"
       "band on class boundaries; vertical faces are non-traversable.");
   cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp")
@@ -120,6 +122,7 @@ void RegisterSynth(CLI::App& app) {
     }
     const synth::SynthSummary summary = synth::WriteSyntheticSequence(*options, *out_dir, progress);
     std::cout << summary.BriefReport() << "\n";
+    if (!summary.warning.empty()) std::cerr << "ssta synth: warning: " << summary.warning << "\n";
   });
 }
 

@@ -631,9 +631,10 @@ Scene MakeYard(std::uint64_t seed) {
   // Rocks of several sizes.
   const double heights[] = {0.06, 0.12, 0.18, 0.25, 0.4, 0.08, 0.3};
   for (double h : heights) {
-    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 16.0, 1.1, 5.0);
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 16.0, 1.6, 5.0);
     AddRock(&s, &rng, p.x(), p.y(), h);
   }
+  s.clear_run_m = 6.5;  // the crate at x = 8
   return s;
 }
 
@@ -655,9 +656,10 @@ Scene MakeHills(std::uint64_t seed) {
   s.pits.push_back({6.5, 0.5, 0.15, 0.5, 7.0, 0.5});
   s.Finish();
   for (int i = 0; i < 5; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 18.0, 1.2, 7.0);
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 18.0, 1.6, 7.0);
     AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.4));
   }
+  s.clear_run_m = 5.5;  // the ditch at x = 6.5
   return s;
 }
 
@@ -672,13 +674,14 @@ Scene MakeDropoff(std::uint64_t seed) {
   s.pits.push_back({4.5, 2.2, 0.3, 0.4, 0.5, 0.3});
   s.Finish();
   for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 5.0, 1.3, 4.0);
+    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 5.0, 1.5, 4.0);
     AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
   }
   for (int i = 0; i < 4; ++i) {  // rocks down below, on the lower level
     const Eigen::Vector2d p = SidePosition(&rng, 12.0, 18.0, 0.0, 6.0);
     AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.2, 0.6));
   }
+  s.clear_run_m = 5.5;  // the drop at x = 6
   return s;
 }
 
@@ -725,13 +728,14 @@ Scene MakeForest(std::uint64_t seed) {
   };
   add_log(6.5, 0.3, kPi / 2 + 0.15, 0.07, 1.6);  // a thin log across the way (about 0.12 m)
   for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 4.0, 16.0, 2.0, 7.0);
+    const Eigen::Vector2d p = SidePosition(&rng, 4.0, 16.0, 2.7, 7.0);
     add_log(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.1, 0.25), rng.Uniform(1.0, 2.2));
   }
   for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 14.0, 1.2, 6.0);
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 14.0, 1.5, 6.0);
     AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
   }
+  s.clear_run_m = 5.5;  // the log across the way at x = 6.5
   return s;
 }
 

@@ -324,6 +324,14 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   WriteTextAtomically(Join(out_dir, "imu0/data.csv"), imu_csv.str());
   WriteTextAtomically(Join(out_dir, "pose0/data.csv"), pose_csv.str());
 
+  const double run_m = o.motion.speed_mps * (o.frames - 1) / o.rig.rate_hz + kLeadIn_s * o.motion.speed_mps;
+  if (run_m > scene.clear_run_m) {
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(1) << "the path runs " << run_m << " m, past the "
+      << scene.clear_run_m << " m the " << o.scene
+      << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
+    summary.warning = w.str();
+  }
   WriteGrid(scene, o, cam_positions, Join(out_dir, "gt"));
   WriteFaultsYaml(o, body_T_cam0, written_cam0, summary, Join(out_dir, "gt/faults.yaml"));
   return summary;

@@ -95,6 +95,10 @@ class Scene {
   Material ground_material = Material::kGrass;
   Eigen::Vector2d start_xy = Eigen::Vector2d::Zero();  ///< where the vehicle starts [m]
   double start_yaw_rad = 0;                            ///< its heading [rad]
+  /// How far the vehicle can drive from the start before its path meets an obstacle, pit or
+  /// steep ramp [m]. The pose follows the base ground only, so beyond this it would drive
+  /// through obstacles or float over pits.
+  double clear_run_m = 1e9;
   std::uint64_t texture_seed = 1;
 
   /// Height of the smooth base ground (no pits, no obstacles) at (x, y) [m].
