@@ -90,6 +90,9 @@ void RegisterSynth(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--noise", options->render.sensor_noise_grey, "pixel noise std dev [grey levels]")
       ->capture_default_str();
+  cmd->add_option("--threads", options->render.threads,
+                  "render threads (0 = all cores); the output is the same for any count")
+      ->capture_default_str();
   cmd->add_option("--grid-resolution", options->grid_resolution_m, "gt grid cell size [m]")
       ->capture_default_str();
   auto& f = options->faults;

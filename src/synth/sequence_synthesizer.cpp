@@ -14,6 +14,7 @@
 #include "ssta/synth/scene.h"
 #include "ssta/synth/stereo_renderer.h"
 #include "ssta/synth/vehicle_trajectory.h"
+#include "synth/parallel.h"
 #include "synth/random.h"
 
 namespace ssta::synth {
@@ -94,7 +95,7 @@ void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eige
   const int h = static_cast<int>(std::ceil((y1 + reach - y0) / r));
   ImageU8 grid(w, h, 0);
   constexpr int kSub = 3;
-  for (int row = 0; row < h; ++row) {
+  ParallelFor(h, o.render.threads, [&](int row) {
     for (int col = 0; col < w; ++col) {
       const double cx = x0 + col * r, cy = y0 + (h - 1 - row) * r;  // lower-left corner
       TravClass worst = TravClass::kTraversable;
@@ -113,7 +114,7 @@ void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eige
       if (z_hi >= z_lo) worst = Worse(worst, o.vehicle.ClassifyStep(z_hi - z_lo));
       grid(row, col) = static_cast<std::uint8_t>(worst);
     }
-  }
+  });
   WriteImage(grid, Join(gt_dir, "grid_classes.png"));
   std::ostringstream yaml;
   yaml << std::setprecision(10);

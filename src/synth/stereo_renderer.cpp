@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "synth/parallel.h"
 #include "synth/random.h"
 
 namespace ssta::synth {
@@ -149,8 +150,9 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
     const Eigen::Vector3d origin = world_T_cam.translation();
     const Eigen::Matrix3d r = world_T_cam.linear();
     ImageU8& image = cam == 0 ? out.left : out.right;
-    Rng noise(Mix64(seed_ * 1000003 + static_cast<std::uint64_t>(frame_index) * 2 + cam));
-    for (int v = 0; v < h; ++v) {
+    ParallelFor(h, render_.threads, [&](int v) {
+      // One noise stream per row keeps the bytes independent of the thread count.
+      Rng noise(Mix64(Mix64(seed_ * 1000003 + static_cast<std::uint64_t>(frame_index) * 2 + cam) + v));
       for (int u = 0; u < w; ++u) {
         const Eigen::Vector3d d = r * Eigen::Vector3d((u - cu) / f, (v - cv) / f, 1);
         const double t_max = render_.max_ray_m / d.norm();
@@ -180,7 +182,7 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
           raw_class(v, u) = static_cast<std::uint8_t>(scene_.Classify(hit, vehicle_));
         }
       }
-    }
+    });
   }
 
   // Occlusion: the left point must be what cam1 sees at u - d (rectified, same row and depth).

@@ -45,6 +45,7 @@ bool RenderOptions::IsValid(std::string* error) const {
   if (boundary_band_px < 0 || boundary_band_px > 10) {
     return Fail(error, "boundary_band_px: must be in [0, 10] px");
   }
+  if (threads < 0 || threads > 256) return Fail(error, "threads: must be in [0, 256] (0 = all)");
   return true;
 }
 

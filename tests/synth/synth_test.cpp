@@ -335,7 +335,9 @@ TEST(SynthDeterminism, SameSeedSameBytesOtherSeedOtherScene) {
   o.rig.height = 120;
   o.rig.focal_px = 105;
   o.faults.imu_gyro_noise = 0.01;
+  o.render.threads = 1;
   WriteSyntheticSequence(o, tmp.Sub("a"));
+  o.render.threads = 3;  // the thread count must not change a byte
   WriteSyntheticSequence(o, tmp.Sub("b"));
   o.seed = 2;
   WriteSyntheticSequence(o, tmp.Sub("c"));
