@@ -111,8 +111,11 @@ double SkyGrey(const Eigen::Vector3d& d) {
 
 double ShadeHit(const SurfaceHit& hit, const Eigen::Vector3d& d, double footprint_m,
                 std::uint64_t seed) {
-  const double incidence = std::max(0.15, std::abs(hit.normal_world.dot(d)) / d.norm());
-  const double albedo = Albedo(hit.material, hit.p_world, footprint_m / incidence, seed);
+  // A pixel's footprint stretches by 1 / incidence along the view direction but not across
+  // it; the geometric mean keeps detail along image rows (what stereo matches) at grazing
+  // angles while still limiting aliasing down the columns.
+  const double incidence = std::max(0.05, std::abs(hit.normal_world.dot(d)) / d.norm());
+  const double albedo = Albedo(hit.material, hit.p_world, footprint_m / std::sqrt(incidence), seed);
   const double light = kAmbient + kSunGain * std::max(0.0, hit.normal_world.dot(kSun));
   return albedo * light;
 }
