@@ -206,6 +206,21 @@ TEST(SynthGroundTruth, PlaneDisparityMatchesClosedForm) {
   }
 }
 
+TEST(SynthOptions, DefaultRigSuitsTheDefaultStereoRange) {
+  // Flat ground seen by the default rig: the bottom row has the largest ground disparity,
+  // which must stay below the default 64-disparity search range; the horizon must be in view.
+  const RigOptions rig;
+  const double p = rig.pitch_down_deg * kDeg;
+  const double y_bottom = 0.5 * (rig.height - 1) / rig.focal_px;
+  const double d_max = rig.focal_px * rig.baseline_m * (y_bottom * std::cos(p) + std::sin(p)) / rig.camera_height_m;
+  const double horizon_row = 0.5 * (rig.height - 1) - rig.focal_px * std::tan(p);
+  std::cout << "default rig: largest ground disparity " << d_max << " px, horizon at row " << horizon_row << "\n";
+  EXPECT_LT(d_max, 60.0);
+  EXPECT_GT(d_max, 40.0);
+  EXPECT_GT(horizon_row, 0.1 * rig.height);
+  EXPECT_LT(horizon_row, 0.4 * rig.height);
+}
+
 TEST(SynthGroundTruth, RampLabelsEqualClosedFormClass) {
   const VehicleOptions vehicle;  // semi 15 deg, max 25 deg
   const std::pair<double, TravClass> cases[] = {{10.0, TravClass::kTraversable},
