@@ -1,5 +1,6 @@
 # Sources of the synth module.
 target_sources(ssta PRIVATE ${CMAKE_CURRENT_LIST_DIR}/scene.cpp)
+target_sources(ssta PRIVATE ${CMAKE_CURRENT_LIST_DIR}/scene_catalogue.cpp)
 target_sources(ssta PRIVATE ${CMAKE_CURRENT_LIST_DIR}/stereo_renderer.cpp)
 target_sources(ssta PRIVATE ${CMAKE_CURRENT_LIST_DIR}/vehicle_trajectory.cpp)
 target_sources(ssta PRIVATE ${CMAKE_CURRENT_LIST_DIR}/synth_options.cpp)
