@@ -90,6 +90,7 @@ void RegisterSynth(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--noise", options->render.sensor_noise_grey, "pixel noise std dev [grey levels]")
       ->capture_default_str();
+  cmd->add_flag("!--no-shadows", options->render.shadows, "render without cast sun shadows");
   cmd->add_option("--threads", options->render.threads,
                   "render threads (0 = all cores); the output is the same for any count")
       ->capture_default_str();

@@ -100,24 +100,31 @@ CameraCalibration StereoRenderer::Intrinsics() const {
 
 namespace {
 
-const Eigen::Vector3d kSun = Eigen::Vector3d(-0.45, 0.35, 0.82).normalized();
+/// Towards the sun: high on the left and a little behind, so shadows fall to the right.
+const Eigen::Vector3d kSun = Eigen::Vector3d(-0.2, 0.6, 0.78).normalized();
 constexpr double kAmbient = 0.45;
 constexpr double kSunGain = 0.62;
+constexpr double kShadowRay_m = 60.0;  ///< occluders farther towards the sun are ignored
 
 double SkyGrey(const Eigen::Vector3d& d) {
   const double elevation = d.z() / d.norm();
   return 185.0 + 50.0 * std::clamp(elevation, 0.0, 1.0);
 }
 
-double ShadeHit(const SurfaceHit& hit, const Eigen::Vector3d& d, double footprint_m,
-                std::uint64_t seed) {
+/// Grey value of a hit seen along `d`: textured albedo times ambient plus sun (Lambert), the
+/// sun blocked when `shadows` and the way to it is not free.
+double ShadeHit(const Scene& scene, const SurfaceHit& hit, const Eigen::Vector3d& d,
+                double footprint_m, bool shadows) {
   // A pixel's footprint stretches by 1 / incidence along the view direction but not across
   // it; the geometric mean keeps detail along image rows (what stereo matches) at grazing
   // angles while still limiting aliasing down the columns.
   const double incidence = std::max(0.05, std::abs(hit.normal_world.dot(d)) / d.norm());
-  const double albedo = Albedo(hit.material, hit.p_world, footprint_m / std::sqrt(incidence), seed);
-  const double light = kAmbient + kSunGain * std::max(0.0, hit.normal_world.dot(kSun));
-  return albedo * light;
+  const double albedo =
+      Albedo(hit.material, hit.p_world, footprint_m / std::sqrt(incidence), scene.texture_seed);
+  const double sun = std::max(0.0, hit.normal_world.dot(kSun));
+  const bool lit = sun > 0 && !(shadows && scene.CastRay(hit.p_world + 2e-3 * hit.normal_world,
+                                                          kSun, kShadowRay_m).hit);
+  return albedo * (kAmbient + (lit ? kSunGain * sun : 0.0));
 }
 
 }  // namespace
@@ -129,7 +136,7 @@ double StereoRenderer::Shade(const Eigen::Isometry3d& world_T_camera, double u, 
   const double t_max = render_.max_ray_m / d.norm();
   const SurfaceHit hit = scene_.CastRay(world_T_camera.translation(), d, t_max);
   if (!hit.hit) return SkyGrey(d);
-  return ShadeHit(hit, d, hit.t / rig_.focal_px, scene_.texture_seed);
+  return ShadeHit(scene_, hit, d, hit.t / rig_.focal_px, render_.shadows);
 }
 
 StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int frame_index) const {
@@ -170,7 +177,7 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
           }
           grey /= ss * ss;
         } else {
-          grey = hit.hit ? ShadeHit(hit, d, hit.t / f, scene_.texture_seed) : SkyGrey(d);
+          grey = hit.hit ? ShadeHit(scene_, hit, d, hit.t / f, render_.shadows) : SkyGrey(d);
         }
         grey += render_.sensor_noise_grey * noise.Gaussian();
         image(v, u) = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));

@@ -24,8 +24,9 @@ struct StereoFrame {
 
 /// Ray-casts a rectified stereo pair of a Scene. Pixel centres are at integer (u, v) with the
 /// principal point at ((w-1)/2, (h-1)/2). Texture is anchored in the world (3D value noise per
-/// material, band-limited by distance), shading is Lambert from a sun plus ambient, the sky is
-/// a textureless vertical gradient. Thread-safe: Render is const.
+/// material, band-limited by distance), shading is Lambert from a sun plus ambient with cast
+/// shadows (RenderOptions::shadows), the sky is a textureless vertical gradient. Render is
+/// const and spreads image rows over RenderOptions::threads threads.
 class StereoRenderer {
  public:
   /// Precondition: the options are valid; `scene` outlives the renderer.

@@ -32,6 +32,7 @@ struct RenderOptions {
   double max_label_range_m = 20.0;///< labels beyond this range from cam0 are 255 (don't care) [m]
   double max_ray_m = 120.0;       ///< rays that hit nothing within this distance see the sky [m]
   int boundary_band_px = 1;       ///< labels within this many px of a class change become 255
+  bool shadows = true;            ///< cast sun shadows (about 15-30 % more render time)
   int threads = 0;                ///< render threads (0 = all hardware threads); same bytes for any
 
   bool IsValid(std::string* error) const;
