@@ -144,9 +144,9 @@ void WriteImuSensorYaml(const SynthOptions& o, const std::string& path) {
   WriteTextAtomically(path, out.str());
 }
 
-void WriteFaultsYaml(const SynthOptions& o, const Eigen::Isometry3d& true_cam0,
-                     const Eigen::Isometry3d& written_cam0, const SynthSummary& s,
-                     const std::string& path) {
+void WriteFaultsYaml(const SynthOptions& o, const Scene& scene, const Eigen::Isometry3d& true_cam0,
+                     const Eigen::Isometry3d& written_cam0, const std::vector<int>& dropped,
+                     const SynthSummary& s, const std::string& path) {
   const FaultOptions& f = o.faults;
   std::ostringstream out;
   out << std::setprecision(17);
@@ -171,7 +171,17 @@ void WriteFaultsYaml(const SynthOptions& o, const Eigen::Isometry3d& true_cam0,
     out << (i ? ", " : "") << s.dropped_timestamps_ns[i];
   }
   out << "]\n"
-      << "textureless_patches: " << f.textureless_patches << "\n";
+      << "dropped_frame_indices: [";
+  for (std::size_t i = 0; i < dropped.size(); ++i) out << (i ? ", " : "") << dropped[i];
+  out << "]\n"
+      << "textureless_patches: " << f.textureless_patches << "\n"
+      << "# flat untextured discs on the ground: [x, y, radius] in world [m]\n"
+      << "textureless_discs: [";
+  for (std::size_t i = 0; i < scene.textureless.size(); ++i) {
+    const TexturelessPatch& p = scene.textureless[i];
+    out << (i ? ", " : "") << "[" << p.x << ", " << p.y << ", " << p.radius_m << "]";
+  }
+  out << "]\n";
   WriteTextAtomically(path, out.str());
 }
 
@@ -334,7 +344,8 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
     summary.warning = w.str();
   }
   WriteGrid(scene, o, cam_positions, Join(out_dir, "gt"));
-  WriteFaultsYaml(o, body_T_cam0, written_cam0, summary, Join(out_dir, "gt/faults.yaml"));
+  WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
+                  Join(out_dir, "gt/faults.yaml"));
   return summary;
 }
 
