@@ -85,6 +85,16 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option("--speed", options->motion.speed_mps, "vehicle speed [m/s]")->capture_default_str();
   cmd->add_option("--weave", options->motion.weave_amplitude_m, "lateral weave of the path [m]")
       ->capture_default_str();
+  cmd->add_option("--weave-period", options->motion.weave_period_s, "period of the weave [s]")
+      ->capture_default_str();
+  cmd->add_option("--imu-rate", options->motion.imu_rate_hz, "IMU and pose0 rate [Hz]")
+      ->capture_default_str();
+  cmd->add_option("--max-label-range", options->render.max_label_range_m,
+                  "labels beyond this range are 255 [m]")
+      ->capture_default_str();
+  cmd->add_option("--boundary-band", options->render.boundary_band_px,
+                  "labels within this many px of a class change are 255")
+      ->capture_default_str();
   cmd->add_option("--supersample", options->render.supersample,
                   "rays per pixel side for anti-aliasing (1 = off, 2 = 2x2: about 5x slower)")
       ->capture_default_str();
@@ -98,9 +108,11 @@ void RegisterSynth(CLI::App& app) {
       ->capture_default_str();
   auto& f = options->faults;
   cmd->add_option("--mount-pitch-error-deg", f.mount_pitch_error_deg,
-                  "rotate the rig in cam*/sensor.yaml about body y [deg]; images stay true");
+                  "rotate the rig in cam*/sensor.yaml about body y [deg] (positive: further down);\n"
+                  "images stay true, gt/extrinsics.yaml keeps the truth");
   cmd->add_option("--mount-roll-error-deg", f.mount_roll_error_deg,
-                  "rotate the rig in cam*/sensor.yaml about body x [deg]; images stay true");
+                  "rotate the rig in cam*/sensor.yaml about body x [deg] (positive: right side down);\n"
+                  "images stay true, gt/extrinsics.yaml keeps the truth");
   cmd->add_option("--pose-drift-roll-deg-per-s", f.pose_drift_roll_deg_per_s,
                   "pose0 roll drifts linearly [deg/s]; images and IMU stay true");
   cmd->add_option("--pose-drift-pitch-deg-per-s", f.pose_drift_pitch_deg_per_s,
