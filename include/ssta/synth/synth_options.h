@@ -32,7 +32,7 @@ struct RenderOptions {
   double max_label_range_m = 20.0;///< labels beyond this range from cam0 are 255 (don't care) [m]
   double max_ray_m = 120.0;       ///< rays that hit nothing within this distance see the sky [m]
   int boundary_band_px = 1;       ///< labels within this many px of a class change become 255
-  bool shadows = true;            ///< cast sun shadows (about 15-30 % more render time)
+  bool shadows = true;            ///< cast sun shadows (about 5-20 % more render time)
   int threads = 0;                ///< render threads (0 = all hardware threads); same bytes for any
 
   bool IsValid(std::string* error) const;
@@ -54,8 +54,8 @@ struct MotionOptions {
 /// Deliberate errors written into the sequence; every one is recorded in gt/faults.yaml.
 /// The images are always rendered with the true geometry.
 struct FaultOptions {
-  double mount_pitch_error_deg = 0.0;  ///< cam sensor.yaml rig rotated about body y [deg]
-  double mount_roll_error_deg = 0.0;   ///< cam sensor.yaml rig rotated about body x [deg]
+  double mount_pitch_error_deg = 0.0;  ///< sensor.yaml rig rotated about body y (+ = down) [deg]
+  double mount_roll_error_deg = 0.0;   ///< sensor.yaml rig rotated about body x [deg]
   double pose_drift_roll_deg_per_s = 0.0;   ///< pose0 roll drifts linearly [deg/s]
   double pose_drift_pitch_deg_per_s = 0.0;  ///< pose0 pitch drifts linearly [deg/s]
   double imu_gyro_noise = 0.0;   ///< white noise std dev per gyro sample [rad/s]
