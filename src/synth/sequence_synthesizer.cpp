@@ -1,0 +1,352 @@
+#include "ssta/synth/sequence_synthesizer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <numeric>
+#include <sstream>
+
+#include "ssta/core/error.h"
+#include "ssta/io/camera_calibration.h"
+#include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+#include "ssta/synth/scene.h"
+#include "ssta/synth/stereo_renderer.h"
+#include "ssta/synth/vehicle_trajectory.h"
+#include "synth/parallel.h"
+#include "synth/random.h"
+
+namespace ssta::synth {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+/// Time of the first IMU / pose sample; EuRoC-like magnitude to exercise int64 handling [ns].
+constexpr std::int64_t kBaseNs = 1'600'000'000'000'000'000LL;
+/// The first camera frame comes this long after the first IMU sample [s].
+constexpr double kLeadIn_s = 0.1;
+/// IMU and pose run on this long after the last camera frame [s].
+constexpr double kLeadOut_s = 0.1;
+
+std::string Join(const std::string& a, const std::string& b) { return a + "/" + b; }
+
+/// Body-frame rotation of the mount fault: pitch about body y, then roll about body x.
+Eigen::Matrix3d MountError(const FaultOptions& f) {
+  return (Eigen::AngleAxisd(f.mount_pitch_error_deg * kDeg, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(f.mount_roll_error_deg * kDeg, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+/// The pose with its roll and pitch (ZYX Euler angles) offset by the given angles [rad].
+Eigen::Isometry3d WithRollPitchOffset(const Eigen::Isometry3d& pose, double d_roll, double d_pitch) {
+  const Eigen::Matrix3d& r = pose.linear();
+  const double yaw = std::atan2(r(1, 0), r(0, 0));
+  const double pitch = std::asin(std::clamp(-r(2, 0), -1.0, 1.0));
+  const double roll = std::atan2(r(2, 1), r(2, 2));
+  Eigen::Isometry3d out = pose;
+  out.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) *
+                  Eigen::AngleAxisd(pitch + d_pitch, Eigen::Vector3d::UnitY()) *
+                  Eigen::AngleAxisd(roll + d_roll, Eigen::Vector3d::UnitX()))
+                     .toRotationMatrix();
+  return out;
+}
+
+std::string MatrixYaml(const Eigen::Matrix4d& m, const std::string& indent) {
+  std::ostringstream out;
+  out << std::setprecision(17);
+  out << indent << "cols: 4\n" << indent << "rows: 4\n" << indent << "data: [";
+  for (int i = 0; i < 16; ++i) out << m(i / 4, i % 4) << (i == 15 ? "]\n" : ", ");
+  return out.str();
+}
+
+std::vector<int> DroppedFrames(const SynthOptions& o) {
+  std::vector<int> dropped = o.faults.drop_frame_indices;
+  if (dropped.empty() && o.faults.drop_frame_fraction > 0) {
+    const int count = static_cast<int>(std::lround(o.faults.drop_frame_fraction * o.frames));
+    std::vector<int> all(o.frames);
+    std::iota(all.begin(), all.end(), 0);
+    Rng rng(o.seed * 2654435761ULL + 17);
+    for (int i = 0; i < count; ++i) {  // partial Fisher-Yates
+      const int j = i + static_cast<int>(rng.Uniform(0, o.frames - i));
+      std::swap(all[i], all[std::min(j, o.frames - 1)]);
+    }
+    dropped.assign(all.begin(), all.begin() + count);
+  }
+  std::sort(dropped.begin(), dropped.end());
+  dropped.erase(std::unique(dropped.begin(), dropped.end()), dropped.end());
+  return dropped;
+}
+
+/// World grid of classes over the area the cameras could label, map_server style.
+void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eigen::Vector3d>& cams,
+               const std::string& gt_dir) {
+  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+  for (const Eigen::Vector3d& c : cams) {
+    x0 = std::min(x0, c.x());
+    y0 = std::min(y0, c.y());
+    x1 = std::max(x1, c.x());
+    y1 = std::max(y1, c.y());
+  }
+  const double reach = o.render.max_label_range_m;
+  const double r = o.grid_resolution_m;
+  x0 = std::floor((x0 - reach) / r) * r;
+  y0 = std::floor((y0 - reach) / r) * r;
+  const int w = static_cast<int>(std::ceil((x1 + reach - x0) / r));
+  const int h = static_cast<int>(std::ceil((y1 + reach - y0) / r));
+  ImageU8 grid(w, h, 0);
+  constexpr int kSub = 3;
+  ParallelFor(h, o.render.threads, [&](int row) {
+    for (int col = 0; col < w; ++col) {
+      const double cx = x0 + col * r, cy = y0 + (h - 1 - row) * r;  // lower-left corner
+      TravClass worst = TravClass::kTraversable;
+      double z_lo = 1e300, z_hi = -1e300;
+      for (int j = 0; j < kSub; ++j) {
+        for (int i = 0; i < kSub; ++i) {
+          const double x = cx + (i + 0.5) * r / kSub, y = cy + (j + 0.5) * r / kSub;
+          const Eigen::Vector3d origin(x, y, scene.BaseHeight(x, y) + 50.0);
+          const SurfaceHit hit = scene.CastRay(origin, -Eigen::Vector3d::UnitZ(), 200.0);
+          if (!hit.hit) continue;
+          worst = Worse(worst, scene.Classify(hit, o.vehicle));
+          z_lo = std::min(z_lo, hit.p_world.z());
+          z_hi = std::max(z_hi, hit.p_world.z());
+        }
+      }
+      if (z_hi >= z_lo) worst = Worse(worst, o.vehicle.ClassifyStep(z_hi - z_lo));
+      grid(row, col) = static_cast<std::uint8_t>(worst);
+    }
+  });
+  WriteImage(grid, Join(gt_dir, "grid_classes.png"));
+  std::ostringstream yaml;
+  yaml << std::setprecision(10);
+  yaml << "# Ground-truth world grid of classes (ids of INTERFACES section 3); row 0 = largest y.\n"
+       << "# A cell takes the worst class of 3x3 samples of the top surface and of the height\n"
+       << "# range inside it (a step within the cell).\n"
+       << "image: grid_classes.png\n"
+       << "resolution: " << r << "\n"
+       << "origin: [" << x0 << ", " << y0 << ", 0.0]\n";
+  WriteTextAtomically(Join(gt_dir, "grid.yaml"), yaml.str());
+}
+
+void WriteImuSensorYaml(const SynthOptions& o, const std::string& path) {
+  std::ostringstream out;
+  out << std::setprecision(10);
+  const double sqrt_rate = std::sqrt(o.motion.imu_rate_hz);
+  out << "%YAML:1.0\n"
+      << "sensor_type: imu\n"
+      << "comment: \"ssta synth: ideal IMU at the body origin (defines the body frame)\"\n"
+      << "T_BS:\n"
+      << MatrixYaml(Eigen::Matrix4d::Identity(), "  ")
+      << "rate_hz: " << o.motion.imu_rate_hz << "\n"
+      << "gyroscope_noise_density: " << o.faults.imu_gyro_noise / sqrt_rate << "\n"
+      << "gyroscope_random_walk: 0.0\n"
+      << "accelerometer_noise_density: " << o.faults.imu_accel_noise / sqrt_rate << "\n"
+      << "accelerometer_random_walk: 0.0\n";
+  WriteTextAtomically(path, out.str());
+}
+
+void WriteFaultsYaml(const SynthOptions& o, const Scene& scene, const Eigen::Isometry3d& true_cam0,
+                     const Eigen::Isometry3d& written_cam0, const std::vector<int>& dropped,
+                     const SynthSummary& s, const std::string& path) {
+  const FaultOptions& f = o.faults;
+  std::ostringstream out;
+  out << std::setprecision(17);
+  out << "# Faults injected by ssta synth; the images, IMU and gt/ always follow the truth.\n"
+      << "mount_pitch_error_deg: " << f.mount_pitch_error_deg << "\n"
+      << "mount_roll_error_deg: " << f.mount_roll_error_deg << "\n"
+      << "# cam0/sensor.yaml and cam1/sensor.yaml carry T_BS_written = R_err * T_BS_true, rotated\n"
+      << "# about cam0's optical centre; R_err = Ry(pitch) * Rx(roll) in the body frame.\n"
+      << "true_cam0_T_BS:\n" << MatrixYaml(true_cam0.matrix(), "  ")
+      << "written_cam0_T_BS:\n" << MatrixYaml(written_cam0.matrix(), "  ")
+      << "pose_drift_roll_deg_per_s: " << f.pose_drift_roll_deg_per_s << "\n"
+      << "pose_drift_pitch_deg_per_s: " << f.pose_drift_pitch_deg_per_s << "\n"
+      << "# pose0 roll/pitch (ZYX Euler) = truth + drift * (t - t_first_pose)\n"
+      << "imu_gyro_noise: " << f.imu_gyro_noise << "        # rad/s per sample, white\n"
+      << "imu_accel_noise: " << f.imu_accel_noise << "       # m/s^2 per sample, white\n"
+      << "imu_gyro_bias: " << f.imu_gyro_bias << "          # rad/s on every axis\n"
+      << "imu_accel_bias: " << f.imu_accel_bias << "         # m/s^2 on every axis\n"
+      << "drop_frames_fraction: " << f.drop_frame_fraction << "\n"
+      << "# dropped frames are missing from cam1 only; cam0 and gt keep them\n"
+      << "dropped_frames: [";
+  for (std::size_t i = 0; i < s.dropped_timestamps_ns.size(); ++i) {
+    out << (i ? ", " : "") << s.dropped_timestamps_ns[i];
+  }
+  out << "]\n"
+      << "dropped_frame_indices: [";
+  for (std::size_t i = 0; i < dropped.size(); ++i) out << (i ? ", " : "") << dropped[i];
+  out << "]\n"
+      << "textureless_patches: " << f.textureless_patches << "\n"
+      << "# flat untextured discs on the ground: [x, y, radius] in world [m]\n"
+      << "textureless_discs: [";
+  for (std::size_t i = 0; i < scene.textureless.size(); ++i) {
+    const TexturelessPatch& p = scene.textureless[i];
+    out << (i ? ", " : "") << "[" << p.x << ", " << p.y << ", " << p.radius_m << "]";
+  }
+  out << "]\n";
+  WriteTextAtomically(path, out.str());
+}
+
+std::string VehicleYaml(const VehicleOptions& v) {
+  std::ostringstream out;
+  out << std::setprecision(10);
+  out << "# Vehicle thresholds used for this sequence's ground truth (INTERFACES section 4).\n"
+      << "vehicle:\n"
+      << "  max_slope_deg: " << v.max_slope_deg << "\n"
+      << "  semi_slope_deg: " << v.semi_slope_deg << "\n"
+      << "  max_step_m: " << v.max_step_m << "\n"
+      << "  semi_step_m: " << v.semi_step_m << "\n";
+  return out.str();
+}
+
+}  // namespace
+
+std::string SynthSummary::BriefReport() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << "synth: " << frames_written << " frames ("
+      << frames_dropped << " dropped from cam1), " << imu_samples << " IMU samples, largest disparity "
+      << max_disparity_px << " px, " << render_ms_per_frame << " ms per stereo frame";
+  return out.str();
+}
+
+Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& motion) {
+  const double p = rig.pitch_down_deg * kDeg;
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(0, -1, 0);                         // camera x: body right
+  r.col(2) = Eigen::Vector3d(std::cos(p), 0, -std::sin(p));     // camera z: forward, pitched down
+  r.col(1) = r.col(2).cross(r.col(0));                          // camera y: down
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = r;
+  t.translation() = Eigen::Vector3d(rig.camera_forward_m, 0.5 * rig.baseline_m,
+                                    rig.camera_height_m - motion.body_height_m);
+  return t;
+}
+
+SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& out_dir,
+                                    const SynthProgress& progress) {
+  std::string error;
+  if (!o.IsValid(&error)) throw Error(error);
+
+  Scene scene = MakeScene(o.scene, o.seed, o.ramp_slope_deg);
+  if (o.faults.textureless_patches > 0) AddTexturelessPatches(&scene, o.faults.textureless_patches, o.seed);
+  const VehicleTrajectory trajectory(scene, o.motion);
+  const StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
+
+  SynthSummary summary;
+  const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
+  const Eigen::Isometry3d body_T_cam1 = body_T_cam0 * Eigen::Translation3d(o.rig.baseline_m, 0, 0);
+  summary.body_T_cam0 = body_T_cam0;
+  const Eigen::Matrix3d r_err = MountError(o.faults);
+  Eigen::Isometry3d written_cam0 = body_T_cam0, written_cam1 = body_T_cam1;
+  written_cam0.linear() = r_err * body_T_cam0.linear();
+  written_cam1.linear() = r_err * body_T_cam1.linear();
+  written_cam1.translation() =
+      body_T_cam0.translation() + r_err * (body_T_cam1.translation() - body_T_cam0.translation());
+
+  for (const char* dir : {"cam0/data", "cam1/data", "imu0", "pose0", "gt/labels", "gt/disparity"}) {
+    MakeDirectories(Join(out_dir, dir));
+  }
+
+  // Calibration files.
+  CameraCalibration cam = renderer.Intrinsics();
+  cam.body_T_camera = written_cam0;
+  SaveCameraCalibration(cam, Join(out_dir, "cam0/sensor.yaml"), "ssta synth: cam0 (left)");
+  cam.body_T_camera = written_cam1;
+  SaveCameraCalibration(cam, Join(out_dir, "cam1/sensor.yaml"), "ssta synth: cam1 (right)");
+  cam.body_T_camera = body_T_cam0;
+  SaveCameraCalibration(cam, Join(out_dir, "gt/extrinsics.yaml"),
+                        "ssta synth: the TRUE cam0 calibration and T_BS");
+  WriteImuSensorYaml(o, Join(out_dir, "imu0/sensor.yaml"));
+  WriteTextAtomically(Join(out_dir, "vehicle.yaml"), VehicleYaml(o.vehicle));
+
+  // Frames.
+  const std::vector<int> dropped = DroppedFrames(o);
+  std::ostringstream cam0_csv, cam1_csv;
+  cam0_csv << "#timestamp [ns],filename\n";
+  cam1_csv << "#timestamp [ns],filename\n";
+  std::vector<Eigen::Vector3d> cam_positions;
+  double render_ms = 0;
+  for (int k = 0; k < o.frames; ++k) {
+    const std::int64_t ns = kBaseNs + std::llround(kLeadIn_s * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
+    const double t = static_cast<double>(ns - kBaseNs) * 1e-9;
+    const Eigen::Isometry3d world_T_cam0 = trajectory.WorldTBody(t) * body_T_cam0;
+    cam_positions.push_back(world_T_cam0.translation());
+    const auto start = std::chrono::steady_clock::now();
+    const StereoFrame frame = renderer.Render(world_T_cam0, k);
+    render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+
+    const std::string name = std::to_string(ns) + ".png";
+    WriteImage(frame.left, Join(out_dir, "cam0/data/" + name));
+    cam0_csv << ns << "," << name << "\n";
+    if (std::binary_search(dropped.begin(), dropped.end(), k)) {
+      summary.dropped_timestamps_ns.push_back(ns);
+    } else {
+      WriteImage(frame.right, Join(out_dir, "cam1/data/" + name));
+      cam1_csv << ns << "," << name << "\n";
+    }
+    ImageU16 disparity(frame.disparity.width(), frame.disparity.height(), 0);
+    for (std::size_t i = 0; i < disparity.size(); ++i) {
+      const float d = frame.disparity[i];
+      if (d > 0) {
+        disparity[i] = static_cast<std::uint16_t>(std::clamp(std::lround(d * 256.0), 1L, 65535L));
+        summary.max_disparity_px = std::max(summary.max_disparity_px, static_cast<double>(d));
+      }
+    }
+    WriteImage(frame.labels, Join(out_dir, "gt/labels/" + name));
+    WriteImage(disparity, Join(out_dir, "gt/disparity/" + name));
+    ++summary.frames_written;
+    if (progress) progress(k + 1, o.frames);
+  }
+  summary.frames_dropped = static_cast<int>(summary.dropped_timestamps_ns.size());
+  summary.render_ms_per_frame = render_ms / o.frames;
+  WriteTextAtomically(Join(out_dir, "cam0/data.csv"), cam0_csv.str());
+  WriteTextAtomically(Join(out_dir, "cam1/data.csv"), cam1_csv.str());
+
+  // IMU and poses at the IMU rate, covering every frame.
+  const double t_end = kLeadIn_s + (o.frames - 1) / o.rig.rate_hz + kLeadOut_s;
+  const int samples = static_cast<int>(std::floor(t_end * o.motion.imu_rate_hz)) + 1;
+  Rng imu_noise(o.seed * 6364136223846793005ULL + 23);
+  std::ostringstream imu_csv, pose_csv;
+  imu_csv << std::setprecision(12);
+  pose_csv << std::setprecision(12);
+  imu_csv << "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+             "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]\n";
+  pose_csv << "#timestamp [ns],p_x [m],p_y [m],p_z [m],q_w [],q_x [],q_y [],q_z []\n";
+  for (int i = 0; i < samples; ++i) {
+    const std::int64_t ns = kBaseNs + std::llround(i * 1e9 / o.motion.imu_rate_hz);
+    const double t = static_cast<double>(ns - kBaseNs) * 1e-9;
+    const ImuSample imu = trajectory.Imu(t);
+    Eigen::Vector3d gyro = imu.gyro_rad_s, accel = imu.accel_m_s2;
+    for (int a = 0; a < 3; ++a) {
+      gyro[a] += o.faults.imu_gyro_bias + o.faults.imu_gyro_noise * imu_noise.Gaussian();
+      accel[a] += o.faults.imu_accel_bias + o.faults.imu_accel_noise * imu_noise.Gaussian();
+    }
+    imu_csv << ns << "," << gyro.x() << "," << gyro.y() << "," << gyro.z() << "," << accel.x()
+            << "," << accel.y() << "," << accel.z() << "\n";
+    const Eigen::Isometry3d pose = WithRollPitchOffset(
+        trajectory.WorldTBody(t), o.faults.pose_drift_roll_deg_per_s * kDeg * t,
+        o.faults.pose_drift_pitch_deg_per_s * kDeg * t);
+    Eigen::Quaterniond q(pose.linear());
+    q.normalize();
+    if (q.w() < 0) q.coeffs() = -q.coeffs();
+    const Eigen::Vector3d p = pose.translation();
+    pose_csv << ns << "," << p.x() << "," << p.y() << "," << p.z() << "," << q.w() << "," << q.x()
+             << "," << q.y() << "," << q.z() << "\n";
+  }
+  summary.imu_samples = samples;
+  WriteTextAtomically(Join(out_dir, "imu0/data.csv"), imu_csv.str());
+  WriteTextAtomically(Join(out_dir, "pose0/data.csv"), pose_csv.str());
+
+  const double run_m = o.motion.speed_mps * (o.frames - 1) / o.rig.rate_hz + kLeadIn_s * o.motion.speed_mps;
+  if (run_m > scene.clear_run_m) {
+    std::ostringstream w;
+    w << std::fixed << std::setprecision(1) << "the path runs " << run_m << " m, past the "
+      << scene.clear_run_m << " m the " << o.scene
+      << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
+    summary.warning = w.str();
+  }
+  WriteGrid(scene, o, cam_positions, Join(out_dir, "gt"));
+  WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
+                  Join(out_dir, "gt/faults.yaml"));
+  return summary;
+}
+
+}  // namespace ssta::synth

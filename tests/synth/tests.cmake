@@ -1,0 +1,1 @@
+ssta_add_test(synth_test ${CMAKE_CURRENT_LIST_DIR}/synth_test.cpp)
