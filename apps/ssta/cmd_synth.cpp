@@ -9,6 +9,7 @@
 #include <string>
 
 #include "commands.h"
+#include "config_loading.h"
 #include "ssta/core/error.h"
 #include "ssta/synth/sequence_synthesizer.h"
 
@@ -46,6 +47,7 @@ void RegisterSynth(CLI::App& app) {
   auto options = std::make_shared<synth::SynthOptions>();
   auto out_dir = std::make_shared<std::string>();
   auto drop_frames = std::make_shared<std::string>();
+  auto config_files = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app.add_subcommand(
       "synth",
       "Render a synthetic stereo sequence (ASL layout) with exact ground truth in SEQ/gt/\n"
@@ -106,6 +108,8 @@ void RegisterSynth(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--grid-resolution", options->grid_resolution_m, "gt grid cell size [m]")
       ->capture_default_str();
+  cmd->add_option("--config", *config_files,
+                  "YAML config whose vehicle section sets the ground truth's thresholds (repeatable)");
   auto& f = options->faults;
   cmd->add_option("--mount-pitch-error-deg", f.mount_pitch_error_deg,
                   "rotate the rig in cam*/sensor.yaml about body y [deg] (positive: further down);\n"
@@ -126,8 +130,9 @@ void RegisterSynth(CLI::App& app) {
                   "point (0.1), or 0-based frame indices (3,7,12)");
   cmd->add_option("--textureless-patches", f.textureless_patches,
                   "number of flat untextured discs on the ground ahead");
-  cmd->callback([options, out_dir, drop_frames] {
+  cmd->callback([options, out_dir, drop_frames, config_files] {
     ParseDropFrames(*drop_frames, &options->faults);
+    if (!config_files->empty()) options->vehicle = LoadLayeredConfig(nullptr, *config_files).vehicle;
     const bool tty = isatty(fileno(stderr)) != 0;
     synth::SynthProgress progress;
     if (tty) {
