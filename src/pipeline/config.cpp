@@ -62,6 +62,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("min_disparity", &o->min_disparity);
   s.Read("num_disparities", &o->num_disparities);
   s.Read("block_size", &o->block_size);
+  ReadEnum(s, "sgbm_mode", &o->sgbm_mode, [](const std::string& n) { return ParseSgbmMode(n); });
   s.Read("uniqueness_ratio", &o->uniqueness_ratio);
   s.Read("left_right_check", &o->left_right_check);
   s.Read("left_right_max_diff", &o->left_right_max_diff);
@@ -223,6 +224,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  min_disparity: " << s.min_disparity << "\n"
     << "  num_disparities: " << s.num_disparities << "\n"
     << "  block_size: " << s.block_size << "\n"
+    << "  sgbm_mode: " << SgbmModeName(s.sgbm_mode) << "\n"
     << "  uniqueness_ratio: " << s.uniqueness_ratio << "\n"
     << "  left_right_check: " << s.left_right_check << "\n"
     << "  left_right_max_diff: " << s.left_right_max_diff << "\n"

@@ -37,6 +37,16 @@ ImageF FromFixedPoint(const cv::Mat& disp16, short invalid) {
   return out;
 }
 
+int OpenCvMode(SgbmMode mode) {
+  switch (mode) {
+    case SgbmMode::kThreeWay: return cv::StereoSGBM::MODE_SGBM_3WAY;
+    case SgbmMode::kFive: return cv::StereoSGBM::MODE_SGBM;
+    case SgbmMode::kHh4: return cv::StereoSGBM::MODE_HH4;
+    case SgbmMode::kHh: return cv::StereoSGBM::MODE_HH;
+  }
+  return cv::StereoSGBM::MODE_SGBM_3WAY;
+}
+
 ImageF ComputeOpenCv(const ImageU8& left, const ImageU8& right, const StereoMatcherOptions& o) {
   const int lr_max_diff = o.left_right_check ? o.left_right_max_diff : -1;
   cv::Ptr<cv::StereoMatcher> matcher;
@@ -55,7 +65,7 @@ ImageF ComputeOpenCv(const ImageU8& left, const ImageU8& right, const StereoMatc
     // SGBM's time, 0.4x HH4's); its result does not depend on the thread count.
     auto sgbm = cv::StereoSGBM::create(o.min_disparity, o.num_disparities, o.block_size,
                                        8 * area, 32 * area, lr_max_diff, 63, o.uniqueness_ratio,
-                                       0, 0, cv::StereoSGBM::MODE_SGBM_3WAY);
+                                       0, 0, OpenCvMode(o.sgbm_mode));
     matcher = sgbm;
   }
   matcher->setDisp12MaxDiff(lr_max_diff);
@@ -110,6 +120,24 @@ void DropTexturelessPixels(const ImageU8& left, int block, double min_std, Image
 }
 
 }  // namespace
+
+SgbmMode ParseSgbmMode(const std::string& name) {
+  if (name == "3way") return SgbmMode::kThreeWay;
+  if (name == "sgbm") return SgbmMode::kFive;
+  if (name == "hh4") return SgbmMode::kHh4;
+  if (name == "hh") return SgbmMode::kHh;
+  throw Error("unknown SGBM mode '" + name + "' (3way, sgbm, hh4, hh)");
+}
+
+std::string SgbmModeName(SgbmMode mode) {
+  switch (mode) {
+    case SgbmMode::kThreeWay: return "3way";
+    case SgbmMode::kFive: return "sgbm";
+    case SgbmMode::kHh4: return "hh4";
+    case SgbmMode::kHh: return "hh";
+  }
+  return "3way";
+}
 
 MatcherType ParseMatcherType(const std::string& name) {
   if (name == "bm") return MatcherType::kBlockMatching;

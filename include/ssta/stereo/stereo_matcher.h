@@ -14,6 +14,17 @@ enum class MatcherType {
   kPclAdaptiveCost,   ///< "pcl_acso": PCL AdaptiveCostSOStereoMatching (the paper's ACSO)
 };
 
+/// OpenCV StereoSGBM's cost aggregation (YAML `stereo.sgbm_mode`).
+enum class SgbmMode {
+  kThreeWay,  ///< "3way": 3 directions per pass, fastest (OpenCV MODE_SGBM_3WAY)
+  kFive,      ///< "sgbm": 5 directions, single pass (MODE_SGBM)
+  kHh4,       ///< "hh4": 4 directions, two passes (MODE_HH4)
+  kHh,        ///< "hh": 8 directions, two passes, full-image cost volume (MODE_HH)
+};
+/// Parses "3way", "sgbm", "hh4", "hh"; throws ssta::Error otherwise.
+SgbmMode ParseSgbmMode(const std::string& name);
+std::string SgbmModeName(SgbmMode mode);
+
 /// Parses "bm", "sgbm", "pcl_bb", "pcl_acso"; throws ssta::Error (message starts with
 /// "algorithm:") otherwise.
 MatcherType ParseMatcherType(const std::string& name);
@@ -27,6 +38,7 @@ struct StereoMatcherOptions {
   int num_disparities = 64;    ///< search range [px], a positive multiple of 16
   int block_size = 7;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
                                ///< pcl_acso the length of the aggregation column
+  SgbmMode sgbm_mode = SgbmMode::kThreeWay;  ///< sgbm only: cost aggregation directions
   int uniqueness_ratio = 10;   ///< [%] bm/sgbm: best cost must beat the second best by this margin
   bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (all)
   int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check
