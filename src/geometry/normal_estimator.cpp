@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <vector>
 
 #include <Eigen/Geometry>
 
+#include "geometry/integral_row_ring.h"
 #include "geometry/smallest_eigenvector.h"
 
 namespace ssta {
@@ -24,6 +27,9 @@ constexpr double kMaxDepthScale = 2.0;
 // Covariance sums use fixed point so that their precision does not depend on how far the rest
 // of the frame lies: a window's sums of squared coordinates must stay below this (2^62).
 constexpr double kMaxWindowSumOfSquares = 4.6e18;
+// The gradient methods sum first-order values in 32-bit fixed point: a window's sum of
+// |quantised value| must stay below 2^31.
+constexpr double kMaxWindowSum32 = 2.0e9;
 
 bool Fail(std::string* error, const std::string& message) {
   if (error) *error = message;
@@ -34,8 +40,53 @@ inline bool IsValidPoint(const Eigen::Vector3f& p) {
   return p.z() > 0.0f && std::isfinite(p.z()) && std::isfinite(p.x()) && std::isfinite(p.y());
 }
 
+// Sum over rows [top, bottom) and columns [c0, c1) of channel k of integral rows `top`,
+// `bottom` (C channels per column), as a signed value: the unsigned sums wrap, the box fits.
+template <typename S, int C, typename T>
+inline S BoxSum(const T* top, const T* bottom, int c0, int c1, int k) {
+  const T sum = static_cast<T>(bottom[c1 * C + k] - bottom[c0 * C + k] - top[c1 * C + k] +
+                               top[c0 * C + k]);
+  return static_cast<S>(sum);
+}
+
 inline int MinCount(int area) {
   return std::max(3, static_cast<int>(std::ceil(kMinValidFraction * area)));
+}
+
+// Minimum valid points per radius r = 0..max_radius, for the full window and for a half.
+struct MinCounts {
+  std::vector<int> full, half;
+  explicit MinCounts(int max_radius) {
+    for (int r = 0; r <= max_radius; ++r) {
+      full.push_back(MinCount((2 * r + 1) * (2 * r + 1)));
+      half.push_back(MinCount(r * (2 * r + 1)));
+    }
+  }
+};
+
+// Vertical strip sums: out[i] = bottom[i] - top[i] over a whole integral row (wrapping), so
+// that a box over the rows between them and columns [c0, c1) is out[c1] - out[c0]. Computed
+// once per output row for the full radius, which most pixels use.
+template <typename T>
+inline void StripSums(const T* top, const T* bottom, std::size_t n, T* out) {
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<T>(bottom[i] - top[i]);
+}
+
+// Channel k of the box over columns [c0, c1) of a strip (C channels per column), signed.
+template <typename S, int C, typename T>
+inline S StripBox(const T* strip, int c0, int c1, int k) {
+  return static_cast<S>(static_cast<T>(strip[c1 * C + k] - strip[c0 * C + k]));
+}
+
+// Reciprocals of four positive numbers with one division.
+inline void Reciprocals(double a, double b, double c, double d, double* ia, double* ib,
+                        double* ic, double* id) {
+  const double ab = a * b, cd = c * d;
+  const double inv = 1.0 / (ab * cd);
+  *ia = inv * b * cd;
+  *ib = inv * a * cd;
+  *ic = inv * ab * d;
+  *id = inv * ab * c;
 }
 
 // Orients `n` towards the camera (n . p < 0) and stores it as a unit float vector.
@@ -80,97 +131,136 @@ bool NormalOptions::IsValid(std::string* error) const {
   return true;
 }
 
-NormalEstimator::NormalEstimator(const NormalOptions& options) : options_(options) {
+struct NormalEstimator::Buffers {
+  Image3f normals;
+  ImageU8 radius;                             // per-pixel window radius [px]
+  ImageF inverse_depth;                       // 1/Z [1/m], 0 where the point is invalid
+  ImageU8 edge;                               // 1 at depth-edge pixels
+  std::vector<std::int32_t> edge_integral;    // summed-area table of `edge`
+  std::vector<std::int32_t> last_valid_row;   // per column, for the vertical edge scan
+  std::vector<float> last_inverse_depth;      // per column, 1/Z at last_valid_row [1/m]
+  internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
+  internal::IntegralRowRing<std::uint32_t, 4> first_order_rows;
+  std::vector<std::uint64_t> strip_u64;       // full-radius strip sums of the current row
+  std::vector<std::uint32_t> strips_u32;      // full, top-half and bottom-half strips
+  double max_abs_coordinate_m = 0.0;          // of this frame's valid points
+  double max_inverse_depth = 0.0;             // [1/m]
+  int max_radius_px = 0;                      // largest radius any pixel may use
+  // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
+  double fx_px = 0.0;
+  double fy_px = 0.0;
+};
+
+NormalEstimator::NormalEstimator(const NormalOptions& options)
+    : options_(options), buffers_(std::make_unique<Buffers>()) {
   std::string error;
   if (!options_.IsValid(&error)) throw Error(error);
 }
 
+NormalEstimator::~NormalEstimator() = default;
+NormalEstimator::NormalEstimator(NormalEstimator&&) noexcept = default;
+NormalEstimator& NormalEstimator::operator=(NormalEstimator&&) noexcept = default;
+
+const ImageU8& NormalEstimator::window_radius_px() const { return buffers_->radius; }
+
 const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
+  Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
-  if (normals_.width() != width || normals_.height() != height) {
-    normals_ = Image3f(width, height, NanVector3f());
-    radius_ = ImageU8(width, height, 0);
-    distance_ = ImageU8(width, height, kFarPx);
-  } else {
-    normals_.Fill(NanVector3f());
+  if (b.normals.width() != width || b.normals.height() != height) {
+    b.normals = Image3f(width, height, NanVector3f());
+    b.radius = ImageU8(width, height, 0);
+    b.inverse_depth = ImageF(width, height, 0.0f);
+    b.edge = ImageU8(width, height, 0);
   }
-  if (cloud.empty()) return normals_;
+  if (cloud.empty()) return b.normals;
 
+  PrepareFrame(cloud);
   ComputeWindowRadii(cloud);
-  if (max_abs_coordinate_m_ <= 0.0) return normals_;  // no valid point at all
+  if (b.max_abs_coordinate_m <= 0.0) {  // no valid point at all
+    b.normals.Fill(NanVector3f());
+    return b.normals;
+  }
   switch (options_.method) {
     case NormalMethod::kCovarianceMatrix: ComputeCovariance(cloud); break;
     case NormalMethod::kAverage3dGradient: ComputeAverage3dGradient(cloud); break;
     case NormalMethod::kAverageDepthChange: ComputeAverageDepthChange(cloud); break;
   }
-  return normals_;
+  return b.normals;
 }
 
-// Marks depth-edge pixels (distance 0), runs a two-pass chessboard distance transform and
-// derives each pixel's window radius. Also records the largest coordinate (for the fixed-point
-// scale) and the pinhole scale fx, fy from the extreme valid pixels.
-void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
+// One raster pass: inverse depth per pixel, depth-edge pixels (horizontal and vertical
+// neighbours, bridging short gaps of invalid pixels), the largest coordinate (for the fixed-point
+// scales) and the pinhole scale fx, fy from the extreme valid pixels.
+void NormalEstimator::PrepareFrame(const Image3f& cloud) {
+  Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
   const int base_radius = options_.smoothing_size_px / 2;
-  max_radius_px_ = options_.depth_dependent_smoothing
-                       ? static_cast<int>(options_.smoothing_size_px * kMaxDepthScale) / 2
-                       : base_radius;
+  b.max_radius_px = options_.depth_dependent_smoothing
+                        ? static_cast<int>(options_.smoothing_size_px * kMaxDepthScale) / 2
+                        : base_radius;
   // A gap of invalid pixels longer than this cannot fit inside any window with valid pixels on
   // both of its sides, so the points at its ends need no comparison.
-  const int max_gap = 2 * max_radius_px_ - 1;
+  const int max_gap = 2 * b.max_radius_px - 1;
   std::vector<float> threshold(static_cast<std::size_t>(max_gap) + 1);
   for (int gap = 0; gap <= max_gap; ++gap) {
     threshold[gap] = static_cast<float>(options_.max_depth_change_factor * std::sqrt(1.0 + gap));
   }
 
-  distance_.Fill(kFarPx);
-  last_valid_row_.assign(width, -1);
-  last_inverse_depth_.assign(width, 0.0f);
-  double max_abs = 0.0;
+  b.edge.Fill(0);
+  b.last_valid_row.assign(width, -1);
+  b.last_inverse_depth.assign(width, 0.0f);
+  float max_abs = 0.0f, max_rho = 0.0f;
   int u_min = std::numeric_limits<int>::max(), u_max = -1, v_min = -1, v_max = -1;
   double xhat_at_u_min = 0.0, xhat_at_u_max = 0.0, yhat_at_v_min = 0.0, yhat_at_v_max = 0.0;
+  std::int32_t* last_row = b.last_valid_row.data();
+  float* last_rho_column = b.last_inverse_depth.data();
 
   for (int v = 0; v < height; ++v) {
     const Eigen::Vector3f* points = cloud.row(v);
-    std::uint8_t* dist = distance_.row(v);
+    float* rho_row = b.inverse_depth.row(v);
+    std::uint8_t* edge = b.edge.row(v);
     int last_u = -1;
     float last_rho = 0.0f;
     for (int u = 0; u < width; ++u) {
       const Eigen::Vector3f& p = points[u];
-      if (!IsValidPoint(p)) continue;
+      if (!IsValidPoint(p)) {
+        rho_row[u] = 0.0f;
+        continue;
+      }
       const float rho = 1.0f / p.z();
-      max_abs = std::max({max_abs, static_cast<double>(std::abs(p.x())),
-                          static_cast<double>(std::abs(p.y())), static_cast<double>(p.z())});
+      rho_row[u] = rho;
+      max_abs = std::max(max_abs, std::max(std::max(std::abs(p.x()), std::abs(p.y())), p.z()));
+      max_rho = std::max(max_rho, rho);
       if (last_u >= 0) {
         const int gap = u - last_u - 1;
         if (gap <= max_gap && std::abs(rho - last_rho) > threshold[gap]) {
-          dist[u] = 0;
-          dist[last_u] = 0;
+          edge[u] = 1;
+          edge[last_u] = 1;
         }
       } else if (u < u_min) {
         u_min = u;
         xhat_at_u_min = p.x() / p.z();
       }
-      const int row_above = last_valid_row_[u];
+      const int row_above = last_row[u];
       if (row_above >= 0) {
         const int gap = v - row_above - 1;
-        if (gap <= max_gap && std::abs(rho - last_inverse_depth_[u]) > threshold[gap]) {
-          dist[u] = 0;
-          distance_(row_above, u) = 0;
+        if (gap <= max_gap && std::abs(rho - last_rho_column[u]) > threshold[gap]) {
+          edge[u] = 1;
+          b.edge(row_above, u) = 1;
         }
       }
-      if (v_min < 0) {
-        v_min = v;
-        yhat_at_v_min = p.y() / p.z();
-      }
       if (v != v_max) {
+        if (v_min < 0) {
+          v_min = v;
+          yhat_at_v_min = p.y() / p.z();
+        }
         v_max = v;
         yhat_at_v_max = p.y() / p.z();
       }
-      last_valid_row_[u] = v;
-      last_inverse_depth_[u] = rho;
+      last_row[u] = v;
+      last_rho_column[u] = rho;
       last_u = u;
       last_rho = rho;
     }
@@ -179,132 +269,128 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
       xhat_at_u_max = points[last_u].x() / points[last_u].z();
     }
   }
-  max_abs_coordinate_m_ = max_abs;
-  fx_px_ = (u_max > u_min && xhat_at_u_max != xhat_at_u_min)
-               ? (u_max - u_min) / (xhat_at_u_max - xhat_at_u_min)
-               : 0.0;
-  fy_px_ = (v_max > v_min && yhat_at_v_max != yhat_at_v_min)
-               ? (v_max - v_min) / (yhat_at_v_max - yhat_at_v_min)
-               : 0.0;
+  b.max_abs_coordinate_m = max_abs;
+  b.max_inverse_depth = max_rho;
+  b.fx_px = (u_max > u_min && xhat_at_u_max != xhat_at_u_min)
+                ? (u_max - u_min) / (xhat_at_u_max - xhat_at_u_min)
+                : 0.0;
+  b.fy_px = (v_max > v_min && yhat_at_v_max != yhat_at_v_min)
+                ? (v_max - v_min) / (yhat_at_v_max - yhat_at_v_min)
+                : 0.0;
+}
 
-  // Chessboard distance transform (exact for this metric with two raster passes): a square
-  // window of radius d - 1 around a pixel at distance d holds no edge pixel.
-  auto relax = [](std::uint8_t& d, std::uint8_t neighbour) {
-    const int candidate = neighbour + 1;
-    if (candidate < d) d = static_cast<std::uint8_t>(candidate);
-  };
+// Radius per pixel: the smoothing radius (depth-dependent if asked), cut by the image border and
+// shrunk until the square window holds no depth-edge pixel (edge counts from a summed-area
+// table). Edge pixels themselves get no normal: their window would reach across the edge.
+void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
+  Buffers& b = *buffers_;
+  const int width = cloud.width();
+  const int height = cloud.height();
+  const std::size_t stride = static_cast<std::size_t>(width) + 1;
+  b.edge_integral.resize(stride * (height + 1));
+  std::int32_t* integral = b.edge_integral.data();
+  std::fill(integral, integral + stride, 0);
   for (int v = 0; v < height; ++v) {
-    std::uint8_t* d = distance_.row(v);
-    const std::uint8_t* above = v > 0 ? distance_.row(v - 1) : nullptr;
+    const std::uint8_t* edge = b.edge.row(v);
+    const std::int32_t* prev = integral + stride * v;
+    std::int32_t* cur = integral + stride * (v + 1);
+    std::int32_t acc = 0;
+    cur[0] = 0;
     for (int u = 0; u < width; ++u) {
-      if (d[u] == 0) continue;
-      if (u > 0) relax(d[u], d[u - 1]);
-      if (above) {
-        relax(d[u], above[u]);
-        if (u > 0) relax(d[u], above[u - 1]);
-        if (u + 1 < width) relax(d[u], above[u + 1]);
-      }
+      acc += edge[u];
+      cur[u + 1] = prev[u + 1] + acc;
     }
   }
-  for (int v = height - 1; v >= 0; --v) {
-    std::uint8_t* d = distance_.row(v);
-    const std::uint8_t* below = v + 1 < height ? distance_.row(v + 1) : nullptr;
-    for (int u = width - 1; u >= 0; --u) {
-      if (d[u] == 0) continue;
-      if (u + 1 < width) relax(d[u], d[u + 1]);
-      if (below) {
-        relax(d[u], below[u]);
-        if (u > 0) relax(d[u], below[u - 1]);
-        if (u + 1 < width) relax(d[u], below[u + 1]);
-      }
-    }
-  }
+  auto edges_in_window = [&](int v, int u, int r) {
+    const std::int32_t* top = integral + stride * (v - r);
+    const std::int32_t* bottom = integral + stride * (v + r + 1);
+    return bottom[u + r + 1] - bottom[u - r] - top[u + r + 1] + top[u - r];
+  };
 
-  // Radius: the smoothing radius, cut by the nearest edge and the image border.
+  const int base_radius = options_.smoothing_size_px / 2;
   for (int v = 0; v < height; ++v) {
-    const Eigen::Vector3f* points = cloud.row(v);
-    const std::uint8_t* d = distance_.row(v);
-    std::uint8_t* r_out = radius_.row(v);
+    const float* rho = b.inverse_depth.row(v);
+    std::uint8_t* r_out = b.radius.row(v);
     const int border_v = std::min(v, height - 1 - v);
     for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3f& p = points[u];
-      if (!IsValidPoint(p)) {
+      if (!(rho[u] > 0.0f)) {
         r_out[u] = 0;
         continue;
       }
       int r = base_radius;
       if (options_.depth_dependent_smoothing) {
-        const double scale = std::clamp(std::sqrt(p.z() / kReferenceDepthM), kMinDepthScale,
-                                        kMaxDepthScale);
+        const double scale = std::clamp(std::sqrt(1.0 / (rho[u] * kReferenceDepthM)),
+                                        kMinDepthScale, kMaxDepthScale);
         r = static_cast<int>(options_.smoothing_size_px * scale) / 2;
       }
-      r = std::min({r, d[u] - 1, border_v, u, width - 1 - u});
+      r = std::min({r, border_v, u, width - 1 - u});
+      while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
       r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
     }
   }
 }
 
 // Sums over the window of 1, x, y, z and the six products, as integers in units of a per-frame
-// quantum q (and q^2): exact box sums whatever the magnitude of the frame's other sums, with
-// modular uint64 arithmetic so the running totals may wrap; only a window's sums must fit.
+// quantum q (and q^2): exact box sums whatever the magnitude of the frame's other sums.
 void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   constexpr int kC = 10;  // n, x, y, z, xx, xy, xz, yy, yz, zz
+  Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
-  const double max_area = std::pow(2.0 * max_radius_px_ + 1.0, 2);
-  const double inv_q = std::sqrt(kMaxWindowSumOfSquares / max_area) / max_abs_coordinate_m_;
-  const std::size_t row_stride = static_cast<std::size_t>(width + 1) * kC;
-  integral_u64_.resize(row_stride * (height + 1));
-  std::fill(integral_u64_.begin(), integral_u64_.begin() + row_stride, 0);
+  const int max_r = b.max_radius_px;
+  const double max_area = std::pow(2.0 * max_r + 1.0, 2);
+  const float inv_q =
+      static_cast<float>(std::sqrt(kMaxWindowSumOfSquares / max_area) / b.max_abs_coordinate_m);
+  auto& rows = b.covariance_rows;
+  rows.Reset(width, height, max_r);
+  auto add = [&](int v, int u, std::uint64_t* acc) {
+    if (!(b.inverse_depth(v, u) > 0.0f)) return;
+    const Eigen::Vector3f& p = cloud(v, u);
+    const auto x = static_cast<std::int64_t>(p.x() * inv_q);
+    const auto y = static_cast<std::int64_t>(p.y() * inv_q);
+    const auto z = static_cast<std::int64_t>(p.z() * inv_q);
+    acc[0] += 1;
+    acc[1] += static_cast<std::uint64_t>(x);
+    acc[2] += static_cast<std::uint64_t>(y);
+    acc[3] += static_cast<std::uint64_t>(z);
+    acc[4] += static_cast<std::uint64_t>(x * x);
+    acc[5] += static_cast<std::uint64_t>(x * y);
+    acc[6] += static_cast<std::uint64_t>(x * z);
+    acc[7] += static_cast<std::uint64_t>(y * y);
+    acc[8] += static_cast<std::uint64_t>(y * z);
+    acc[9] += static_cast<std::uint64_t>(z * z);
+  };
 
+  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
+  b.strip_u64.resize(row_size);
+  std::uint64_t* strip = b.strip_u64.data();
+  const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
-    const std::uint64_t* prev = integral_u64_.data() + row_stride * v;
-    std::uint64_t* cur = integral_u64_.data() + row_stride * (v + 1);
-    std::fill(cur, cur + kC, 0);
-    std::uint64_t acc[kC] = {};
-    const Eigen::Vector3f* points = cloud.row(v);
-    for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3f& p = points[u];
-      if (IsValidPoint(p)) {
-        const auto x = static_cast<std::int64_t>(p.x() * inv_q);
-        const auto y = static_cast<std::int64_t>(p.y() * inv_q);
-        const auto z = static_cast<std::int64_t>(p.z() * inv_q);
-        acc[0] += 1;
-        acc[1] += static_cast<std::uint64_t>(x);
-        acc[2] += static_cast<std::uint64_t>(y);
-        acc[3] += static_cast<std::uint64_t>(z);
-        acc[4] += static_cast<std::uint64_t>(x * x);
-        acc[5] += static_cast<std::uint64_t>(x * y);
-        acc[6] += static_cast<std::uint64_t>(x * z);
-        acc[7] += static_cast<std::uint64_t>(y * y);
-        acc[8] += static_cast<std::uint64_t>(y * z);
-        acc[9] += static_cast<std::uint64_t>(z * z);
-      }
-      const std::uint64_t* above = prev + (u + 1) * kC;
-      std::uint64_t* out = cur + (u + 1) * kC;
-      for (int k = 0; k < kC; ++k) out[k] = above[k] + acc[k];
+    rows.BuildUpTo(v + max_r + 1, add);
+    if (v >= max_r && v + max_r + 1 <= height) {
+      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
     }
-  }
-
-  for (int v = 0; v < height; ++v) {
-    const std::uint8_t* radius = radius_.row(v);
+    std::uint8_t* radius = b.radius.row(v);
     const Eigen::Vector3f* points = cloud.row(v);
-    Eigen::Vector3f* normals = normals_.row(v);
+    Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
+      normals[u] = NanVector3f();
       const int r = radius[u];
       if (r == 0) continue;
-      const std::uint64_t* top = integral_u64_.data() + row_stride * (v - r);
-      const std::uint64_t* bottom = integral_u64_.data() + row_stride * (v + r + 1);
-      const std::size_t left = static_cast<std::size_t>(u - r) * kC;
-      const std::size_t right = static_cast<std::size_t>(u + r + 1) * kC;
       double s[kC];
-      for (int k = 0; k < kC; ++k) {
-        const std::uint64_t box = bottom[right + k] - bottom[left + k] - top[right + k] + top[left + k];
-        s[k] = static_cast<double>(static_cast<std::int64_t>(box));
+      if (r == max_r) {
+        for (int k = 0; k < kC; ++k) {
+          s[k] = static_cast<double>(StripBox<std::int64_t, kC>(strip, u - r, u + r + 1, k));
+        }
+      } else {
+        const std::uint64_t* top = rows.Row(v - r);
+        const std::uint64_t* bottom = rows.Row(v + r + 1);
+        for (int k = 0; k < kC; ++k) {
+          s[k] = static_cast<double>(BoxSum<std::int64_t, kC>(top, bottom, u - r, u + r + 1, k));
+        }
       }
-      const int area = (2 * r + 1) * (2 * r + 1);
-      if (s[0] < MinCount(area)) {
-        radius_(v, u) = 0;
+      if (s[0] < min_counts.full[r]) {
+        radius[u] = 0;
         continue;
       }
       const double inv_n = 1.0 / s[0];
@@ -314,96 +400,87 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
                                         s[6] * inv_n - mx * mz, s[7] * inv_n - my * my,
                                         s[8] * inv_n - my * mz, s[9] * inv_n - mz * mz, &n)) {
         StoreOriented(n, points[u], &normals[u]);
-      } else {
-        radius_(v, u) = 0;
       }
+      if (!IsFinite(normals[u])) radius[u] = 0;
     }
   }
 }
-
-namespace {
-// Box sums of a C-channel double integral image with (width + 1) columns per row.
-template <int C>
-struct BoxSummer {
-  const double* data;
-  std::size_t row_stride;
-  // Sum over rows [v0, v1) and columns [u0, u1).
-  void Sum(int v0, int v1, int u0, int u1, double* out) const {
-    const double* a = data + row_stride * v0 + static_cast<std::size_t>(u0) * C;
-    const double* b = data + row_stride * v0 + static_cast<std::size_t>(u1) * C;
-    const double* c = data + row_stride * v1 + static_cast<std::size_t>(u0) * C;
-    const double* d = data + row_stride * v1 + static_cast<std::size_t>(u1) * C;
-    for (int k = 0; k < C; ++k) out[k] = d[k] - c[k] - b[k] + a[k];
-  }
-};
-
-// Fills a C-channel double integral image; `values(p, out)` writes the C channel values of a
-// valid point (channel 0 is the count and is set here).
-template <int C, typename Values>
-void BuildIntegral(const Image3f& cloud, std::vector<double>* integral, Values values) {
-  const int width = cloud.width();
-  const int height = cloud.height();
-  const std::size_t row_stride = static_cast<std::size_t>(width + 1) * C;
-  integral->resize(row_stride * (height + 1));
-  std::fill(integral->begin(), integral->begin() + row_stride, 0.0);
-  for (int v = 0; v < height; ++v) {
-    const double* prev = integral->data() + row_stride * v;
-    double* cur = integral->data() + row_stride * (v + 1);
-    std::fill(cur, cur + C, 0.0);
-    double acc[C] = {};
-    const Eigen::Vector3f* points = cloud.row(v);
-    for (int u = 0; u < width; ++u) {
-      if (IsValidPoint(points[u])) {
-        double add[C];
-        values(points[u], add);
-        acc[0] += 1.0;
-        for (int k = 1; k < C; ++k) acc[k] += add[k];
-      }
-      const double* above = prev + (u + 1) * C;
-      double* out = cur + (u + 1) * C;
-      for (int k = 0; k < C; ++k) out[k] = above[k] + acc[k];
-    }
-  }
-}
-}  // namespace
 
 // Tangents as differences of the mean points of opposite window halves (right - left,
 // bottom - top, each half excluding the centre row or column); for a plane every mean point
 // lies on the plane, so the tangents are exact even when invalid pixels unbalance the halves.
+// Sums in 32-bit fixed point (only directions matter, so the quantum cancels).
 void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
   constexpr int kC = 4;  // n, x, y, z
+  Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
-  BuildIntegral<kC>(cloud, &integral_f64_, [](const Eigen::Vector3f& p, double* out) {
-    out[1] = p.x();
-    out[2] = p.y();
-    out[3] = p.z();
-  });
-  const BoxSummer<kC> box{integral_f64_.data(), static_cast<std::size_t>(width + 1) * kC};
-  auto mean = [](const double* s) -> Eigen::Vector3d {
-    const double inv_n = 1.0 / s[0];
-    return Eigen::Vector3d(s[1] * inv_n, s[2] * inv_n, s[3] * inv_n);
+  const int max_r = b.max_radius_px;
+  const double max_area = std::pow(2.0 * max_r + 1.0, 2);
+  const float inv_q = static_cast<float>(kMaxWindowSum32 / (max_area * b.max_abs_coordinate_m));
+  auto& rows = b.first_order_rows;
+  rows.Reset(width, height, max_r);
+  auto add = [&](int v, int u, std::uint32_t* acc) {
+    if (!(b.inverse_depth(v, u) > 0.0f)) return;
+    const Eigen::Vector3f& p = cloud(v, u);
+    acc[0] += 1;
+    acc[1] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.x() * inv_q));
+    acc[2] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.y() * inv_q));
+    acc[3] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.z() * inv_q));
   };
 
+  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
+  b.strips_u32.resize(3 * row_size);
+  std::uint32_t* full = b.strips_u32.data();
+  std::uint32_t* upper = full + row_size;
+  std::uint32_t* lower = upper + row_size;
+  const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
+    rows.BuildUpTo(v + max_r + 1, add);
+    if (v >= max_r && v + max_r + 1 <= height) {
+      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, full);
+      StripSums(rows.Row(v - max_r), rows.Row(v), row_size, upper);
+      StripSums(rows.Row(v + 1), rows.Row(v + max_r + 1), row_size, lower);
+    }
+    std::uint8_t* radius = b.radius.row(v);
     const Eigen::Vector3f* points = cloud.row(v);
-    Eigen::Vector3f* normals = normals_.row(v);
-    std::uint8_t* radius = radius_.row(v);
+    Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
+      normals[u] = NanVector3f();
       const int r = radius[u];
       if (r == 0) continue;
       double sl[kC], sr[kC], st[kC], sb[kC];
-      box.Sum(v - r, v + r + 1, u - r, u, sl);
-      box.Sum(v - r, v + r + 1, u + 1, u + r + 1, sr);
-      box.Sum(v - r, v, u - r, u + r + 1, st);
-      box.Sum(v + 1, v + r + 1, u - r, u + r + 1, sb);
-      const int min_count = MinCount(r * (2 * r + 1));
+      if (r == max_r) {
+        for (int k = 0; k < kC; ++k) {
+          sl[k] = StripBox<std::int32_t, kC>(full, u - r, u, k);
+          sr[k] = StripBox<std::int32_t, kC>(full, u + 1, u + r + 1, k);
+          st[k] = StripBox<std::int32_t, kC>(upper, u - r, u + r + 1, k);
+          sb[k] = StripBox<std::int32_t, kC>(lower, u - r, u + r + 1, k);
+        }
+      } else {
+        const std::uint32_t* top = rows.Row(v - r);
+        const std::uint32_t* middle_top = rows.Row(v);
+        const std::uint32_t* middle_bottom = rows.Row(v + 1);
+        const std::uint32_t* bottom = rows.Row(v + r + 1);
+        for (int k = 0; k < kC; ++k) {
+          sl[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k);
+          sr[k] = BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k);
+          st[k] = BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k);
+          sb[k] = BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k);
+        }
+      }
+      const int min_count = min_counts.half[r];
       if (sl[0] < min_count || sr[0] < min_count || st[0] < min_count || sb[0] < min_count) {
         radius[u] = 0;
         continue;
       }
-      const Eigen::Vector3d n = (mean(sr) - mean(sl)).cross(mean(sb) - mean(st));
-      StoreOriented(n, points[u], &normals[u]);
+      double il, ir, it, ib;
+      Reciprocals(sl[0], sr[0], st[0], sb[0], &il, &ir, &it, &ib);
+      const Eigen::Vector3d tangent_u(sr[1] * ir - sl[1] * il, sr[2] * ir - sl[2] * il,
+                                      sr[3] * ir - sl[3] * il);
+      const Eigen::Vector3d tangent_v(sb[1] * ib - st[1] * it, sb[2] * ib - st[2] * it,
+                                      sb[3] * ib - st[3] * it);
+      StoreOriented(tangent_u.cross(tangent_v), points[u], &normals[u]);
       if (!IsFinite(normals[u])) radius[u] = 0;
     }
   }
@@ -416,81 +493,103 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
 // the mean pixel coordinates of each half's valid pixels locate where those means apply, so
 // invalid pixels or a range cut that unbalance the halves do not bias the gradient (a 2 x 2
 // solve). One integral image of inverse depth plus the count and the valid u, v sums.
-// fx, fy are recovered from the cloud itself (see ComputeWindowRadii).
+// fx, fy are recovered from the cloud itself (see PrepareFrame).
 void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
-  if (!(fx_px_ > 0.0) || !(fy_px_ > 0.0)) {
-    radius_.Fill(0);
-    return;
-  }
   constexpr int kC = 4;  // n, 1/z, u, v
+  Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
-  {
-    const std::size_t row_stride = static_cast<std::size_t>(width + 1) * kC;
-    integral_f64_.resize(row_stride * (height + 1));
-    std::fill(integral_f64_.begin(), integral_f64_.begin() + row_stride, 0.0);
-    for (int v = 0; v < height; ++v) {
-      const double* prev = integral_f64_.data() + row_stride * v;
-      double* cur = integral_f64_.data() + row_stride * (v + 1);
-      std::fill(cur, cur + kC, 0.0);
-      double acc[kC] = {};
-      const Eigen::Vector3f* points = cloud.row(v);
-      for (int u = 0; u < width; ++u) {
-        if (IsValidPoint(points[u])) {
-          acc[0] += 1.0;
-          acc[1] += 1.0 / points[u].z();
-          acc[2] += u;
-          acc[3] += v;
-        }
-        const double* above = prev + (u + 1) * kC;
-        double* out = cur + (u + 1) * kC;
-        for (int k = 0; k < kC; ++k) out[k] = above[k] + acc[k];
-      }
-    }
+  if (!(b.fx_px > 0.0) || !(b.fy_px > 0.0)) {
+    b.radius.Fill(0);
+    b.normals.Fill(NanVector3f());
+    return;
   }
-  const BoxSummer<kC> box{integral_f64_.data(), static_cast<std::size_t>(width + 1) * kC};
+  const int max_r = b.max_radius_px;
+  const double max_area = std::pow(2.0 * max_r + 1.0, 2);
+  const float inv_q = static_cast<float>(kMaxWindowSum32 / (max_area * b.max_inverse_depth));
+  auto& rows = b.first_order_rows;
+  rows.Reset(width, height, max_r);
+  auto add = [&](int v, int u, std::uint32_t* acc) {
+    const float rho = b.inverse_depth(v, u);
+    if (!(rho > 0.0f)) return;
+    acc[0] += 1;
+    acc[1] += static_cast<std::uint32_t>(static_cast<std::int32_t>(rho * inv_q));
+    acc[2] += static_cast<std::uint32_t>(u);
+    acc[3] += static_cast<std::uint32_t>(v);
+  };
 
+  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
+  b.strips_u32.resize(3 * row_size);
+  std::uint32_t* full = b.strips_u32.data();
+  std::uint32_t* upper = full + row_size;
+  std::uint32_t* lower = upper + row_size;
+  const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
+    rows.BuildUpTo(v + max_r + 1, add);
+    if (v >= max_r && v + max_r + 1 <= height) {
+      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, full);
+      StripSums(rows.Row(v - max_r), rows.Row(v), row_size, upper);
+      StripSums(rows.Row(v + 1), rows.Row(v + max_r + 1), row_size, lower);
+    }
+    std::uint8_t* radius = b.radius.row(v);
     const Eigen::Vector3f* points = cloud.row(v);
-    Eigen::Vector3f* normals = normals_.row(v);
-    std::uint8_t* radius = radius_.row(v);
+    Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
+      normals[u] = NanVector3f();
       const int r = radius[u];
       if (r == 0) continue;
       double sl[kC], sr[kC], st[kC], sb[kC], sw[kC];
-      box.Sum(v - r, v + r + 1, u - r, u, sl);
-      box.Sum(v - r, v + r + 1, u + 1, u + r + 1, sr);
-      box.Sum(v - r, v, u - r, u + r + 1, st);
-      box.Sum(v + 1, v + r + 1, u - r, u + r + 1, sb);
-      box.Sum(v - r, v + r + 1, u - r, u + r + 1, sw);
-      const int min_count = MinCount(r * (2 * r + 1));
+      if (r == max_r) {
+        for (int k = 0; k < kC; ++k) {
+          sl[k] = StripBox<std::int32_t, kC>(full, u - r, u, k);
+          sr[k] = StripBox<std::int32_t, kC>(full, u + 1, u + r + 1, k);
+          st[k] = StripBox<std::int32_t, kC>(upper, u - r, u + r + 1, k);
+          sb[k] = StripBox<std::int32_t, kC>(lower, u - r, u + r + 1, k);
+          sw[k] = StripBox<std::int32_t, kC>(full, u - r, u + r + 1, k);
+        }
+      } else {
+        const std::uint32_t* top = rows.Row(v - r);
+        const std::uint32_t* middle_top = rows.Row(v);
+        const std::uint32_t* middle_bottom = rows.Row(v + 1);
+        const std::uint32_t* bottom = rows.Row(v + r + 1);
+        for (int k = 0; k < kC; ++k) {
+          sl[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k);
+          sr[k] = BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k);
+          st[k] = BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k);
+          sb[k] = BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k);
+          sw[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u + r + 1, k);
+        }
+      }
+      const int min_count = min_counts.half[r];
       if (sl[0] < min_count || sr[0] < min_count || st[0] < min_count || sb[0] < min_count) {
         radius[u] = 0;
         continue;
       }
       // Differences of the halves' means (rho, u, v): horizontal pair h, vertical pair w.
-      const double il = 1.0 / sl[0], ir = 1.0 / sr[0], it = 1.0 / st[0], ib = 1.0 / sb[0];
+      double il, ir, it, ib;
+      Reciprocals(sl[0], sr[0], st[0], sb[0], &il, &ir, &it, &ib);
       const double h_rho = sr[1] * ir - sl[1] * il;
       const double h_u = sr[2] * ir - sl[2] * il;
       const double h_v = sr[3] * ir - sl[3] * il;
       const double w_rho = sb[1] * ib - st[1] * it;
       const double w_u = sb[2] * ib - st[2] * it;
       const double w_v = sb[3] * ib - st[3] * it;
-      const double det = h_u * w_v - h_v * w_u;  // ~ (r + 1)^2 when balanced
+      const double det = h_u * w_v - h_v * w_u;  // (r + 1)^2 when balanced
       if (!(std::abs(det) > 0.25 * (r + 1) * (r + 1))) {
         radius[u] = 0;
         continue;
       }
       const double inv_det = 1.0 / det;
       const double a = (h_rho * w_v - h_v * w_rho) * inv_det;  // drho/du
-      const double b = (h_u * w_rho - h_rho * w_u) * inv_det;  // drho/dv
+      const double c = (h_u * w_rho - h_rho * w_u) * inv_det;  // drho/dv
       const double inv_n = 1.0 / sw[0];
-      const double rho = sw[1] * inv_n + a * (u - sw[2] * inv_n) + b * (v - sw[3] * inv_n);
+      const double rho = sw[1] * inv_n + a * (u - sw[2] * inv_n) + c * (v - sw[3] * inv_n);
       const Eigen::Vector3f& p = points[u];
-      const double xh = p.x() / p.z(), yh = p.y() / p.z();
-      const double rho_xh = fx_px_ * a, rho_yh = fy_px_ * b;
-      const Eigen::Vector3d n(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh);
-      StoreOriented(n, p, &normals[u]);
+      const double rho_p = b.inverse_depth(v, u);
+      const double xh = p.x() * rho_p, yh = p.y() * rho_p;
+      const double rho_xh = b.fx_px * a, rho_yh = b.fy_px * c;
+      StoreOriented(Eigen::Vector3d(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh), p,
+                    &normals[u]);
       if (!IsFinite(normals[u])) radius[u] = 0;
     }
   }

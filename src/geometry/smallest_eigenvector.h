@@ -7,8 +7,9 @@
 namespace ssta {
 namespace internal {
 
-/// Unit eigenvector of the smallest eigenvalue of the symmetric positive semi-definite 3x3
-/// matrix [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]] (a covariance), sign arbitrary.
+/// Eigenvector of the smallest eigenvalue of the symmetric positive semi-definite 3x3 matrix
+/// [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]] (a covariance), NOT normalised (callers normalise
+/// once, together with orienting it), sign arbitrary, length >= 1e-50.
 ///
 /// Why not Eigen::SelfAdjointEigenSolver::computeDirect: it needs acos/cos/sin per call, which
 /// at 300k pixels per frame costs more than the rest of the normal estimation. Instead: the
@@ -53,7 +54,7 @@ inline bool SmallestEigenvector(double xx, double xy, double xz, double yy, doub
                         a01 * v.x() + a11 * v.y() + a12 * v.z(),
                         a02 * v.x() + a12 * v.y() + a22 * v.z());
   }
-  *normal = v / std::sqrt(v.squaredNorm());
+  *normal = v;
   return true;
 }
 

@@ -311,7 +311,7 @@ TEST(SmallestEigenvector, AgreesWithEigenOnRandomFlatCovariances) {
     ASSERT_TRUE(internal::SmallestEigenvector(c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2), &n));
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(c);
-    const double cosine = std::min(1.0, std::abs(n.dot(solver.eigenvectors().col(0))));
+    const double cosine = std::min(1.0, std::abs(n.normalized().dot(solver.eigenvectors().col(0))));
     worst_deg = std::max(worst_deg, std::acos(cosine) * 180.0 / M_PI);
   }
   RecordProperty("worst_deg", std::to_string(worst_deg));

@@ -1,8 +1,7 @@
 #pragma once
 
-#include <cstdint>
+#include <memory>
 #include <string>
-#include <vector>
 
 #include "ssta/core/image.h"
 
@@ -80,35 +79,30 @@ class NormalEstimator {
  public:
   /// Throws ssta::Error (message from NormalOptions::IsValid) on invalid options.
   explicit NormalEstimator(const NormalOptions& options);
+  ~NormalEstimator();
+  NormalEstimator(NormalEstimator&&) noexcept;
+  NormalEstimator& operator=(NormalEstimator&&) noexcept;
 
   /// Normals of `cloud_camera`; the reference stays valid until the next Compute call.
   const Image3f& Compute(const Image3f& cloud_camera);
 
   /// Window half-size [px] used at each pixel by the last Compute: the window is
   /// (2r+1) x (2r+1); 0 where no normal was computed.
-  const ImageU8& window_radius_px() const { return radius_; }
+  const ImageU8& window_radius_px() const;
 
   const NormalOptions& options() const { return options_; }
 
  private:
+  struct Buffers;  // integral rows, edge maps: private to the implementation
+
+  void PrepareFrame(const Image3f& cloud);
   void ComputeWindowRadii(const Image3f& cloud);
   void ComputeCovariance(const Image3f& cloud);
   void ComputeAverage3dGradient(const Image3f& cloud);
   void ComputeAverageDepthChange(const Image3f& cloud);
 
   NormalOptions options_;
-  Image3f normals_;
-  ImageU8 radius_;    // per-pixel window radius [px]
-  ImageU8 distance_;  // chessboard distance to the nearest depth-edge pixel [px], capped
-  std::vector<std::int32_t> last_valid_row_;  // per column, for the vertical edge scan
-  std::vector<float> last_inverse_depth_;     // per column, 1/Z at last_valid_row_ [1/m]
-  std::vector<std::uint64_t> integral_u64_;   // covariance sums (fixed point, modular)
-  std::vector<double> integral_f64_;          // gradient / depth-change sums
-  double max_abs_coordinate_m_ = 0.0;         // of the last frame's valid points
-  int max_radius_px_ = 0;                     // largest window radius any pixel may use
-  // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
-  double fx_px_ = 0.0;
-  double fy_px_ = 0.0;
+  std::unique_ptr<Buffers> buffers_;
 };
 
 /// One-shot convenience: NormalEstimator(options).Compute(cloud_camera), returned by value.
