@@ -30,6 +30,8 @@ constexpr double kMaxWindowSumOfSquares = 4.6e18;
 // The gradient methods sum first-order values in 32-bit fixed point: a window's sum of
 // |quantised value| must stay below 2^31.
 constexpr double kMaxWindowSum32 = 2.0e9;
+// Covariance windows whose lambda2 * lambda3 / trace^2 is below this are (nearly) collinear.
+constexpr float kMinRank2Float = 1e-6f;
 
 bool Fail(std::string* error, const std::string& message) {
   if (error) *error = message;
@@ -76,6 +78,22 @@ inline void StripSums(const T* top, const T* bottom, std::size_t n, T* out) {
 template <typename S, int C, typename T>
 inline S StripBox(const T* strip, int c0, int c1, int k) {
   return static_cast<S>(static_cast<T>(strip[c1 * C + k] - strip[c0 * C + k]));
+}
+
+// The eigen solve of one row of trace-1 covariances (structure of arrays). A function of its
+// own so that __restrict on the parameters lets the compiler vectorise the loop.
+#if defined(__GNUC__)
+__attribute__((noinline))
+#endif
+void SmallestEigenvectorsOfRow(int n, const float* __restrict cxx, const float* __restrict cxy,
+                               const float* __restrict cxz, const float* __restrict cyy,
+                               const float* __restrict cyz, const float* __restrict czz,
+                               float* __restrict nx, float* __restrict ny,
+                               float* __restrict nz) {
+  for (int i = 0; i < n; ++i) {
+    internal::SmallestEigenvectorOfUnitTrace(cxx[i], cxy[i], cxz[i], cyy[i], cyz[i], czz[i],
+                                             kMinRank2Float, &nx[i], &ny[i], &nz[i]);
+  }
 }
 
 // Reciprocals of four positive numbers with one division.
@@ -141,6 +159,7 @@ struct NormalEstimator::Buffers {
   std::vector<float> last_inverse_depth;      // per column, 1/Z at last_valid_row [1/m]
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
   internal::IntegralRowRing<std::uint32_t, 4> first_order_rows;
+  std::vector<float> row_soa;                 // covariance: per-row structure of arrays
   std::vector<std::uint64_t> strip_u64;       // full-radius strip sums of the current row
   std::vector<std::uint32_t> strips_u32;      // full, top-half and bottom-half strips
   double max_abs_coordinate_m = 0.0;          // of this frame's valid points
@@ -364,6 +383,18 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
   b.strip_u64.resize(row_size);
   std::uint64_t* strip = b.strip_u64.data();
+  // Per-row structure-of-arrays: the trace-1 covariance entries, then the eigenvectors, so that
+  // the eigen solve runs as one branch-free loop the compiler vectorises.
+  b.row_soa.resize(static_cast<std::size_t>(width) * 9);
+  float* cxx = b.row_soa.data();
+  float* cxy = cxx + width;
+  float* cxz = cxy + width;
+  float* cyy = cxz + width;
+  float* cyz = cyy + width;
+  float* czz = cyz + width;
+  float* nx = czz + width;
+  float* ny = nx + width;
+  float* nz = ny + width;
   const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
@@ -371,10 +402,8 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
       StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
     }
     std::uint8_t* radius = b.radius.row(v);
-    const Eigen::Vector3f* points = cloud.row(v);
-    Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
-      normals[u] = NanVector3f();
+      cxx[u] = cxy[u] = cxz[u] = cyy[u] = cyz[u] = czz[u] = 0.0f;
       const int r = radius[u];
       if (r == 0) continue;
       double s[kC];
@@ -393,15 +422,37 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
         radius[u] = 0;
         continue;
       }
+      // Centred in double (the subtraction cancels), then scaled to trace 1 for float.
       const double inv_n = 1.0 / s[0];
       const double mx = s[1] * inv_n, my = s[2] * inv_n, mz = s[3] * inv_n;
-      Eigen::Vector3d n;
-      if (internal::SmallestEigenvector(s[4] * inv_n - mx * mx, s[5] * inv_n - mx * my,
-                                        s[6] * inv_n - mx * mz, s[7] * inv_n - my * my,
-                                        s[8] * inv_n - my * mz, s[9] * inv_n - mz * mz, &n)) {
-        StoreOriented(n, points[u], &normals[u]);
+      const double xx = s[4] * inv_n - mx * mx, yy = s[7] * inv_n - my * my;
+      const double zz = s[9] * inv_n - mz * mz;
+      const double trace = xx + yy + zz;
+      if (!(trace > 0.0)) {
+        radius[u] = 0;
+        continue;
       }
-      if (!IsFinite(normals[u])) radius[u] = 0;
+      const double inv_trace = 1.0 / trace;
+      cxx[u] = static_cast<float>(xx * inv_trace);
+      cxy[u] = static_cast<float>((s[5] * inv_n - mx * my) * inv_trace);
+      cxz[u] = static_cast<float>((s[6] * inv_n - mx * mz) * inv_trace);
+      cyy[u] = static_cast<float>(yy * inv_trace);
+      cyz[u] = static_cast<float>((s[8] * inv_n - my * mz) * inv_trace);
+      czz[u] = static_cast<float>(zz * inv_trace);
+    }
+    SmallestEigenvectorsOfRow(width, cxx, cxy, cxz, cyy, cyz, czz, nx, ny, nz);
+    const Eigen::Vector3f* points = cloud.row(v);
+    Eigen::Vector3f* normals = b.normals.row(v);
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector3f n(nx[u], ny[u], nz[u]);
+      const float squared_norm = n.squaredNorm();
+      if (radius[u] == 0 || !(squared_norm > 0.0f)) {
+        normals[u] = NanVector3f();
+        radius[u] = 0;
+        continue;
+      }
+      const float sign = n.dot(points[u]) > 0.0f ? -1.0f : 1.0f;
+      normals[u] = n * (sign / std::sqrt(squared_norm));
     }
   }
 }

@@ -22,16 +22,6 @@ inline std::int32_t Find(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
-inline void Union(std::int32_t* parent, std::int32_t a, std::int32_t b) {
-  a = Find(parent, a);
-  b = Find(parent, b);
-  if (a < b) {
-    parent[b] = a;
-  } else if (b < a) {
-    parent[a] = b;
-  }
-}
-
 }  // namespace
 
 bool SegmenterOptions::IsValid(std::string* error) const {
@@ -74,7 +64,8 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   parent_.resize(static_cast<std::size_t>(width) * height);
   std::int32_t* parent = parent_.data();
 
-  // Pass 1: join each valid pixel with its left and upper neighbours.
+  // Pass 1: join each valid pixel with its left and upper neighbours. Parents always point to
+  // smaller indices, so a set's root is its first pixel in raster order.
   auto joins = [&](std::int32_t a, std::int32_t b) {
     if (parent[b] < 0) return false;
     if (normals[a].dot(normals[b]) < cos_min) return false;
@@ -93,27 +84,43 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
         parent[i] = -1;
         continue;
       }
-      parent[i] = i;
-      if (u > 0 && joins(i, i - 1)) Union(parent, i, i - 1);
-      if (v > 0 && joins(i, i - width)) Union(parent, i, i - width);
+      const bool left = u > 0 && joins(i, i - 1);
+      const bool up = v > 0 && joins(i, i - width);
+      if (left && up) {
+        const std::int32_t a = Find(parent, i - 1), b = Find(parent, i - width);
+        if (a < b) {
+          parent[b] = a;
+          parent[i] = a;
+        } else {
+          parent[a] = b;
+          parent[i] = b;
+        }
+      } else if (left) {
+        parent[i] = parent[i - 1];
+      } else if (up) {
+        parent[i] = Find(parent, i - width);
+      } else {
+        parent[i] = i;
+      }
     }
   }
 
-  // Pass 2: a root is its set's first pixel in raster order, so labels are assigned in order.
+  // Pass 2: roots get ids in raster order; every other pixel takes its parent's id, which is
+  // already final because the parent comes earlier and, by induction, holds its root's id.
   std::int32_t* labels = out.labels.data();
   int num_segments = 0;
   const std::int32_t num_pixels = width * height;
   for (std::int32_t i = 0; i < num_pixels; ++i) {
-    if (parent[i] < 0) {
+    const std::int32_t p = parent[i];
+    if (p < 0) {
       labels[i] = -1;
       continue;
     }
-    const std::int32_t root = Find(parent, i);
-    if (root == i) {
+    if (p == i) {
       labels[i] = num_segments++;
       out.sizes.push_back(0);
     } else {
-      labels[i] = labels[root];
+      labels[i] = labels[p];
     }
     ++out.sizes[labels[i]];
   }

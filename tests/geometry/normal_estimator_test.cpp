@@ -297,29 +297,51 @@ TEST(NormalMethod, NamesRoundTripAndUnknownNamesAreErrors) {
   }
 }
 
+// Smallest-eigenvector direction of a covariance with SmallestEigenvectorOfUnitTrace in T.
+template <typename T>
+Eigen::Vector3d SolveUnitTrace(const Eigen::Matrix3d& c, T min_rank2) {
+  const Eigen::Matrix3d m = c / c.trace();
+  T x, y, z;
+  internal::SmallestEigenvectorOfUnitTrace<T>(T(m(0, 0)), T(m(0, 1)), T(m(0, 2)), T(m(1, 1)),
+                                              T(m(1, 2)), T(m(2, 2)), min_rank2, &x, &y, &z);
+  return Eigen::Vector3d(x, y, z);
+}
+
 TEST(SmallestEigenvector, AgreesWithEigenOnRandomFlatCovariances) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), ratio(0.0, 0.2), scale(1e-4, 1e2);
-  double worst_deg = 0.0;
+  double worst_float_deg = 0.0, worst_double_deg = 0.0;
   for (int i = 0; i < 10000; ++i) {
     const Eigen::Matrix3d rotation =
         Eigen::Quaterniond(Eigen::Vector4d(unit(rng), unit(rng), unit(rng), unit(rng)).normalized())
             .toRotationMatrix();
-    const double l3 = scale(rng), l2 = l3 * (0.05 + 0.95 * (unit(rng) + 1) / 2), l1 = l2 * ratio(rng);
+    // lambda3 >= lambda2 >= 0.02 lambda3 (windows up to 50 times longer than wide), lambda1 <=
+    // 0.2 lambda2 (flat enough to call a surface).
+    const double l3 = scale(rng), l2 = l3 * (0.02 + 0.98 * (unit(rng) + 1) / 2), l1 = l2 * ratio(rng);
     const Eigen::Matrix3d c = rotation * Eigen::Vector3d(l1, l2, l3).asDiagonal() * rotation.transpose();
-    Eigen::Vector3d n;
-    ASSERT_TRUE(internal::SmallestEigenvector(c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2), &n));
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(c);
-    const double cosine = std::min(1.0, std::abs(n.normalized().dot(solver.eigenvectors().col(0))));
-    worst_deg = std::max(worst_deg, std::acos(cosine) * 180.0 / M_PI);
+    const Eigen::Vector3d truth = solver.eigenvectors().col(0);
+    auto angle_deg = [&](const Eigen::Vector3d& n) {
+      return std::acos(std::min(1.0, std::abs(n.normalized().dot(truth)))) * 180.0 / M_PI;
+    };
+    const Eigen::Vector3d nf = SolveUnitTrace<float>(c, 1e-6f);
+    const Eigen::Vector3d nd = SolveUnitTrace<double>(c, 1e-10);
+    ASSERT_GT(nf.norm(), 0.0);
+    ASSERT_GT(nd.norm(), 0.0);
+    worst_float_deg = std::max(worst_float_deg, angle_deg(nf));
+    worst_double_deg = std::max(worst_double_deg, angle_deg(nd));
   }
-  RecordProperty("worst_deg", std::to_string(worst_deg));
-  EXPECT_LT(worst_deg, 0.1);
-  // Collinear points have no normal.
-  Eigen::Vector3d n;
-  EXPECT_FALSE(internal::SmallestEigenvector(1, 1, 1, 1, 1, 1, &n));
-  EXPECT_FALSE(internal::SmallestEigenvector(0, 0, 0, 0, 0, 0, &n));
+  RecordProperty("worst_float_deg", std::to_string(worst_float_deg));
+  RecordProperty("worst_double_deg", std::to_string(worst_double_deg));
+  EXPECT_LT(worst_float_deg, 0.1);
+  EXPECT_LT(worst_double_deg, 0.1);
+  // Collinear points and a single point have no normal.
+  Eigen::Matrix3d line = Eigen::Matrix3d::Constant(1.0);
+  EXPECT_EQ(SolveUnitTrace<float>(line, 1e-6f).norm(), 0.0);
+  Eigen::Matrix3d point = Eigen::Matrix3d::Zero();
+  point(0, 0) = 1e-30;  // trace must be positive; the caller rejects trace 0 itself
+  EXPECT_EQ(SolveUnitTrace<float>(point, 1e-6f).norm(), 0.0);
 }
 
 }  // namespace
