@@ -230,7 +230,7 @@ TEST(Segmenter, NoisyStereoGroundStaysOneSegmentAtDefaults) {
   RecordProperty("largest_fraction", std::to_string(largest_fraction));
   RecordProperty("near_fraction", std::to_string(near_fraction));
   EXPECT_GT(near_fraction, 0.95);
-  EXPECT_GT(largest_fraction, 0.8);
+  EXPECT_GT(largest_fraction, 0.9);
 }
 
 TEST(SegmenterOptions, ValidationNamesTheKey) {
