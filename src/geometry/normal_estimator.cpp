@@ -457,12 +457,203 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   }
 }
 
+namespace {
+
+// Box sums over the full window (w) and its four halves (l, r, t, b: left/right of the centre
+// column, above/below the centre row) of a 4-channel quantity, as floats.
+struct HalfSums {
+  float l[4], r[4], t[4], b[4], w[4];
+};
+
+// Half and full window sums of pixel u at radius r from integral rows (generic path).
+inline HalfSums HalfSumsFromRows(const std::uint32_t* top, const std::uint32_t* middle_top,
+                                 const std::uint32_t* middle_bottom, const std::uint32_t* bottom,
+                                 int u, int r) {
+  constexpr int kC = 4;
+  HalfSums s;
+  for (int k = 0; k < kC; ++k) {
+    s.l[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k));
+    s.r[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k));
+    s.t[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k));
+    s.b[k] = static_cast<float>(BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k));
+    s.w[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u - r, u + r + 1, k));
+  }
+  return s;
+}
+
+// Channel planes of the full-radius strips of one output row: plane k of strip `full` holds
+// channel k of (integral row v + R + 1) - (integral row v - R) for columns 0..width, etc.
+struct PlanarStrips {
+  const std::uint32_t* full[4];
+  const std::uint32_t* upper[4];  // rows v - R .. v - 1
+  const std::uint32_t* lower[4];  // rows v + 1 .. v + R
+};
+
+// Fills planar strips (3 strips x 4 planes x (width + 1)) from AoS integral rows.
+inline PlanarStrips MakePlanarStrips(const std::uint32_t* top, const std::uint32_t* middle_top,
+                                     const std::uint32_t* middle_bottom,
+                                     const std::uint32_t* bottom, int width,
+                                     std::uint32_t* storage) {
+  constexpr int kC = 4;
+  const std::size_t plane = static_cast<std::size_t>(width) + 1;
+  PlanarStrips strips;
+  for (int k = 0; k < kC; ++k) {
+    std::uint32_t* full = storage + plane * k;
+    std::uint32_t* upper = storage + plane * (kC + k);
+    std::uint32_t* lower = storage + plane * (2 * kC + k);
+    for (std::size_t c = 0; c < plane; ++c) {
+      full[c] = bottom[c * kC + k] - top[c * kC + k];
+      upper[c] = middle_top[c * kC + k] - top[c * kC + k];
+      lower[c] = bottom[c * kC + k] - middle_bottom[c * kC + k];
+    }
+    strips.full[k] = full;
+    strips.upper[k] = upper;
+    strips.lower[k] = lower;
+  }
+  return strips;
+}
+
+// Sum over columns [a, b) of a strip plane, as a float.
+inline float PlaneBox(const std::uint32_t* plane, int a, int b) {
+  return static_cast<float>(static_cast<std::int32_t>(plane[b] - plane[a]));
+}
+
+// Average 3D gradient normal (unnormalised; 0 when a half has fewer than min_count points)
+// from half-window sums of (count, x, y, z). Branch-free.
+inline void GradientNormal(const float* l, const float* r, const float* t, const float* b,
+                           float min_count, float* nx, float* ny, float* nz) {
+  const bool ok = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) &
+                  (b[0] >= min_count);
+  const float il = 1.0f / (ok ? l[0] : 1.0f), ir = 1.0f / (ok ? r[0] : 1.0f);
+  const float it = 1.0f / (ok ? t[0] : 1.0f), ib = 1.0f / (ok ? b[0] : 1.0f);
+  const float ux = r[1] * ir - l[1] * il, uy = r[2] * ir - l[2] * il, uz = r[3] * ir - l[3] * il;
+  const float vx = b[1] * ib - t[1] * it, vy = b[2] * ib - t[2] * it, vz = b[3] * ib - t[3] * it;
+  const float keep = ok ? 1.0f : 0.0f;
+  *nx = (uy * vz - uz * vy) * keep;
+  *ny = (uz * vx - ux * vz) * keep;
+  *nz = (ux * vy - uy * vx) * keep;
+}
+
+// Inverse-depth plane rho = a u + c v + e through the window from half-window sums of
+// (count, rho, u, v): writes a, c and rho at pixel (u, v); ok = 0 when a half has fewer than
+// min_count points or the halves' centres are (nearly) collinear. Branch-free.
+inline void InverseDepthGradient(const float* l, const float* r, const float* t, const float* b,
+                                 const float* w, float u, float v, float radius,
+                                 float min_count, float* a, float* c, float* rho, float* ok) {
+  bool good = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) &
+              (b[0] >= min_count);
+  const float il = 1.0f / (good ? l[0] : 1.0f), ir = 1.0f / (good ? r[0] : 1.0f);
+  const float it = 1.0f / (good ? t[0] : 1.0f), ib = 1.0f / (good ? b[0] : 1.0f);
+  const float iw = 1.0f / (good ? w[0] : 1.0f);
+  // Differences of the halves' means (rho, u, v): horizontal pair h, vertical pair g.
+  const float h_rho = r[1] * ir - l[1] * il, h_u = r[2] * ir - l[2] * il;
+  const float h_v = r[3] * ir - l[3] * il;
+  const float g_rho = b[1] * ib - t[1] * it, g_u = b[2] * ib - t[2] * it;
+  const float g_v = b[3] * ib - t[3] * it;
+  const float det = h_u * g_v - h_v * g_u;  // (r + 1)^2 when balanced
+  const float step = radius + 1.0f;
+  good = good & (std::abs(det) > 0.25f * step * step);
+  const float inv_det = 1.0f / (good ? det : 1.0f);
+  const float da = (h_rho * g_v - h_v * g_rho) * inv_det;
+  const float dc = (h_u * g_rho - h_rho * g_u) * inv_det;
+  *a = da;
+  *c = dc;
+  *rho = w[1] * iw + da * (u - w[2] * iw) + dc * (v - w[3] * iw);
+  *ok = good ? 1.0f : 0.0f;
+}
+
+// Full-radius kernels over pixels [begin, end) of a row: separate functions so that __restrict
+// parameters let the compiler vectorise them (GCC needs them not inlined into the caller).
+#if defined(__GNUC__)
+#define SSTA_NOINLINE __attribute__((noinline))
+#else
+#define SSTA_NOINLINE
+#endif
+
+SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, PlanarStrips strips,
+                               float* __restrict nx, float* __restrict ny,
+                               float* __restrict nz) {
+  const std::uint32_t* __restrict f0 = strips.full[0];
+  const std::uint32_t* __restrict f1 = strips.full[1];
+  const std::uint32_t* __restrict f2 = strips.full[2];
+  const std::uint32_t* __restrict f3 = strips.full[3];
+  const std::uint32_t* __restrict p0 = strips.upper[0];
+  const std::uint32_t* __restrict p1 = strips.upper[1];
+  const std::uint32_t* __restrict p2 = strips.upper[2];
+  const std::uint32_t* __restrict p3 = strips.upper[3];
+  const std::uint32_t* __restrict q0 = strips.lower[0];
+  const std::uint32_t* __restrict q1 = strips.lower[1];
+  const std::uint32_t* __restrict q2 = strips.lower[2];
+  const std::uint32_t* __restrict q3 = strips.lower[3];
+  for (int u = begin; u < end; ++u) {
+    const int a = u - r, b = u + r + 1;
+    const float l[4] = {PlaneBox(f0, a, u), PlaneBox(f1, a, u), PlaneBox(f2, a, u),
+                        PlaneBox(f3, a, u)};
+    const float rr[4] = {PlaneBox(f0, u + 1, b), PlaneBox(f1, u + 1, b), PlaneBox(f2, u + 1, b),
+                         PlaneBox(f3, u + 1, b)};
+    const float t[4] = {PlaneBox(p0, a, b), PlaneBox(p1, a, b), PlaneBox(p2, a, b),
+                        PlaneBox(p3, a, b)};
+    const float bt[4] = {PlaneBox(q0, a, b), PlaneBox(q1, a, b), PlaneBox(q2, a, b),
+                         PlaneBox(q3, a, b)};
+    GradientNormal(l, rr, t, bt, min_count, &nx[u], &ny[u], &nz[u]);
+  }
+}
+
+SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_count,
+                                  PlanarStrips strips, float* __restrict ga,
+                                  float* __restrict gc, float* __restrict rho,
+                                  float* __restrict ok) {
+  const std::uint32_t* __restrict f0 = strips.full[0];
+  const std::uint32_t* __restrict f1 = strips.full[1];
+  const std::uint32_t* __restrict f2 = strips.full[2];
+  const std::uint32_t* __restrict f3 = strips.full[3];
+  const std::uint32_t* __restrict p0 = strips.upper[0];
+  const std::uint32_t* __restrict p1 = strips.upper[1];
+  const std::uint32_t* __restrict p2 = strips.upper[2];
+  const std::uint32_t* __restrict p3 = strips.upper[3];
+  const std::uint32_t* __restrict q0 = strips.lower[0];
+  const std::uint32_t* __restrict q1 = strips.lower[1];
+  const std::uint32_t* __restrict q2 = strips.lower[2];
+  const std::uint32_t* __restrict q3 = strips.lower[3];
+  const float fv = static_cast<float>(v), fr = static_cast<float>(r);
+  for (int u = begin; u < end; ++u) {
+    const int a = u - r, b = u + r + 1;
+    const float l[4] = {PlaneBox(f0, a, u), PlaneBox(f1, a, u), PlaneBox(f2, a, u),
+                        PlaneBox(f3, a, u)};
+    const float rr[4] = {PlaneBox(f0, u + 1, b), PlaneBox(f1, u + 1, b), PlaneBox(f2, u + 1, b),
+                         PlaneBox(f3, u + 1, b)};
+    const float t[4] = {PlaneBox(p0, a, b), PlaneBox(p1, a, b), PlaneBox(p2, a, b),
+                        PlaneBox(p3, a, b)};
+    const float bt[4] = {PlaneBox(q0, a, b), PlaneBox(q1, a, b), PlaneBox(q2, a, b),
+                         PlaneBox(q3, a, b)};
+    const float w[4] = {PlaneBox(f0, a, b), PlaneBox(f1, a, b), PlaneBox(f2, a, b),
+                        PlaneBox(f3, a, b)};
+    InverseDepthGradient(l, rr, t, bt, w, static_cast<float>(u), fv, fr, min_count, &ga[u],
+                         &gc[u], &rho[u], &ok[u]);
+  }
+}
+
+// Writes the unit normal oriented towards the camera, or NaN (and radius 0) for a zero vector.
+inline void FinishNormal(const Eigen::Vector3f& n, const Eigen::Vector3f& p, Eigen::Vector3f* out,
+                         std::uint8_t* radius) {
+  const float squared_norm = n.squaredNorm();
+  if (*radius == 0 || !(squared_norm > 0.0f) || !std::isfinite(squared_norm)) {
+    *out = NanVector3f();
+    *radius = 0;
+    return;
+  }
+  const float sign = n.dot(p) > 0.0f ? -1.0f : 1.0f;
+  *out = n * (sign / std::sqrt(squared_norm));
+}
+
+}  // namespace
+
 // Tangents as differences of the mean points of opposite window halves (right - left,
 // bottom - top, each half excluding the centre row or column); for a plane every mean point
 // lies on the plane, so the tangents are exact even when invalid pixels unbalance the halves.
-// Sums in 32-bit fixed point (only directions matter, so the quantum cancels).
+// Sums in 32-bit fixed point (only directions matter, so the quantum cancels). Pixels with the
+// full radius go through a vectorised row kernel, the others through the same maths one by one.
 void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
-  constexpr int kC = 4;  // n, x, y, z
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -480,73 +671,48 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
     acc[3] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.z() * inv_q));
   };
 
-  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
-  b.strips_u32.resize(3 * row_size);
-  std::uint32_t* full = b.strips_u32.data();
-  std::uint32_t* upper = full + row_size;
-  std::uint32_t* lower = upper + row_size;
+  b.strips_u32.resize(12 * (static_cast<std::size_t>(width) + 1));
+  b.row_soa.resize(3 * static_cast<std::size_t>(width));
+  float* nx = b.row_soa.data();
+  float* ny = nx + width;
+  float* nz = ny + width;
   const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
-    if (v >= max_r && v + max_r + 1 <= height) {
-      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, full);
-      StripSums(rows.Row(v - max_r), rows.Row(v), row_size, upper);
-      StripSums(rows.Row(v + 1), rows.Row(v + max_r + 1), row_size, lower);
-    }
     std::uint8_t* radius = b.radius.row(v);
+    const bool full_rows = v >= max_r && v + max_r + 1 <= height;
+    if (full_rows && width > 2 * max_r) {
+      const PlanarStrips strips =
+          MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
+                           rows.Row(v + max_r + 1), width, b.strips_u32.data());
+      GradientRow(max_r, width - max_r, max_r, static_cast<float>(min_counts.half[max_r]), strips,
+                  nx, ny, nz);
+    }
+    for (int u = 0; u < width; ++u) {
+      const int r = radius[u];
+      if (r == 0 || (r == max_r && full_rows)) continue;
+      const HalfSums s = HalfSumsFromRows(rows.Row(v - r), rows.Row(v), rows.Row(v + 1),
+                                          rows.Row(v + r + 1), u, r);
+      GradientNormal(s.l, s.r, s.t, s.b, static_cast<float>(min_counts.half[r]), &nx[u], &ny[u],
+                     &nz[u]);
+    }
     const Eigen::Vector3f* points = cloud.row(v);
     Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
-      normals[u] = NanVector3f();
-      const int r = radius[u];
-      if (r == 0) continue;
-      double sl[kC], sr[kC], st[kC], sb[kC];
-      if (r == max_r) {
-        for (int k = 0; k < kC; ++k) {
-          sl[k] = StripBox<std::int32_t, kC>(full, u - r, u, k);
-          sr[k] = StripBox<std::int32_t, kC>(full, u + 1, u + r + 1, k);
-          st[k] = StripBox<std::int32_t, kC>(upper, u - r, u + r + 1, k);
-          sb[k] = StripBox<std::int32_t, kC>(lower, u - r, u + r + 1, k);
-        }
-      } else {
-        const std::uint32_t* top = rows.Row(v - r);
-        const std::uint32_t* middle_top = rows.Row(v);
-        const std::uint32_t* middle_bottom = rows.Row(v + 1);
-        const std::uint32_t* bottom = rows.Row(v + r + 1);
-        for (int k = 0; k < kC; ++k) {
-          sl[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k);
-          sr[k] = BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k);
-          st[k] = BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k);
-          sb[k] = BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k);
-        }
-      }
-      const int min_count = min_counts.half[r];
-      if (sl[0] < min_count || sr[0] < min_count || st[0] < min_count || sb[0] < min_count) {
-        radius[u] = 0;
-        continue;
-      }
-      double il, ir, it, ib;
-      Reciprocals(sl[0], sr[0], st[0], sb[0], &il, &ir, &it, &ib);
-      const Eigen::Vector3d tangent_u(sr[1] * ir - sl[1] * il, sr[2] * ir - sl[2] * il,
-                                      sr[3] * ir - sl[3] * il);
-      const Eigen::Vector3d tangent_v(sb[1] * ib - st[1] * it, sb[2] * ib - st[2] * it,
-                                      sb[3] * ib - st[3] * it);
-      StoreOriented(tangent_u.cross(tangent_v), points[u], &normals[u]);
-      if (!IsFinite(normals[u])) radius[u] = 0;
+      FinishNormal(Eigen::Vector3f(nx[u], ny[u], nz[u]), points[u], &normals[u], &radius[u]);
     }
   }
 }
 
 // Inverse depth rho = 1/Z is linear in the normalised image coordinates (xh, yh) = (X/Z, Y/Z)
 // on a plane n . P + d = 0: rho = -(n_x xh + n_y yh + n_z) / d, hence linear in (u, v) too:
-// rho = a u + b v + c. So n ~ (fx a, fy b, rho - xh fx a - yh fy b) at the pixel.
-// a and b come from the mean inverse depth of opposite window halves (left/right, top/bottom);
+// rho = a u + c v + e. So n ~ (fx a, fy c, rho - xh fx a - yh fy c) at the pixel.
+// a and c come from the mean inverse depth of opposite window halves (left/right, top/bottom);
 // the mean pixel coordinates of each half's valid pixels locate where those means apply, so
 // invalid pixels or a range cut that unbalance the halves do not bias the gradient (a 2 x 2
 // solve). One integral image of inverse depth plus the count and the valid u, v sums.
 // fx, fy are recovered from the cloud itself (see PrepareFrame).
 void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
-  constexpr int kC = 4;  // n, 1/z, u, v
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -569,79 +735,48 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
     acc[3] += static_cast<std::uint32_t>(v);
   };
 
-  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
-  b.strips_u32.resize(3 * row_size);
-  std::uint32_t* full = b.strips_u32.data();
-  std::uint32_t* upper = full + row_size;
-  std::uint32_t* lower = upper + row_size;
+  b.strips_u32.resize(12 * (static_cast<std::size_t>(width) + 1));
+  b.row_soa.resize(4 * static_cast<std::size_t>(width));
+  float* ga = b.row_soa.data();
+  float* gc = ga + width;
+  float* rho_centre = gc + width;
+  float* ok = rho_centre + width;
   const MinCounts min_counts(max_r);
+  const float fx = static_cast<float>(b.fx_px), fy = static_cast<float>(b.fy_px);
   for (int v = 0; v < height; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
-    if (v >= max_r && v + max_r + 1 <= height) {
-      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, full);
-      StripSums(rows.Row(v - max_r), rows.Row(v), row_size, upper);
-      StripSums(rows.Row(v + 1), rows.Row(v + max_r + 1), row_size, lower);
-    }
     std::uint8_t* radius = b.radius.row(v);
+    const bool full_rows = v >= max_r && v + max_r + 1 <= height;
+    if (full_rows && width > 2 * max_r) {
+      const PlanarStrips strips =
+          MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
+                           rows.Row(v + max_r + 1), width, b.strips_u32.data());
+      DepthChangeRow(max_r, width - max_r, v, max_r, static_cast<float>(min_counts.half[max_r]),
+                     strips, ga, gc, rho_centre, ok);
+    }
+    for (int u = 0; u < width; ++u) {
+      const int r = radius[u];
+      if (r == 0 || (r == max_r && full_rows)) continue;
+      const HalfSums s = HalfSumsFromRows(rows.Row(v - r), rows.Row(v), rows.Row(v + 1),
+                                          rows.Row(v + r + 1), u, r);
+      InverseDepthGradient(s.l, s.r, s.t, s.b, s.w, static_cast<float>(u), static_cast<float>(v),
+                           static_cast<float>(r), static_cast<float>(min_counts.half[r]), &ga[u],
+                           &gc[u], &rho_centre[u], &ok[u]);
+    }
     const Eigen::Vector3f* points = cloud.row(v);
+    const float* rho_row = b.inverse_depth.row(v);
     Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
-      normals[u] = NanVector3f();
-      const int r = radius[u];
-      if (r == 0) continue;
-      double sl[kC], sr[kC], st[kC], sb[kC], sw[kC];
-      if (r == max_r) {
-        for (int k = 0; k < kC; ++k) {
-          sl[k] = StripBox<std::int32_t, kC>(full, u - r, u, k);
-          sr[k] = StripBox<std::int32_t, kC>(full, u + 1, u + r + 1, k);
-          st[k] = StripBox<std::int32_t, kC>(upper, u - r, u + r + 1, k);
-          sb[k] = StripBox<std::int32_t, kC>(lower, u - r, u + r + 1, k);
-          sw[k] = StripBox<std::int32_t, kC>(full, u - r, u + r + 1, k);
-        }
-      } else {
-        const std::uint32_t* top = rows.Row(v - r);
-        const std::uint32_t* middle_top = rows.Row(v);
-        const std::uint32_t* middle_bottom = rows.Row(v + 1);
-        const std::uint32_t* bottom = rows.Row(v + r + 1);
-        for (int k = 0; k < kC; ++k) {
-          sl[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k);
-          sr[k] = BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k);
-          st[k] = BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k);
-          sb[k] = BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k);
-          sw[k] = BoxSum<std::int32_t, kC>(top, bottom, u - r, u + r + 1, k);
-        }
-      }
-      const int min_count = min_counts.half[r];
-      if (sl[0] < min_count || sr[0] < min_count || st[0] < min_count || sb[0] < min_count) {
+      if (radius[u] == 0 || ok[u] == 0.0f) {
+        normals[u] = NanVector3f();
         radius[u] = 0;
         continue;
       }
-      // Differences of the halves' means (rho, u, v): horizontal pair h, vertical pair w.
-      double il, ir, it, ib;
-      Reciprocals(sl[0], sr[0], st[0], sb[0], &il, &ir, &it, &ib);
-      const double h_rho = sr[1] * ir - sl[1] * il;
-      const double h_u = sr[2] * ir - sl[2] * il;
-      const double h_v = sr[3] * ir - sl[3] * il;
-      const double w_rho = sb[1] * ib - st[1] * it;
-      const double w_u = sb[2] * ib - st[2] * it;
-      const double w_v = sb[3] * ib - st[3] * it;
-      const double det = h_u * w_v - h_v * w_u;  // (r + 1)^2 when balanced
-      if (!(std::abs(det) > 0.25 * (r + 1) * (r + 1))) {
-        radius[u] = 0;
-        continue;
-      }
-      const double inv_det = 1.0 / det;
-      const double a = (h_rho * w_v - h_v * w_rho) * inv_det;  // drho/du
-      const double c = (h_u * w_rho - h_rho * w_u) * inv_det;  // drho/dv
-      const double inv_n = 1.0 / sw[0];
-      const double rho = sw[1] * inv_n + a * (u - sw[2] * inv_n) + c * (v - sw[3] * inv_n);
       const Eigen::Vector3f& p = points[u];
-      const double rho_p = b.inverse_depth(v, u);
-      const double xh = p.x() * rho_p, yh = p.y() * rho_p;
-      const double rho_xh = b.fx_px * a, rho_yh = b.fy_px * c;
-      StoreOriented(Eigen::Vector3d(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh), p,
-                    &normals[u]);
-      if (!IsFinite(normals[u])) radius[u] = 0;
+      const float xh = p.x() * rho_row[u], yh = p.y() * rho_row[u];
+      const float rho_xh = fx * ga[u], rho_yh = fy * gc[u];
+      FinishNormal(Eigen::Vector3f(rho_xh, rho_yh, rho_centre[u] - xh * rho_xh - yh * rho_yh), p,
+                   &normals[u], &radius[u]);
     }
   }
 }
