@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
 
@@ -25,11 +26,14 @@ constexpr double kReferenceDepthM = 5.0;
 constexpr double kMinDepthScale = 0.5;
 constexpr double kMaxDepthScale = 2.0;
 // Covariance sums use fixed point so that their precision does not depend on how far the rest
-// of the frame lies: a window's sums of squared coordinates must stay below this (2^62).
+// of the frame lies: a window's sums of squared coordinates must stay below this (2^62). The
+// quantum is then max|coordinate| * (2r+1) / 2.1e9: 0.12 um for a 13 x 13 window and points up
+// to 20 m, 3 um with a stereo outlier at 500 m (3 x 3 windows at 1.5 m span 1 cm).
 constexpr double kMaxWindowSumOfSquares = 4.6e18;
-// The gradient methods sum first-order values in 32-bit fixed point: a window's sum of
-// |quantised value| must stay below 2^31.
-constexpr double kMaxWindowSum32 = 2.0e9;
+// The gradient methods sum first-order values in 64-bit fixed point: a window's sum of
+// |quantised value| must stay below 2^51 (exact, vectorisable conversion to double). The
+// quantum is then max|value| * (2r+1)^2 / 2.2e15: far below float precision.
+constexpr double kMaxWindowSum64 = 2.2e15;
 // Covariance windows whose lambda2 * lambda3 / trace^2 is below this are (nearly) collinear.
 constexpr float kMinRank2Float = 1e-6f;
 
@@ -42,12 +46,13 @@ inline bool IsValidPoint(const Eigen::Vector3f& p) {
   return p.z() > 0.0f && std::isfinite(p.z()) && std::isfinite(p.x()) && std::isfinite(p.y());
 }
 
-// Sum over rows [top, bottom) and columns [c0, c1) of channel k of integral rows `top`,
-// `bottom` (C channels per column), as a signed value: the unsigned sums wrap, the box fits.
-template <typename S, int C, typename T>
-inline S BoxSum(const T* top, const T* bottom, int c0, int c1, int k) {
-  const T sum = static_cast<T>(bottom[c1 * C + k] - bottom[c0 * C + k] - top[c1 * C + k] +
-                               top[c0 * C + k]);
+// Sum over rows [top, bottom) and columns [c0, c1) of channel k of channel-planar integral
+// rows `top`, `bottom` (planes `plane` apart), as a signed value: the unsigned sums wrap, the
+// box fits.
+template <typename S, typename T>
+inline S BoxSum(const T* top, const T* bottom, std::size_t plane, int c0, int c1, int k) {
+  const std::size_t o = plane * k;
+  const T sum = static_cast<T>(bottom[o + c1] - bottom[o + c0] - top[o + c1] + top[o + c0]);
   return static_cast<S>(sum);
 }
 
@@ -74,18 +79,24 @@ inline void StripSums(const T* top, const T* bottom, std::size_t n, T* out) {
   for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<T>(bottom[i] - top[i]);
 }
 
-// Channel k of the box over columns [c0, c1) of a strip (C channels per column), signed.
-template <typename S, int C, typename T>
-inline S StripBox(const T* strip, int c0, int c1, int k) {
-  return static_cast<S>(static_cast<T>(strip[c1 * C + k] - strip[c0 * C + k]));
+// Channel k of the box over columns [c0, c1) of a channel-planar strip, signed.
+template <typename S, typename T>
+inline S StripBox(const T* strip, std::size_t plane, int c0, int c1, int k) {
+  const std::size_t o = plane * k;
+  return static_cast<S>(static_cast<T>(strip[o + c1] - strip[o + c0]));
 }
 
 // The eigen solve of one row of trace-1 covariances (structure of arrays). A function of its
 // own so that __restrict on the parameters lets the compiler vectorise the loop.
+// GCC drops __restrict of a function inlined into its caller; the row kernels below must stay
+// out of line to vectorise.
 #if defined(__GNUC__)
-__attribute__((noinline))
+#define SSTA_NOINLINE __attribute__((noinline))
+#else
+#define SSTA_NOINLINE
 #endif
-void SmallestEigenvectorsOfRow(int n, const float* __restrict cxx, const float* __restrict cxy,
+
+SSTA_NOINLINE void SmallestEigenvectorsOfRow(int n, const float* __restrict cxx, const float* __restrict cxy,
                                const float* __restrict cxz, const float* __restrict cyy,
                                const float* __restrict cyz, const float* __restrict czz,
                                float* __restrict nx, float* __restrict ny,
@@ -96,23 +107,85 @@ void SmallestEigenvectorsOfRow(int n, const float* __restrict cxx, const float* 
   }
 }
 
-// Reciprocals of four positive numbers with one division.
-inline void Reciprocals(double a, double b, double c, double d, double* ia, double* ib,
-                        double* ic, double* id) {
-  const double ab = a * b, cd = c * d;
-  const double inv = 1.0 / (ab * cd);
-  *ia = inv * b * cd;
-  *ib = inv * a * cd;
-  *ic = inv * ab * d;
-  *id = inv * ab * c;
+// double of a two's-complement 64-bit integer given as uint64, without the scalar-only
+// int64 -> double conversion (SSE2 has none): the high half converts as an int32, the low half
+// through the bits of 2^52 + low. One rounding, like the plain conversion. Vectorises.
+inline double Int64ToDouble(std::uint64_t x) {
+  constexpr std::uint64_t kTwo52Bits = 0x4330000000000000ull;  // 2^52
+  constexpr double kTwo52 = 4503599627370496.0;
+  const auto high = static_cast<std::int32_t>(static_cast<std::uint32_t>(x >> 32));
+  const std::uint64_t low_bits = (x & 0xffffffffull) | kTwo52Bits;
+  double low;
+  std::memcpy(&low, &low_bits, sizeof low);
+  return static_cast<double>(high) * 4294967296.0 + (low - kTwo52);
 }
 
-// Orients `n` towards the camera (n . p < 0) and stores it as a unit float vector.
-inline void StoreOriented(const Eigen::Vector3d& n, const Eigen::Vector3f& p, Eigen::Vector3f* out) {
-  const double squared_norm = n.squaredNorm();
-  if (!(squared_norm > 0.0) || !std::isfinite(squared_norm)) return;
-  const double sign = (n.x() * p.x() + n.y() * p.y() + n.z() * p.z()) > 0.0 ? -1.0 : 1.0;
-  *out = (n * (sign / std::sqrt(squared_norm))).cast<float>();
+// double of a two's-complement integer |x| < 2^51 given as uint64, cheaper still: add the bits
+// of 1.5 * 2^52 and subtract it as a double. Vectorises.
+inline double Int52ToDouble(std::uint64_t x) {
+  constexpr std::uint64_t kMagicBits = 0x4338000000000000ull;  // 1.5 * 2^52
+  constexpr double kMagic = 6755399441055744.0;
+  const std::uint64_t bits = x + kMagicBits;
+  double d;
+  std::memcpy(&d, &bits, sizeof d);
+  return d - kMagic;
+}
+
+// Trace-1 covariance entries (xx, xy, xz, yy, yz, zz) of a window from its sums s[10] =
+// (n, x, y, z, xx, xy, xz, yy, yz, zz), or zeros when it has fewer than min_count points.
+// Centred in double (the subtraction cancels), then scaled to trace 1 for the float solver.
+// Branch-free.
+inline void UnitTraceCovariance(const double* s, double min_count, float* out) {
+  const bool counted = s[0] >= min_count;
+  const double inv_n = 1.0 / (counted ? s[0] : 1.0);
+  const double mx = s[1] * inv_n, my = s[2] * inv_n, mz = s[3] * inv_n;
+  const double xx = s[4] * inv_n - mx * mx, yy = s[7] * inv_n - my * my;
+  const double zz = s[9] * inv_n - mz * mz;
+  const double trace = xx + yy + zz;
+  const bool ok = counted & (trace > 0.0);
+  const double scale = (ok ? 1.0 : 0.0) / (ok ? trace : 1.0);
+  out[0] = static_cast<float>(xx * scale);
+  out[1] = static_cast<float>((s[5] * inv_n - mx * my) * scale);
+  out[2] = static_cast<float>((s[6] * inv_n - mx * mz) * scale);
+  out[3] = static_cast<float>(yy * scale);
+  out[4] = static_cast<float>((s[8] * inv_n - my * mz) * scale);
+  out[5] = static_cast<float>(zz * scale);
+}
+
+// Full-radius covariances of pixels [begin, end) of a row from a channel-planar strip.
+SSTA_NOINLINE void CovarianceRow(int begin, int end, int r, double min_count,
+                                 const std::uint64_t* __restrict strip, std::size_t plane,
+                                 float* __restrict cxx, float* __restrict cxy,
+                                 float* __restrict cxz, float* __restrict cyy,
+                                 float* __restrict cyz, float* __restrict czz) {
+  for (int u = begin; u < end; ++u) {
+    double s[10];
+    for (int k = 0; k < 10; ++k) {
+      const std::size_t o = plane * k;
+      s[k] = Int64ToDouble(strip[o + u + r + 1] - strip[o + u - r]);
+    }
+    float c[6];
+    UnitTraceCovariance(s, min_count, c);
+    cxx[u] = c[0];
+    cxy[u] = c[1];
+    cxz[u] = c[2];
+    cyy[u] = c[3];
+    cyz[u] = c[4];
+    czz[u] = c[5];
+  }
+}
+
+// Writes the unit normal oriented towards the camera, or NaN (and radius 0) for a zero vector.
+inline void FinishNormal(const Eigen::Vector3f& n, const Eigen::Vector3f& p, Eigen::Vector3f* out,
+                         std::uint8_t* radius) {
+  const float squared_norm = n.squaredNorm();
+  if (*radius == 0 || !(squared_norm > 0.0f) || !std::isfinite(squared_norm)) {
+    *out = NanVector3f();
+    *radius = 0;
+    return;
+  }
+  const float sign = n.dot(p) > 0.0f ? -1.0f : 1.0f;
+  *out = n * (sign / std::sqrt(squared_norm));
 }
 
 }  // namespace
@@ -158,10 +231,10 @@ struct NormalEstimator::Buffers {
   std::vector<std::int32_t> last_valid_row;   // per column, for the vertical edge scan
   std::vector<float> last_inverse_depth;      // per column, 1/Z at last_valid_row [1/m]
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
-  internal::IntegralRowRing<std::uint32_t, 4> first_order_rows;
+  internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
   std::vector<float> row_soa;                 // covariance: per-row structure of arrays
   std::vector<std::uint64_t> strip_u64;       // full-radius strip sums of the current row
-  std::vector<std::uint32_t> strips_u32;      // full, top-half and bottom-half strips
+  std::vector<std::uint64_t> strips_u64;      // full, top-half and bottom-half strips
   double max_abs_coordinate_m = 0.0;          // of this frame's valid points
   double max_inverse_depth = 0.0;             // [1/m]
   int max_radius_px = 0;                      // largest radius any pixel may use
@@ -380,7 +453,8 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
     acc[9] += static_cast<std::uint64_t>(z * z);
   };
 
-  const std::size_t row_size = static_cast<std::size_t>(width + 1) * kC;
+  const std::size_t row_size = rows.row_size();
+  const std::size_t plane = rows.plane();
   b.strip_u64.resize(row_size);
   std::uint64_t* strip = b.strip_u64.data();
   // Per-row structure-of-arrays: the trace-1 covariance entries, then the eigenvectors, so that
@@ -402,57 +476,34 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
       StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
     }
     std::uint8_t* radius = b.radius.row(v);
+    const bool full_rows = v >= max_r && v + max_r + 1 <= height;
+    if (full_rows && width > 2 * max_r) {
+      CovarianceRow(max_r, width - max_r, max_r, min_counts.full[max_r], strip, plane, cxx, cxy,
+                    cxz, cyy, cyz, czz);
+    }
     for (int u = 0; u < width; ++u) {
-      cxx[u] = cxy[u] = cxz[u] = cyy[u] = cyz[u] = czz[u] = 0.0f;
       const int r = radius[u];
-      if (r == 0) continue;
+      if (r == 0 || (r == max_r && full_rows)) continue;
+      const std::uint64_t* top = rows.Row(v - r);
+      const std::uint64_t* bottom = rows.Row(v + r + 1);
       double s[kC];
-      if (r == max_r) {
-        for (int k = 0; k < kC; ++k) {
-          s[k] = static_cast<double>(StripBox<std::int64_t, kC>(strip, u - r, u + r + 1, k));
-        }
-      } else {
-        const std::uint64_t* top = rows.Row(v - r);
-        const std::uint64_t* bottom = rows.Row(v + r + 1);
-        for (int k = 0; k < kC; ++k) {
-          s[k] = static_cast<double>(BoxSum<std::int64_t, kC>(top, bottom, u - r, u + r + 1, k));
-        }
+      for (int k = 0; k < kC; ++k) {
+        s[k] = static_cast<double>(BoxSum<std::int64_t>(top, bottom, plane, u - r, u + r + 1, k));
       }
-      if (s[0] < min_counts.full[r]) {
-        radius[u] = 0;
-        continue;
-      }
-      // Centred in double (the subtraction cancels), then scaled to trace 1 for float.
-      const double inv_n = 1.0 / s[0];
-      const double mx = s[1] * inv_n, my = s[2] * inv_n, mz = s[3] * inv_n;
-      const double xx = s[4] * inv_n - mx * mx, yy = s[7] * inv_n - my * my;
-      const double zz = s[9] * inv_n - mz * mz;
-      const double trace = xx + yy + zz;
-      if (!(trace > 0.0)) {
-        radius[u] = 0;
-        continue;
-      }
-      const double inv_trace = 1.0 / trace;
-      cxx[u] = static_cast<float>(xx * inv_trace);
-      cxy[u] = static_cast<float>((s[5] * inv_n - mx * my) * inv_trace);
-      cxz[u] = static_cast<float>((s[6] * inv_n - mx * mz) * inv_trace);
-      cyy[u] = static_cast<float>(yy * inv_trace);
-      cyz[u] = static_cast<float>((s[8] * inv_n - my * mz) * inv_trace);
-      czz[u] = static_cast<float>(zz * inv_trace);
+      float c[6];
+      UnitTraceCovariance(s, min_counts.full[r], c);
+      cxx[u] = c[0];
+      cxy[u] = c[1];
+      cxz[u] = c[2];
+      cyy[u] = c[3];
+      cyz[u] = c[4];
+      czz[u] = c[5];
     }
     SmallestEigenvectorsOfRow(width, cxx, cxy, cxz, cyy, cyz, czz, nx, ny, nz);
     const Eigen::Vector3f* points = cloud.row(v);
     Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3f n(nx[u], ny[u], nz[u]);
-      const float squared_norm = n.squaredNorm();
-      if (radius[u] == 0 || !(squared_norm > 0.0f)) {
-        normals[u] = NanVector3f();
-        radius[u] = 0;
-        continue;
-      }
-      const float sign = n.dot(points[u]) > 0.0f ? -1.0f : 1.0f;
-      normals[u] = n * (sign / std::sqrt(squared_norm));
+      FinishNormal(Eigen::Vector3f(nx[u], ny[u], nz[u]), points[u], &normals[u], &radius[u]);
     }
   }
 }
@@ -466,17 +517,17 @@ struct HalfSums {
 };
 
 // Half and full window sums of pixel u at radius r from integral rows (generic path).
-inline HalfSums HalfSumsFromRows(const std::uint32_t* top, const std::uint32_t* middle_top,
-                                 const std::uint32_t* middle_bottom, const std::uint32_t* bottom,
-                                 int u, int r) {
-  constexpr int kC = 4;
+inline HalfSums HalfSumsFromRows(const std::uint64_t* top, const std::uint64_t* middle_top,
+                                 const std::uint64_t* middle_bottom, const std::uint64_t* bottom,
+                                 std::size_t plane, int u, int r) {
   HalfSums s;
-  for (int k = 0; k < kC; ++k) {
-    s.l[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u - r, u, k));
-    s.r[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u + 1, u + r + 1, k));
-    s.t[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, middle_top, u - r, u + r + 1, k));
-    s.b[k] = static_cast<float>(BoxSum<std::int32_t, kC>(middle_bottom, bottom, u - r, u + r + 1, k));
-    s.w[k] = static_cast<float>(BoxSum<std::int32_t, kC>(top, bottom, u - r, u + r + 1, k));
+  for (int k = 0; k < 4; ++k) {
+    s.l[k] = static_cast<float>(BoxSum<std::int64_t>(top, bottom, plane, u - r, u, k));
+    s.r[k] = static_cast<float>(BoxSum<std::int64_t>(top, bottom, plane, u + 1, u + r + 1, k));
+    s.t[k] = static_cast<float>(BoxSum<std::int64_t>(top, middle_top, plane, u - r, u + r + 1, k));
+    s.b[k] =
+        static_cast<float>(BoxSum<std::int64_t>(middle_bottom, bottom, plane, u - r, u + r + 1, k));
+    s.w[k] = static_cast<float>(BoxSum<std::int64_t>(top, bottom, plane, u - r, u + r + 1, k));
   }
   return s;
 }
@@ -484,48 +535,46 @@ inline HalfSums HalfSumsFromRows(const std::uint32_t* top, const std::uint32_t* 
 // Channel planes of the full-radius strips of one output row: plane k of strip `full` holds
 // channel k of (integral row v + R + 1) - (integral row v - R) for columns 0..width, etc.
 struct PlanarStrips {
-  const std::uint32_t* full[4];
-  const std::uint32_t* upper[4];  // rows v - R .. v - 1
-  const std::uint32_t* lower[4];  // rows v + 1 .. v + R
+  const std::uint64_t* full[4];
+  const std::uint64_t* upper[4];  // rows v - R .. v - 1
+  const std::uint64_t* lower[4];  // rows v + 1 .. v + R
 };
 
-// Fills planar strips (3 strips x 4 planes x (width + 1)) from AoS integral rows.
-inline PlanarStrips MakePlanarStrips(const std::uint32_t* top, const std::uint32_t* middle_top,
-                                     const std::uint32_t* middle_bottom,
-                                     const std::uint32_t* bottom, int width,
-                                     std::uint32_t* storage) {
-  constexpr int kC = 4;
-  const std::size_t plane = static_cast<std::size_t>(width) + 1;
+// Fills the three strips (each 4 planes x (width + 1)) from channel-planar integral rows.
+inline PlanarStrips MakePlanarStrips(const std::uint64_t* top, const std::uint64_t* middle_top,
+                                     const std::uint64_t* middle_bottom,
+                                     const std::uint64_t* bottom, std::size_t plane,
+                                     std::uint64_t* storage) {
+  const std::size_t row_size = 4 * plane;
+  std::uint64_t* full = storage;
+  std::uint64_t* upper = full + row_size;
+  std::uint64_t* lower = upper + row_size;
+  StripSums(top, bottom, row_size, full);
+  StripSums(top, middle_top, row_size, upper);
+  StripSums(middle_bottom, bottom, row_size, lower);
   PlanarStrips strips;
-  for (int k = 0; k < kC; ++k) {
-    std::uint32_t* full = storage + plane * k;
-    std::uint32_t* upper = storage + plane * (kC + k);
-    std::uint32_t* lower = storage + plane * (2 * kC + k);
-    for (std::size_t c = 0; c < plane; ++c) {
-      full[c] = bottom[c * kC + k] - top[c * kC + k];
-      upper[c] = middle_top[c * kC + k] - top[c * kC + k];
-      lower[c] = bottom[c * kC + k] - middle_bottom[c * kC + k];
-    }
-    strips.full[k] = full;
-    strips.upper[k] = upper;
-    strips.lower[k] = lower;
+  for (int k = 0; k < 4; ++k) {
+    strips.full[k] = full + plane * k;
+    strips.upper[k] = upper + plane * k;
+    strips.lower[k] = lower + plane * k;
   }
   return strips;
 }
 
 // Sum over columns [a, b) of a strip plane, as a float.
-inline float PlaneBox(const std::uint32_t* plane, int a, int b) {
-  return static_cast<float>(static_cast<std::int32_t>(plane[b] - plane[a]));
+inline float PlaneBox(const std::uint64_t* plane, int a, int b) {
+  return static_cast<float>(Int52ToDouble(plane[b] - plane[a]));
 }
 
 // Average 3D gradient normal (unnormalised; 0 when a half has fewer than min_count points)
-// from half-window sums of (count, x, y, z). Branch-free.
+// from half-window sums of (count, x, y, z) in units of `quantum` [m]. Branch-free.
 inline void GradientNormal(const float* l, const float* r, const float* t, const float* b,
-                           float min_count, float* nx, float* ny, float* nz) {
+                           float min_count, float quantum, float* nx, float* ny, float* nz) {
   const bool ok = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) &
                   (b[0] >= min_count);
-  const float il = 1.0f / (ok ? l[0] : 1.0f), ir = 1.0f / (ok ? r[0] : 1.0f);
-  const float it = 1.0f / (ok ? t[0] : 1.0f), ib = 1.0f / (ok ? b[0] : 1.0f);
+  // Means in metres, so that the cross product stays within float range.
+  const float il = quantum / (ok ? l[0] : 1.0f), ir = quantum / (ok ? r[0] : 1.0f);
+  const float it = quantum / (ok ? t[0] : 1.0f), ib = quantum / (ok ? b[0] : 1.0f);
   const float ux = r[1] * ir - l[1] * il, uy = r[2] * ir - l[2] * il, uz = r[3] * ir - l[3] * il;
   const float vx = b[1] * ib - t[1] * it, vy = b[2] * ib - t[2] * it, vz = b[3] * ib - t[3] * it;
   const float keep = ok ? 1.0f : 0.0f;
@@ -562,29 +611,25 @@ inline void InverseDepthGradient(const float* l, const float* r, const float* t,
   *ok = good ? 1.0f : 0.0f;
 }
 
-// Full-radius kernels over pixels [begin, end) of a row: separate functions so that __restrict
-// parameters let the compiler vectorise them (GCC needs them not inlined into the caller).
-#if defined(__GNUC__)
-#define SSTA_NOINLINE __attribute__((noinline))
-#else
-#define SSTA_NOINLINE
-#endif
+// Full-radius kernels over pixels [begin, end) of a row: separate functions (SSTA_NOINLINE)
+// so that __restrict parameters let the compiler vectorise them.
 
-SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, PlanarStrips strips,
+SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, float quantum,
+                               PlanarStrips strips,
                                float* __restrict nx, float* __restrict ny,
                                float* __restrict nz) {
-  const std::uint32_t* __restrict f0 = strips.full[0];
-  const std::uint32_t* __restrict f1 = strips.full[1];
-  const std::uint32_t* __restrict f2 = strips.full[2];
-  const std::uint32_t* __restrict f3 = strips.full[3];
-  const std::uint32_t* __restrict p0 = strips.upper[0];
-  const std::uint32_t* __restrict p1 = strips.upper[1];
-  const std::uint32_t* __restrict p2 = strips.upper[2];
-  const std::uint32_t* __restrict p3 = strips.upper[3];
-  const std::uint32_t* __restrict q0 = strips.lower[0];
-  const std::uint32_t* __restrict q1 = strips.lower[1];
-  const std::uint32_t* __restrict q2 = strips.lower[2];
-  const std::uint32_t* __restrict q3 = strips.lower[3];
+  const std::uint64_t* __restrict f0 = strips.full[0];
+  const std::uint64_t* __restrict f1 = strips.full[1];
+  const std::uint64_t* __restrict f2 = strips.full[2];
+  const std::uint64_t* __restrict f3 = strips.full[3];
+  const std::uint64_t* __restrict p0 = strips.upper[0];
+  const std::uint64_t* __restrict p1 = strips.upper[1];
+  const std::uint64_t* __restrict p2 = strips.upper[2];
+  const std::uint64_t* __restrict p3 = strips.upper[3];
+  const std::uint64_t* __restrict q0 = strips.lower[0];
+  const std::uint64_t* __restrict q1 = strips.lower[1];
+  const std::uint64_t* __restrict q2 = strips.lower[2];
+  const std::uint64_t* __restrict q3 = strips.lower[3];
   for (int u = begin; u < end; ++u) {
     const int a = u - r, b = u + r + 1;
     const float l[4] = {PlaneBox(f0, a, u), PlaneBox(f1, a, u), PlaneBox(f2, a, u),
@@ -595,7 +640,7 @@ SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, Plana
                         PlaneBox(p3, a, b)};
     const float bt[4] = {PlaneBox(q0, a, b), PlaneBox(q1, a, b), PlaneBox(q2, a, b),
                          PlaneBox(q3, a, b)};
-    GradientNormal(l, rr, t, bt, min_count, &nx[u], &ny[u], &nz[u]);
+    GradientNormal(l, rr, t, bt, min_count, quantum, &nx[u], &ny[u], &nz[u]);
   }
 }
 
@@ -603,18 +648,18 @@ SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_co
                                   PlanarStrips strips, float* __restrict ga,
                                   float* __restrict gc, float* __restrict rho,
                                   float* __restrict ok) {
-  const std::uint32_t* __restrict f0 = strips.full[0];
-  const std::uint32_t* __restrict f1 = strips.full[1];
-  const std::uint32_t* __restrict f2 = strips.full[2];
-  const std::uint32_t* __restrict f3 = strips.full[3];
-  const std::uint32_t* __restrict p0 = strips.upper[0];
-  const std::uint32_t* __restrict p1 = strips.upper[1];
-  const std::uint32_t* __restrict p2 = strips.upper[2];
-  const std::uint32_t* __restrict p3 = strips.upper[3];
-  const std::uint32_t* __restrict q0 = strips.lower[0];
-  const std::uint32_t* __restrict q1 = strips.lower[1];
-  const std::uint32_t* __restrict q2 = strips.lower[2];
-  const std::uint32_t* __restrict q3 = strips.lower[3];
+  const std::uint64_t* __restrict f0 = strips.full[0];
+  const std::uint64_t* __restrict f1 = strips.full[1];
+  const std::uint64_t* __restrict f2 = strips.full[2];
+  const std::uint64_t* __restrict f3 = strips.full[3];
+  const std::uint64_t* __restrict p0 = strips.upper[0];
+  const std::uint64_t* __restrict p1 = strips.upper[1];
+  const std::uint64_t* __restrict p2 = strips.upper[2];
+  const std::uint64_t* __restrict p3 = strips.upper[3];
+  const std::uint64_t* __restrict q0 = strips.lower[0];
+  const std::uint64_t* __restrict q1 = strips.lower[1];
+  const std::uint64_t* __restrict q2 = strips.lower[2];
+  const std::uint64_t* __restrict q3 = strips.lower[3];
   const float fv = static_cast<float>(v), fr = static_cast<float>(r);
   for (int u = begin; u < end; ++u) {
     const int a = u - r, b = u + r + 1;
@@ -633,25 +678,12 @@ SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_co
   }
 }
 
-// Writes the unit normal oriented towards the camera, or NaN (and radius 0) for a zero vector.
-inline void FinishNormal(const Eigen::Vector3f& n, const Eigen::Vector3f& p, Eigen::Vector3f* out,
-                         std::uint8_t* radius) {
-  const float squared_norm = n.squaredNorm();
-  if (*radius == 0 || !(squared_norm > 0.0f) || !std::isfinite(squared_norm)) {
-    *out = NanVector3f();
-    *radius = 0;
-    return;
-  }
-  const float sign = n.dot(p) > 0.0f ? -1.0f : 1.0f;
-  *out = n * (sign / std::sqrt(squared_norm));
-}
-
 }  // namespace
 
 // Tangents as differences of the mean points of opposite window halves (right - left,
 // bottom - top, each half excluding the centre row or column); for a plane every mean point
 // lies on the plane, so the tangents are exact even when invalid pixels unbalance the halves.
-// Sums in 32-bit fixed point (only directions matter, so the quantum cancels). Pixels with the
+// Sums in 64-bit fixed point, means back in metres. Pixels with the
 // full radius go through a vectorised row kernel, the others through the same maths one by one.
 void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
   Buffers& b = *buffers_;
@@ -659,19 +691,20 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
   const int height = cloud.height();
   const int max_r = b.max_radius_px;
   const double max_area = std::pow(2.0 * max_r + 1.0, 2);
-  const float inv_q = static_cast<float>(kMaxWindowSum32 / (max_area * b.max_abs_coordinate_m));
+  const float inv_q = static_cast<float>(kMaxWindowSum64 / (max_area * b.max_abs_coordinate_m));
+  const float quantum = 1.0f / inv_q;
   auto& rows = b.first_order_rows;
   rows.Reset(width, height, max_r);
-  auto add = [&](int v, int u, std::uint32_t* acc) {
+  auto add = [&](int v, int u, std::uint64_t* acc) {
     if (!(b.inverse_depth(v, u) > 0.0f)) return;
     const Eigen::Vector3f& p = cloud(v, u);
     acc[0] += 1;
-    acc[1] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.x() * inv_q));
-    acc[2] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.y() * inv_q));
-    acc[3] += static_cast<std::uint32_t>(static_cast<std::int32_t>(p.z() * inv_q));
+    acc[1] += static_cast<std::uint64_t>(static_cast<std::int64_t>(p.x() * inv_q));
+    acc[2] += static_cast<std::uint64_t>(static_cast<std::int64_t>(p.y() * inv_q));
+    acc[3] += static_cast<std::uint64_t>(static_cast<std::int64_t>(p.z() * inv_q));
   };
 
-  b.strips_u32.resize(12 * (static_cast<std::size_t>(width) + 1));
+  b.strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
   b.row_soa.resize(3 * static_cast<std::size_t>(width));
   float* nx = b.row_soa.data();
   float* ny = nx + width;
@@ -684,17 +717,17 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
     if (full_rows && width > 2 * max_r) {
       const PlanarStrips strips =
           MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
-                           rows.Row(v + max_r + 1), width, b.strips_u32.data());
-      GradientRow(max_r, width - max_r, max_r, static_cast<float>(min_counts.half[max_r]), strips,
-                  nx, ny, nz);
+                           rows.Row(v + max_r + 1), rows.plane(), b.strips_u64.data());
+      GradientRow(max_r, width - max_r, max_r, static_cast<float>(min_counts.half[max_r]), quantum,
+                  strips, nx, ny, nz);
     }
     for (int u = 0; u < width; ++u) {
       const int r = radius[u];
       if (r == 0 || (r == max_r && full_rows)) continue;
       const HalfSums s = HalfSumsFromRows(rows.Row(v - r), rows.Row(v), rows.Row(v + 1),
-                                          rows.Row(v + r + 1), u, r);
-      GradientNormal(s.l, s.r, s.t, s.b, static_cast<float>(min_counts.half[r]), &nx[u], &ny[u],
-                     &nz[u]);
+                                          rows.Row(v + r + 1), rows.plane(), u, r);
+      GradientNormal(s.l, s.r, s.t, s.b, static_cast<float>(min_counts.half[r]), quantum, &nx[u],
+                     &ny[u], &nz[u]);
     }
     const Eigen::Vector3f* points = cloud.row(v);
     Eigen::Vector3f* normals = b.normals.row(v);
@@ -723,19 +756,20 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
   }
   const int max_r = b.max_radius_px;
   const double max_area = std::pow(2.0 * max_r + 1.0, 2);
-  const float inv_q = static_cast<float>(kMaxWindowSum32 / (max_area * b.max_inverse_depth));
+  const float inv_q = static_cast<float>(kMaxWindowSum64 / (max_area * b.max_inverse_depth));
+  const float quantum = 1.0f / inv_q;  // [1/m]
   auto& rows = b.first_order_rows;
   rows.Reset(width, height, max_r);
-  auto add = [&](int v, int u, std::uint32_t* acc) {
+  auto add = [&](int v, int u, std::uint64_t* acc) {
     const float rho = b.inverse_depth(v, u);
     if (!(rho > 0.0f)) return;
     acc[0] += 1;
-    acc[1] += static_cast<std::uint32_t>(static_cast<std::int32_t>(rho * inv_q));
-    acc[2] += static_cast<std::uint32_t>(u);
-    acc[3] += static_cast<std::uint32_t>(v);
+    acc[1] += static_cast<std::uint64_t>(static_cast<std::int64_t>(rho * inv_q));
+    acc[2] += static_cast<std::uint64_t>(u);
+    acc[3] += static_cast<std::uint64_t>(v);
   };
 
-  b.strips_u32.resize(12 * (static_cast<std::size_t>(width) + 1));
+  b.strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
   b.row_soa.resize(4 * static_cast<std::size_t>(width));
   float* ga = b.row_soa.data();
   float* gc = ga + width;
@@ -750,7 +784,7 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
     if (full_rows && width > 2 * max_r) {
       const PlanarStrips strips =
           MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
-                           rows.Row(v + max_r + 1), width, b.strips_u32.data());
+                           rows.Row(v + max_r + 1), rows.plane(), b.strips_u64.data());
       DepthChangeRow(max_r, width - max_r, v, max_r, static_cast<float>(min_counts.half[max_r]),
                      strips, ga, gc, rho_centre, ok);
     }
@@ -758,7 +792,7 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
       const int r = radius[u];
       if (r == 0 || (r == max_r && full_rows)) continue;
       const HalfSums s = HalfSumsFromRows(rows.Row(v - r), rows.Row(v), rows.Row(v + 1),
-                                          rows.Row(v + r + 1), u, r);
+                                          rows.Row(v + r + 1), rows.plane(), u, r);
       InverseDepthGradient(s.l, s.r, s.t, s.b, s.w, static_cast<float>(u), static_cast<float>(v),
                            static_cast<float>(r), static_cast<float>(min_counts.half[r]), &ga[u],
                            &gc[u], &rho_centre[u], &ok[u]);
@@ -774,8 +808,10 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
       }
       const Eigen::Vector3f& p = points[u];
       const float xh = p.x() * rho_row[u], yh = p.y() * rho_row[u];
-      const float rho_xh = fx * ga[u], rho_yh = fy * gc[u];
-      FinishNormal(Eigen::Vector3f(rho_xh, rho_yh, rho_centre[u] - xh * rho_xh - yh * rho_yh), p,
+      // Back from fixed point to 1/m, keeping the squared norm within float range.
+      const float rho_xh = fx * ga[u] * quantum, rho_yh = fy * gc[u] * quantum;
+      const float rho = rho_centre[u] * quantum;
+      FinishNormal(Eigen::Vector3f(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh), p,
                    &normals[u], &radius[u]);
     }
   }

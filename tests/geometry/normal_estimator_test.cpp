@@ -111,6 +111,30 @@ TEST(NormalEstimator, GroundAtGrazingAnglesUpTo20mIsExact) {
   }
 }
 
+TEST(NormalEstimator, FarOutliersDoNotCostNearWindowsTheirPrecision) {
+  // A plane 1.5 m away (windows ~4 cm wide) plus a few stereo outliers at 500 m, which set the
+  // fixed-point quantum of the frame.
+  const PinholeCamera camera;
+  Scene scene;
+  const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.5, -0.8).normalized();
+  scene.AddPlane(n, -n.dot(Eigen::Vector3d(0, 0, 1.5)));
+  Image3f truth;
+  Image3f cloud = scene.Render(camera, &truth);
+  for (const auto& [v, u] : {std::pair{100, 100}, std::pair{300, 500}, std::pair{400, 50}}) {
+    cloud(v, u) = (500.0 * camera.Ray(v, u)).cast<float>();
+    truth(v, u) = NanVector3f();
+  }
+  for (const NormalMethod method : kAllMethods) {
+    SCOPED_TRACE(NormalMethodName(method));
+    const ErrorStats stats =
+        Compare(EstimateNormals(cloud, OptionsFor(method)), truth, [](int, int) { return true; });
+    EXPECT_GT(stats.Coverage(), 0.97);
+    EXPECT_LT(stats.max_deg, 0.1);
+    RecordProperty(std::string(NormalMethodName(method)) + "_outlier_frame_max_deg",
+                   std::to_string(stats.max_deg));
+  }
+}
+
 TEST(NormalEstimator, InvalidPointsGiveNanAndBarelyDisturbNeighbours) {
   const PinholeCamera camera;
   Image3f truth;
