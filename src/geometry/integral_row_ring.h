@@ -14,9 +14,10 @@ namespace internal {
 ///
 /// Integral row j (0 <= j <= height) holds, at column i (0 <= i <= width), the sums over image
 /// rows < j and columns < i, channel-planar: channel k of column i is at Row(j)[k * plane() + i]
-/// (so strips and boxes of one channel are contiguous and vectorise). T is an unsigned integer type: sums wrap modulo 2^bits and box
-/// differences are still exact as long as the box's true sum fits the signed type (callers
-/// choose their fixed-point scale for that), whatever the magnitude of the running totals.
+/// (so strips and boxes of one channel are contiguous and vectorise). T is an unsigned integer
+/// type: sums wrap modulo 2^bits and box differences are still exact as long as the box's true sum
+/// fits the signed type (callers choose their fixed-point scale for that), whatever the magnitude
+/// of the running totals.
 template <typename T, int C>
 class IntegralRowRing {
  public:
@@ -48,7 +49,8 @@ class IntegralRowRing {
       for (int u = 0; u < width_; ++u) {
         add(v, u, acc);
         const std::size_t i = static_cast<std::size_t>(u) + 1;
-        for (int k = 0; k < C; ++k) cur[k * plane_ + i] = static_cast<T>(prev[k * plane_ + i] + acc[k]);
+        for (int k = 0; k < C; ++k)
+          cur[k * plane_ + i] = static_cast<T>(prev[k * plane_ + i] + acc[k]);
       }
     }
   }
@@ -59,7 +61,9 @@ class IntegralRowRing {
   std::size_t row_size() const { return stride_; }
 
   /// Integral row j; it must have been built and not yet overwritten (j > last built - slots).
-  const T* Row(int j) const { return data_.data() + stride_ * static_cast<std::size_t>(j % slots_); }
+  const T* Row(int j) const {
+    return data_.data() + stride_ * static_cast<std::size_t>(j % slots_);
+  }
 
  private:
   T* Slot(int j) { return data_.data() + stride_ * static_cast<std::size_t>(j % slots_); }

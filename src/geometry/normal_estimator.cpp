@@ -18,7 +18,6 @@ namespace {
 constexpr int kMinSmoothingSizePx = 3;
 constexpr int kMaxSmoothingSizePx = 201;  // radius 100, x2 with depth-dependent smoothing fits u8
 constexpr int kMinRadiusPx = 1;           // 3 x 3 is the smallest window that yields a normal
-constexpr std::uint8_t kFarPx = 255;      // distance-map value "no edge nearby"
 // A window (or each half-window of the gradient methods) needs this fraction of valid points.
 constexpr double kMinValidFraction = 0.25;
 // Depth-dependent smoothing: side = smoothing_size_px * sqrt(Z / kReferenceDepthM), clamped.
@@ -86,21 +85,19 @@ inline S StripBox(const T* strip, std::size_t plane, int c0, int c1, int k) {
   return static_cast<S>(static_cast<T>(strip[o + c1] - strip[o + c0]));
 }
 
-// The eigen solve of one row of trace-1 covariances (structure of arrays). A function of its
-// own so that __restrict on the parameters lets the compiler vectorise the loop.
-// GCC drops __restrict of a function inlined into its caller; the row kernels below must stay
-// out of line to vectorise.
+// Row kernels take __restrict pointers so that the compiler vectorises their loops; GCC drops
+// __restrict when such a function is inlined into its caller, so they stay out of line.
 #if defined(__GNUC__)
 #define SSTA_NOINLINE __attribute__((noinline))
 #else
 #define SSTA_NOINLINE
 #endif
 
-SSTA_NOINLINE void SmallestEigenvectorsOfRow(int n, const float* __restrict cxx, const float* __restrict cxy,
-                               const float* __restrict cxz, const float* __restrict cyy,
-                               const float* __restrict cyz, const float* __restrict czz,
-                               float* __restrict nx, float* __restrict ny,
-                               float* __restrict nz) {
+// The eigen solve of one row of trace-1 covariances (structure of arrays).
+SSTA_NOINLINE void SmallestEigenvectorsOfRow(
+    int n, const float* __restrict cxx, const float* __restrict cxy, const float* __restrict cxz,
+    const float* __restrict cyy, const float* __restrict cyz, const float* __restrict czz,
+    float* __restrict nx, float* __restrict ny, float* __restrict nz) {
   for (int i = 0; i < n; ++i) {
     internal::SmallestEigenvectorOfUnitTrace(cxx[i], cxy[i], cxz[i], cyy[i], cyz[i], czz[i],
                                              kMinRank2Float, &nx[i], &ny[i], &nz[i]);
@@ -200,9 +197,12 @@ NormalMethod ParseNormalMethod(const std::string& name) {
 
 const char* NormalMethodName(NormalMethod method) {
   switch (method) {
-    case NormalMethod::kCovarianceMatrix: return "covariance";
-    case NormalMethod::kAverage3dGradient: return "average_3d_gradient";
-    case NormalMethod::kAverageDepthChange: return "average_depth_change";
+    case NormalMethod::kCovarianceMatrix:
+      return "covariance";
+    case NormalMethod::kAverage3dGradient:
+      return "average_3d_gradient";
+    case NormalMethod::kAverageDepthChange:
+      return "average_depth_change";
   }
   return "unknown";
 }
@@ -224,20 +224,20 @@ bool NormalOptions::IsValid(std::string* error) const {
 
 struct NormalEstimator::Buffers {
   Image3f normals;
-  ImageU8 radius;                             // per-pixel window radius [px]
-  ImageF inverse_depth;                       // 1/Z [1/m], 0 where the point is invalid
-  ImageU8 edge;                               // 1 at depth-edge pixels
-  std::vector<std::int32_t> edge_integral;    // summed-area table of `edge`
-  std::vector<std::int32_t> last_valid_row;   // per column, for the vertical edge scan
-  std::vector<float> last_inverse_depth;      // per column, 1/Z at last_valid_row [1/m]
+  ImageU8 radius;                            // per-pixel window radius [px]
+  ImageF inverse_depth;                      // 1/Z [1/m], 0 where the point is invalid
+  ImageU8 edge;                              // 1 at depth-edge pixels
+  std::vector<std::int32_t> edge_integral;   // summed-area table of `edge`
+  std::vector<std::int32_t> last_valid_row;  // per column, for the vertical edge scan
+  std::vector<float> last_inverse_depth;     // per column, 1/Z at last_valid_row [1/m]
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
   internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
-  std::vector<float> row_soa;                 // covariance: per-row structure of arrays
-  std::vector<std::uint64_t> strip_u64;       // full-radius strip sums of the current row
-  std::vector<std::uint64_t> strips_u64;      // full, top-half and bottom-half strips
-  double max_abs_coordinate_m = 0.0;          // of this frame's valid points
-  double max_inverse_depth = 0.0;             // [1/m]
-  int max_radius_px = 0;                      // largest radius any pixel may use
+  std::vector<float> row_soa;             // covariance: per-row structure of arrays
+  std::vector<std::uint64_t> strip_u64;   // full-radius strip sums of the current row
+  std::vector<std::uint64_t> strips_u64;  // full, top-half and bottom-half strips
+  double max_abs_coordinate_m = 0.0;      // of this frame's valid points
+  double max_inverse_depth = 0.0;         // [1/m]
+  int max_radius_px = 0;                  // largest radius any pixel may use
   // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
   double fx_px = 0.0;
   double fy_px = 0.0;
@@ -274,9 +274,15 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
     return b.normals;
   }
   switch (options_.method) {
-    case NormalMethod::kCovarianceMatrix: ComputeCovariance(cloud); break;
-    case NormalMethod::kAverage3dGradient: ComputeAverage3dGradient(cloud); break;
-    case NormalMethod::kAverageDepthChange: ComputeAverageDepthChange(cloud); break;
+    case NormalMethod::kCovarianceMatrix:
+      ComputeCovariance(cloud);
+      break;
+    case NormalMethod::kAverage3dGradient:
+      ComputeAverage3dGradient(cloud);
+      break;
+    case NormalMethod::kAverageDepthChange:
+      ComputeAverageDepthChange(cloud);
+      break;
   }
   return b.normals;
 }
@@ -570,8 +576,8 @@ inline float PlaneBox(const std::uint64_t* plane, int a, int b) {
 // from half-window sums of (count, x, y, z) in units of `quantum` [m]. Branch-free.
 inline void GradientNormal(const float* l, const float* r, const float* t, const float* b,
                            float min_count, float quantum, float* nx, float* ny, float* nz) {
-  const bool ok = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) &
-                  (b[0] >= min_count);
+  const bool ok =
+      (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) & (b[0] >= min_count);
   // Means in metres, so that the cross product stays within float range.
   const float il = quantum / (ok ? l[0] : 1.0f), ir = quantum / (ok ? r[0] : 1.0f);
   const float it = quantum / (ok ? t[0] : 1.0f), ib = quantum / (ok ? b[0] : 1.0f);
@@ -587,10 +593,9 @@ inline void GradientNormal(const float* l, const float* r, const float* t, const
 // (count, rho, u, v): writes a, c and rho at pixel (u, v); ok = 0 when a half has fewer than
 // min_count points or the halves' centres are (nearly) collinear. Branch-free.
 inline void InverseDepthGradient(const float* l, const float* r, const float* t, const float* b,
-                                 const float* w, float u, float v, float radius,
-                                 float min_count, float* a, float* c, float* rho, float* ok) {
-  bool good = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) &
-              (b[0] >= min_count);
+                                 const float* w, float u, float v, float radius, float min_count,
+                                 float* a, float* c, float* rho, float* ok) {
+  bool good = (l[0] >= min_count) & (r[0] >= min_count) & (t[0] >= min_count) & (b[0] >= min_count);
   const float il = 1.0f / (good ? l[0] : 1.0f), ir = 1.0f / (good ? r[0] : 1.0f);
   const float it = 1.0f / (good ? t[0] : 1.0f), ib = 1.0f / (good ? b[0] : 1.0f);
   const float iw = 1.0f / (good ? w[0] : 1.0f);
@@ -615,8 +620,7 @@ inline void InverseDepthGradient(const float* l, const float* r, const float* t,
 // so that __restrict parameters let the compiler vectorise them.
 
 SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, float quantum,
-                               PlanarStrips strips,
-                               float* __restrict nx, float* __restrict ny,
+                               PlanarStrips strips, float* __restrict nx, float* __restrict ny,
                                float* __restrict nz) {
   const std::uint64_t* __restrict f0 = strips.full[0];
   const std::uint64_t* __restrict f1 = strips.full[1];
@@ -645,9 +649,8 @@ SSTA_NOINLINE void GradientRow(int begin, int end, int r, float min_count, float
 }
 
 SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_count,
-                                  PlanarStrips strips, float* __restrict ga,
-                                  float* __restrict gc, float* __restrict rho,
-                                  float* __restrict ok) {
+                                  PlanarStrips strips, float* __restrict ga, float* __restrict gc,
+                                  float* __restrict rho, float* __restrict ok) {
   const std::uint64_t* __restrict f0 = strips.full[0];
   const std::uint64_t* __restrict f1 = strips.full[1];
   const std::uint64_t* __restrict f2 = strips.full[2];
@@ -673,8 +676,8 @@ SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_co
                          PlaneBox(q3, a, b)};
     const float w[4] = {PlaneBox(f0, a, b), PlaneBox(f1, a, b), PlaneBox(f2, a, b),
                         PlaneBox(f3, a, b)};
-    InverseDepthGradient(l, rr, t, bt, w, static_cast<float>(u), fv, fr, min_count, &ga[u],
-                         &gc[u], &rho[u], &ok[u]);
+    InverseDepthGradient(l, rr, t, bt, w, static_cast<float>(u), fv, fr, min_count, &ga[u], &gc[u],
+                         &rho[u], &ok[u]);
   }
 }
 
@@ -811,8 +814,8 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
       // Back from fixed point to 1/m, keeping the squared norm within float range.
       const float rho_xh = fx * ga[u] * quantum, rho_yh = fy * gc[u] * quantum;
       const float rho = rho_centre[u] * quantum;
-      FinishNormal(Eigen::Vector3f(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh), p,
-                   &normals[u], &radius[u]);
+      FinishNormal(Eigen::Vector3f(rho_xh, rho_yh, rho - xh * rho_xh - yh * rho_yh), p, &normals[u],
+                   &radius[u]);
     }
   }
 }

@@ -47,8 +47,7 @@ Segmenter::Segmenter(const SegmenterOptions& options) : options_(options) {
 const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* disparity) {
   const int width = normals.width();
   const int height = normals.height();
-  SSTA_CHECK(disparity == nullptr ||
-                 (disparity->width() == width && disparity->height() == height),
+  SSTA_CHECK(disparity == nullptr || (disparity->width() == width && disparity->height() == height),
              "disparity and normals must have the same size");
   const bool use_disparity = disparity != nullptr && options_.max_disparity_jump_px > 0.0;
   const float cos_min = static_cast<float>(std::cos(options_.roughness_deg * kPi / 180.0));

@@ -22,8 +22,8 @@ namespace internal {
 /// min_rank2 = 1e-6 keeps the adjugate's cancellation error small and the result far above the
 /// smallest normal float.
 template <typename T>
-inline void SmallestEigenvectorOfUnitTrace(T xx, T xy, T xz, T yy, T yz, T zz, T min_rank2,
-                                           T* nx, T* ny, T* nz) {
+inline void SmallestEigenvectorOfUnitTrace(T xx, T xy, T xz, T yy, T yz, T zz, T min_rank2, T* nx,
+                                           T* ny, T* nz) {
   const T a00 = yy * zz - yz * yz;
   const T a11 = xx * zz - xz * xz;
   const T a22 = xx * yy - xy * xy;

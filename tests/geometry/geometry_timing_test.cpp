@@ -32,8 +32,9 @@ TEST(GeometryTiming, PrintsMillisecondsPer640x480Frame) {
   constexpr int kRepeats = 20;
 
   Image3f normals;
-  for (const NormalMethod method : {NormalMethod::kCovarianceMatrix, NormalMethod::kAverage3dGradient,
-                                    NormalMethod::kAverageDepthChange}) {
+  for (const NormalMethod method :
+       {NormalMethod::kCovarianceMatrix, NormalMethod::kAverage3dGradient,
+        NormalMethod::kAverageDepthChange}) {
     NormalOptions options;
     options.method = method;
     NormalEstimator estimator(options);

@@ -107,7 +107,8 @@ TEST(NormalEstimator, GroundAtGrazingAnglesUpTo20mIsExact) {
     // border lose their normals.
     EXPECT_GT(stats.Coverage(), 0.95);
     EXPECT_LT(stats.max_deg, 0.05);
-    RecordProperty(std::string(NormalMethodName(method)) + "_ground_max_deg", std::to_string(stats.max_deg));
+    RecordProperty(std::string(NormalMethodName(method)) + "_ground_max_deg",
+                   std::to_string(stats.max_deg));
   }
 }
 
@@ -162,7 +163,8 @@ TEST(NormalEstimator, InvalidPointsGiveNanAndBarelyDisturbNeighbours) {
     EXPECT_GT(stats.Coverage(), 0.97);
     // Exact for all: the gradient methods locate each half by its valid points.
     EXPECT_LT(stats.max_deg, 0.05);
-    RecordProperty(std::string(NormalMethodName(method)) + "_max_deg", std::to_string(stats.max_deg));
+    RecordProperty(std::string(NormalMethodName(method)) + "_max_deg",
+                   std::to_string(stats.max_deg));
   }
 }
 
@@ -196,7 +198,8 @@ TEST(NormalEstimator, WindowsDoNotStraddleDepthEdges) {
     const ErrorStats edge = Compare(normals, truth, near_silhouette);
     EXPECT_GT(edge.selected, 3000);
     EXPECT_LT(edge.max_deg, 0.05);
-    RecordProperty(std::string(NormalMethodName(method)) + "_silhouette_max_deg", std::to_string(edge.max_deg));
+    RecordProperty(std::string(NormalMethodName(method)) + "_silhouette_max_deg",
+                   std::to_string(edge.max_deg));
     EXPECT_GT(Compare(normals, truth, on_face).Coverage(), 0.94);  // only 2 px lost per side
     // The wall around the box is right too.
     const ErrorStats wall =
@@ -259,8 +262,10 @@ TEST(NormalEstimator, ReusesBuffersAcrossFrameSizes) {
   const Image3f cloud_small = TiltedPlaneScene().Render(small, &truth_small);
   NormalEstimator estimator(NormalOptions{});
   for (int i = 0; i < 2; ++i) {
-    const ErrorStats a = Compare(estimator.Compute(cloud_big), truth_big, [](int, int) { return true; });
-    const ErrorStats b = Compare(estimator.Compute(cloud_small), truth_small, [](int, int) { return true; });
+    const ErrorStats a =
+        Compare(estimator.Compute(cloud_big), truth_big, [](int, int) { return true; });
+    const ErrorStats b =
+        Compare(estimator.Compute(cloud_small), truth_small, [](int, int) { return true; });
     EXPECT_LT(a.max_deg, 0.5);
     EXPECT_LT(b.max_deg, 0.5);
     EXPECT_GT(b.Coverage(), 0.9);
@@ -344,8 +349,10 @@ TEST(SmallestEigenvector, AgreesWithEigenOnRandomFlatCovariances) {
             .toRotationMatrix();
     // lambda3 >= lambda2 >= 0.02 lambda3 (windows up to 50 times longer than wide), lambda1 <=
     // 0.2 lambda2 (flat enough to call a surface).
-    const double l3 = scale(rng), l2 = l3 * (0.02 + 0.98 * (unit(rng) + 1) / 2), l1 = l2 * ratio(rng);
-    const Eigen::Matrix3d c = rotation * Eigen::Vector3d(l1, l2, l3).asDiagonal() * rotation.transpose();
+    const double l3 = scale(rng), l2 = l3 * (0.02 + 0.98 * (unit(rng) + 1) / 2),
+                 l1 = l2 * ratio(rng);
+    const Eigen::Matrix3d c =
+        rotation * Eigen::Vector3d(l1, l2, l3).asDiagonal() * rotation.transpose();
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
     solver.computeDirect(c);
     const Eigen::Vector3d truth = solver.eigenvectors().col(0);
