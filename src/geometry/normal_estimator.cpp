@@ -230,6 +230,7 @@ struct NormalEstimator::Buffers {
   std::vector<std::int32_t> edge_integral;   // summed-area table of `edge`
   std::vector<std::int32_t> last_valid_row;  // per column, for the vertical edge scan
   std::vector<float> last_inverse_depth;     // per column, 1/Z at last_valid_row [1/m]
+  std::vector<float> edge_threshold;         // inverse-depth jump per gap length [1/m]
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
   internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
   std::vector<float> row_soa;             // covariance: per-row structure of arrays
@@ -301,7 +302,8 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
   // A gap of invalid pixels longer than this cannot fit inside any window with valid pixels on
   // both of its sides, so the points at its ends need no comparison.
   const int max_gap = 2 * b.max_radius_px - 1;
-  std::vector<float> threshold(static_cast<std::size_t>(max_gap) + 1);
+  std::vector<float>& threshold = b.edge_threshold;
+  threshold.resize(static_cast<std::size_t>(max_gap) + 1);
   for (int gap = 0; gap <= max_gap; ++gap) {
     threshold[gap] = static_cast<float>(options_.max_depth_change_factor * std::sqrt(1.0 + gap));
   }
