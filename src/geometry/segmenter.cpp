@@ -22,6 +22,39 @@ inline std::int32_t Find(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
+#if defined(__GNUC__)
+#define SSTA_NOINLINE __attribute__((noinline))
+#else
+#define SSTA_NOINLINE
+#endif
+
+// Join tests of n pixel pairs (a[i], b[i]) given as packed xyz normals: 1 where
+// a . b >= cos_min (false for NaN normals). Out of line so that __restrict lets it vectorise.
+SSTA_NOINLINE void JoinTests(int n, const float* __restrict a, const float* __restrict b,
+                             float cos_min, std::uint8_t* __restrict out) {
+  for (int i = 0; i < n; ++i) {
+    const float dot =
+        a[3 * i] * b[3 * i] + a[3 * i + 1] * b[3 * i + 1] + a[3 * i + 2] * b[3 * i + 2];
+    out[i] = dot >= cos_min ? 1 : 0;
+  }
+}
+
+// As JoinTests, and the disparities (da[i], db[i]) [px] must be valid (> 0) and differ by at
+// most max_jump (false for NaN).
+SSTA_NOINLINE void JoinTestsWithDisparity(int n, const float* __restrict a,
+                                          const float* __restrict b, const float* __restrict da,
+                                          const float* __restrict db, float cos_min, float max_jump,
+                                          std::uint8_t* __restrict out) {
+  for (int i = 0; i < n; ++i) {
+    const float dot =
+        a[3 * i] * b[3 * i] + a[3 * i + 1] * b[3 * i + 1] + a[3 * i + 2] * b[3 * i + 2];
+    const bool normal_ok = dot >= cos_min;
+    const bool disparity_ok =
+        (da[i] > 0.0f) & (db[i] > 0.0f) & (std::abs(da[i] - db[i]) <= max_jump);
+    out[i] = (normal_ok & disparity_ok) ? 1 : 0;
+  }
+}
+
 }  // namespace
 
 bool SegmenterOptions::IsValid(std::string* error) const {
@@ -64,27 +97,43 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   std::int32_t* parent = parent_.data();
 
   // Pass 1: join each valid pixel with its left and upper neighbours. Parents always point to
-  // smaller indices, so a set's root is its first pixel in raster order.
-  auto joins = [&](std::int32_t a, std::int32_t b) {
-    if (parent[b] < 0) return false;
-    if (normals[a].dot(normals[b]) < cos_min) return false;
+  // smaller indices, so a set's root is its first pixel in raster order. The join tests of a
+  // row run first as vectorised kernels (a NaN normal fails them by itself).
+  join_left_.resize(static_cast<std::size_t>(width));
+  join_up_.resize(static_cast<std::size_t>(width));
+  std::uint8_t* join_left = join_left_.data();
+  std::uint8_t* join_up = join_up_.data();
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "normals must be packed xyz");
+  const float* normal_data = normals.data()->data();
+  const float* disparity_data = use_disparity ? disparity->data() : nullptr;
+  auto join_tests = [&](std::int32_t a, std::int32_t b, int n, std::uint8_t* out) {
+    if (n <= 0) return;
     if (use_disparity) {
-      const float da = (*disparity)[a], db = (*disparity)[b];
-      // Also false for NaN or invalid (<= 0) disparities.
-      if (!(da > 0.0f && db > 0.0f && std::abs(da - db) <= max_jump)) return false;
+      JoinTestsWithDisparity(n, normal_data + 3 * static_cast<std::size_t>(a),
+                             normal_data + 3 * static_cast<std::size_t>(b), disparity_data + a,
+                             disparity_data + b, cos_min, max_jump, out);
+    } else {
+      JoinTests(n, normal_data + 3 * static_cast<std::size_t>(a),
+                normal_data + 3 * static_cast<std::size_t>(b), cos_min, out);
     }
-    return true;
   };
   for (int v = 0; v < height; ++v) {
     const std::int32_t row = v * width;
+    join_left[0] = 0;
+    join_tests(row + 1, row, width - 1, join_left + 1);
+    if (v > 0) {
+      join_tests(row, row - width, width, join_up);
+    } else {
+      std::fill(join_up, join_up + width, std::uint8_t{0});
+    }
     for (int u = 0; u < width; ++u) {
       const std::int32_t i = row + u;
       if (!IsFinite(normals[i])) {
         parent[i] = -1;
         continue;
       }
-      const bool left = u > 0 && joins(i, i - 1);
-      const bool up = v > 0 && joins(i, i - width);
+      const bool left = join_left[u] != 0;
+      const bool up = join_up[u] != 0;
       if (left && up) {
         const std::int32_t a = Find(parent, i - 1), b = Find(parent, i - width);
         if (a < b) {

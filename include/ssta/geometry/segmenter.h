@@ -77,6 +77,7 @@ class Segmenter {
   Segmentation result_;
   std::vector<std::int32_t> parent_;
   std::vector<int> cursor_;
+  std::vector<std::uint8_t> join_left_, join_up_;  // per-row join tests
 };
 
 /// One-shot convenience: Segmenter(options).Compute(normals, disparity), returned by value.
