@@ -1,13 +1,15 @@
 #pragma once
 
+#include <cmath>
+
 namespace ssta {
 namespace internal {
 
 /// Eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3x3 matrix
 /// [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]] (a covariance) scaled to trace 1. Writes it NOT
-/// normalised (length in [~min_rank2^5, 1]; callers normalise once, together with orienting
-/// it), sign arbitrary; or (0, 0, 0) when lambda2 * lambda3 <= min_rank2 (rank <= 1: the points
-/// lie on a line or are one point).
+/// normalised (length about 1 to 150; callers normalise once, together with orienting it), sign
+/// arbitrary; or (0, 0, 0) when lambda2 * lambda3 <= min_rank2 (rank <= 1: the points lie on a
+/// line or are one point).
 ///
 /// Why not Eigen::SelfAdjointEigenSolver::computeDirect: it needs acos/cos/sin and branches per
 /// call, which at 300k pixels per frame costs more than the rest of the normal estimation.
@@ -19,19 +21,24 @@ namespace internal {
 ///
 /// Branch-free (selects only), so a loop over a row vectorises (float: 4 pixels per SSE
 /// instruction; GCC needs -fno-trapping-math to turn the selects into blends). In float,
-/// min_rank2 = 1e-6 keeps the adjugate's cancellation error small and the result far above the
-/// smallest normal float.
+/// min_rank2 = 1e-6 keeps the adjugate's cancellation error small.
 template <typename T>
 inline void SmallestEigenvectorOfUnitTrace(T xx, T xy, T xz, T yy, T yz, T zz, T min_rank2, T* nx,
                                            T* ny, T* nz) {
-  const T a00 = yy * zz - yz * yz;
-  const T a11 = xx * zz - xz * xz;
-  const T a22 = xx * yy - xy * xy;
-  const T a01 = xz * yz - xy * zz;
-  const T a02 = xy * yz - xz * yy;
-  const T a12 = xy * xz - xx * yz;
+  // Entries below 1e-12 (relative to trace^2 = 1) are rounding noise; flushing them, and
+  // rescaling by 1/best in every iteration, keeps the vanishing components of exact planes
+  // (lambda1 = 0) above denormal floats, which cost ~10% of the frame time on such data.
+  auto flush = [](T value, T tiny) { return std::abs(value) < tiny ? T(0) : value; };
+  constexpr T kTinyEntry = T(1e-12);
+  const T a00 = flush(yy * zz - yz * yz, kTinyEntry);
+  const T a11 = flush(xx * zz - xz * xz, kTinyEntry);
+  const T a22 = flush(xx * yy - xy * xy, kTinyEntry);
+  const T a01 = flush(xz * yz - xy * zz, kTinyEntry);
+  const T a02 = flush(xy * yz - xz * yy, kTinyEntry);
+  const T a12 = flush(xy * xz - xx * yz, kTinyEntry);
   // Column of the largest diagonal entry. |a_ij| <= sqrt(a_ii a_jj) <= best for the PSD
-  // adjugate, so scaling by 1/best keeps |v| <= 1; adj's eigenvalues are <= 1/4 at trace 1.
+  // adjugate, so scaling by 1/best keeps |v| <= 1; each iteration rescales by 1/best too, which
+  // keeps the dominant component within [1, 81] (best >= lambda2 lambda3 / 3).
   const T m12 = a11 >= a22 ? a11 : a22;
   const T best = a00 >= m12 ? a00 : m12;
   T x = a00 >= m12 ? a00 : (a11 >= a22 ? a01 : a02);
@@ -43,9 +50,9 @@ inline void SmallestEigenvectorOfUnitTrace(T xx, T xy, T xz, T yy, T yz, T zz, T
   y *= scale;
   z *= scale;
   for (int i = 0; i < 4; ++i) {
-    const T x1 = a00 * x + a01 * y + a02 * z;
-    const T y1 = a01 * x + a11 * y + a12 * z;
-    const T z1 = a02 * x + a12 * y + a22 * z;
+    const T x1 = (a00 * x + a01 * y + a02 * z) * scale;
+    const T y1 = (a01 * x + a11 * y + a12 * z) * scale;
+    const T z1 = (a02 * x + a12 * y + a22 * z) * scale;
     x = x1;
     y = y1;
     z = z1;
