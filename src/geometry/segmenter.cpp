@@ -22,13 +22,36 @@ inline std::int32_t Find(std::int32_t* parent, std::int32_t i) {
   return i;
 }
 
-inline void Union(std::int32_t* parent, std::int32_t a, std::int32_t b) {
-  a = Find(parent, a);
-  b = Find(parent, b);
-  if (a < b) {
-    parent[b] = a;
-  } else if (b < a) {
-    parent[a] = b;
+#if defined(__GNUC__)
+#define SSTA_NOINLINE __attribute__((noinline))
+#else
+#define SSTA_NOINLINE
+#endif
+
+// Join tests of n pixel pairs (a[i], b[i]) given as packed xyz normals: 1 where
+// a . b >= cos_min (false for NaN normals). Out of line so that __restrict lets it vectorise.
+SSTA_NOINLINE void JoinTests(int n, const float* __restrict a, const float* __restrict b,
+                             float cos_min, std::uint8_t* __restrict out) {
+  for (int i = 0; i < n; ++i) {
+    const float dot =
+        a[3 * i] * b[3 * i] + a[3 * i + 1] * b[3 * i + 1] + a[3 * i + 2] * b[3 * i + 2];
+    out[i] = dot >= cos_min ? 1 : 0;
+  }
+}
+
+// As JoinTests, and the disparities (da[i], db[i]) [px] must be valid (> 0) and differ by at
+// most max_jump (false for NaN).
+SSTA_NOINLINE void JoinTestsWithDisparity(int n, const float* __restrict a,
+                                          const float* __restrict b, const float* __restrict da,
+                                          const float* __restrict db, float cos_min, float max_jump,
+                                          std::uint8_t* __restrict out) {
+  for (int i = 0; i < n; ++i) {
+    const float dot =
+        a[3 * i] * b[3 * i] + a[3 * i + 1] * b[3 * i + 1] + a[3 * i + 2] * b[3 * i + 2];
+    const bool normal_ok = dot >= cos_min;
+    const bool disparity_ok =
+        (da[i] > 0.0f) & (db[i] > 0.0f) & (std::abs(da[i] - db[i]) <= max_jump);
+    out[i] = (normal_ok & disparity_ok) ? 1 : 0;
   }
 }
 
@@ -60,8 +83,7 @@ Segmenter::Segmenter(const SegmenterOptions& options) : options_(options) {
 const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* disparity) {
   const int width = normals.width();
   const int height = normals.height();
-  SSTA_CHECK(disparity == nullptr ||
-                 (disparity->width() == width && disparity->height() == height),
+  SSTA_CHECK(disparity == nullptr || (disparity->width() == width && disparity->height() == height),
              "disparity and normals must have the same size");
   const bool use_disparity = disparity != nullptr && options_.max_disparity_jump_px > 0.0;
   const float cos_min = static_cast<float>(std::cos(options_.roughness_deg * kPi / 180.0));
@@ -80,64 +102,110 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   std::int32_t* parent = parent_.data();
   if (use_segment_angle) normal_sum_.resize(parent_.size());
   Eigen::Vector3f* normal_sum = normal_sum_.data();
-
-  // Joins the sets of a and b; with the segment test, only while their mean normals agree.
-  auto merge = [&](std::int32_t a, std::int32_t b) {
-    if (!use_segment_angle) {
-      Union(parent, a, b);
-      return;
-    }
-    const std::int32_t ra = Find(parent, a), rb = Find(parent, b);
-    if (ra == rb) return;
+  // With the segment test, sets join only while their mean normals (sums, kept at the roots)
+  // agree. Roots stay the smaller index, so parents still point backwards.
+  auto agree = [&](std::int32_t ra, std::int32_t rb) {
     const Eigen::Vector3f& sa = normal_sum[ra];
     const Eigen::Vector3f& sb = normal_sum[rb];
-    if (sa.dot(sb) < cos_segment * sa.norm() * sb.norm()) return;
+    return sa.dot(sb) >= cos_segment * sa.norm() * sb.norm();
+  };
+  auto merge_roots = [&](std::int32_t ra, std::int32_t rb) {
+    if (ra == rb) return ra;
     const std::int32_t root = std::min(ra, rb), child = std::max(ra, rb);
     parent[child] = root;
-    normal_sum[root] = sa + sb;
+    normal_sum[root] += normal_sum[child];
+    return root;
   };
 
-  // Pass 1: join each valid pixel with its left and upper neighbours.
-  auto joins = [&](std::int32_t a, std::int32_t b) {
-    if (parent[b] < 0) return false;
-    if (normals[a].dot(normals[b]) < cos_min) return false;
+  // Pass 1: join each valid pixel with its left and upper neighbours. Parents always point to
+  // smaller indices, so a set's root is its first pixel in raster order. The join tests of a
+  // row run first as vectorised kernels (a NaN normal fails them by itself).
+  join_left_.resize(static_cast<std::size_t>(width));
+  join_up_.resize(static_cast<std::size_t>(width));
+  std::uint8_t* join_left = join_left_.data();
+  std::uint8_t* join_up = join_up_.data();
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "normals must be packed xyz");
+  const float* normal_data = normals.data()->data();
+  const float* disparity_data = use_disparity ? disparity->data() : nullptr;
+  auto join_tests = [&](std::int32_t a, std::int32_t b, int n, std::uint8_t* out) {
+    if (n <= 0) return;
     if (use_disparity) {
-      const float da = (*disparity)[a], db = (*disparity)[b];
-      // Also false for NaN or invalid (<= 0) disparities.
-      if (!(da > 0.0f && db > 0.0f && std::abs(da - db) <= max_jump)) return false;
+      JoinTestsWithDisparity(n, normal_data + 3 * static_cast<std::size_t>(a),
+                             normal_data + 3 * static_cast<std::size_t>(b), disparity_data + a,
+                             disparity_data + b, cos_min, max_jump, out);
+    } else {
+      JoinTests(n, normal_data + 3 * static_cast<std::size_t>(a),
+                normal_data + 3 * static_cast<std::size_t>(b), cos_min, out);
     }
-    return true;
   };
   for (int v = 0; v < height; ++v) {
     const std::int32_t row = v * width;
+    join_left[0] = 0;
+    join_tests(row + 1, row, width - 1, join_left + 1);
+    if (v > 0) {
+      join_tests(row, row - width, width, join_up);
+    } else {
+      std::fill(join_up, join_up + width, std::uint8_t{0});
+    }
     for (int u = 0; u < width; ++u) {
       const std::int32_t i = row + u;
       if (!IsFinite(normals[i])) {
         parent[i] = -1;
         continue;
       }
-      parent[i] = i;
-      if (use_segment_angle) normal_sum[i] = normals[i];
-      if (u > 0 && joins(i, i - 1)) merge(i, i - 1);
-      if (v > 0 && joins(i, i - width)) merge(i, i - width);
+      const bool left = join_left[u] != 0;
+      const bool up = join_up[u] != 0;
+      if (use_segment_angle) {
+        parent[i] = i;
+        normal_sum[i] = normals[i];
+        std::int32_t root = i;
+        if (left) {
+          const std::int32_t ra = Find(parent, i - 1);
+          if (agree(ra, root)) root = merge_roots(ra, root);
+        }
+        if (up) {
+          const std::int32_t rb = Find(parent, i - width);
+          if (rb != root && agree(rb, root)) root = merge_roots(rb, root);
+        }
+        continue;
+      }
+      if (left && up) {
+        const std::int32_t a = Find(parent, i - 1), b = Find(parent, i - width);
+        if (a < b) {
+          parent[b] = a;
+          parent[i] = a;
+        } else {
+          parent[a] = b;
+          parent[i] = b;
+        }
+      } else if (left) {
+        parent[i] = parent[i - 1];
+      } else if (up) {
+        parent[i] = Find(parent, i - width);
+      } else {
+        parent[i] = i;
+      }
     }
   }
 
-  // Pass 2: a root is its set's first pixel in raster order, so labels are assigned in order.
+  // Pass 2: roots get ids in raster order; every other pixel takes its parent's id, which is
+  // already final because the parent comes earlier and, by induction, holds its root's id.
   std::int32_t* labels = out.labels.data();
   int num_segments = 0;
   const std::int32_t num_pixels = width * height;
   for (std::int32_t i = 0; i < num_pixels; ++i) {
-    if (parent[i] < 0) {
+    const std::int32_t p = parent[i];
+    if (p < 0) {
       labels[i] = -1;
       continue;
     }
-    const std::int32_t root = Find(parent, i);
-    if (root == i) {
+    if (p == i) {
       labels[i] = num_segments++;
       out.sizes.push_back(0);
     } else {
-      labels[i] = labels[root];
+      // Parents point backwards, so labels[p] is final; with the segment test p may be a
+      // non-root whose chain was not compressed, which labels[p] already accounts for.
+      labels[i] = labels[p];
     }
     ++out.sizes[labels[i]];
   }

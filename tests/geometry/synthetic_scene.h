@@ -18,9 +18,7 @@ struct PinholeCamera {
   double cv_px = 239.5;
   double baseline_m = 0.12;
   /// Viewing direction of pixel (v, u), with z = 1.
-  Eigen::Vector3d Ray(int v, int u) const {
-    return {(u - cu_px) / f_px, (v - cv_px) / f_px, 1.0};
-  }
+  Eigen::Vector3d Ray(int v, int u) const { return {(u - cu_px) / f_px, (v - cv_px) / f_px, 1.0}; }
 };
 
 /// An analytic world of planes and boxes in the camera frame; renders organized clouds by

@@ -1,24 +1,30 @@
 #pragma once
 
-#include <cstdint>
+#include <memory>
 #include <string>
-#include <vector>
 
 #include "ssta/core/image.h"
 
 namespace ssta {
 
 /// How per-pixel normals are computed from integral images (paper, section "Feature
-/// extraction"). All three cost O(1) per pixel whatever the window size.
+/// extraction"). All three cost O(1) per pixel whatever the window size, and all three are
+/// exact (< 0.01 degree) on noise-free planes, also next to holes, depth edges and the border.
+/// On stereo ground with 0.15 px disparity noise and 13 x 13 windows the mean error is ~1.6
+/// degrees beyond 5 m for all three; closer than 2.5 m the covariance fit is tilted most by
+/// the noise along the viewing rays (4.3 degrees against 2.6 for the two gradient methods).
 enum class NormalMethod {
-  /// Smallest eigenvector of the 3x3 covariance of the window's points (9 sums + a count).
-  /// The most accurate and the most robust to noise; the paper's choice.
+  /// Smallest eigenvector of the 3x3 covariance of the window's points (9 sums + a count):
+  /// the paper's choice, and the only method that keeps a normal where a window half is empty
+  /// (e.g. at the far end of the ground). Also the fastest here (its eigen solve vectorises).
   kCovarianceMatrix,
   /// Cross product of the smoothed horizontal and vertical 3D gradients, each the difference of
   /// the mean points of two window halves (3 sums + a count).
   kAverage3dGradient,
-  /// Normals from the average change of inverse depth across window halves (1 sum + a count),
-  /// turned into 3D tangents with the pixel's own viewing ray. The fastest, least robust.
+  /// Normals from the average change of inverse depth across window halves (a sum of 1/Z, a
+  /// count and the valid pixels' u, v sums, which locate each half's centre), turned into 3D
+  /// with the pixel's own viewing ray and the focal length recovered from the cloud (X/Z of
+  /// the extreme valid columns and rows: needs valid points in two columns and two rows).
   kAverageDepthChange,
 };
 
@@ -54,10 +60,12 @@ struct NormalOptions {
   double max_depth_change_factor = 0.02;
 
   /// When true, the window side scales with depth as smoothing_size_px * sqrt(Z / 5 m),
-  /// clamped to [0.5, 2] x smoothing_size_px: the normal error from depth noise sigma_Z ~ Z^2
-  /// over a window of s x s pixels grows as Z / s^2, so s ~ sqrt(Z) keeps it roughly constant
-  /// (finer near the camera, smoother far away). Off by default: fixed windows are predictable
-  /// and far ground at a grazing angle already spans metres per window.
+  /// clamped to [0.5, 2] x smoothing_size_px (so up to 2x the buffers and time). Why sqrt: on a
+  /// surface facing the camera, disparity noise gives a normal error ~ Z / s^2 for an s x s
+  /// window, so s ~ sqrt(Z) keeps it constant. Off by default: on ground seen at a grazing
+  /// angle the error of a fixed pixel window hardly depends on Z, and shrinking the near
+  /// windows costs more there than the far ones gain (measured, 0.15 px disparity noise: mean
+  /// error 1.6 -> 0.8 degrees beyond 10 m, but 4.3 -> 7.0 degrees closer than 2.5 m).
   bool depth_dependent_smoothing = false;
 
   /// On failure writes a message starting with the offending key (e.g.
@@ -71,44 +79,47 @@ struct NormalOptions {
 /// metres), from a pinhole camera (X/Z linear in u, Y/Z linear in v - true for triangulated
 /// rectified stereo), all-NaN where there is no point. Points with Z <= 0 are treated as invalid.
 /// Output: unit normals in the same frame, oriented towards the camera (n . p < 0), all-NaN
-/// where the point is invalid, the window holds too few valid points, or the window is cut by a
-/// depth edge or the image border to less than 3 x 3 pixels.
+/// where the point is invalid, the window holds fewer than a quarter valid points (each half,
+/// for the gradient methods), or the window is cut by a depth edge or the image border to less
+/// than 3 x 3 pixels. The window is the largest square around the pixel, up to the smoothing
+/// size, that holds no depth-edge pixel (the chessboard distance to the nearest edge pixel,
+/// found with a summed-area table of the edge map); depth-edge pixels themselves get none.
 ///
+/// Precision hardly depends on the rest of the frame: window sums are exact 64-bit integers in
+/// a per-frame fixed-point unit (scaled to the largest coordinate), not running float totals,
+/// so a few stereo outliers at 500 m cost a plane 1.5 m away at most 0.04 degrees (tested).
+///
+/// Cost: O(1) per pixel; memory ~ (smoothing_size_px + 2) integral rows, not whole tables.
 /// Keeps its buffers between calls, so a sequence of equally sized frames does not reallocate.
 /// Not thread-safe: use one estimator per thread.
 class NormalEstimator {
  public:
   /// Throws ssta::Error (message from NormalOptions::IsValid) on invalid options.
   explicit NormalEstimator(const NormalOptions& options);
+  ~NormalEstimator();
+  NormalEstimator(NormalEstimator&&) noexcept;
+  NormalEstimator& operator=(NormalEstimator&&) noexcept;
 
   /// Normals of `cloud_camera`; the reference stays valid until the next Compute call.
   const Image3f& Compute(const Image3f& cloud_camera);
 
   /// Window half-size [px] used at each pixel by the last Compute: the window is
   /// (2r+1) x (2r+1); 0 where no normal was computed.
-  const ImageU8& window_radius_px() const { return radius_; }
+  const ImageU8& window_radius_px() const;
 
   const NormalOptions& options() const { return options_; }
 
  private:
+  struct Buffers;  // integral rows, edge maps: private to the implementation
+
+  void PrepareFrame(const Image3f& cloud);
   void ComputeWindowRadii(const Image3f& cloud);
   void ComputeCovariance(const Image3f& cloud);
   void ComputeAverage3dGradient(const Image3f& cloud);
   void ComputeAverageDepthChange(const Image3f& cloud);
 
   NormalOptions options_;
-  Image3f normals_;
-  ImageU8 radius_;    // per-pixel window radius [px]
-  ImageU8 distance_;  // chessboard distance to the nearest depth-edge pixel [px], capped
-  std::vector<std::int32_t> last_valid_row_;  // per column, for the vertical edge scan
-  std::vector<float> last_inverse_depth_;     // per column, 1/Z at last_valid_row_ [1/m]
-  std::vector<std::uint64_t> integral_u64_;   // covariance sums (fixed point, modular)
-  std::vector<double> integral_f64_;          // gradient / depth-change sums
-  double max_abs_coordinate_m_ = 0.0;         // of the last frame's valid points
-  int max_radius_px_ = 0;                     // largest window radius any pixel may use
-  // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
-  double fx_px_ = 0.0;
-  double fy_px_ = 0.0;
+  std::unique_ptr<Buffers> buffers_;
 };
 
 /// One-shot convenience: NormalEstimator(options).Compute(cloud_camera), returned by value.

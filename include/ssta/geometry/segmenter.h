@@ -11,11 +11,15 @@ namespace ssta {
 /// Options of the normal-based segmentation (YAML section `segmentation`).
 struct SegmenterOptions {
   /// Maximum angle between the normals of two 4-neighbours that join one segment [deg]
-  /// (paper eq. 1, read as n1 . n2 >= cos(roughness)). Default 2: neighbouring normals share
-  /// most of their window, so on stereo ground they differ by well under 1 degree even where
-  /// each is a few degrees off, while the integral-image window spreads a crease of angle a over
-  /// about one window (13 px): a 20-degree ramp or a box edge turns the normal by ~2-4 degrees
-  /// per pixel at its steepest, which this threshold must stay below to cut it.
+  /// (paper eq. 1, read as n1 . n2 >= cos(roughness)). The test is local, and the window spreads
+  /// a crease over about its width, so a crease splits two surfaces only where the normal turns
+  /// by more than roughness_deg per pixel. Measured with 13 x 13 covariance windows (floor to
+  /// ramp at 6 m): 10 / 15 / 20 / 30 degree creases turn by 1.4 / 2.3 / 3.4 / 6.0 degrees per
+  /// pixel at their steepest. Default 2: splits creases from ~14 degrees (about the vehicle's
+  /// semi-traversable slope) while noisy stereo ground, whose neighbouring normals share most of
+  /// their window, stays one segment (97% of the ground within 10 m at 0.15 px disparity
+  /// noise). Gentler creases merge into one segment; their slopes lie below the default
+  /// semi-traversable slope (15 degrees) anyway.
   double roughness_deg = 2.0;
 
   /// Maximum disparity difference between two 4-neighbours that join one segment [px]; 0
@@ -83,6 +87,7 @@ class Segmenter {
   std::vector<std::int32_t> parent_;
   std::vector<Eigen::Vector3f> normal_sum_;  // per root: sum of its pixels' normals
   std::vector<int> cursor_;
+  std::vector<std::uint8_t> join_left_, join_up_;  // per-row join tests
 };
 
 /// One-shot convenience: Segmenter(options).Compute(normals, disparity), returned by value.
