@@ -107,6 +107,30 @@ TEST(Segmenter, SplitsRampFromFloorBelowCreaseRotationAndMergesAboveRampAngle) {
   EXPECT_GT(r.count, 0.99 * r.selected);
 }
 
+TEST(Segmenter, SegmentAngleStopsAGradualCreaseFromChaining) {
+  // At roughness 5 degrees the 20-degree crease (steepest turn ~3.4 deg/px) is crossed in
+  // sub-threshold steps and floor and ramp merge; comparing the segments' mean normals stops it.
+  const PinholeCamera camera;
+  Image3f truth;
+  const Image3f cloud = FloorAndRampScene(20.0).Render(camera, &truth, 20.0);
+  const ImageF disparity = test::DisparityOf(cloud, camera);
+  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
+  const auto floor = Facing(truth, {0, -1, 0});
+  const auto ramp = Facing(truth, Eigen::Vector3f(0, -std::cos(20 * kPi / 180), -std::sin(20 * kPi / 180)));
+
+  SegmenterOptions neighbours_only = WithRoughness(5.0);
+  const Segmentation chained = SegmentNormals(normals, &disparity, neighbours_only);
+  EXPECT_EQ(ModeOf(chained, floor).label, ModeOf(chained, ramp).label);
+
+  SegmenterOptions with_segments = neighbours_only;
+  with_segments.max_segment_angle_deg = 8.0;
+  const Segmentation split = SegmentNormals(normals, &disparity, with_segments);
+  const Mode f = ModeOf(split, floor), r = ModeOf(split, ramp);
+  EXPECT_NE(f.label, r.label);
+  EXPECT_GT(f.count, 0.95 * f.selected);
+  EXPECT_GT(r.count, 0.9 * r.selected);
+}
+
 TEST(Segmenter, BoxTopAndFrontAreSeparateSegments) {
   const PinholeCamera camera;
   Image3f truth;
