@@ -98,6 +98,32 @@ void ReadGravity(YamlSection s, GravityOptions* o) {
 
 }  // namespace
 
+StereoMatcherOptions PipelineStereoDefaults() {
+  StereoMatcherOptions o;
+  o.block_size = 9;
+  return o;
+}
+
+NormalOptions PipelineNormalDefaults() {
+  NormalOptions o;
+  o.smoothing_size_px = 31;
+  o.depth_dependent_smoothing = true;
+  return o;
+}
+
+SegmenterOptions PipelineSegmenterDefaults() {
+  SegmenterOptions o;
+  o.roughness_deg = 8.0;
+  o.max_segment_angle_deg = 10.0;
+  return o;
+}
+
+AnalysisOptions PipelineAnalysisDefaults() {
+  AnalysisOptions o;
+  o.small_segments = SmallSegmentPolicy::kAll;
+  return o;
+}
+
 bool GravityOptions::IsValid(std::string* error) const {
   if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
     return Fail(error, "up_camera: must be a finite, non-zero vector");

@@ -40,16 +40,25 @@ struct MappingOptions {
   bool IsValid(std::string* error) const;
 };
 
+/// The pipeline's tuned stage defaults where they differ from each module's own neutral ones
+/// (measured on the synthetic yard with SGBM; see docs/accuracy.md): a wider matching block, a
+/// depth-dependent 31 px normal window, looser neighbour roughness held together by the
+/// segment-angle test, and a verdict for every small segment that has a trustworthy plane.
+StereoMatcherOptions PipelineStereoDefaults();
+NormalOptions PipelineNormalDefaults();
+SegmenterOptions PipelineSegmenterDefaults();
+AnalysisOptions PipelineAnalysisDefaults();
+
 /// Every option of the per-frame pipeline, one struct per stage (one YAML section each).
 /// Defaults are the values documented in config/default.yaml.
 struct Config {
   VehicleOptions vehicle;
   RectifierOptions rectification;
-  StereoMatcherOptions stereo;
+  StereoMatcherOptions stereo = PipelineStereoDefaults();
   TriangulationOptions triangulation;
-  NormalOptions normals;
-  SegmenterOptions segmentation;
-  AnalysisOptions analysis;
+  NormalOptions normals = PipelineNormalDefaults();
+  SegmenterOptions segmentation = PipelineSegmenterDefaults();
+  AnalysisOptions analysis = PipelineAnalysisDefaults();
   GravityOptions gravity;
   AttitudeFilterOptions attitude;
   MappingOptions map;
