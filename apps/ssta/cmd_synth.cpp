@@ -106,6 +106,8 @@ void RegisterSynth(CLI::App& app) {
   cmd->add_option("--threads", options->render.threads,
                   "render threads (0 = all cores); the output is the same for any count")
       ->capture_default_str();
+  cmd->add_flag("!--grid-all-cells", options->grid_seen_only,
+                "classify every gt grid cell, also those no camera saw (default: those are 255)");
   cmd->add_option("--grid-resolution", options->grid_resolution_m, "gt grid cell size [m]")
       ->capture_default_str();
   cmd->add_option("--config", *config_files,

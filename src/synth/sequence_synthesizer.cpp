@@ -77,9 +77,25 @@ std::vector<int> DroppedFrames(const SynthOptions& o) {
   return dropped;
 }
 
-/// World grid of classes over the area the cameras could label, map_server style.
+/// The (x, y) of the surface points behind every 4th labelled pixel (label != 255) of a frame,
+/// in the world: what the cameras actually saw, so that the grid only scores that.
+void CollectSeenPoints(const StereoFrame& frame, const Eigen::Isometry3d& world_T_cam0, const RigOptions& rig,
+                       std::vector<Eigen::Vector2d>* seen) {
+  const double cu = (frame.depth.width() - 1) * 0.5, cv = (frame.depth.height() - 1) * 0.5;
+  for (int v = 0; v < frame.depth.height(); v += 2) {
+    for (int u = 0; u < frame.depth.width(); u += 2) {
+      const float z = frame.depth(v, u);
+      if (!(z > 0) || frame.labels(v, u) == kDontCare) continue;
+      const Eigen::Vector3d p = world_T_cam0 * Eigen::Vector3d((u - cu) * z / rig.focal_px, (v - cv) * z / rig.focal_px, z);
+      seen->emplace_back(p.x(), p.y());
+    }
+  }
+}
+
+/// World grid of classes over the area the cameras could label, map_server style. Cells that no
+/// labelled pixel of any frame saw are 255 (don't care): a map cannot know them.
 void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eigen::Vector3d>& cams,
-               const std::string& gt_dir) {
+               const std::vector<Eigen::Vector2d>& seen, const std::string& gt_dir) {
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (const Eigen::Vector3d& c : cams) {
     x0 = std::min(x0, c.x());
@@ -115,12 +131,21 @@ void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eige
       grid(row, col) = static_cast<std::uint8_t>(worst);
     }
   });
+  ImageU8 seen_mask(w, h, 0);
+  for (const Eigen::Vector2d& p : seen) {
+    const int col = static_cast<int>(std::floor((p.x() - x0) / r));
+    const int row = h - 1 - static_cast<int>(std::floor((p.y() - y0) / r));
+    if (seen_mask.Contains(row, col)) seen_mask(row, col) = 1;
+  }
+  for (std::size_t i = 0; i < grid.size() && o.grid_seen_only; ++i) {
+    if (!seen_mask[i]) grid[i] = kDontCare;
+  }
   WriteImage(grid, Join(gt_dir, "grid_classes.png"));
   std::ostringstream yaml;
   yaml << std::setprecision(10);
   yaml << "# Ground-truth world grid of classes (ids of INTERFACES section 3); row 0 = largest y.\n"
        << "# A cell takes the worst class of 3x3 samples of the top surface and of the height\n"
-       << "# range inside it (a step within the cell).\n"
+       << "# range inside it (a step within the cell). Cells no camera saw are 255 (don't care).\n"
        << "image: grid_classes.png\n"
        << "resolution: " << r << "\n"
        << "origin: [" << x0 << ", " << y0 << ", 0.0]\n";
@@ -263,6 +288,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   cam0_csv << "#timestamp [ns],filename\n";
   cam1_csv << "#timestamp [ns],filename\n";
   std::vector<Eigen::Vector3d> cam_positions;
+  std::vector<Eigen::Vector2d> seen;
   double render_ms = 0;
   for (int k = 0; k < o.frames; ++k) {
     const std::int64_t ns = kBaseNs + std::llround(kLeadIn_s * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
@@ -272,6 +298,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
     const auto start = std::chrono::steady_clock::now();
     const StereoFrame frame = renderer.Render(world_T_cam0, k);
     render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    CollectSeenPoints(frame, world_T_cam0, o.rig, &seen);
 
     const std::string name = std::to_string(ns) + ".png";
     WriteImage(frame.left, Join(out_dir, "cam0/data/" + name));
@@ -343,7 +370,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
       << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
     summary.warning = w.str();
   }
-  WriteGrid(scene, o, cam_positions, Join(out_dir, "gt"));
+  WriteGrid(scene, o, cam_positions, seen, Join(out_dir, "gt"));
   WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
                   Join(out_dir, "gt/faults.yaml"));
   return summary;

@@ -51,6 +51,7 @@ SynthOptions SmallOptions(const std::string& scene, int frames) {
   o.rig.height = 240;
   o.rig.focal_px = 210;
   o.grid_resolution_m = 0.25;
+  o.grid_seen_only = false;  // the scene checks below look at places the small cameras miss
   return o;
 }
 
@@ -336,6 +337,32 @@ TEST(SynthGroundTruth, YardGridClassesAtKnownPlaces) {
   EXPECT_EQ(class_at(8.0, -0.6), TravClass::kNonTraversable);       // the crate
   EXPECT_EQ(class_at(8.0, 4.6 - 0.6 - 0.6), TravClass::kTraversable);  // 8 deg ramp flank
   EXPECT_EQ(class_at(8.0, 4.6), TravClass::kTraversable);           // its flat top
+}
+
+TEST(SynthGroundTruth, GridScoresOnlyCellsTheCamerasSaw) {
+  TempDir tmp;
+  SynthOptions o = SmallOptions("ramp", 2);
+  o.ramp_slope_deg = 10.0;
+  o.grid_seen_only = true;
+  WriteSyntheticSequence(o, tmp.Sub("seq"));
+  const ImageU8 grid = ReadLabelImage(tmp.Sub("seq/gt/grid_classes.png"));
+  const std::string yaml = ReadTextFile(tmp.Sub("seq/gt/grid.yaml"));
+  double x0 = 0, y0 = 0;
+  ASSERT_EQ(std::sscanf(yaml.c_str() + yaml.find("origin: ["), "origin: [%lf, %lf", &x0, &y0), 2);
+  auto class_at = [&](double x, double y) {
+    const int col = static_cast<int>(std::floor((x - x0) / 0.25));
+    const int row = grid.height() - 1 - static_cast<int>(std::floor((y - y0) / 0.25));
+    return grid(row, col);
+  };
+  EXPECT_EQ(class_at(-3.0, 0.0), kDontCare);  // behind the start: never in view
+  EXPECT_EQ(class_at(4.0, 0.0), static_cast<std::uint8_t>(TravClass::kTraversable));  // ahead
+  int seen = 0, dont_care = 0;
+  for (std::size_t i = 0; i < grid.size(); ++i) {
+    seen += grid[i] == static_cast<std::uint8_t>(TravClass::kTraversable);
+    dont_care += grid[i] == kDontCare;
+  }
+  EXPECT_GT(seen, 50);
+  EXPECT_GT(dont_care, seen);  // the grid spans the label range around the whole path
 }
 
 TEST(SynthMotion, ImuIntegratesBackToPose) {
