@@ -118,6 +118,13 @@ SegmenterOptions PipelineSegmenterDefaults() {
   return o;
 }
 
+MapOptions PipelineMapDefaults() {
+  MapOptions o;
+  o.max_range_m = 12.0;
+  o.occupied_threshold_prob = 0.8;
+  return o;
+}
+
 AnalysisOptions PipelineAnalysisDefaults() {
   AnalysisOptions o;
   o.small_segments = SmallSegmentPolicy::kAll;

@@ -32,9 +32,14 @@ struct GravityOptions {
   bool IsValid(std::string* error) const;
 };
 
+/// The map's fusion defaults for stereo: hits only within 12 m (farther stereo points are too
+/// noisy to classify) and a voxel counts as occupied from 2 hits (P >= 0.8), so one stray
+/// point does not become a column's top surface.
+MapOptions PipelineMapDefaults();
+
 /// YAML section `map`: how frames are fused into a TraversabilityMap.
 struct MappingOptions {
-  MapOptions fusion;            ///< voxel size, range and the log-odds sensor model
+  MapOptions fusion = PipelineMapDefaults();  ///< voxel size, range and the log-odds sensor model
   int pixel_stride = 2;         ///< insert every n-th pixel in u and v (the map thins per voxel)
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   bool IsValid(std::string* error) const;
