@@ -1,0 +1,81 @@
+// End to end on rendered sequences with exact ground truth: synth -> classify / build-map ->
+// export -> eval. These pin the project's measured accuracy so that a change that loses it
+// fails; the figures and the issue targets are in docs/accuracy.md.
+
+#include <gtest/gtest.h>
+
+#include "ssta/eval/grid_evaluator.h"
+#include "ssta/eval/label_evaluator.h"
+#include "ssta/mapping/map_export.h"
+#include "ssta/pipeline/map_builder.h"
+#include "ssta/pipeline/sequence_classifier.h"
+#include "ssta/synth/sequence_synthesizer.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+synth::SynthOptions Yard(int frames) {
+  synth::SynthOptions o;
+  o.scene = "yard";
+  o.frames = frames;
+  o.seed = 1;
+  o.render.max_label_range_m = 12.0;
+  return o;
+}
+
+ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& out_dir) {
+  const Sequence seq = Sequence::Open(seq_dir);
+  ClassifyOptions options;
+  options.out_dir = out_dir;
+  ClassifySequence(seq, Config{}, options);
+  return EvaluateLabelFolders(out_dir, seq_dir, LabelEvalOptions{}).total;
+}
+
+double MapGridAccuracy(const std::string& seq_dir, const Config& config, const testing::TempDir& dir) {
+  BuildMapOptions options;
+  options.map_path = dir / "m.ot";
+  BuildMap(Sequence::Open(seq_dir), "yard", config, options);
+  ExportGrid(TraversabilityMap::Load(options.map_path), dir / "grid");
+  return EvaluateExportedGrid(dir / "grid", seq_dir).matrix.Accuracy();
+}
+
+TEST(EndToEnd, YardClassifiedWithSgbm) {
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(Yard(10), dir / "seq");
+  const ConfusionMatrix m = ClassifyAndScore(dir / "seq", dir / "out");
+  RecordProperty("accuracy", std::to_string(m.Accuracy()));
+  RecordProperty("mean_iou", std::to_string(m.MeanIou()));
+  // Measured 0.877 / 0.565 on 20 frames (docs/accuracy.md); the issue's target is 0.90 / 0.75.
+  EXPECT_GT(m.Accuracy(), 0.85);
+  EXPECT_GT(m.MeanIou(), 0.50);
+  EXPECT_GT(m.Coverage(), 0.88);
+}
+
+TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
+  testing::TempDir dir;
+  synth::SynthOptions clean = Yard(20);
+  synth::SynthOptions drift = clean;
+  drift.faults.pose_drift_roll_deg_per_s = 1.5;
+  drift.faults.pose_drift_pitch_deg_per_s = 1.5;
+  synth::WriteSyntheticSequence(clean, dir / "clean");
+  synth::WriteSyntheticSequence(drift, dir / "drift");
+
+  const Config corrected;  // gravity.source auto: roll and pitch from the IMU attitude filter
+  Config uncorrected;
+  uncorrected.gravity.source = GravitySource::kPose;
+  testing::TempDir a, b, c;
+  const double reference = MapGridAccuracy(dir / "clean", corrected, a);
+  const double with_imu = MapGridAccuracy(dir / "drift", corrected, b);
+  const double without = MapGridAccuracy(dir / "drift", uncorrected, c);
+  RecordProperty("drift_free", std::to_string(reference));
+  RecordProperty("imu_corrected", std::to_string(with_imu));
+  RecordProperty("uncorrected", std::to_string(without));
+  EXPECT_NEAR(with_imu, reference, 0.02);
+  EXPECT_LT(without, with_imu - 0.015) << "uncorrected " << without << " vs corrected " << with_imu;
+  // Decided cells are mostly right (measured 0.90 on 30 frames).
+  EXPECT_GT(reference, 0.5);
+}
+
+}  // namespace
+}  // namespace ssta
