@@ -17,4 +17,5 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/sstaConfigVersion.c
   COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sstaConfig.cmake
               ${CMAKE_CURRENT_BINARY_DIR}/sstaConfigVersion.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/FindSstaPCL.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/ssta)
