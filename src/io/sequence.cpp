@@ -222,6 +222,16 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   return Sequence(std::move(seq));
 }
 
+std::vector<StereoFrame> SelectFrames(const std::vector<StereoFrame>& frames, int every, int max_frames) {
+  SSTA_CHECK(every >= 1 && max_frames >= 0, "every must be >= 1 and max_frames >= 0");
+  std::vector<StereoFrame> out;
+  for (std::size_t i = 0; i < frames.size(); i += static_cast<std::size_t>(every)) {
+    if (max_frames > 0 && static_cast<int>(out.size()) >= max_frames) break;
+    out.push_back(frames[i]);
+  }
+  return out;
+}
+
 std::optional<Eigen::Isometry3d> Sequence::WorldTBodyAt(std::int64_t t) const {
   if (data_.poses.empty() || t < data_.poses.front().timestamp_ns || t > data_.poses.back().timestamp_ns) {
     return std::nullopt;

@@ -7,20 +7,13 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "core/json_escape.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {
 namespace {
 
-std::string Escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
-}
 
 // Finite numbers as they are, NaN/inf as null (JSON has no NaN).
 std::string Num(double x) {
@@ -63,11 +56,11 @@ ImageRgb FalseColourDisparity(const ImageF& disparity) {
 std::string FrameReportJson(const FrameResult& f, const std::string& name) {
   const AnalysisResult& a = f.analysis;
   std::ostringstream j;
-  j << "{\n  \"frame\": \"" << Escape(name) << "\",\n  \"timestamp_ns\": " << f.timestamp_ns << ",\n";
+  j << "{\n  \"frame\": \"" << internal::JsonEscape(name) << "\",\n  \"timestamp_ns\": " << f.timestamp_ns << ",\n";
   j << "  \"up_camera\": " << Array(f.up_rectified) << ",\n";
   j << "  \"depth_pixels\": " << a.depth_pixels << ",\n  \"inliers_min\": " << a.inliers_min << ",\n";
   j << "  \"quality\": {\"passed\": " << (a.quality.passed ? "true" : "false") << ", \"reason\": \""
-    << Escape(a.quality.reason) << "\"},\n";
+    << internal::JsonEscape(a.quality.reason) << "\"},\n";
   j << "  \"ground_plane\": ";
   if (a.ground.found) {
     j << "{\"segment\": " << a.ground.segment_id << ", \"plane\": " << Array(a.ground.plane)
@@ -108,7 +101,7 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
         << ", \"slope_deg\": " << Num(s.slope_deg) << ", \"step_m\": " << Num(s.step_m);
     }
     j << ", \"class\": " << static_cast<int>(s.verdict) << ", \"class_name\": \"" << ClassName(s.verdict)
-      << "\", \"ground\": " << (s.ground ? "true" : "false") << ", \"reason\": \"" << Escape(s.reason) << "\"}";
+      << "\", \"ground\": " << (s.ground ? "true" : "false") << ", \"reason\": \"" << internal::JsonEscape(s.reason) << "\"}";
   }
   j << "\n  ]\n}\n";
   return j.str();

@@ -5,20 +5,13 @@
 #include <iomanip>
 #include <sstream>
 
+#include "core/json_escape.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
 
 namespace ssta {
 namespace {
 
-std::string Escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
-}
 
 std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeometry& g) {
   std::ostringstream s;
@@ -112,11 +105,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   Eigen::Isometry3d body_T_rectified = sequence.calibration().left.body_T_camera;
   body_T_rectified.linear() = body_T_rectified.linear() * pipeline.geometry().rectified_R_camera.transpose();
 
-  std::vector<StereoFrame> todo;
-  for (std::size_t i = 0; i < sequence.frames().size(); i += options.every) {
-    if (options.max_frames > 0 && static_cast<int>(todo.size()) >= options.max_frames) break;
-    todo.push_back(sequence.frames()[i]);
-  }
+  const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
   BuildMapSummary summary;
   summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
   summary.skipped = sequence.skipped();
@@ -191,7 +180,7 @@ std::string BuildMapSummary::Json() const {
   auto list = [&](const std::vector<SkippedFrame>& v) {
     j << "[";
     for (std::size_t i = 0; i < v.size(); ++i) {
-      j << (i ? ", " : "") << "{\"timestamp_ns\": " << v[i].timestamp_ns << ", \"reason\": \"" << Escape(v[i].reason) << "\"}";
+      j << (i ? ", " : "") << "{\"timestamp_ns\": " << v[i].timestamp_ns << ", \"reason\": \"" << internal::JsonEscape(v[i].reason) << "\"}";
     }
     j << "]";
   };

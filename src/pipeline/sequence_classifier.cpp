@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "core/json_escape.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
@@ -13,14 +14,6 @@
 namespace ssta {
 namespace {
 
-std::string Escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
-}
 
 void Accumulate(const StageTimings& t, StageTimings* sum) {
   sum->rectify_ms += t.rectify_ms;
@@ -70,11 +63,7 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
   MakeDirectories(options.out_dir);
 
-  std::vector<StereoFrame> todo;
-  for (std::size_t i = 0; i < sequence.frames().size(); i += options.every) {
-    if (options.max_frames > 0 && static_cast<int>(todo.size()) >= options.max_frames) break;
-    todo.push_back(sequence.frames()[i]);
-  }
+  const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
 
   ClassifySummary summary;
   summary.frames_total = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
@@ -141,12 +130,12 @@ std::string ClassifySummary::Json() const {
     << ",\n  \"skipped\": [";
   for (std::size_t i = 0; i < skipped.size(); ++i) {
     j << (i ? ", " : "") << "{\"timestamp_ns\": " << skipped[i].timestamp_ns << ", \"reason\": \""
-      << Escape(skipped[i].reason) << "\"}";
+      << internal::JsonEscape(skipped[i].reason) << "\"}";
   }
   j << "],\n  \"quality_failed\": [";
   for (std::size_t i = 0; i < quality_failed.size(); ++i) {
     j << (i ? ", " : "") << "{\"timestamp_ns\": " << quality_failed[i].timestamp_ns << ", \"reason\": \""
-      << Escape(quality_failed[i].reason) << "\"}";
+      << internal::JsonEscape(quality_failed[i].reason) << "\"}";
   }
   j << "],\n  \"class_pixels\": {";
   for (int c = 0; c < 5; ++c) {

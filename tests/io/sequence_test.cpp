@@ -91,6 +91,16 @@ TEST_F(AslFixture, InterpolatesPosesLinearlyAndWithSlerp) {
   EXPECT_FALSE(seq.WorldTBodyAt(2'000'000'000).has_value());
 }
 
+TEST(Sequence, SelectFramesTakesEveryNthUpToALimit) {
+  std::vector<StereoFrame> frames(10);
+  for (int i = 0; i < 10; ++i) frames[i].timestamp_ns = i;
+  const auto picked = SelectFrames(frames, 3, 0);
+  ASSERT_EQ(picked.size(), 4u);
+  EXPECT_EQ(picked[3].timestamp_ns, 9);
+  EXPECT_EQ(SelectFrames(frames, 2, 2).size(), 2u);
+  EXPECT_EQ(SelectFrames(frames, 1, 0).size(), 10u);
+}
+
 TEST(Sequence, MissingFolderIsAnErrorNamingIt) {
   try {
     Sequence::Open("/nonexistent/seq");

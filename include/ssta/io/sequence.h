@@ -96,6 +96,10 @@ class Sequence {
   SequenceData data_;
 };
 
+/// Every `every`-th frame from the first, at most `max_frames` of them (0: no limit).
+/// Precondition: every >= 1, max_frames >= 0.
+std::vector<StereoFrame> SelectFrames(const std::vector<StereoFrame>& frames, int every, int max_frames);
+
 /// Reads a numeric ASL CSV (`#` header line, comma separated, first column int64 ns).
 /// Each row must have `columns` values. Throws ssta::Error naming file and line.
 struct CsvRow {
