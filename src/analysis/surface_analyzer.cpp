@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 #include <Eigen/Eigenvalues>
 
@@ -34,7 +35,93 @@ std::string ClassReason(const SegmentResult& s) {
   return r.str();
 }
 
+/// Step classes by reachability from the ground segment (StepReference::kReachable): returns
+/// the class per segment (traversable / semi / non-traversable) and, in `jump_m`, the mean
+/// boundary height jump of the crossing that reached it [m] (0 for the ground, NaN unreached).
+std::vector<TravClass> ReachableStepClasses(const Image3f& cloud, const ImageI32& ids,
+                                            const std::vector<SegmentResult>& segments, int ground_id,
+                                            const Eigen::Vector3d& up, const VehicleOptions& vehicle,
+                                            std::vector<double>* jump_m) {
+  struct Edge {
+    int n = 0, within_semi = 0, within_max = 0;
+    double sum = 0.0;
+  };
+  std::unordered_map<std::uint64_t, Edge> edges;
+  const Eigen::Vector3f up_f = up.cast<float>();
+  auto add = [&](std::size_t i, std::size_t j) {
+    const int a = ids[i], b = ids[j];
+    if (a < 0 || b < 0 || a == b || !IsFinite(cloud[i]) || !IsFinite(cloud[j])) return;
+    const double dh = std::abs((cloud[i] - cloud[j]).dot(up_f));
+    const std::uint64_t key =
+        (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
+    Edge& e = edges[key];
+    ++e.n;
+    e.within_semi += dh <= vehicle.semi_step_m;
+    e.within_max += dh <= vehicle.max_step_m;
+    e.sum += dh;
+  };
+  const int w = cloud.width(), h = cloud.height();
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * w + u;
+      if (u + 1 < w) add(i, i + 1);
+      if (v + 1 < h) add(i, i + w);
+    }
+  }
+  // Adjacency: the neighbour, the crossing's class by its median jump, and its mean jump.
+  struct Link {
+    int to;
+    int step_class;
+    double mean_jump;
+  };
+  std::vector<std::vector<Link>> links(segments.size());
+  for (const auto& [key, e] : edges) {
+    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
+    const int c = 2 * e.within_semi >= e.n ? 1 : (2 * e.within_max >= e.n ? 2 : 3);
+    links[a].push_back({b, c, e.sum / e.n});
+    links[b].push_back({a, c, e.sum / e.n});
+  }
+  // Breadth-first from the ground, first over traversable crossings and segments only, then
+  // also over semi-traversable ones: a segment's class is the first level that reaches it.
+  std::vector<int> level(segments.size(), 0);  // 0: not reached
+  jump_m->assign(segments.size(), std::numeric_limits<double>::quiet_NaN());
+  level[ground_id] = 1;
+  (*jump_m)[ground_id] = 0.0;
+  for (int L = 1; L <= 2; ++L) {
+    std::vector<int> queue;
+    for (std::size_t s = 0; s < segments.size(); ++s) {
+      if (level[s] != 0) queue.push_back(static_cast<int>(s));
+    }
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+      const SegmentResult& from = segments[queue[q]];
+      // Only a segment a vehicle can drive on leads on to its neighbours.
+      if (!from.has_plane || static_cast<int>(from.slope_class) > L) continue;
+      for (const Link& link : links[queue[q]]) {
+        if (level[link.to] != 0 || link.step_class > L) continue;
+        level[link.to] = L;
+        (*jump_m)[link.to] = link.mean_jump;
+        queue.push_back(link.to);
+      }
+    }
+  }
+  std::vector<TravClass> reach(segments.size(), TravClass::kNonTraversable);
+  for (std::size_t s = 0; s < segments.size(); ++s) {
+    if (level[s] != 0) reach[s] = static_cast<TravClass>(level[s]);
+  }
+  return reach;
+}
+
 }  // namespace
+
+StepReference ParseStepReference(const std::string& name) {
+  if (name == "dominant_plane") return StepReference::kDominantPlane;
+  if (name == "reachable") return StepReference::kReachable;
+  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable)");
+}
+
+std::string StepReferenceName(StepReference reference) {
+  return reference == StepReference::kReachable ? "reachable" : "dominant_plane";
+}
 
 SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name) {
   if (name == "paper") return SmallSegmentPolicy::kPaper;
@@ -175,6 +262,13 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     }
   }
 
+  std::vector<TravClass> reach;
+  std::vector<double> reach_jump_m;
+  if (quality.passed && options.step_reference == StepReference::kReachable) {
+    reach = ReachableStepClasses(cloud, segment_ids, result.segments, ground.segment_id, up_camera, vehicle,
+                                 &reach_jump_m);
+  }
+
   // Step to the ground plane (eq. 5) and the verdict per segment.
   for (SegmentResult& s : result.segments) {
     if (s.inliers == 0) continue;
@@ -186,6 +280,11 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     s.ground = s.id == ground.segment_id;
     s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
     s.step_class = vehicle.ClassifyStep(s.step_m);
+    if (!reach.empty()) {
+      s.step_class = reach[s.id];
+      // Reached: the jump of the crossing that reached it; unreached: eq. 5's distance.
+      if (std::isfinite(reach_jump_m[s.id])) s.step_m = reach_jump_m[s.id];
+    }
     if (!s.has_plane) {
       // One or two points: no slope, but their height above the ground still tells an obstacle.
       const bool obstacle =
@@ -224,6 +323,25 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     result.labels[i] = static_cast<std::uint8_t>(c);
   }
   return result;
+}
+
+void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                        ImageU8* labels) {
+  SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
+             "normals and labels differ in size");
+  const Eigen::Vector3f up = up_camera.cast<float>();
+  const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
+  const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    std::uint8_t& label = (*labels)[i];
+    if (label != 1 && label != 2) continue;
+    const float c = std::abs(normals[i].dot(up));  // NaN compares false: left as is
+    if (c < cos_max) {
+      label = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+    } else if (c < cos_semi) {
+      label = std::max<std::uint8_t>(label, static_cast<std::uint8_t>(TravClass::kSemiTraversable));
+    }
+  }
 }
 
 }  // namespace ssta

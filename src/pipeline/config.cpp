@@ -128,6 +128,7 @@ MapOptions PipelineMapDefaults() {
 AnalysisOptions PipelineAnalysisDefaults() {
   AnalysisOptions o;
   o.small_segments = SmallSegmentPolicy::kAll;
+  o.pixel_slopes = true;
   return o;
 }
 
@@ -181,6 +182,9 @@ void ApplyConfigFile(const std::string& path, Config* config) {
   {
     YamlSection s = root.Child("analysis");
     s.Read("inliers_min_ratio", &c.analysis.inliers_min_ratio);
+    s.Read("pixel_slopes", &c.analysis.pixel_slopes);
+    ReadEnum(s, "step_reference", &c.analysis.step_reference,
+             [](const std::string& n) { return ParseStepReference(n); });
     ReadEnum(s, "small_segments", &c.analysis.small_segments,
              [](const std::string& n) { return ParseSmallSegmentPolicy(n); });
     s.Read("min_plane_points", &c.analysis.min_plane_points);
@@ -285,6 +289,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  max_segment_angle_deg: " << c.segmentation.max_segment_angle_deg << "\n";
   y << "analysis:\n"
     << "  inliers_min_ratio: " << c.analysis.inliers_min_ratio << "\n"
+    << "  pixel_slopes: " << c.analysis.pixel_slopes << "\n"
+    << "  step_reference: " << StepReferenceName(c.analysis.step_reference) << "\n"
     << "  small_segments: " << SmallSegmentPolicyName(c.analysis.small_segments) << "\n"
     << "  min_plane_points: " << c.analysis.min_plane_points << "\n"
     << "  min_ground_share: " << c.analysis.min_ground_share << "\n"

@@ -97,6 +97,9 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
   out.analysis = AnalyzeSurfaces(cloud, segmentation.labels, out.num_segments, out.up_rectified,
                                  config_.vehicle, config_.analysis);
+  if (config_.analysis.pixel_slopes && out.analysis.quality.passed) {
+    RefineByPixelSlope(normals, out.up_rectified, config_.vehicle, &out.analysis.labels);
+  }
   out.timings.analyze_ms = clock.LapMs();
 
   // Labels keep the full rectified size; outside the common area they stay unknown (0).

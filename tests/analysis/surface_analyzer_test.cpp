@@ -194,6 +194,61 @@ TEST(SurfaceAnalyzer, PixelsWithoutDepthAreUnknownAndUnsegmentedAreUndecided) {
   EXPECT_EQ(r.depth_pixels, 100 * 100 - 1);
 }
 
+TEST(RefineByPixelSlope, SteepPixelsOfATraversableSegmentTakeTheirSlopeClass) {
+  const Eigen::Vector3d up(0, -1, 0);
+  auto normal_at = [&](double deg) {
+    const double r = deg * M_PI / 180.0;
+    return Eigen::Vector3f(0, -std::cos(r), -std::sin(r));
+  };
+  Image3f normals(5, 1, NanVector3f());
+  ImageU8 labels(5, 1, 1);
+  normals[0] = normal_at(5);   // stays traversable
+  normals[1] = normal_at(20);  // semi by slope
+  normals[2] = normal_at(40);  // non-traversable by slope
+  labels[3] = 3;               // already an obstacle: never improved
+  normals[3] = normal_at(0);
+  labels[4] = 2;               // NaN normal: left as is
+  RefineByPixelSlope(normals, up, VehicleOptions{}, &labels);
+  EXPECT_EQ(labels[0], 1);
+  EXPECT_EQ(labels[1], 2);
+  EXPECT_EQ(labels[2], 3);
+  EXPECT_EQ(labels[3], 3);
+  EXPECT_EQ(labels[4], 2);
+}
+
+TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {
+  // Floor in columns 0..59; from column 60 a 12-degree ramp rises away to the right, 6 cm per
+  // column: its centroid stands 0.24 m above the floor plane, a non-traversable "step" by eq. 5,
+  // yet its foot meets the floor without a jump and a vehicle drives up it.
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 60);
+  const double s = 12.0 * M_PI / 180.0;
+  for (int v = 0; v < 100; ++v) {
+    for (int u = 60; u < 100; ++u) {
+      const double along = (u - 60) * 0.06;
+      w.cloud_(v, u) = Eigen::Vector3f(static_cast<float>(0.2 + along * std::cos(s)),
+                                       static_cast<float>(1.0 - along * std::sin(s)), static_cast<float>(2.0 + 0.02 * v));
+      w.ids_(v, u) = 1;
+    }
+  }
+  // A box top 0.3 m above the floor inside it, reached only across a 0.3 m jump.
+  w.Paint(2, 40, 60, 20, 30, {-0.5, 0.7, 2.5}, {1, 0, 0}, {0, 0, 1});
+  AnalysisOptions options;
+  options.inliers_min_ratio = 0.01;
+  const AnalysisResult paper = w.Analyze({}, options);
+  ASSERT_TRUE(paper.quality.passed);
+  ASSERT_EQ(paper.ground.segment_id, 0);
+  EXPECT_NEAR(paper.segments[1].slope_deg, 12.0, 1e-3);
+  EXPECT_GT(paper.segments[1].step_m, 0.2);
+  EXPECT_EQ(paper.segments[1].verdict, TravClass::kNonTraversable);
+  options.step_reference = StepReference::kReachable;
+  const AnalysisResult reach = w.Analyze({}, options);
+  EXPECT_EQ(reach.segments[1].step_class, TravClass::kTraversable);
+  EXPECT_EQ(reach.segments[1].verdict, TravClass::kTraversable);
+  EXPECT_EQ(reach.segments[2].verdict, TravClass::kNonTraversable);
+  EXPECT_NEAR(reach.segments[2].step_m, 0.3, 0.02);
+}
+
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {
   PlaneAccumulator acc;
   const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.9, 0.3).normalized();

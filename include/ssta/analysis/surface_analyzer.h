@@ -28,8 +28,30 @@ enum class SmallSegmentPolicy {
 SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name);
 std::string SmallSegmentPolicyName(SmallSegmentPolicy policy);
 
+/// What a segment's step is measured against (YAML `analysis.step_reference`).
+enum class StepReference {
+  /// "dominant_plane": the distance of the segment's centroid to the dominant ground plane
+  /// (paper eq. 5). A hillside or the top of a long ramp reads as a tall step.
+  kDominantPlane,
+  /// "reachable": the step class is the smallest class over the ways to reach the segment from
+  /// the dominant ground across segment boundaries, where crossing a boundary costs the median
+  /// height jump between its adjacent 3D points (along up) and every segment passed on the way
+  /// must be drivable by slope. Smooth ramps and hills are reached without a step; a box top,
+  /// a curb or stereo noise floating in the air is not.
+  kReachable,
+};
+StepReference ParseStepReference(const std::string& name);
+std::string StepReferenceName(StepReference reference);
+
 /// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E).
 struct AnalysisOptions {
+  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
+  /// is in a worse slope class takes that class (RefineByPixelSlope). On smooth terrain a
+  /// hillside has no segment boundary, and one PCA slope for the whole segment averages its
+  /// steep flank away. false: the paper, one verdict per segment.
+  bool pixel_slopes = false;
+  /// How steps are measured; see StepReference.
+  StepReference step_reference = StepReference::kDominantPlane;
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
   /// their own in the paper.
   double inliers_min_ratio = 0.02;
@@ -55,7 +77,10 @@ struct SegmentResult {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< A, B, C, D with (A,B,C) = normal
   double rms_m = 0.0;       ///< RMS point-to-plane distance [m]
   double slope_deg = 0.0;   ///< angle between the normal and up [deg]
-  double step_m = 0.0;      ///< |distance| of the centroid to the ground plane [m]; NaN without one
+  /// Step [m]: |distance| of the centroid to the ground plane (eq. 5); with step_reference
+  /// "reachable", the mean height jump of the crossing that reached it (eq. 5 if unreached).
+  /// NaN without a ground plane.
+  double step_m = 0.0;
   bool has_plane = false;   ///< at least 3 points: centroid, PCA plane and slope are set
   bool small = false;       ///< fewer inliers than inliers_min
   bool ground = false;      ///< this is the dominant ground plane
@@ -104,6 +129,12 @@ struct AnalysisResult {
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                                const AnalysisOptions& options);
+
+/// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
+/// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
+/// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
+void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                        ImageU8* labels);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.

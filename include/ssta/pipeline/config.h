@@ -48,7 +48,8 @@ struct MappingOptions {
 /// The pipeline's tuned stage defaults where they differ from each module's own neutral ones
 /// (measured on the synthetic yard with SGBM; see docs/accuracy.md): a wider matching block, a
 /// depth-dependent 31 px normal window, looser neighbour roughness held together by the
-/// segment-angle test, and a verdict for every small segment that has a trustworthy plane.
+/// segment-angle test, a verdict for every small segment that has a trustworthy plane, and
+/// per-pixel slopes within segments (smooth hillsides).
 StereoMatcherOptions PipelineStereoDefaults();
 NormalOptions PipelineNormalDefaults();
 SegmenterOptions PipelineSegmenterDefaults();
