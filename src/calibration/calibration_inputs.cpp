@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "io/yaml_reader.h"
 #include "ssta/calibration/stereo_calibrator.h"
@@ -14,6 +15,8 @@
 namespace ssta {
 
 std::vector<std::string> ExpandGlob(const std::string& pattern) {
+  // An existing file is taken as it is, also when its name holds '[', '*' or '?'.
+  if (std::filesystem::is_regular_file(pattern)) return {pattern};
   glob_t matches{};
   const int status = ::glob(pattern.c_str(), 0, nullptr, &matches);
   std::vector<std::string> paths;

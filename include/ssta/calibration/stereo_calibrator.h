@@ -162,8 +162,8 @@ StereoCalibrationSummary CalibrateStereoRig(const StereoCalibratorOptions& optio
                                             const std::string& out_dir);
 
 /// Expands a POSIX glob pattern (glob(3), no brace or tilde expansion) into the matching paths
-/// in byte order. A pattern without wildcards yields itself when that file exists. Returns an
-/// empty list when nothing matches.
+/// in byte order. A pattern that names an existing file yields that file (also when the name
+/// holds wildcard characters). Returns an empty list when nothing matches.
 std::vector<std::string> ExpandGlob(const std::string& pattern);
 
 /// Reads a body transform from YAML: either a `T_BS:` block as in sensor.yaml (so an existing
