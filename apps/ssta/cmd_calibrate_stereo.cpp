@@ -104,8 +104,9 @@ void RegisterCalibrateStereo(CLI::App& app) {
   cmd->add_flag("--fix-intrinsics", args->fix_intrinsics,
                 "keep each camera's own intrinsics in the stereo solve (default: refine them jointly)");
   cmd->add_option("--outlier-px", args->options.outlier_px,
-                  "flag a pair whose left or right stereo RMS error exceeds this [px]")->capture_default_str();
-  cmd->add_flag("--drop-outliers", args->options.drop_outliers, "remove flagged pairs and solve again");
+                  "outliers: pairs taken out worst first, solving again each time, while a pair's "
+                  "stereo RMS error (left or right view) exceeds this [px]")->capture_default_str();
+  cmd->add_flag("--drop-outliers", args->options.drop_outliers, "leave the outliers out of the final solution (default: only flag them)");
   cmd->add_option("--min-pairs", args->options.min_pairs,
                   "fewest pairs with the board in both views")->capture_default_str();
   cmd->add_option("--coverage-grid", args->coverage_grid,

@@ -225,6 +225,29 @@ TEST(StereoCalibrator, BodyTransformPlacesCam0AndComposesCam1) {
   EXPECT_TRUE(LoadBodyTransform(dir / "body.yaml").matrix().isApprox(expected, 1e-12));
 }
 
+TEST(StereoCalibrator, PairWithoutBoardIsSkippedWithAReason) {
+  TempDir dir;
+  const std::string blank = dir / "blank.png";
+  ASSERT_TRUE(cv::imwrite(blank, cv::Mat(480, 640, CV_8UC1, cv::Scalar(128))));
+  std::vector<std::string> left = Images("left"), right = Images("right");
+  left.resize(7);
+  right.resize(7);
+  right[2] = blank;
+  left[5] = blank;
+  const StereoCalibrationSummary s = StereoCalibrator(StereoCalibratorOptions{}).Calibrate(left, right);
+  EXPECT_EQ(s.pairs_used, 5);
+  EXPECT_TRUE(s.pairs[2].board_in_left);
+  EXPECT_FALSE(s.pairs[2].board_in_right);
+  EXPECT_EQ(s.pairs[2].skip_reason, "board not found in the right image");
+  EXPECT_EQ(s.pairs[5].skip_reason, "board not found in the left image");
+  EXPECT_TRUE(std::isnan(s.pairs[2].left_stereo_rms_px));
+  EXPECT_TRUE(s.pairs[0].used());
+  EXPECT_LT(s.stereo_rms_px, 1.0);
+  const std::string report = s.BriefReport();
+  EXPECT_NE(report.find("skipped: board not found in the right image"), std::string::npos) << report;
+  EXPECT_NE(report.find("pairs used: 5 of 7"), std::string::npos) << report;
+}
+
 // Pair 5 gets the right image of pair 6: both views show a board, but no rig explains them.
 TEST(StereoCalibrator, DropOutliersRemovesAMispairedImage) {
   std::vector<std::string> right = Images("right");
