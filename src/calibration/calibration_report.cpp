@@ -1,5 +1,6 @@
 // StereoCalibrationSummary as text for a terminal and as JSON.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -11,6 +12,9 @@
 
 namespace ssta {
 namespace {
+
+/// Below this fraction of coverage-grid cells the report suggests more views near the edges.
+constexpr double kLowCoverage = 0.5;
 
 std::string FileName(const std::string& path) {
   return std::filesystem::path(path).filename().string();
@@ -97,9 +101,19 @@ std::string StereoCalibrationSummary::BriefReport() const {
       << Fixed(stereo_rms_px, 4) << " px ("
       << (options.intrinsics == StereoIntrinsics::kFix ? "intrinsics fixed" : "intrinsics refined")
       << ")\n";
+  if (stereo_rms_px > options.outlier_px) {
+    out << "WARNING: the stereo RMS error is above the outlier threshold of "
+        << Fixed(options.outlier_px, 2)
+        << " px; this calibration is unlikely to be usable: check the flagged pairs, or run "
+           "again with --drop-outliers\n";
+  }
   out << "board coverage (" << options.coverage_cols << "x" << options.coverage_rows
       << " cells touched by corners): left " << Fixed(left_coverage * 100.0, 0) << " %, right "
       << Fixed(right_coverage * 100.0, 0) << " %\n";
+  if (std::min(left_coverage, right_coverage) < kLowCoverage) {
+    out << "note: the boards cover little of the image; distortion is only measured where "
+           "corners were seen, so add views with the board near the edges and corners\n";
+  }
   for (const auto* cam : {&l, &r}) {
     out << (cam == &l ? "cam0" : "cam1") << ": fu " << Fixed(cam->fu, 2) << ", fv "
         << Fixed(cam->fv, 2) << ", cu " << Fixed(cam->cu, 2) << ", cv " << Fixed(cam->cv, 2)

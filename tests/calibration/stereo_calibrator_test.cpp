@@ -264,6 +264,7 @@ TEST(StereoCalibrator, DropOutliersRemovesAMispairedImage) {
     }
   }
   EXPECT_GT(flagged.stereo_rms_px, 1.0);
+  EXPECT_NE(flagged.BriefReport().find("WARNING: the stereo RMS error is above"), std::string::npos);
 
   options.drop_outliers = true;
   const StereoCalibrationSummary dropped = StereoCalibrator(options).Calibrate(Images("left"), right);
@@ -277,6 +278,7 @@ TEST(StereoCalibrator, DropOutliersRemovesAMispairedImage) {
   EXPECT_LT(dropped.stereo_rms_px, flagged.stereo_rms_px);
   const std::string report = dropped.BriefReport();
   EXPECT_NE(report.find("OUTLIER, dropped"), std::string::npos) << report;
+  EXPECT_EQ(report.find("WARNING"), std::string::npos) << report;
 }
 
 TEST(StereoCalibratorCli, TooFewBoardsNamesTheImagesAndExitsWithTwo) {
