@@ -1,5 +1,6 @@
 #include "ssta/calibration/stereo_calibrator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -200,6 +201,125 @@ std::string TooFewPairsMessage(const std::vector<CalibrationPairReport>& reports
   return m.str();
 }
 
+/// The boards found in every pair, and the report of each pair so far.
+struct Detections {
+  std::vector<CalibrationPairReport> reports;  ///< one per input pair
+  std::vector<PairCorners> found;              ///< pairs with the board in both views
+  cv::Size size;                               ///< common size of all images
+};
+
+Detections DetectBoards(const std::vector<std::string>& left_paths,
+                        const std::vector<std::string>& right_paths,
+                        const StereoCalibratorOptions& o) {
+  Detections d;
+  std::string size_source;
+  for (std::size_t i = 0; i < left_paths.size(); ++i) {
+    CalibrationPairReport report;
+    report.left_path = left_paths[i];
+    report.right_path = right_paths[i];
+    report.left_mono_rms_px = report.right_mono_rms_px = kNaN;
+    report.left_stereo_rms_px = report.right_stereo_rms_px = kNaN;
+    PairCorners corners;
+    corners.index = i;
+    for (const bool is_left : {true, false}) {
+      const std::string& path = is_left ? left_paths[i] : right_paths[i];
+      ImageU8 storage;
+      const cv::Mat grey = ReadGreyMat(path, &storage);
+      if (size_source.empty()) {
+        d.size = grey.size();
+        size_source = path;
+      } else if (grey.size() != d.size) {
+        throw Error(path + ": image is " + SizeText(grey.cols, grey.rows) + " but " +
+                    size_source + " is " + SizeText(d.size.width, d.size.height) +
+                    "; all images of a calibration must have the same size");
+      }
+      (is_left ? report.board_in_left : report.board_in_right) = internal::DetectChessboard(
+          grey, o.board_cols, o.board_rows, is_left ? &corners.left : &corners.right);
+    }
+    if (!report.board_in_left && !report.board_in_right) {
+      report.skip_reason = "board not found in either image";
+    } else if (!report.board_in_left) {
+      report.skip_reason = "board not found in the left image";
+    } else if (!report.board_in_right) {
+      report.skip_reason = "board not found in the right image";
+    } else {
+      internal::AlignCornerOrder(corners.left, &corners.right);
+      d.found.push_back(std::move(corners));
+    }
+    d.reports.push_back(std::move(report));
+  }
+  return d;
+}
+
+/// Marks the outliers of `search` in `reports`; with drop_outliers also takes them out of
+/// `found` and keeps in their report the errors of the solve they were taken out of.
+void ApplyOutliers(const OutlierSearch& search, const StereoCalibratorOptions& o,
+                   std::vector<CalibrationPairReport>* reports, std::vector<PairCorners>* found) {
+  for (const RemovedPair& removed : search.removed) {
+    CalibrationPairReport& r = (*reports)[removed.index];
+    r.outlier = true;
+    if (!o.drop_outliers) continue;
+    r.dropped = true;
+    r.skip_reason = "dropped as an outlier";
+    r.left_mono_rms_px = removed.left_mono;
+    r.right_mono_rms_px = removed.right_mono;
+    r.left_stereo_rms_px = removed.left_stereo;
+    r.right_stereo_rms_px = removed.right_stereo;
+  }
+  // Pairs still above the threshold when the search had to stop at min_pairs.
+  for (std::size_t j = 0; j < search.kept.size(); ++j) {
+    if (std::max(search.remaining.left_stereo[j], search.remaining.right_stereo[j]) > o.outlier_px) {
+      (*reports)[search.kept[j]].outlier = true;
+    }
+  }
+  if (o.drop_outliers) {
+    found->erase(std::remove_if(found->begin(), found->end(),
+                                [&](const PairCorners& p) { return (*reports)[p.index].dropped; }),
+                 found->end());
+  }
+}
+
+/// Fills the rig (cameras, T_BS, baseline), the RMS figures and the coverage of `summary` from
+/// `solution`, solved over `used`. Throws when the rig cannot be right (cam1 left of cam0).
+void FillRig(const Solution& solution, const std::vector<PairCorners>& used, const cv::Size& size,
+             StereoCalibrationSummary* summary) {
+  const StereoCalibratorOptions& o = summary->options;
+  // OpenCV: p_cam1 = R * p_cam0 + T, i.e. (R, T) is cam1_T_cam0.
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  cv::cv2eigen(solution.r, r);
+  cv::cv2eigen(solution.t, t);
+  Eigen::Isometry3d cam1_T_cam0 = Eigen::Isometry3d::Identity();
+  cam1_T_cam0.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
+  cam1_T_cam0.translation() = t;
+  summary->cam0_T_cam1 = cam1_T_cam0.inverse();
+  summary->baseline_m = t.norm();
+  summary->calibration.left = ToCamera(solution.k_left, solution.d_left, size, o.body_T_cam0);
+  summary->calibration.right =
+      ToCamera(solution.k_right, solution.d_right, size, o.body_T_cam0 * summary->cam0_T_cam1);
+  summary->pairs_used = static_cast<int>(used.size());
+  summary->left_mono_rms_px = solution.left_mono_rms;
+  summary->right_mono_rms_px = solution.right_mono_rms;
+  summary->stereo_rms_px = solution.stereo_rms;
+  std::vector<const std::vector<cv::Point2f>*> left_views, right_views;
+  for (const PairCorners& p : used) {
+    left_views.push_back(&p.left);
+    right_views.push_back(&p.right);
+  }
+  summary->left_coverage = Coverage(left_views, size, o.coverage_cols, o.coverage_rows);
+  summary->right_coverage = Coverage(right_views, size, o.coverage_cols, o.coverage_rows);
+
+  std::string error;
+  if (!summary->calibration.IsValid(&error)) {
+    const Eigen::Vector3d p = summary->cam0_T_cam1.translation();
+    std::ostringstream m;
+    m << "--left/--right: the calibrated rig is not usable (" << error << "); cam1 sits at ["
+      << p.x() << ", " << p.y() << ", " << p.z()
+      << "] m in cam0, so check that --left holds the left camera's images";
+    throw Error(m.str());
+  }
+}
+
 }  // namespace
 
 bool StereoCalibratorOptions::IsValid(std::string* error) const {
@@ -242,125 +362,25 @@ StereoCalibrationSummary StereoCalibrator::Calibrate(const std::vector<std::stri
 
   StereoCalibrationSummary summary;
   summary.options = o;
-  std::vector<PairCorners> found;
-  cv::Size size;
-  std::string size_source;
-  for (std::size_t i = 0; i < left_paths.size(); ++i) {
-    CalibrationPairReport report;
-    report.left_path = left_paths[i];
-    report.right_path = right_paths[i];
-    PairCorners corners;
-    corners.index = i;
-    for (const std::string* path : {&left_paths[i], &right_paths[i]}) {
-      ImageU8 storage;
-      const cv::Mat grey = ReadGreyMat(*path, &storage);
-      if (size_source.empty()) {
-        size = grey.size();
-        size_source = *path;
-      } else if (grey.size() != size) {
-        throw Error(*path + ": image is " + SizeText(grey.cols, grey.rows) + " but " +
-                    size_source + " is " + SizeText(size.width, size.height) +
-                    "; all images of a calibration must have the same size");
-      }
-      const bool is_left = path == &left_paths[i];
-      const bool ok = internal::DetectChessboard(grey, o.board_cols, o.board_rows,
-                                                 is_left ? &corners.left : &corners.right);
-      (is_left ? report.board_in_left : report.board_in_right) = ok;
-    }
-    report.left_mono_rms_px = report.right_mono_rms_px = kNaN;
-    report.left_stereo_rms_px = report.right_stereo_rms_px = kNaN;
-    if (!report.board_in_left && !report.board_in_right) {
-      report.skip_reason = "board not found in either image";
-    } else if (!report.board_in_left) {
-      report.skip_reason = "board not found in the left image";
-    } else if (!report.board_in_right) {
-      report.skip_reason = "board not found in the right image";
-    } else {
-      internal::AlignCornerOrder(corners.left, &corners.right);
-      found.push_back(std::move(corners));
-    }
-    summary.pairs.push_back(std::move(report));
-  }
+  Detections detections = DetectBoards(left_paths, right_paths, o);
+  summary.pairs = std::move(detections.reports);
+  std::vector<PairCorners>& found = detections.found;
   if (static_cast<int>(found.size()) < o.min_pairs) {
     throw Error(TooFewPairsMessage(summary.pairs, found, o));
   }
 
-  // Writes the per-pair errors of solution `s` over `used` into the report.
-  auto record = [&](const Solution& s, const std::vector<PairCorners>& used) {
-    for (std::size_t j = 0; j < used.size(); ++j) {
-      CalibrationPairReport& r = summary.pairs[used[j].index];
-      r.left_mono_rms_px = s.left_mono[j];
-      r.right_mono_rms_px = s.right_mono[j];
-      r.left_stereo_rms_px = s.left_stereo[j];
-      r.right_stereo_rms_px = s.right_stereo[j];
-    }
-  };
-  const Solution all = Solve(found, size, o);
-  const OutlierSearch search = FindOutliers(found, all, size, o);
-  Solution solution = all;
-  if (o.drop_outliers && !search.removed.empty()) {
-    for (const RemovedPair& removed : search.removed) {
-      CalibrationPairReport& r = summary.pairs[removed.index];
-      r.left_mono_rms_px = removed.left_mono;
-      r.right_mono_rms_px = removed.right_mono;
-      r.left_stereo_rms_px = removed.left_stereo;
-      r.right_stereo_rms_px = removed.right_stereo;
-      r.outlier = r.dropped = true;
-      r.skip_reason = "dropped as an outlier";
-    }
-    std::vector<PairCorners> kept;
-    for (PairCorners& p : found) {
-      if (!summary.pairs[p.index].dropped) kept.push_back(std::move(p));
-    }
-    found = std::move(kept);
-    solution = search.remaining;
-    record(solution, found);
-  } else {
-    record(all, found);
-    for (const RemovedPair& removed : search.removed) summary.pairs[removed.index].outlier = true;
+  const Solution all = Solve(found, detections.size, o);
+  const OutlierSearch search = FindOutliers(found, all, detections.size, o);
+  const Solution& solution = o.drop_outliers ? search.remaining : all;
+  ApplyOutliers(search, o, &summary.pairs, &found);
+  for (std::size_t j = 0; j < found.size(); ++j) {
+    CalibrationPairReport& r = summary.pairs[found[j].index];
+    r.left_mono_rms_px = solution.left_mono[j];
+    r.right_mono_rms_px = solution.right_mono[j];
+    r.left_stereo_rms_px = solution.left_stereo[j];
+    r.right_stereo_rms_px = solution.right_stereo[j];
   }
-  // Pairs still above the threshold when the search had to stop at min_pairs.
-  for (std::size_t j = 0; j < search.kept.size(); ++j) {
-    const std::size_t index = search.kept[j];
-    if (std::max(search.remaining.left_stereo[j], search.remaining.right_stereo[j]) > o.outlier_px) {
-      summary.pairs[index].outlier = true;
-    }
-  }
-
-  // OpenCV: p_cam1 = R * p_cam0 + T, i.e. (R, T) is cam1_T_cam0.
-  Eigen::Matrix3d r;
-  Eigen::Vector3d t;
-  cv::cv2eigen(solution.r, r);
-  cv::cv2eigen(solution.t, t);
-  Eigen::Isometry3d cam1_T_cam0 = Eigen::Isometry3d::Identity();
-  cam1_T_cam0.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
-  cam1_T_cam0.translation() = t;
-  summary.cam0_T_cam1 = cam1_T_cam0.inverse();
-  summary.baseline_m = t.norm();
-  summary.calibration.left = ToCamera(solution.k_left, solution.d_left, size, o.body_T_cam0);
-  summary.calibration.right =
-      ToCamera(solution.k_right, solution.d_right, size, o.body_T_cam0 * summary.cam0_T_cam1);
-  summary.pairs_used = static_cast<int>(found.size());
-  summary.left_mono_rms_px = solution.left_mono_rms;
-  summary.right_mono_rms_px = solution.right_mono_rms;
-  summary.stereo_rms_px = solution.stereo_rms;
-  std::vector<const std::vector<cv::Point2f>*> left_views, right_views;
-  for (const PairCorners& p : found) {
-    left_views.push_back(&p.left);
-    right_views.push_back(&p.right);
-  }
-  summary.left_coverage = Coverage(left_views, size, o.coverage_cols, o.coverage_rows);
-  summary.right_coverage = Coverage(right_views, size, o.coverage_cols, o.coverage_rows);
-
-  std::string error;
-  if (!summary.calibration.IsValid(&error)) {
-    const Eigen::Vector3d p = summary.cam0_T_cam1.translation();
-    std::ostringstream m;
-    m << "--left/--right: the calibrated rig is not usable (" << error << "); cam1 sits at ["
-      << p.x() << ", " << p.y() << ", " << p.z()
-      << "] m in cam0, so check that --left holds the left camera's images";
-    throw Error(m.str());
-  }
+  FillRig(solution, found, detections.size, &summary);
   return summary;
 }
 
