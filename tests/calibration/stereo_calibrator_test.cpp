@@ -220,9 +220,22 @@ TEST(StereoCalibrator, BodyTransformPlacesCam0AndComposesCam1) {
   EXPECT_TRUE(placed.LeftTRight().matrix().isApprox(identity.right.body_T_camera.matrix(), 1e-9));
   EXPECT_TRUE(placed.right.body_T_camera.matrix().isApprox(expected * identity.right.body_T_camera.matrix(), 1e-9));
 
-  // The same transform from a YAML file with a T_BS block.
+  // The same transform from YAML: a T_BS block (as in sensor.yaml) through the command, and a
+  // top-level data list through the library.
   WriteTextAtomically(dir / "body.yaml", "T_BS:\n  rows: 4\n  cols: 4\n  data: [" + body_T_cam0 + "]\n");
-  EXPECT_TRUE(LoadBodyTransform(dir / "body.yaml").matrix().isApprox(expected, 1e-12));
+  TempDir from_file;
+  r = CalibrateAll(from_file, "--quiet --body-T-cam0 " + (dir / "body.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(LoadCameraCalibration(from_file / "rig/cam0/sensor.yaml").body_T_camera.matrix().isApprox(expected, 1e-12));
+  WriteTextAtomically(dir / "flat.yaml", "data: [" + body_T_cam0 + "]\n");
+  EXPECT_TRUE(LoadBodyTransform(dir / "flat.yaml").matrix().isApprox(expected, 1e-12));
+  WriteTextAtomically(dir / "bad.yaml", "T_BS:\n  data: [2,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]\n");
+  try {
+    LoadBodyTransform(dir / "bad.yaml");
+    ADD_FAILURE() << "a scaled rotation must be rejected";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml: T_BS.data: rotation part is not orthonormal"), std::string::npos) << e.what();
+  }
 }
 
 TEST(StereoCalibrator, PairWithoutBoardIsSkippedWithAReason) {
