@@ -145,9 +145,10 @@ class StereoCalibrator {
 /// Rectifies the used pairs of `summary` with the project's Rectifier (default
 /// RectifierOptions) built from `calibration` (normally read back from the written files),
 /// detects the board again in each rectified pair, and measures |v_left - v_right| of
-/// corresponding corners. Returns the figures and, in `*picture`, the first checked pair side by
-/// side (left | right, cropped to the common area) with horizontal lines every 20 rows and the
-/// detected corners marked. Throws ssta::Error when the Rectifier rejects the calibration.
+/// corresponding corners. Returns the figures and, in `*picture` (may be null), one rectified
+/// pair side by side (left | right, cropped to the common area) with horizontal lines every 20
+/// rows and the re-detected corners marked: the first pair whose board was found again, else
+/// the first used pair. Throws ssta::Error when the Rectifier rejects the calibration.
 RectificationCheck CheckRectification(const StereoCalibration& calibration,
                                       const StereoCalibrationSummary& summary, ImageRgb* picture);
 
