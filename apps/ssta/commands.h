@@ -13,5 +13,6 @@ void RegisterEval(CLI::App& app);
 void RegisterBuildMap(CLI::App& app);
 void RegisterQuery(CLI::App& app);
 void RegisterExport(CLI::App& app);
+void RegisterCalibrateStereo(CLI::App& app);
 
 }  // namespace ssta::cli

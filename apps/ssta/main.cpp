@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterQuery(app);
   ssta::cli::RegisterExport(app);
   ssta::cli::RegisterEval(app);
+  ssta::cli::RegisterCalibrateStereo(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
