@@ -7,7 +7,7 @@
 #include <limits>
 #include <sstream>
 
-#include "eval/json_writer.h"
+#include "core/json_writer.h"
 #include "ssta/calibration/stereo_calibrator.h"
 
 namespace ssta {

@@ -5,7 +5,7 @@
 #include <filesystem>
 
 #include "eval/class_ids.h"
-#include "eval/json_writer.h"
+#include "core/json_writer.h"
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/eval/label_evaluator.h"

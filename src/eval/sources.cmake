@@ -5,7 +5,6 @@ target_sources(ssta PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/comparison_picture.cpp
   ${CMAKE_CURRENT_LIST_DIR}/confusion_matrix.cpp
   ${CMAKE_CURRENT_LIST_DIR}/grid_evaluator.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/json_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/label_evaluator.cpp
   ${CMAKE_CURRENT_LIST_DIR}/metrics_json.cpp
   ${CMAKE_CURRENT_LIST_DIR}/query_evaluator.cpp)

@@ -122,6 +122,8 @@ MapOptions PipelineMapDefaults() {
   MapOptions o;
   o.max_range_m = 12.0;
   o.occupied_threshold_prob = 0.8;
+  o.occupancy_miss_prob = 0.45;
+  o.class_free_decay_log_odds = 0.2;
   return o;
 }
 

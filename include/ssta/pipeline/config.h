@@ -33,8 +33,9 @@ struct GravityOptions {
 };
 
 /// The map's fusion defaults for stereo: hits only within 12 m (farther stereo points are too
-/// noisy to classify) and a voxel counts as occupied from 2 hits (P >= 0.8), so one stray
-/// point does not become a column's top surface.
+/// noisy to classify), a voxel counts as occupied from 2 hits (P >= 0.8), so one stray point
+/// does not become a column's top surface, and free space is carved gently (P 0.45 per ray),
+/// because rays to far ground graze the voxels of nearer ground and would clear them.
 MapOptions PipelineMapDefaults();
 
 /// YAML section `map`: how frames are fused into a TraversabilityMap.
