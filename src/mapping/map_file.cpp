@@ -122,6 +122,7 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "class_free_decay_log_odds" << YAML::Value << num(o.class_free_decay_log_odds);
   out << YAML::Key << "class_clamp_min" << YAML::Value << num(o.class_clamp_min);
   out << YAML::Key << "class_clamp_max" << YAML::Value << num(o.class_clamp_max);
+  out << YAML::Key << "free_space_clearance_m" << YAML::Value << num(o.free_space_clearance_m);
   out << YAML::EndMap;
   const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
@@ -252,6 +253,7 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
   options->class_free_decay_log_odds = o.Require<double>("class_free_decay_log_odds");
   options->class_clamp_min = o.Require<double>("class_clamp_min");
   options->class_clamp_max = o.Require<double>("class_clamp_max");
+  options->free_space_clearance_m = o.Require<double>("free_space_clearance_m");
   std::string error;
   if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
 

@@ -46,6 +46,9 @@ bool MapOptions::IsValid(std::string* error) const {
   if (!(class_clamp_min < 0.0 && class_clamp_min > -50.0)) {
     return Fail(error, "class_clamp_min: must be in (-50, 0)");
   }
+  if (!(free_space_clearance_m >= 0.0 && free_space_clearance_m <= 5.0)) {
+    return Fail(error, "free_space_clearance_m: must be in [0, 5] m");
+  }
   if (!(class_clamp_max > 0.0 && class_clamp_max < 50.0)) {
     return Fail(error, "class_clamp_max: must be in (0, 50)");
   }

@@ -246,7 +246,20 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
                              static_cast<float>(end.z()));
     if (tree.computeRayKeys(origin, e, ray)) free_keys.insert(ray.begin(), ray.end());
   };
-  for (const auto& [key, acc] : hits) cast(acc.sum_p / acc.points);
+  // Rays to surface points stop short where they graze the surface (free_space_clearance_m).
+  constexpr double kMaxShortening_m = 2.0;
+  for (const auto& [key, acc] : hits) {
+    const Eigen::Vector3d end = acc.sum_p / acc.points;
+    const Eigen::Vector3d d = end - sensor_origin_world;
+    const double length = d.norm();
+    if (opt.free_space_clearance_m > 0.0 && length > 1e-9) {
+      const double sin_elevation = std::max(std::abs(d.z()) / length, 1e-3);
+      const double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
+      if (shorten < length) cast(sensor_origin_world + d * ((length - shorten) / length));
+    } else {
+      cast(end);
+    }
+  }
   for (const auto& [key, acc] : far) {
     const Eigen::Vector3d direction = (acc.sum_p / acc.points - sensor_origin_world).normalized();
     cast(sensor_origin_world + direction * opt.max_range_m);

@@ -124,6 +124,7 @@ MapOptions PipelineMapDefaults() {
   o.occupied_threshold_prob = 0.8;
   o.occupancy_miss_prob = 0.45;
   o.class_free_decay_log_odds = 0.2;
+  o.free_space_clearance_m = 0.1;
   return o;
 }
 
@@ -218,6 +219,7 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.Read("class_free_decay_log_odds", &f.class_free_decay_log_odds);
     s.Read("class_clamp_min", &f.class_clamp_min);
     s.Read("class_clamp_max", &f.class_clamp_max);
+    s.Read("free_space_clearance_m", &f.free_space_clearance_m);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
     s.RejectUnknownKeys();
@@ -320,6 +322,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  class_free_decay_log_odds: " << f.class_free_decay_log_odds << "\n"
     << "  class_clamp_min: " << f.class_clamp_min << "\n"
     << "  class_clamp_max: " << f.class_clamp_max << "\n"
+    << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
   return y.str();

@@ -89,6 +89,26 @@ TEST(Fusion, AVoxelSeenThroughLosesOccupancyAndItsClass) {
   EXPECT_FALSE(map.TopSurfaceAt(kA.x(), kA.y()).observed);
 }
 
+TEST(Fusion, GrazingRaysKeepTheGroundTheyPassOverWithClearance) {
+  // A camera 0.8 m above flat ground at z = 0 sees a ground voxel at 9.5 m, then one at 10 m: the
+  // ray to the far point runs within one voxel (0.1 m) of the ground over its last 1.25 m, so it
+  // passes through the voxel seen first (at x = 9.55 the ray is 0.09 m up). Without clearance
+  // that ground voxel is cleared; with 0.1 m the ray stops 1.25 m short and keeps it.
+  const Eigen::Vector3d camera(0.05, 0.05, 0.85);
+  const Eigen::Vector3d near(9.55, 0.05, 0.05), far(10.05, 0.05, 0.05);
+  for (const double clearance : {0.0, 0.1}) {
+    MapOptions options;
+    options.free_space_clearance_m = clearance;
+    TraversabilityMap map(options);
+    map.InsertFrame(At(near, TravClass::kTraversable), camera, 1);
+    ASSERT_TRUE(map.CellAt(near).occupied);
+    for (int n = 0; n < 4; ++n) map.InsertFrame(At(far, TravClass::kTraversable), camera, 2 + n);
+    EXPECT_EQ(map.CellAt(near).occupied, clearance > 0) << clearance;
+    // Free space well above the ground is carved either way.
+    EXPECT_TRUE(map.CellAt({5.05, 0.05, 0.45}).observed) << clearance;
+  }
+}
+
 TEST(Fusion, ThreeNonTraversableViewsOutvoteOneTraversable) {
   TraversabilityMap map;
   for (int i = 0; i < 3; ++i) map.InsertFrame(At(kA, TravClass::kNonTraversable), kOrigin, i);

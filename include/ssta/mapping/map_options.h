@@ -37,6 +37,11 @@ struct MapOptions {
   double class_free_decay_log_odds = 0.4;
   double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
   double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
+  /// A ray stops clearing free space where it comes within this height [m] of its endpoint,
+  /// i.e. clearance / sin(elevation) before the end (at most 2 m). Why: a ray to far ground
+  /// runs within one voxel of nearer ground for its last resolution/sin(elevation) metres and
+  /// would clear the ground seen before. 0 disables it (OctoMap's usual carving); >= 0.
+  double free_space_clearance_m = 0.0;
 
   /// True when every field is in range; otherwise `*error` (when not null) gets a message that
   /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
