@@ -72,10 +72,26 @@ ImageF ComputeOpenCv(const ImageU8& left, const ImageU8& right, const StereoMatc
   // Speckles are removed later for all algorithms alike.
   matcher->setSpeckleWindowSize(0);
   matcher->setSpeckleRange(0);
+  // OpenCV leaves the first min_disparity + num_disparities columns without disparity. Padding
+  // both images on the left (replicated border) lets those columns be matched wherever their
+  // partner lies inside the right image; the left-right check rejects the rest.
+  const int pad = o.min_disparity + o.num_disparities;
+  cv::Mat left_padded, right_padded;
+  cv::copyMakeBorder(WrapConst(left), left_padded, 0, 0, pad, 0, cv::BORDER_REPLICATE);
+  cv::copyMakeBorder(WrapConst(right), right_padded, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   cv::Mat disp16;
-  matcher->compute(WrapConst(left), WrapConst(right), disp16);
+  matcher->compute(left_padded, right_padded, disp16);
   SSTA_CHECK(disp16.type() == CV_16SC1, "OpenCV stereo returned an unexpected type");
-  return FromFixedPoint(disp16, static_cast<short>((o.min_disparity - 1) * 16));
+  const cv::Mat cropped = disp16(cv::Rect(pad, 0, left.width(), left.height())).clone();
+  ImageF disparity = FromFixedPoint(cropped, static_cast<short>((o.min_disparity - 1) * 16));
+  // A match whose partner falls into the padding is not a measurement.
+  for (int v = 0; v < disparity.height(); ++v) {
+    float* d = disparity.row(v);
+    for (int u = 0; u < disparity.width(); ++u) {
+      if (d[u] > static_cast<float>(u)) d[u] = 0.0f;
+    }
+  }
+  return disparity;
 }
 
 /// cv::filterSpeckles on a fixed-point copy: connected blobs (neighbours differ by at most
