@@ -38,7 +38,7 @@ void RunSequence(const ClassifyArgs& a) {
 
 void RunPair(const ClassifyArgs& a) {
   if (a.left.empty() || a.right.empty() || a.calib0.empty() || a.calib1.empty()) {
-    throw Error("single-pair mode needs --left, --right, --calib0 and --calib1");
+    throw Error("classify needs --sequence SEQ, or --left, --right, --calib0 and --calib1 for one pair");
   }
   const StereoCalibration calibration = LoadStereoCalibration(a.calib0, a.calib1);
   const Config config = LoadLayeredConfig(nullptr, a.config);
