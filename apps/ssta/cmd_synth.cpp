@@ -49,9 +49,10 @@ void RegisterSynth(CLI::App& app) {
   auto drop_frames = std::make_shared<std::string>();
   auto config_files = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app.add_subcommand(
-      "synth",
-      "Render a synthetic stereo sequence (ASL layout) with exact ground truth in SEQ/gt/\n"
-      "(labels, disparity*256, world grid of classes, true extrinsics, faults.yaml).\n"
+      "synth", "Render a synthetic stereo sequence with exact ground truth (SEQ/gt/) for testing and scoring");
+  cmd->footer(
+      "Writes an ASL sequence and SEQ/gt/ (labels, disparity*256, world grid of classes, true\n"
+      "extrinsics, faults.yaml).\n"
       "Rig: rectified pinhole pair, 640x480, f = 420 px, principal point at the image centre,\n"
       "baseline 0.12 m, cam0 0.80 m above the ground pitched down 15 deg (horizon near row 127,\n"
       "largest ground disparity about 51 px), 15 Hz; IMU and pose0 at 200 Hz; vehicle 1 m/s\n"
