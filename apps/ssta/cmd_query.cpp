@@ -67,9 +67,11 @@ std::string Answer(const TraversabilityMap& map, const std::vector<double>& p) {
 
 void RegisterQuery(CLI::App& app) {
   auto args = std::make_shared<QueryArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "query", "Query map cells: CSV on stdout (x,y,z,class,cost,probability,slope_deg,step_m,observations); "
-               "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point");
+  CLI::App* cmd = app.add_subcommand("query", "Query map cells for a planner: CSV on stdout");
+  cmd->footer(
+      "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations.\n"
+      "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
+      "an unobserved cell is class 0 with an empty cost (nan): the planner decides.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")->delimiter(',')->expected(2, 3);
   auto* points = cmd->add_option("--points", args->points, "CSV file of points, one x,y or x,y,z per line");
