@@ -71,7 +71,7 @@ void RegisterQuery(CLI::App& app) {
   cmd->footer(
       "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations.\n"
       "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
-      "an unobserved cell is class 0 with an empty cost (nan): the planner decides.");
+      "an unobserved cell is class 0 with cost nan: the planner decides.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")->delimiter(',')->expected(2, 3);
   auto* points = cmd->add_option("--points", args->points, "CSV file of points, one x,y or x,y,z per line");
