@@ -143,6 +143,7 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   const auto left = ReadImageList(cam0);
   const auto right = ReadImageList(cam1);
   // Pair by timestamp: exact, or the nearest right frame within 1 ms.
+  std::vector<bool> right_used(right.size(), false);
   std::size_t j = 0;
   for (const auto& l : left) {
     while (j + 1 < right.size() &&
@@ -157,12 +158,23 @@ Sequence Sequence::OpenAsl(const std::string& path) {
       seq.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
       continue;
     }
+    right_used[j] = true;
     if (!fs::exists(right[j].file)) {
       seq.skipped.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
       continue;
     }
     seq.frames.push_back({l.timestamp_ns, l.file, right[j].file});
   }
+  // cam1 rows that no cam0 frame pairs with are reported too (a cut recording, a dropped frame).
+  for (std::size_t k = 0; k < right.size(); ++k) {
+    if (right_used[k]) continue;
+    seq.skipped.push_back({right[k].timestamp_ns, fs::exists(right[k].file)
+                                                      ? "cam1 frame without a cam0 frame within 1 ms"
+                                                      : "cam1 frame without a cam0 frame, and its image is missing: " +
+                                                            right[k].file});
+  }
+  std::sort(seq.skipped.begin(), seq.skipped.end(),
+            [](const SkippedFrame& a, const SkippedFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
 
   const std::string imu_csv = seq.root + "/imu0/data.csv";
   if (fs::exists(imu_csv)) {

@@ -53,9 +53,13 @@ TEST_F(AslFixture, PairsWithinOneMillisecondAndReportsWhatItSkips) {
   EXPECT_EQ(seq.frames()[0].timestamp_ns, 0);
   EXPECT_EQ(seq.frames()[1].timestamp_ns, 200'000'000);
   EXPECT_NE(seq.frames()[1].right_path.find("200400000.png"), std::string::npos);
-  ASSERT_EQ(seq.skipped().size(), 2u);
+  // Left 100 ms (its cam1 image is missing), left 300 ms (no cam1 within 1 ms) and the cam1 row
+  // at 305 ms that no cam0 frame pairs with.
+  ASSERT_EQ(seq.skipped().size(), 3u);
   EXPECT_NE(seq.skipped()[0].reason.find("cam1 image missing"), std::string::npos);
-  EXPECT_NE(seq.skipped()[1].reason.find("within 1 ms"), std::string::npos);
+  EXPECT_NE(seq.skipped()[1].reason.find("no cam1 frame within 1 ms"), std::string::npos);
+  EXPECT_EQ(seq.skipped()[2].timestamp_ns, 305'000'000);
+  EXPECT_NE(seq.skipped()[2].reason.find("cam1 frame without a cam0 frame"), std::string::npos);
 }
 
 TEST_F(AslFixture, FindsTheMav0SubFolder) {
