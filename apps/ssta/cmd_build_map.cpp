@@ -59,6 +59,7 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file");
+  cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
   cmd->callback([args] {
     std::string error;

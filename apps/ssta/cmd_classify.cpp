@@ -79,6 +79,7 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png in false colour");
   cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
+  cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
   cmd->callback([args] {
     std::string error;

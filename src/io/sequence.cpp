@@ -244,6 +244,20 @@ std::vector<StereoFrame> SelectFrames(const std::vector<StereoFrame>& frames, in
   return out;
 }
 
+std::string Sequence::NoPoseReason(std::int64_t t) const {
+  if (data_.poses.empty()) return "the sequence has no poses";
+  if (t < data_.poses.front().timestamp_ns || t > data_.poses.back().timestamp_ns) {
+    return "outside the pose time range";
+  }
+  if (WorldTBodyAt(t)) return "";
+  const auto it = std::lower_bound(data_.poses.begin(), data_.poses.end(), t,
+                                   [](const PoseSample& p, std::int64_t time) { return p.timestamp_ns < time; });
+  std::ostringstream why;
+  why << "inside a pose gap of " << 1e-9 * static_cast<double>(it->timestamp_ns - (it - 1)->timestamp_ns)
+      << " s (longer than " << 1e-9 * kMaxPoseGapNs << " s is not interpolated)";
+  return why.str();
+}
+
 std::optional<Eigen::Isometry3d> Sequence::WorldTBodyAt(std::int64_t t) const {
   if (data_.poses.empty() || t < data_.poses.front().timestamp_ns || t > data_.poses.back().timestamp_ns) {
     return std::nullopt;
@@ -258,6 +272,7 @@ std::optional<Eigen::Isometry3d> Sequence::WorldTBodyAt(std::int64_t t) const {
   }
   const PoseSample& b = *it;
   const PoseSample& a = *(it - 1);
+  if (b.timestamp_ns - a.timestamp_ns > kMaxPoseGapNs) return std::nullopt;
   const double s = static_cast<double>(t - a.timestamp_ns) / static_cast<double>(b.timestamp_ns - a.timestamp_ns);
   out.linear() = a.world_q_body.slerp(s, b.world_q_body).toRotationMatrix();
   out.translation() = (1.0 - s) * a.world_p_body + s * b.world_p_body;

@@ -109,6 +109,12 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   BuildMapSummary summary;
   summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
   summary.skipped = sequence.skipped();
+  auto fail_if_strict = [&](std::int64_t t, const std::string& reason) {
+    if (!options.strict) return;
+    map.Save(options.map_path);  // nothing fused so far is lost
+    throw Error(sequence.root() + ": frame " + std::to_string(t) + ": " + reason + " (strict: no frame may be skipped)");
+  };
+  if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
   for (const StereoFrame& frame : todo) {
@@ -124,7 +130,8 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       world_T_body = gravity.WorldTBodyAt(t);
     }
     if (!world_T_body) {
-      summary.skipped.push_back({t, "no pose at this time (outside the pose time range)"});
+      fail_if_strict(t, "no pose: " + sequence.NoPoseReason(t));
+      summary.skipped.push_back({t, "no pose: " + sequence.NoPoseReason(t)});
     } else {
       try {
         const ImageU8 left = ReadGreyImage(frame.left_path);
@@ -138,6 +145,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
         const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
         const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
         if (!stats.inserted) {
+          fail_if_strict(t, "map rejected the frame: " + stats.reason);
           summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
         } else {
           ++summary.frames_used;
@@ -145,6 +153,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
           if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
         }
       } catch (const Error& e) {
+        fail_if_strict(t, e.what());
         summary.skipped.push_back({t, e.what()});
       }
     }

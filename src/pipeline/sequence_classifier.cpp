@@ -68,6 +68,10 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   ClassifySummary summary;
   summary.frames_total = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
   summary.skipped = sequence.skipped();
+  if (options.strict && !summary.skipped.empty()) {
+    throw Error(sequence.root() + ": frame " + std::to_string(summary.skipped.front().timestamp_ns) + ": " +
+                summary.skipped.front().reason + " (strict: no frame may be skipped)");
+  }
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
   for (const StereoFrame& frame : todo) {
@@ -91,6 +95,7 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
       }
     } catch (const Error& e) {
       // A frame whose images cannot be read or have the wrong size is skipped, not fatal.
+      if (options.strict) throw Error(std::string(e.what()) + " (strict: no frame may be skipped)");
       summary.skipped.push_back({frame.timestamp_ns, e.what()});
     }
     if (progress) progress(++done, static_cast<int>(todo.size()));

@@ -86,13 +86,27 @@ TEST_F(AslFixture, InterpolatesPosesLinearlyAndWithSlerp) {
   const Eigen::Quaterniond q1(Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()));
   std::ofstream(root_ / "pose0/data.csv") << std::setprecision(17) << "#timestamp [ns],p_x [m],p_y,p_z,q_w,q_x,q_y,q_z\n"
                                           << "0,0,0,0,1,0,0,0\n"
-                                          << "1000000000,2,0,0," << q1.w() << ",0,0," << q1.z() << "\n";
+                                          << "400000000,2,0,0," << q1.w() << ",0,0," << q1.z() << "\n";
   const Sequence seq = Sequence::Open(root_.path().string());
-  const auto pose = seq.WorldTBodyAt(250'000'000);
+  const auto pose = seq.WorldTBodyAt(100'000'000);  // a quarter of the way
   ASSERT_TRUE(pose.has_value());
   EXPECT_NEAR(pose->translation().x(), 0.5, 1e-12);
   EXPECT_NEAR(Eigen::AngleAxisd(pose->rotation()).angle(), 0.1, 1e-9);
   EXPECT_FALSE(seq.WorldTBodyAt(2'000'000'000).has_value());
+}
+
+TEST_F(AslFixture, PosesAreNotInterpolatedAcrossALongGap) {
+  fs::create_directories(root_ / "pose0");
+  std::ofstream(root_ / "pose0/data.csv") << "#timestamp [ns],p_x [m],p_y,p_z,q_w,q_x,q_y,q_z\n"
+                                          << "0,0,0,0,1,0,0,0\n100000000,1,0,0,1,0,0,0\n"
+                                          << "900000000,2,0,0,1,0,0,0\n";
+  const Sequence seq = Sequence::Open(root_.path().string());
+  EXPECT_TRUE(seq.WorldTBodyAt(50'000'000).has_value());
+  EXPECT_FALSE(seq.WorldTBodyAt(500'000'000).has_value());  // inside the 0.8 s gap
+  EXPECT_NE(seq.NoPoseReason(500'000'000).find("pose gap of 0.8 s"), std::string::npos)
+      << seq.NoPoseReason(500'000'000);
+  EXPECT_NE(seq.NoPoseReason(2'000'000'000).find("outside the pose time range"), std::string::npos);
+  EXPECT_EQ(seq.NoPoseReason(50'000'000), "");
 }
 
 TEST(Sequence, SelectFramesTakesEveryNthUpToALimit) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
 #include <sstream>
 
 #include "cli_runner.h"
@@ -86,6 +87,28 @@ TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("nope"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir.path() / "m.ot"));
+}
+
+TEST(Cli, StrictMakesASkippedFrameFatal) {
+  testing::TempDir dir;
+  const fs::path seq = dir.path() / "seq";
+  fs::copy(kEuroc, seq, fs::copy_options::recursive);
+  // Remove the second cam1 image: that frame cannot be used.
+  std::vector<fs::path> images;
+  for (const auto& e : fs::directory_iterator(seq / "mav0" / "cam1" / "data")) images.push_back(e.path());
+  std::sort(images.begin(), images.end());
+  fs::remove(images[1]);
+  const std::string common = "classify --sequence " + seq.string() + " --config " + kEurocConfig + " --out " + (dir / "o");
+  auto r = RunSsta(common + " -q");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta(common + " --strict");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(images[1].filename().string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("strict"), std::string::npos) << r.output;
+  r = RunSsta("build-map --sequence " + seq.string() + " --static --strict --config " + kEurocConfig + " --map " +
+              (dir / "m.ot"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("cam1 image missing"), std::string::npos) << r.output;
 }
 
 TEST(Cli, ClassifyWritesTheInterfaceOutputs) {

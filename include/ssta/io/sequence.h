@@ -88,9 +88,14 @@ class Sequence {
   /// `vehicle.yaml` shipped with the sequence, if any (a config file with a vehicle section).
   const std::optional<std::string>& vehicle_config() const { return data_.vehicle_config; }
 
+  /// Poses are not interpolated across a gap longer than this [ns]: that would be a guess.
+  static constexpr std::int64_t kMaxPoseGapNs = 500'000'000;
+
   /// T_WB at `t`, interpolated (linear position, slerp rotation); nullopt outside the pose
-  /// time range or when the sequence has no poses.
+  /// time range, inside a gap longer than kMaxPoseGapNs, or when the sequence has no poses.
   std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
+  /// Why WorldTBodyAt(t) has no answer, for reports ("" when it has one).
+  std::string NoPoseReason(std::int64_t t) const;
 
  private:
   SequenceData data_;

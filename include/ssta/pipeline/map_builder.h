@@ -25,6 +25,9 @@ struct BuildMapOptions {
   bool static_platform = false;
   int max_frames = 0;          ///< 0: all frames
   int every = 1;               ///< use every n-th frame
+  /// Any frame that cannot be used (no pose, unreadable image, ...) is an error instead of a
+  /// skip with a reason; the map keeps what was fused before it.
+  bool strict = false;
   bool IsValid(std::string* error) const;
 };
 

@@ -19,6 +19,9 @@ struct ClassifyOptions {
   int max_frames = 0;           ///< 0: all frames
   int every = 1;                ///< use every n-th frame
   bool write_disparity = false; ///< also write disparity/<ts>.png in false colour
+  /// Any frame that cannot be used (unpaired, missing or unreadable image, wrong size) is an
+  /// error instead of a skip with a reason.
+  bool strict = false;
   /// Use the sequence's gt/disparity/<ts>.png (16-bit, disparity * 256) instead of stereo
   /// matching: measures the analysis alone on synthetic sequences.
   bool oracle_disparity = false;
