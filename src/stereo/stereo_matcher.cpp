@@ -1,5 +1,6 @@
 #include "ssta/stereo/stereo_matcher.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 
@@ -72,26 +73,10 @@ ImageF ComputeOpenCv(const ImageU8& left, const ImageU8& right, const StereoMatc
   // Speckles are removed later for all algorithms alike.
   matcher->setSpeckleWindowSize(0);
   matcher->setSpeckleRange(0);
-  // OpenCV leaves the first min_disparity + num_disparities columns without disparity. Padding
-  // both images on the left (replicated border) lets those columns be matched wherever their
-  // partner lies inside the right image; the left-right check rejects the rest.
-  const int pad = o.min_disparity + o.num_disparities;
-  cv::Mat left_padded, right_padded;
-  cv::copyMakeBorder(WrapConst(left), left_padded, 0, 0, pad, 0, cv::BORDER_REPLICATE);
-  cv::copyMakeBorder(WrapConst(right), right_padded, 0, 0, pad, 0, cv::BORDER_REPLICATE);
   cv::Mat disp16;
-  matcher->compute(left_padded, right_padded, disp16);
+  matcher->compute(WrapConst(left), WrapConst(right), disp16);
   SSTA_CHECK(disp16.type() == CV_16SC1, "OpenCV stereo returned an unexpected type");
-  const cv::Mat cropped = disp16(cv::Rect(pad, 0, left.width(), left.height())).clone();
-  ImageF disparity = FromFixedPoint(cropped, static_cast<short>((o.min_disparity - 1) * 16));
-  // A match whose partner falls into the padding is not a measurement.
-  for (int v = 0; v < disparity.height(); ++v) {
-    float* d = disparity.row(v);
-    for (int u = 0; u < disparity.width(); ++u) {
-      if (d[u] > static_cast<float>(u)) d[u] = 0.0f;
-    }
-  }
-  return disparity;
+  return FromFixedPoint(disp16, static_cast<short>((o.min_disparity - 1) * 16));
 }
 
 /// cv::filterSpeckles on a fixed-point copy: connected blobs (neighbours differ by at most
@@ -114,6 +99,18 @@ void FilterSpeckles(int window, int range, ImageF* disparity) {
       if (src[u] == 0) dst[u] = 0.0f;
     }
   }
+}
+
+/// `image` with `pad` columns added on the left, each a copy of the row's first pixel.
+ImageU8 PadLeft(const ImageU8& image, int pad) {
+  ImageU8 out(image.width() + pad, image.height());
+  for (int v = 0; v < image.height(); ++v) {
+    const std::uint8_t* src = image.row(v);
+    std::uint8_t* dst = out.row(v);
+    std::fill(dst, dst + pad, src[0]);
+    std::copy(src, src + image.width(), dst + pad);
+  }
+  return out;
 }
 
 /// Invalidates the disparity where the left image's standard deviation over a block x block
@@ -235,16 +232,28 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
                 std::to_string(min_width) + " px width (min_disparity + num_disparities + "
                 "block_size) and " + std::to_string(options_.block_size) + " px height");
   }
-  ImageF disparity;
+  // Every matcher leaves its first columns (the search range, and for some the window) without
+  // disparity. Padding both images on the left (replicated border) lets those columns be matched
+  // wherever their partner lies inside the right image; matches into the padding are dropped.
+  const int pad = options_.min_disparity + options_.num_disparities + options_.block_size;
+  const ImageU8 left_padded = PadLeft(left, pad);
+  const ImageU8 right_padded = PadLeft(right, pad);
+  ImageF padded;
   switch (options_.algorithm) {
     case MatcherType::kBlockMatching:
     case MatcherType::kSemiGlobal:
-      disparity = ComputeOpenCv(left, right, options_);
+      padded = ComputeOpenCv(left_padded, right_padded, options_);
       break;
     case MatcherType::kPclBlockBased:
     case MatcherType::kPclAdaptiveCost:
-      disparity = internal::ComputePclDisparity(left, right, options_);
+      padded = internal::ComputePclDisparity(left_padded, right_padded, options_);
       break;
+  }
+  ImageF disparity(left.width(), left.height(), 0.0f);
+  for (int v = 0; v < disparity.height(); ++v) {
+    const float* src = padded.row(v) + pad;
+    float* d = disparity.row(v);
+    for (int u = 0; u < disparity.width(); ++u) d[u] = src[u] > static_cast<float>(u) ? 0.0f : src[u];
   }
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
   if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);

@@ -74,6 +74,26 @@ TEST_P(EachMatcher, RecoversPlaneAndNearerSquare) {
   EXPECT_LT(abs_error / n, 0.25);
 }
 
+TEST_P(EachMatcher, MatchesLeftColumnsWhosePartnerIsInTheRightImage) {
+  // Background at 20 px: every left column from 20 + a half window on has its partner inside
+  // the right image, also those below num_disparities (64) that a matcher leaves empty unless
+  // the images are padded.
+  const SyntheticPair pair = MakePair(320, 240, 20, 36, 150, 70, 90, 8, 20 + 8);
+  const ImageF disparity = StereoMatcher(OptionsFor(GetParam())).Compute(pair.left, pair.right);
+  long scored = 0, correct = 0, partner_outside = 0;
+  for (int v = 8; v < 232; ++v) {
+    for (int u = 0; u < 64; ++u) {
+      if (u < 20 && disparity(v, u) > static_cast<float>(u)) ++partner_outside;
+      if (!pair.evaluate(v, u)) continue;
+      ++scored;
+      correct += std::abs(disparity(v, u) - pair.truth(v, u)) <= 1.0f;
+    }
+  }
+  ASSERT_GT(scored, 30 * 200);
+  EXPECT_GT(static_cast<double>(correct) / scored, 0.85) << MatcherTypeName(GetParam());
+  EXPECT_EQ(partner_outside, 0);  // no disparity points outside the right image
+}
+
 TEST_P(EachMatcher, RecoversSlantedFloorWithSubPixelAccuracy) {
   // Disparity 12 px at the top row to 40 px at the bottom: a floor receding to the horizon.
   const SyntheticPair floor = testing::MakeFloor(320, 240, 12.0, 40.0, 8, 72);
