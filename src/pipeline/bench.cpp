@@ -1,6 +1,7 @@
 #include "ssta/pipeline/bench.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -101,18 +102,21 @@ std::string BenchReport::Table() const {
     t << name << Fixed(wall.median, 16, 2) << Fixed(wall.p90, 13, 2) << Fixed(cpu.median, 15, 2)
       << Fixed(FramesPerSecond(wall.median), 11, 1) << "\n";
   }
-  t << "peak memory (max RSS): " << Fixed(peak_rss_mib, 0, 1) << " MiB\n";
-  if (!map_growth.empty()) {
-    const MapGrowthSample& first = map_growth.front();
-    const MapGrowthSample& last = map_growth.back();
-    const std::size_t half = map_growth.size() / 2;
+  t << "peak memory (max RSS): " << Fixed(peak_rss_mib, 0, 1) << " MiB";
+  if (!series.empty()) {
+    t << "; resident " << Fixed(series.front().rss_mib, 0, 1) << " MiB after the first measured frame, "
+      << Fixed(series.back().rss_mib, 0, 1) << " MiB after the last";
+  }
+  t << "\n";
+  if (with_map && !series.empty()) {
+    const FrameSample& first = series.front();
+    const FrameSample& last = series.back();
+    const std::size_t half = series.size() / 2;
     std::vector<double> early, late;
-    for (std::size_t i = 0; i < map_growth.size(); ++i) {
-      (i < half ? early : late).push_back(map_growth[i].update_ms);
-    }
-    const double per_frame = map_growth.size() > 1
+    for (std::size_t i = 0; i < series.size(); ++i) (i < half ? early : late).push_back(series[i].update_ms);
+    const double per_frame = series.size() > 1
                                  ? (static_cast<double>(last.nodes) - static_cast<double>(first.nodes)) /
-                                       static_cast<double>(map_growth.size() - 1)
+                                       static_cast<double>(series.size() - 1)
                                  : 0.0;
     t << "map: " << first.nodes << " nodes after the first measured frame, " << last.nodes << " after the last ("
       << Fixed(per_frame, 0, 0) << " per frame); update median " << Fixed(Quantile(early, 0.5), 0, 2)
@@ -160,20 +164,23 @@ std::string BenchReport::Json() const {
     j.EndObject();
   }
   j.EndArray();
-  j.Key("map_growth");
+  j.Key("with_map");
+  j.Bool(with_map);
+  j.Key("series_columns");
+  j.BeginInlineArray();
+  for (const char* c : {"frame", "map_update_ms", "map_points", "map_nodes", "rss_mib"}) j.String(c);
+  j.EndArray();
+  j.Key("series");
   j.BeginArray();
-  for (const MapGrowthSample& m : map_growth) {
+  for (const FrameSample& m : series) {
     j.BeginInlineArray();
     j.Integer(m.frame);
     j.Number(m.update_ms);
     j.Integer(static_cast<std::int64_t>(m.points));
     j.Integer(static_cast<std::int64_t>(m.nodes));
+    j.Number(m.rss_mib);
     j.EndArray();
   }
-  j.EndArray();
-  j.Key("map_growth_columns");
-  j.BeginInlineArray();
-  for (const char* c : {"frame", "update_ms", "points", "nodes"}) j.String(c);
   j.EndArray();
   j.EndObject();
   return j.Take();
@@ -187,6 +194,16 @@ bool PipelineBenchOptions::IsValid(std::string* error) const {
   if (max_frames < 0) return fail("frames: must not be negative");
   if (warmup_frames < 0) return fail("warmup: must not be negative");
   return true;
+}
+
+double CurrentResidentMib() {
+  std::FILE* statm = std::fopen("/proc/self/statm", "r");
+  if (statm == nullptr) return std::nan("");
+  long size_pages = 0, resident_pages = 0;
+  const int read = std::fscanf(statm, "%ld %ld", &size_pages, &resident_pages);
+  std::fclose(statm);
+  if (read != 2) return std::nan("");
+  return static_cast<double>(resident_pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
 double PeakResidentMib() {
@@ -223,6 +240,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   report.matcher = MatcherTypeName(config.stereo.algorithm);
   report.warmup_frames = options.warmup_frames;
   report.threads = static_cast<int>(std::thread::hardware_concurrency());
+  report.with_map = options.with_map;
   enum Row { kRectify, kMatch, kTriangulate, kNormals, kSegment, kAnalyze, kFrame, kMap, kEndToEnd };
   for (const char* name : {"rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)"}) {
     report.rows.push_back({name, {}, {}});
@@ -271,8 +289,9 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
       report.rows[kMap].cpu_ms.push_back(map_cpu);
       report.rows[kEndToEnd].wall_ms.push_back(frame_wall + map_wall);
       report.rows[kEndToEnd].cpu_ms.push_back(frame_cpu + map_cpu);
-      report.map_growth.push_back({k - options.warmup_frames, map_wall, points_given, map.NumNodes()});
     }
+    report.series.push_back({k - options.warmup_frames, map_wall, points_given,
+                             options.with_map ? map.NumNodes() : 0, CurrentResidentMib()});
   }
   report.peak_rss_mib = PeakResidentMib();
   return report;

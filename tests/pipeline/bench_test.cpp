@@ -49,7 +49,8 @@ BenchReport KnownReport() {
   r.threads = 2;
   r.rows.push_back({"match", {10, 20, 30, 40}, {}});
   r.rows.push_back({"map update", {4, 5, 6, 5}, {8, 10, 12, 10}});
-  r.map_growth = {{0, 4, 100, 1000}, {1, 5, 100, 1300}, {2, 6, 100, 1500}, {3, 5, 100, 1900}};
+  r.with_map = true;
+  r.series = {{0, 4, 100, 1000, 50}, {1, 5, 100, 1300, 51}, {2, 6, 100, 1500, 52}, {3, 5, 100, 1900, 52.5}};
   r.peak_rss_mib = 123.45;
   return r;
 }
@@ -66,7 +67,10 @@ TEST(Bench, TablePrintsOneFixedWidthLinePerRow) {
       << table;
   EXPECT_NE(table.find("640x480, sgbm, 4 frames measured (1 warm-up not counted), 2 hardware threads"),
             std::string::npos);
-  EXPECT_NE(table.find("peak memory (max RSS): 123.5 MiB"), std::string::npos);
+  EXPECT_NE(table.find("peak memory (max RSS): 123.5 MiB; resident 50.0 MiB after the first measured frame, "
+                       "52.5 MiB after the last\n"),
+            std::string::npos)
+      << table;
   // 1000 -> 1900 nodes over 3 steps: 300 per frame; halves {4, 5} and {6, 5}.
   EXPECT_NE(table.find("map: 1000 nodes after the first measured frame, 1900 after the last (300 per frame); "
                        "update median 4.50 ms in the first half, 5.50 ms in the second"),
@@ -81,7 +85,7 @@ TEST(Bench, JsonHoldsTheStatisticsOfEveryRow) {
   EXPECT_NE(json.find("\"p90\": 37"), std::string::npos) << json;
   EXPECT_NE(json.find("\"frames_per_s\": 40"), std::string::npos) << json;
   EXPECT_NE(json.find("\"cpu_ms\": null"), std::string::npos) << json;
-  EXPECT_NE(json.find("[3, 5, 100, 1900]"), std::string::npos) << json;
+  EXPECT_NE(json.find("[3, 5, 100, 1900, 52.5]"), std::string::npos) << json;
   EXPECT_NE(json.find("\"frames\": 4"), std::string::npos) << json;
 }
 

@@ -38,12 +38,13 @@ struct BenchRow {
   std::vector<double> cpu_ms;
 };
 
-/// The map after one frame of a bench run with a map.
-struct MapGrowthSample {
+/// The process after one measured frame: its memory and, with a map, the map's size.
+struct FrameSample {
   int frame = 0;             ///< 0-based index of the measured frame
-  double update_ms = 0.0;    ///< wall time of ClassifiedPointsInWorld + InsertFrame [ms]
-  std::size_t points = 0;    ///< points given to InsertFrame
-  std::size_t nodes = 0;     ///< octree nodes after the update (TraversabilityMap::NumNodes)
+  double update_ms = 0.0;    ///< wall time of ClassifiedPointsInWorld + InsertFrame [ms]; 0 without map
+  std::size_t points = 0;    ///< points given to InsertFrame; 0 without map
+  std::size_t nodes = 0;     ///< octree nodes after the update (TraversabilityMap::NumNodes); 0 without map
+  double rss_mib = 0.0;      ///< resident memory of the process after the frame [MiB]
 };
 
 /// What a pipeline benchmark measured, and how it prints.
@@ -53,19 +54,21 @@ struct BenchReport {
   std::string matcher;     ///< stereo.algorithm
   int warmup_frames = 0;   ///< frames run before measuring (not in the rows)
   int threads = 0;         ///< hardware threads of the machine
-  std::vector<BenchRow> rows;                ///< in pipeline order; frames = rows' sample count
-  std::vector<MapGrowthSample> map_growth;   ///< one per measured frame when the map was on
+  std::vector<BenchRow> rows;         ///< in pipeline order; frames = rows' sample count
+  bool with_map = false;              ///< the frames were fused into a map
+  std::vector<FrameSample> series;    ///< one per measured frame
   double peak_rss_mib = 0.0;  ///< peak resident memory of the process at the end [MiB]
 
   /// Frames measured (the sample count of the first row; 0 without rows).
   int frames() const;
 
   /// A fixed-width text table, one line per row: median and p90 wall ms, median CPU ms (or
-  /// "-"), and frames/s = 1000 / median wall ms; then peak memory and, with a map, its growth.
+  /// "-"), and frames/s = 1000 / median wall ms; then peak memory, resident memory at the first
+  /// and last frame and, with a map, its growth and update time in the first and second half.
   std::string Table() const;
 
   /// The same as JSON: per row the SampleStats of wall and CPU times and frames/s (from the
-  /// median), peak memory, and the map's growth per frame.
+  /// median), peak memory, and the per-frame series (memory and map growth).
   std::string Json() const;
 };
 
@@ -93,5 +96,8 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config,
 
 /// Peak resident set size of this process so far [MiB] (getrusage's ru_maxrss).
 double PeakResidentMib();
+
+/// Current resident set size of this process [MiB] (/proc/self/statm); NaN when unavailable.
+double CurrentResidentMib();
 
 }  // namespace ssta
