@@ -27,6 +27,7 @@
 #include <pcl/segmentation/plane_refinement_comparator.h>
 
 #include "ssta/analysis/surface_analyzer.h"
+#include "ssta/eval/label_evaluator.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/io/image_io.h"
@@ -57,6 +58,7 @@ struct BenchFrame {
   RectifiedPair rectified;
   FrameResult result;  ///< FramePipeline::Process with the dataset's config
   Image3f normals;     ///< NormalEstimator with the dataset's config
+  ImageU8 truth;       ///< the renderer's class ids, 255 don't care
 };
 
 /// Frames of one rig, rendered in memory from the yard scene, with the pipeline config for it.
@@ -95,6 +97,7 @@ Dataset Render(const std::string& name, const synth::RigOptions& rig, const Conf
     BenchFrame f;
     f.left = pair.left;
     f.right = pair.right;
+    f.truth = pair.labels;
     f.up_camera = (body_T_cam0.linear().transpose() * world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ())
                       .normalized();
     f.world_T_rectified = world_T_body * body_T_rectified;
@@ -505,6 +508,13 @@ class RatioReporter : public benchmark::ConsoleReporter {
     }
   }
 
+  bool saw_stock() const {
+    for (const auto& entry : real_ms_) {
+      if (entry.first.rfind("Stock", 0) == 0) return true;
+    }
+    return false;
+  }
+
   void Finalize() override {
     ConsoleReporter::Finalize();
     std::printf("\nStock chain / SSTA, wall time per frame (medians when repeated):\n");
@@ -538,6 +548,36 @@ class RatioReporter : public benchmark::ConsoleReporter {
   }
   std::map<std::string, double> real_ms_;
 };
+
+/// Not a speed figure: a sanity check that both chains label the benchmark's frames sensibly
+/// (the project's accuracy figures are in docs/accuracy.md, from `ssta eval` over whole
+/// sequences). Scores the few rendered frames against the renderer's truth.
+void PrintAccuracy() {
+  std::printf("\nLabels on the benchmark's own %d rendered frames per rig vs the renderer's truth "
+              "(a sanity check; see docs/accuracy.md):\n", kFramesPerDataset);
+  for (const Dataset* d : {&Vga(), &Kitti()}) {
+    ConfusionMatrix own, stock;
+    StockLabeller labeller;
+    int passed = 0;
+    std::string reason;
+    for (const BenchFrame& f : d->frames) {
+      if (f.result.analysis.quality.passed) {
+        ++passed;
+      } else {
+        reason = f.result.analysis.quality.reason;
+      }
+      own += ScoreLabels(f.truth, f.result.labels);
+      const ImageU8 s = labeller.Label(f.result.cloud, f.result.up_rectified);
+      if (s.width() == f.truth.width() && s.height() == f.truth.height()) stock += ScoreLabels(f.truth, s);
+    }
+    std::printf("  %-5s SSTA  accuracy %5.1f%%  mean IoU %.3f  coverage %5.1f%%  (quality check passed on %d of "
+                "%zu frames%s%s)\n",
+                d->name.c_str(), 100 * own.Accuracy(), own.MeanIou(), 100 * own.Coverage(), passed, d->frames.size(),
+                reason.empty() ? "" : "; last failure: ", reason.c_str());
+    std::printf("  %-5s stock accuracy %5.1f%%  mean IoU %.3f  coverage %5.1f%%\n", d->name.c_str(),
+                100 * stock.Accuracy(), stock.MeanIou(), 100 * stock.Coverage());
+  }
+}
 
 void RegisterAll() {
   using Fn = std::function<void(benchmark::State&)>;
@@ -584,6 +624,7 @@ int main(int argc, char** argv) {
   ssta::RegisterAll();
   ssta::RatioReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
+  if (reporter.saw_stock()) ssta::PrintAccuracy();
   benchmark::Shutdown();
   return 0;
 }
