@@ -415,8 +415,8 @@ class StockLabeller {
 };
 
 /// OctoMap's plain update: the frame's points in the world, thinned to 5 cm (pcl::VoxelGrid),
-/// inserted with OcTree::insertPointCloud (ray casting per point) at 0.10 m and the same 15 m
-/// range as the map's defaults.
+/// inserted with OcTree::insertPointCloud (ray casting per point) at the map's resolution and
+/// range (config map.fusion: 0.10 m and 12 m by default).
 class StockMap {
  public:
   explicit StockMap(const MapOptions& options) : tree_(options.resolution_m), range_m_(options.max_range_m) {}
