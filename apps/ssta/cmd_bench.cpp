@@ -84,7 +84,8 @@ void RegisterBench(CLI::App& app) {
       "memory) on a sequence, or on frames rendered for the run (default: the yard scene at\n"
       "640x480; KITTI size: --width 1242 --height 375 --focal 718.856 --baseline 0.537\n"
       "--camera-height 1.65 --camera-pitch-deg 0 --config config/sensors/kitti.yaml).\n"
-      "The first --warmup frames are run but not counted. Speed only: use `ssta eval` for accuracy.");
+      "The first --warmup frames are run but not counted; the rendering options are ignored with\n"
+      "--sequence. Speed only: use `ssta eval` for accuracy. See docs/performance.md.");
   cmd->add_option("--sequence", args->sequence, "sequence folder to run on (default: render frames)");
   cmd->add_option("--frames", args->frames, "frames to measure (after the warm-up)")->capture_default_str();
   cmd->add_option("--warmup", args->options.warmup_frames, "frames run first and not counted")

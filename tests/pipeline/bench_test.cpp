@@ -112,6 +112,16 @@ TEST(Bench, CommandRendersFramesAndReportsEveryStageWithTheMap) {
   EXPECT_NE(json.find("\"name\": \"end to end\""), std::string::npos) << json;
 }
 
+TEST(Bench, CommandRunsOnARecordedSequenceWithoutTheMap) {
+  const testing::RunResult r = testing::RunSsta(std::string("bench --sequence ") + SSTA_TEST_DATA_DIR +
+                                                "/kitti-street-pair --warmup 0 --frames 1 --config " +
+                                                SSTA_CONFIG_DIR + "/sensors/kitti.yaml");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("kitti-street-pair: 1241x376, sgbm, 1 frames measured"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frame (Process)"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("map update"), std::string::npos) << r.output;
+}
+
 TEST(Bench, CommandRejectsTooFewFramesByName) {
   const testing::RunResult r = testing::RunSsta("bench --frames 0");
   EXPECT_EQ(r.exit_code, 2) << r.output;
