@@ -1,0 +1,300 @@
+#include "ssta/pipeline/bench.h"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "core/json_writer.h"
+#include "ssta/io/image_io.h"
+#include "ssta/mapping/traversability_map.h"
+#include "ssta/pipeline/attitude_filter.h"
+#include "ssta/pipeline/frame_pipeline.h"
+#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/pipeline/map_builder.h"
+
+namespace ssta {
+namespace {
+
+/// Wall and process CPU time since construction [ms].
+class Timer {
+ public:
+  double WallMs() const {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - wall_).count();
+  }
+  double CpuMs() const { return 1000.0 * static_cast<double>(std::clock() - cpu_) / CLOCKS_PER_SEC; }
+
+ private:
+  std::chrono::steady_clock::time_point wall_ = std::chrono::steady_clock::now();
+  std::clock_t cpu_ = std::clock();
+};
+
+std::string Fixed(double value, int width, int decimals) {
+  if (!std::isfinite(value)) return std::string(static_cast<std::size_t>(std::max(0, width - 1)), ' ') + "-";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%*.*f", width, decimals, value);
+  return buffer;
+}
+
+double FramesPerSecond(double median_ms) { return median_ms > 0 ? 1000.0 / median_ms : std::nan(""); }
+
+void WriteStats(const SampleStats& s, internal::JsonWriter* j) {
+  j->BeginObject();
+  j->Key("count");
+  j->Integer(s.count);
+  j->Key("median");
+  j->Number(s.median);
+  j->Key("p90");
+  j->Number(s.p90);
+  j->Key("mean");
+  j->Number(s.mean);
+  j->Key("min");
+  j->Number(s.min);
+  j->Key("max");
+  j->Number(s.max);
+  j->EndObject();
+}
+
+}  // namespace
+
+double Quantile(std::vector<double> samples, double q) {
+  SSTA_CHECK(q >= 0.0 && q <= 1.0, "quantile must be in [0, 1]");
+  if (samples.empty()) return std::nan("");
+  std::sort(samples.begin(), samples.end());
+  const double rank = q * static_cast<double>(samples.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t hi = std::min(lo + 1, samples.size() - 1);
+  return samples[lo] + (rank - static_cast<double>(lo)) * (samples[hi] - samples[lo]);
+}
+
+SampleStats Summarize(const std::vector<double>& samples) {
+  SampleStats s;
+  s.count = static_cast<int>(samples.size());
+  if (samples.empty()) return s;
+  s.median = Quantile(samples, 0.5);
+  s.p90 = Quantile(samples, 0.9);
+  s.mean = std::accumulate(samples.begin(), samples.end(), 0.0) / static_cast<double>(samples.size());
+  const auto [lo, hi] = std::minmax_element(samples.begin(), samples.end());
+  s.min = *lo;
+  s.max = *hi;
+  return s;
+}
+
+int BenchReport::frames() const { return rows.empty() ? 0 : static_cast<int>(rows.front().wall_ms.size()); }
+
+std::string BenchReport::Table() const {
+  std::ostringstream t;
+  t << source << ": " << width << "x" << height << ", " << matcher << ", " << frames() << " frames measured ("
+    << warmup_frames << " warm-up not counted), " << threads << " hardware threads\n";
+  t << "stage               wall median ms  wall p90 ms  CPU median ms   frames/s\n";
+  for (const BenchRow& row : rows) {
+    const SampleStats wall = Summarize(row.wall_ms);
+    const SampleStats cpu = Summarize(row.cpu_ms);
+    std::string name = row.name;
+    name.resize(std::max<std::size_t>(name.size(), 18), ' ');
+    t << name << Fixed(wall.median, 16, 2) << Fixed(wall.p90, 13, 2) << Fixed(cpu.median, 15, 2)
+      << Fixed(FramesPerSecond(wall.median), 11, 1) << "\n";
+  }
+  t << "peak memory (max RSS): " << Fixed(peak_rss_mib, 0, 1) << " MiB";
+  if (!series.empty()) {
+    t << "; resident " << Fixed(series.front().rss_mib, 0, 1) << " MiB after the first measured frame, "
+      << Fixed(series.back().rss_mib, 0, 1) << " MiB after the last";
+  }
+  t << "\n";
+  if (with_map && !series.empty()) {
+    const FrameSample& first = series.front();
+    const FrameSample& last = series.back();
+    const std::size_t half = series.size() / 2;
+    std::vector<double> early, late;
+    for (std::size_t i = 0; i < series.size(); ++i) (i < half ? early : late).push_back(series[i].update_ms);
+    const double per_frame = series.size() > 1
+                                 ? (static_cast<double>(last.nodes) - static_cast<double>(first.nodes)) /
+                                       static_cast<double>(series.size() - 1)
+                                 : 0.0;
+    t << "map: " << first.nodes << " nodes after the first measured frame, " << last.nodes << " after the last ("
+      << Fixed(per_frame, 0, 0) << " per frame); update median " << Fixed(Quantile(early, 0.5), 0, 2)
+      << " ms in the first half, " << Fixed(Quantile(late, 0.5), 0, 2) << " ms in the second\n";
+  }
+  return t.str();
+}
+
+std::string BenchReport::Json() const {
+  internal::JsonWriter j;
+  j.BeginObject();
+  j.Key("source");
+  j.String(source);
+  j.Key("width");
+  j.Integer(width);
+  j.Key("height");
+  j.Integer(height);
+  j.Key("matcher");
+  j.String(matcher);
+  j.Key("frames");
+  j.Integer(frames());
+  j.Key("warmup_frames");
+  j.Integer(warmup_frames);
+  j.Key("hardware_threads");
+  j.Integer(threads);
+  j.Key("peak_rss_mib");
+  j.Number(peak_rss_mib);
+  j.Key("stages");
+  j.BeginArray();
+  for (const BenchRow& row : rows) {
+    const SampleStats wall = Summarize(row.wall_ms);
+    j.BeginObject();
+    j.Key("name");
+    j.String(row.name);
+    j.Key("wall_ms");
+    WriteStats(wall, &j);
+    j.Key("cpu_ms");
+    if (row.cpu_ms.empty()) {
+      j.Null();
+    } else {
+      WriteStats(Summarize(row.cpu_ms), &j);
+    }
+    j.Key("frames_per_s");
+    j.Number(FramesPerSecond(wall.median));
+    j.EndObject();
+  }
+  j.EndArray();
+  j.Key("with_map");
+  j.Bool(with_map);
+  j.Key("series_columns");
+  j.BeginInlineArray();
+  for (const char* c : {"frame", "map_update_ms", "map_points", "map_nodes", "rss_mib"}) j.String(c);
+  j.EndArray();
+  j.Key("series");
+  j.BeginArray();
+  for (const FrameSample& m : series) {
+    j.BeginInlineArray();
+    j.Integer(m.frame);
+    j.Number(m.update_ms);
+    j.Integer(static_cast<std::int64_t>(m.points));
+    j.Integer(static_cast<std::int64_t>(m.nodes));
+    j.Number(m.rss_mib);
+    j.EndArray();
+  }
+  j.EndArray();
+  j.EndObject();
+  return j.Take();
+}
+
+bool PipelineBenchOptions::IsValid(std::string* error) const {
+  auto fail = [&](const char* m) {
+    if (error) *error = m;
+    return false;
+  };
+  if (max_frames < 0) return fail("frames: must not be negative");
+  if (warmup_frames < 0) return fail("warmup: must not be negative");
+  return true;
+}
+
+double CurrentResidentMib() {
+  std::FILE* statm = std::fopen("/proc/self/statm", "r");
+  if (statm == nullptr) return std::nan("");
+  long size_pages = 0, resident_pages = 0;
+  const int read = std::fscanf(statm, "%ld %ld", &size_pages, &resident_pages);
+  std::fclose(statm);
+  if (read != 2) return std::nan("");
+  return static_cast<double>(resident_pages) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+double PeakResidentMib() {
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) return std::nan("");
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
+}
+
+BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error(error);
+  if (!config.IsValid(&error)) throw Error("config: " + error);
+  const int available = static_cast<int>(sequence.frames().size());
+  if (available < options.warmup_frames + 1) {
+    throw Error(sequence.root() + ": " + std::to_string(available) + " frames, the bench needs at least " +
+                std::to_string(options.warmup_frames + 1) + " (warm-up + 1)");
+  }
+  const int measured = options.max_frames > 0 ? std::min(options.max_frames, available - options.warmup_frames)
+                                              : available - options.warmup_frames;
+
+  FramePipeline pipeline(sequence.calibration(), config);
+  const GravityProvider gravity(sequence, config.gravity, config.attitude);
+  const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
+  Eigen::Isometry3d body_T_rectified = body_T_camera;
+  body_T_rectified.linear() = body_T_camera.linear() * pipeline.geometry().rectified_R_camera.transpose();
+  MapMetadata metadata;
+  metadata.vehicle = config.vehicle;
+  TraversabilityMap map(config.map.fusion, metadata);
+
+  BenchReport report;
+  report.source = sequence.root();
+  report.width = sequence.calibration().left.width;
+  report.height = sequence.calibration().left.height;
+  report.matcher = MatcherTypeName(config.stereo.algorithm);
+  report.warmup_frames = options.warmup_frames;
+  report.threads = static_cast<int>(std::thread::hardware_concurrency());
+  report.with_map = options.with_map;
+  enum Row { kRectify, kMatch, kTriangulate, kNormals, kSegment, kAnalyze, kFrame, kMap, kEndToEnd };
+  for (const char* name : {"rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)"}) {
+    report.rows.push_back({name, {}, {}});
+  }
+  if (options.with_map) {
+    report.rows.push_back({"map update", {}, {}});
+    report.rows.push_back({"end to end", {}, {}});
+  }
+
+  for (int k = 0; k < options.warmup_frames + measured; ++k) {
+    const StereoFrame& frame = sequence.frames()[static_cast<std::size_t>(k)];
+    const ImageU8 left = ReadGreyImage(frame.left_path);
+    const ImageU8 right = ReadGreyImage(frame.right_path);
+    const std::int64_t t = frame.timestamp_ns;
+    const Eigen::Isometry3d world_T_body =
+        gravity.WorldTBodyAt(t).value_or(CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t)));
+    const Eigen::Vector3d up_camera =
+        (body_T_camera.linear().transpose() * (world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()))
+            .normalized();
+
+    const Timer frame_timer;
+    FrameResult result = pipeline.Process(left, right, up_camera);
+    const double frame_wall = frame_timer.WallMs(), frame_cpu = frame_timer.CpuMs();
+    result.timestamp_ns = t;
+
+    double map_wall = 0, map_cpu = 0;
+    std::size_t points_given = 0;
+    if (options.with_map) {
+      const Timer map_timer;
+      const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
+      const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
+      map.InsertFrame(points, world_T_rectified.translation(), t);
+      map_wall = map_timer.WallMs();
+      map_cpu = map_timer.CpuMs();
+      points_given = points.size();
+    }
+    if (k < options.warmup_frames) continue;
+
+    const StageTimings& s = result.timings;
+    const double stages[] = {s.rectify_ms, s.match_ms, s.triangulate_ms, s.normals_ms, s.segment_ms, s.analyze_ms};
+    for (int r = kRectify; r <= kAnalyze; ++r) report.rows[r].wall_ms.push_back(stages[r]);
+    report.rows[kFrame].wall_ms.push_back(frame_wall);
+    report.rows[kFrame].cpu_ms.push_back(frame_cpu);
+    if (options.with_map) {
+      report.rows[kMap].wall_ms.push_back(map_wall);
+      report.rows[kMap].cpu_ms.push_back(map_cpu);
+      report.rows[kEndToEnd].wall_ms.push_back(frame_wall + map_wall);
+      report.rows[kEndToEnd].cpu_ms.push_back(frame_cpu + map_cpu);
+    }
+    report.series.push_back({k - options.warmup_frames, map_wall, points_given,
+                             options.with_map ? map.NumNodes() : 0, CurrentResidentMib()});
+  }
+  report.peak_rss_mib = PeakResidentMib();
+  return report;
+}
+
+}  // namespace ssta
