@@ -1,5 +1,7 @@
 #include "core/json_writer.h"
 
+#include "core/json_escape.h"
+
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -8,28 +10,7 @@
 
 namespace ssta::internal {
 
-std::string JsonQuote(std::string_view text) {
-  std::string out = "\"";
-  for (const char ch : text) {
-    switch (ch) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\r': out += "\\r"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20) {
-          char buffer[8];
-          std::snprintf(buffer, sizeof buffer, "\\u%04x", static_cast<unsigned>(ch));
-          out += buffer;
-        } else {
-          out += ch;
-        }
-    }
-  }
-  out += '"';
-  return out;
-}
+std::string JsonQuote(std::string_view text) { return "\"" + JsonEscape(text) + "\""; }
 
 void JsonWriter::NewLine() {
   out_ += '\n';

@@ -59,6 +59,35 @@ double ParseNumber(const std::string& text, const std::string& where) {
   return value;
 }
 
+/// Calls `row(cols, where)` for every data row of an ASL CSV (comment and blank lines skipped),
+/// after checking the column count and that the first column, a timestamp, strictly increases.
+template <typename Row>
+void ForEachCsvRow(const std::string& path, std::size_t columns, const char* expected, Row row) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open");
+  std::string line;
+  int n = 0;
+  std::int64_t previous = 0;
+  bool first = true;
+  while (std::getline(in, line)) {
+    ++n;
+    line = Trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const std::string where = path + ":" + std::to_string(n);
+    const auto cols = SplitCommas(line);
+    if (cols.size() != columns) {
+      throw Error(where + ": expected " + expected + ", found " + std::to_string(cols.size()) + " columns");
+    }
+    const std::int64_t t = ParseTimestamp(cols[0], where);
+    if (!first && t <= previous) {
+      throw Error(where + ": timestamp " + cols[0] + (t == previous ? " is duplicated" : " is out of order"));
+    }
+    first = false;
+    previous = t;
+    row(t, cols, where, n);
+  }
+}
+
 struct ImageEntry {
   std::int64_t timestamp_ns;
   std::string file;
@@ -67,54 +96,27 @@ struct ImageEntry {
 std::vector<ImageEntry> ReadImageList(const std::string& cam_dir) {
   const std::string csv = cam_dir + "/data.csv";
   if (!fs::exists(csv)) throw Error(csv + ": file not found");
-  std::ifstream in(csv);
-  if (!in) throw Error(csv + ": cannot open");
   std::vector<ImageEntry> out;
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    line = Trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = csv + ":" + std::to_string(n);
-    const auto cols = SplitCommas(line);
-    if (cols.size() != 2) throw Error(where + ": expected 'timestamp,filename'");
-    const std::int64_t t = ParseTimestamp(cols[0], where);
-    if (!out.empty() && t <= out.back().timestamp_ns) {
-      throw Error(where + ": timestamp " + cols[0] + (t == out.back().timestamp_ns ? " is duplicated" : " is out of order"));
-    }
-    out.push_back({t, cam_dir + "/data/" + cols[1]});
-  }
+  ForEachCsvRow(csv, 2, "'timestamp,filename'",
+                [&](std::int64_t t, const std::vector<std::string>& cols, const std::string&, int) {
+                  out.push_back({t, cam_dir + "/data/" + cols[1]});
+                });
   return out;
 }
 
 }  // namespace
 
 std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open");
   std::vector<CsvRow> rows;
-  std::string line;
-  int n = 0;
-  while (std::getline(in, line)) {
-    ++n;
-    line = Trim(line);
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = path + ":" + std::to_string(n);
-    const auto cols = SplitCommas(line);
-    if (static_cast<int>(cols.size()) != columns) {
-      throw Error(where + ": expected " + std::to_string(columns) + " columns, found " + std::to_string(cols.size()));
-    }
-    CsvRow row;
-    row.line = n;
-    row.timestamp_ns = ParseTimestamp(cols[0], where);
-    if (!rows.empty() && row.timestamp_ns <= rows.back().timestamp_ns) {
-      throw Error(where + ": timestamp " + cols[0] +
-                  (row.timestamp_ns == rows.back().timestamp_ns ? " is duplicated" : " is out of order"));
-    }
-    for (int c = 1; c < columns; ++c) row.values.push_back(ParseNumber(cols[c], where));
-    rows.push_back(std::move(row));
-  }
+  const std::string expected = std::to_string(columns) + " columns";
+  ForEachCsvRow(path, static_cast<std::size_t>(columns), expected.c_str(),
+                [&](std::int64_t t, const std::vector<std::string>& cols, const std::string& where, int line) {
+                  CsvRow row;
+                  row.line = line;
+                  row.timestamp_ns = t;
+                  for (std::size_t c = 1; c < cols.size(); ++c) row.values.push_back(ParseNumber(cols[c], where));
+                  rows.push_back(std::move(row));
+                });
   return rows;
 }
 
