@@ -14,5 +14,6 @@ void RegisterBuildMap(CLI::App& app);
 void RegisterQuery(CLI::App& app);
 void RegisterExport(CLI::App& app);
 void RegisterCalibrateStereo(CLI::App& app);
+void RegisterCalibrateMount(CLI::App& app);
 
 }  // namespace ssta::cli
