@@ -37,18 +37,23 @@ synth::SynthOptions SmallYard(double pitch_error_deg, double roll_error_deg) {
   return o;
 }
 
-/// Renders the two sequences once for the whole suite.
+/// Renders each sequence on first use, once for the whole suite (CTest runs every case in its
+/// own process, so a case renders only what it reads).
 class MountCalibrationTest : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = std::make_unique<testing::TempDir>();
-    synth::WriteSyntheticSequence(SmallYard(3.0, 1.5), Faulty());
-    synth::WriteSyntheticSequence(SmallYard(0.0, 0.0), Clean());
-  }
+  static void SetUpTestSuite() { dir_ = std::make_unique<testing::TempDir>(); }
   static void TearDownTestSuite() { dir_.reset(); }
-  static std::string Faulty() { return *dir_ / "faulty"; }
-  static std::string Clean() { return *dir_ / "clean"; }
+  static std::string Faulty() { return Rendered("faulty", 3.0, 1.5); }
+  static std::string Clean() { return Rendered("clean", 0.0, 0.0); }
 
+ private:
+  static std::string Rendered(const std::string& name, double pitch_error_deg, double roll_error_deg) {
+    const std::string path = *dir_ / name;
+    if (!fs::exists(path + "/gt/extrinsics.yaml")) {
+      synth::WriteSyntheticSequence(SmallYard(pitch_error_deg, roll_error_deg), path);
+    }
+    return path;
+  }
   static std::unique_ptr<testing::TempDir> dir_;
 };
 std::unique_ptr<testing::TempDir> MountCalibrationTest::dir_;
