@@ -19,7 +19,7 @@ namespace {
 constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
 constexpr double kRadToDeg = 1.0 / kDegToRad;
 
-/// Signed distance of one ground point to its frame's plane, over point_sigma_m.
+/// Signed distance of one ground point to its frame's plane, over the point's sigma.
 /// Parameters: correction (roll, pitch) [rad], height correction [m], and the frame's plane:
 /// its tilt (about body x, y) [rad] and the body origin's height above it [m]. The plane is one
 /// block so that the frames form an independent set for the Schur complement.
@@ -74,6 +74,12 @@ ceres::CostFunction* MakePrior(int first, const Eigen::Matrix<double, N, 1>& mea
   return new ceres::AutoDiffCostFunction<GaussianPrior<N, M>, N, M>(new GaussianPrior<N, M>(first, mean, sigma));
 }
 
+/// Sigma of a ground point about its plane [m]: point_sigma_m, growing with the range beyond
+/// point_sigma_range_m.
+double PointSigma(const Eigen::Vector3d& p_camera, const RefinementOptions& options) {
+  return options.point_sigma_m * std::max(1.0, p_camera.norm() / options.point_sigma_range_m);
+}
+
 Eigen::Vector3d ReferenceNormal(const GroundEvidence& frame, GroundReference reference) {
   return reference == GroundReference::kBody ? Eigen::Vector3d::UnitZ() : frame.up_body.normalized();
 }
@@ -107,6 +113,7 @@ std::string RefinementStatusName(RefinementStatus status) {
     case RefinementStatus::kDetermined: return "determined";
     case RefinementStatus::kTooFewFrames: return "too_few_frames";
     case RefinementStatus::kNotBetterThanPrior: return "not_better_than_prior";
+    case RefinementStatus::kTerrainTooRough: return "terrain_too_rough";
     case RefinementStatus::kFailed: return "failed";
   }
   return "failed";
@@ -164,7 +171,7 @@ MountRefinementResult MountRefiner::Solve() const {
                                       : new ceres::CauchyLoss(loss_scale);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
                                    new GroundPointResidual(body_R_camera * p, body_t_camera, n_ref,
-                                                           options_.point_sigma_m)),
+                                                           PointSigma(p, options_))),
                                loss, correction, height, blocks[i].values);
     }
     problem.AddResidualBlock(
@@ -216,15 +223,17 @@ MountRefinementResult MountRefiner::Solve() const {
       const double d = std::abs(n.dot(p_body) + blocks[i].offset());
       distances.push_back(d);
       sum_sq += d * d;
-      if (d > loss_scale * options_.point_sigma_m) ++result.outlier_points;
+      if (d > loss_scale * PointSigma(p, options_)) ++result.outlier_points;
     }
     FrameGroundEstimate estimate;
     estimate.timestamp_ns = frame.timestamp_ns;
     estimate.points = static_cast<int>(frame.camera_points.size());
     estimate.tilt_deg = std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)) * kRadToDeg;
+    result.ground_tilt_rms_deg += estimate.tilt_deg * estimate.tilt_deg;
     estimate.height_m = blocks[i].offset();
     result.frames.push_back(estimate);
   }
+  result.ground_tilt_rms_deg = std::sqrt(result.ground_tilt_rms_deg / static_cast<double>(window_.size()));
   if (!distances.empty()) {
     result.residual_rms_m = std::sqrt(sum_sq / static_cast<double>(distances.size()));
     result.residual_median_m = Median(distances);
@@ -256,6 +265,7 @@ MountRefinementResult MountRefiner::Solve() const {
     result.height_sigma_m = std::sqrt(std::max(0.0, h));
   }
 
+  // The prior first: a correction a tight prior holds at zero shows up as tilted frames too.
   const double limit_deg = options_.max_sigma_ratio * options_.prior_sigma_deg;
   if (std::max(result.pitch_sigma_deg, result.roll_sigma_deg) > limit_deg) {
     std::ostringstream m;
@@ -263,6 +273,15 @@ MountRefinementResult MountRefiner::Solve() const {
       << result.pitch_sigma_deg << " deg, roll " << result.roll_sigma_deg << " deg vs prior " << options_.prior_sigma_deg
       << " deg (applied only below " << limit_deg << " deg); the configured mount is kept";
     return finish(RefinementStatus::kNotBetterThanPrior, m.str());
+  }
+  // Two tilt angles per frame, each N(0, sigma^2) under the model: RMS tilt ~ sqrt(2) sigma.
+  const double tilt_limit_deg = std::sqrt(2.0) * options_.terrain_tilt_sigma_deg;
+  if (result.ground_tilt_rms_deg > tilt_limit_deg) {
+    std::ostringstream m;
+    m << std::setprecision(3) << "the ground is not flat enough: the frames' ground planes tilt by "
+      << result.ground_tilt_rms_deg << " deg RMS about the reference, more than terrain_tilt_sigma_deg allows ("
+      << tilt_limit_deg << " deg); the configured mount is kept (drive on flatter ground)";
+    return finish(RefinementStatus::kTerrainTooRough, m.str());
   }
   result.body_T_camera_refined.linear() = result.body_R_correction * body_R_camera;
   result.body_T_camera_refined.translation() = body_t_camera + Eigen::Vector3d(0, 0, result.height_correction_m);
@@ -279,7 +298,7 @@ std::string MountRefinementResult::BriefReport() const {
   if (std::isfinite(height_sigma_m)) r << ", height " << height_correction_m << " +- " << height_sigma_m << " m";
   r << "\n  evidence: " << frames_used << " frames, " << points_used << " ground points; residual rms "
     << residual_rms_m << " m, median " << residual_median_m << " m, " << outlier_points
-    << " beyond the loss scale\n";
+    << " beyond the loss scale; ground tilt rms " << ground_tilt_rms_deg << " deg\n";
   r << "  solver: cost " << initial_cost << " -> " << final_cost << " in " << iterations << " iterations, "
     << solve_ms << " ms\n";
   const Eigen::Matrix4d m = body_T_camera_refined.matrix();
@@ -322,7 +341,8 @@ void WriteRefinementJson(const MountRefinementResult& r, JsonWriter* json) {
       {"height_correction_m", r.height_correction_m},   {"pitch_sigma_deg", r.pitch_sigma_deg},
       {"roll_sigma_deg", r.roll_sigma_deg},             {"height_sigma_m", r.height_sigma_m},
       {"prior_sigma_deg", r.prior_sigma_deg},           {"residual_rms_m", r.residual_rms_m},
-      {"residual_median_m", r.residual_median_m},       {"initial_cost", r.initial_cost},
+      {"residual_median_m", r.residual_median_m},       {"ground_tilt_rms_deg", r.ground_tilt_rms_deg},
+      {"initial_cost", r.initial_cost},
       {"final_cost", r.final_cost},                     {"solve_ms", r.solve_ms}};
   for (const auto& [key, value] : numbers) {
     json->Key(key);

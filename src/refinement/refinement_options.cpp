@@ -42,6 +42,7 @@ bool RefinementOptions::IsValid(std::string* error) const {
   if (!Positive(max_range_m)) return Fail(error, "max_range_m: must be positive");
   if (min_frames < 1) return Fail(error, "min_frames: must be at least 1");
   if (!Positive(point_sigma_m)) return Fail(error, "point_sigma_m: must be positive");
+  if (!Positive(point_sigma_range_m)) return Fail(error, "point_sigma_range_m: must be positive");
   if (!Positive(loss_scale)) return Fail(error, "loss_scale: must be positive");
   if (!Positive(terrain_tilt_sigma_deg) || terrain_tilt_sigma_deg > 45.0) {
     return Fail(error, "terrain_tilt_sigma_deg: must be in (0, 45] degrees");

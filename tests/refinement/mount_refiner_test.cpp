@@ -57,9 +57,9 @@ double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
 }
 
 MountRefinementResult SolveFrames(const RefinementOptions& options, const Eigen::Isometry3d& configured, int frames,
-                                  double outlier_share = 0.0, double body_height = 0.4) {
+                                  double outlier_share = 0.0, double body_height = 0.4, double terrain_deg = 0.5) {
   std::mt19937 rng(7);
-  std::normal_distribution<double> terrain(0.0, 0.5);
+  std::normal_distribution<double> terrain(0.0, terrain_deg);
   MountRefiner refiner(options, configured);
   for (int i = 0; i < frames; ++i) refiner.AddFrame(Frame(rng, terrain(rng), 0.02, outlier_share, body_height));
   return refiner.Solve();
@@ -137,6 +137,23 @@ TEST(MountRefiner, TightPriorIsNotBetterDetermined) {
   // The prior dominates: the posterior sigma is close to the prior's.
   EXPECT_GT(r.pitch_sigma_deg, 0.9 * options.prior_sigma_deg);
   EXPECT_LE(r.pitch_sigma_deg, options.prior_sigma_deg * 1.0001);
+}
+
+TEST(MountRefiner, GroundRougherThanTheTiltPriorIsNotApplied) {
+  // The ground ahead tilts by 4 deg (1 sigma) from frame to frame; the model allows 1 deg.
+  RefinementOptions options;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  const MountRefinementResult r = SolveFrames(options, configured, 30, 0.0, 0.4, 4.0);
+  EXPECT_EQ(r.status, RefinementStatus::kTerrainTooRough) << r.BriefReport();
+  EXPECT_GT(r.ground_tilt_rms_deg, std::sqrt(2.0) * options.terrain_tilt_sigma_deg);
+  EXPECT_NE(r.message.find("not flat enough"), std::string::npos) << r.message;
+  EXPECT_TRUE(r.body_T_camera_refined.isApprox(configured));
+  // Told that the terrain is that rough, the same data is accepted, with a wider sigma.
+  options.terrain_tilt_sigma_deg = 4.0;
+  const MountRefinementResult wide = SolveFrames(options, configured, 30, 0.0, 0.4, 4.0);
+  EXPECT_EQ(wide.status, RefinementStatus::kDetermined) << wide.BriefReport();
+  EXPECT_GT(wide.roll_sigma_deg, 0.5);
+  EXPECT_LT(wide.ground_tilt_rms_deg, std::sqrt(2.0) * options.terrain_tilt_sigma_deg);
 }
 
 TEST(MountRefiner, SlidingWindowDropsTheOldestFrame) {

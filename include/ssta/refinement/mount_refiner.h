@@ -18,6 +18,10 @@ enum class RefinementStatus {
   kDetermined,          ///< solved and better determined than the prior: apply it
   kTooFewFrames,        ///< fewer than min_frames usable frames: not determined, not solved
   kNotBetterThanPrior,  ///< solved, but the posterior sigma is not below max_sigma_ratio * prior
+  /// solved, but the frames' ground planes scatter about the reference more than
+  /// terrain_tilt_sigma_deg allows (RMS tilt > sqrt(2) sigma): the ground is not flat enough
+  /// for the model, and the estimate would be biased by the terrain (e.g. on rolling hills)
+  kTerrainTooRough,
   kFailed,              ///< the solver or the covariance failed (message says why)
 };
 
@@ -61,10 +65,13 @@ struct MountRefinementResult {
   int frames_used = 0;
   int points_used = 0;
   /// Robust-loss statistics over the ground points at the solution: points outside the loss's
-  /// quadratic zone (|r| > loss_scale * point_sigma_m), RMS and median |point-to-plane| [m].
+  /// quadratic zone (|distance| > loss_scale * the point's sigma), RMS and median |point-to-plane| [m].
   int outlier_points = 0;
   double residual_rms_m = 0.0;
   double residual_median_m = 0.0;
+  /// RMS over the frames of the angle between each frame's ground normal and the reference at
+  /// the solution [deg]; compared with sqrt(2) * terrain_tilt_sigma_deg.
+  double ground_tilt_rms_deg = 0.0;
   double initial_cost = 0.0, final_cost = 0.0;
   int iterations = 0;
   double solve_ms = 0.0;  ///< solve + covariance wall time [ms]
@@ -85,7 +92,7 @@ struct MountRefinementResult {
 /// p_b = R_corr * R_BS * p_c + t_BS + (0, 0, dh). Frame i's ground is the plane n_i . p + d_i = 0
 /// with n_i the reference direction (body z, or up_body_i) tilted by a per-frame 2-DoF rotation
 /// under a prior of terrain_tilt_sigma_deg, and d_i the body origin's height above it (a prior
-/// at body_height_m when known). Residuals: (n_i . p_b + d_i) / point_sigma_m under the robust
+/// at body_height_m when known). Residuals: (n_i . p_b + d_i) / sigma(range) under the robust
 /// loss; priors on R_corr (prior_sigma_deg) and dh. The tilt priors are what make the
 /// correction observable: the ground seen by the camera is, on average, parallel to the plane
 /// under the wheels.

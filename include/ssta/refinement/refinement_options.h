@@ -43,10 +43,15 @@ struct RefinementOptions {
   double max_range_m = 8.0;
   /// Fewer frames than this with a ground plane: the correction is reported "not determined".
   int min_frames = 5;
-  /// Standard deviation of a ground point about its frame's plane (stereo noise + texture) [m].
+  /// Standard deviation of a ground point about its frame's plane (stereo noise + texture) up
+  /// to point_sigma_range_m from cam0 [m].
   double point_sigma_m = 0.03;
+  /// Beyond this range the sigma grows in proportion to the range: a disparity error moves a
+  /// ground point along its ray, which grazes the ground, so its height error grows about
+  /// linearly with range (depth error ~ range^2, times the grazing angle ~ 1 / range) [m].
+  double point_sigma_range_m = 3.0;
   /// Robust loss on the point residuals, and where it leaves the quadratic, in multiples of
-  /// point_sigma_m.
+  /// each point's sigma.
   RobustLoss robust_loss = RobustLoss::kHuber;
   double loss_scale = 2.0;
   /// Expected direction of the ground normal in the body frame; see GroundReference.
