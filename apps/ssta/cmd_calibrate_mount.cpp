@@ -73,11 +73,13 @@ void RegisterCalibrateMount(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "calibrate-mount", "Refine cam0's mount pitch and roll from the ground seen over a sequence (Ceres)");
   cmd->footer(
-      "The dominant ground plane of each frame is taken as parallel to the plane under the wheels;\n"
-      "the mount rotation that makes this true over all frames is estimated with its 1-sigma\n"
-      "uncertainty. Yaw is not observable from the ground and is kept. Writes the refined cam0\n"
-      "sensor.yaml and the cam1 one that follows from the rig only when the estimate is better\n"
-      "determined than its prior; otherwise exits with status 2 and writes nothing but --report.");
+      "The dominant ground plane of each frame is taken as parallel, on average, to the plane under\n"
+      "the wheels; the mount rotation that makes this true over all frames is estimated with its\n"
+      "1-sigma uncertainty. Yaw is not observable from the ground and is kept. Drive on flat or\n"
+      "uniformly sloped ground. Writes the refined cam0 sensor.yaml and the cam1 one that follows\n"
+      "from the rig only when the estimate is determined; when there are too few frames, the result\n"
+      "is not better determined than its prior, or the terrain is too rough for the model, it exits\n"
+      "with status 2 and writes nothing but --report. See docs/mount_calibration.md.");
   cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
   cmd->add_option("--out", args->out, "refined cam0 sensor.yaml to write (cam1 goes beside it as cam1_sensor.yaml)");
   cmd->add_option("--out-cam1", args->out_cam1, "with --out: where the cam1 sensor.yaml goes instead");
