@@ -16,7 +16,7 @@ namespace ssta::cli {
 namespace {
 
 struct CalibrateMountArgs {
-  std::string sequence, out, out_cam1, out_dir, report;
+  std::string sequence, out, out_cam1, out_dir, report, ground_reference = "body";
   std::vector<std::string> config;
   MountCalibrationOptions options;
   bool quiet = false;
@@ -87,10 +87,15 @@ void RegisterCalibrateMount(CLI::App& app) {
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
   cmd->add_option("--max-frames", args->options.max_frames, "use at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--ground-reference", args->ground_reference,
+                  "body: the ground is parallel to the plane under the wheels (body x-y; a z-up body); "
+                  "gravity: the ground is level, its normal is up from the IMU-corrected pose")
+      ->check(CLI::IsMember({"body", "gravity"}));
   cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");
   cmd->callback([args] {
     std::string error;
+    args->options.refinement.ground_reference = ParseGroundReference(args->ground_reference);
     if (!args->options.IsValid(&error)) throw Error("--" + error);
     Run(*args);
   });

@@ -24,22 +24,26 @@ constexpr double kRadToDeg = 1.0 / kDegToRad;
 /// its tilt (about body x, y) [rad] and the body origin's height above it [m]. The plane is one
 /// block so that the frames form an independent set for the Schur complement.
 struct GroundPointResidual {
-  GroundPointResidual(const Eigen::Vector3d& body_q, const Eigen::Vector3d& body_t, const Eigen::Vector3d& reference,
-                      double sigma)
-      : q(body_q), t(body_t), n_ref(reference), inverse_sigma(1.0 / sigma) {}
+  GroundPointResidual(const Eigen::Vector3d& body_q, const Eigen::Vector3d& body_t, const Eigen::Matrix<double, 3, 2>& up_axes,
+                      const Eigen::Vector3d& reference, const Eigen::Matrix<double, 3, 2>& reference_axes, double sigma)
+      : q(body_q), t(body_t), correction_axes(up_axes), n_ref(reference), tilt_axes(reference_axes),
+        inverse_sigma(1.0 / sigma) {}
 
   template <typename T>
   bool operator()(const T* correction, const T* height, const T* plane, T* residual) const {
     const T* tilt = plane;
     const T* offset = plane + 2;
-    const T w[3] = {correction[0], correction[1], T(0)};
+    T w[3], tw[3];
+    for (int k = 0; k < 3; ++k) {
+      w[k] = correction[0] * correction_axes(k, 0) + correction[1] * correction_axes(k, 1);
+      tw[k] = tilt[0] * tilt_axes(k, 0) + tilt[1] * tilt_axes(k, 1);
+    }
     const T q_in[3] = {T(q.x()), T(q.y()), T(q.z())};
     T p[3];
     ceres::AngleAxisRotatePoint(w, q_in, p);
     p[0] += T(t.x());
     p[1] += T(t.y());
     p[2] += T(t.z()) + height[0];
-    const T tw[3] = {tilt[0], tilt[1], T(0)};
     const T n_in[3] = {T(n_ref.x()), T(n_ref.y()), T(n_ref.z())};
     T n[3];
     ceres::AngleAxisRotatePoint(tw, n_in, n);
@@ -47,9 +51,11 @@ struct GroundPointResidual {
     return true;
   }
 
-  Eigen::Vector3d q;      // R_BS * p_camera (initial mount rotation applied)
-  Eigen::Vector3d t;      // t_BS
-  Eigen::Vector3d n_ref;  // reference ground normal in the body
+  Eigen::Vector3d q;                           // R_BS * p_camera (initial mount rotation applied)
+  Eigen::Vector3d t;                           // t_BS
+  Eigen::Matrix<double, 3, 2> correction_axes; // body axes of the correction's two angles
+  Eigen::Vector3d n_ref;                       // reference ground normal in the body
+  Eigen::Matrix<double, 3, 2> tilt_axes;       // axes of the frame's two tilt angles
   double inverse_sigma;
 };
 
@@ -84,8 +90,20 @@ Eigen::Vector3d ReferenceNormal(const GroundEvidence& frame, GroundReference ref
   return reference == GroundReference::kBody ? Eigen::Vector3d::UnitZ() : frame.up_body.normalized();
 }
 
-Eigen::Matrix3d TiltRotation(double about_x, double about_y) {
-  const Eigen::Vector3d w(about_x, about_y, 0.0);
+/// Two unit axes perpendicular to the unit vector `up`, the rotations about which tilt it: for
+/// up = body z they are body x (roll) and body y (pitch); otherwise body x (or y, when x is
+/// nearly along up) made perpendicular to up, and up cross that.
+Eigen::Matrix<double, 3, 2> TiltAxes(const Eigen::Vector3d& up) {
+  const Eigen::Vector3d seed = std::abs(up.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  Eigen::Matrix<double, 3, 2> axes;
+  axes.col(0) = (seed - seed.dot(up) * up).normalized();
+  axes.col(1) = up.cross(axes.col(0));
+  return axes;
+}
+
+/// The rotation by angles (a, b) [rad] about the two axes: AngleAxis of a * axis0 + b * axis1.
+Eigen::Matrix3d TiltRotation(const Eigen::Matrix<double, 3, 2>& axes, double a, double b) {
+  const Eigen::Vector3d w = a * axes.col(0) + b * axes.col(1);
   const double angle = w.norm();
   if (angle == 0.0) return Eigen::Matrix3d::Identity();
   return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
@@ -151,7 +169,12 @@ MountRefinementResult MountRefiner::Solve() const {
 
   const Eigen::Matrix3d body_R_camera = body_T_camera_.linear();
   const Eigen::Vector3d body_t_camera = body_T_camera_.translation();
-  double correction[2] = {0.0, 0.0};  // about body x (roll), body y (pitch) [rad]
+  // The correction tilts about two axes perpendicular to the window's mean reference normal
+  // (body x and y for the body reference): rotation about the ground normal is unobservable.
+  Eigen::Vector3d mean_up = Eigen::Vector3d::Zero();
+  for (const GroundEvidence& f : window_) mean_up += ReferenceNormal(f, options_.ground_reference);
+  const Eigen::Matrix<double, 3, 2> correction_axes = TiltAxes(mean_up.normalized());
+  double correction[2] = {0.0, 0.0};  // about correction_axes: roll, pitch [rad]
   double height[1] = {0.0};
   std::vector<FramePlane> blocks(window_.size());
 
@@ -161,6 +184,7 @@ MountRefinementResult MountRefiner::Solve() const {
   for (std::size_t i = 0; i < window_.size(); ++i) {
     const GroundEvidence& frame = window_[i];
     const Eigen::Vector3d n_ref = ReferenceNormal(frame, options_.ground_reference);
+    const Eigen::Matrix<double, 3, 2> tilt_axes = TiltAxes(n_ref);
     // Start each plane through the points' mean along the reference normal.
     double mean = 0.0;
     for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
@@ -170,8 +194,8 @@ MountRefinementResult MountRefiner::Solve() const {
                                       ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
                                       : new ceres::CauchyLoss(loss_scale);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
-                                   new GroundPointResidual(body_R_camera * p, body_t_camera, n_ref,
-                                                           PointSigma(p, options_))),
+                                   new GroundPointResidual(body_R_camera * p, body_t_camera, correction_axes,
+                                                           n_ref, tilt_axes, PointSigma(p, options_))),
                                loss, correction, height, blocks[i].values);
     }
     problem.AddResidualBlock(
@@ -207,7 +231,7 @@ MountRefinementResult MountRefiner::Solve() const {
   result.roll_correction_deg = correction[0] * kRadToDeg;
   result.pitch_correction_deg = correction[1] * kRadToDeg;
   result.height_correction_m = options_.estimate_height ? height[0] : 0.0;
-  result.body_R_correction = TiltRotation(correction[0], correction[1]);
+  result.body_R_correction = TiltRotation(correction_axes, correction[0], correction[1]);
 
   // Per-frame planes and robust statistics at the solution [m].
   std::vector<double> distances;
@@ -216,7 +240,7 @@ MountRefinementResult MountRefiner::Solve() const {
   for (std::size_t i = 0; i < window_.size(); ++i) {
     const GroundEvidence& frame = window_[i];
     const Eigen::Vector3d n_ref = ReferenceNormal(frame, options_.ground_reference);
-    const Eigen::Vector3d n = TiltRotation(blocks[i].tilt()[0], blocks[i].tilt()[1]) * n_ref;
+    const Eigen::Vector3d n = TiltRotation(TiltAxes(n_ref), blocks[i].tilt()[0], blocks[i].tilt()[1]) * n_ref;
     for (const Eigen::Vector3d& p : frame.camera_points) {
       const Eigen::Vector3d p_body =
           result.body_R_correction * (body_R_camera * p) + body_t_camera + Eigen::Vector3d(0, 0, height[0]);

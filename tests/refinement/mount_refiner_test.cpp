@@ -156,6 +156,30 @@ TEST(MountRefiner, GroundRougherThanTheTiltPriorIsNotApplied) {
   EXPECT_LT(wide.ground_tilt_rms_deg, std::sqrt(2.0) * options.terrain_tilt_sigma_deg);
 }
 
+TEST(MountRefiner, GravityReferenceWorksInABodyFrameWhoseXIsUp) {
+  // EuRoC's body (its IMU) has x up: the same world seen through body' = R * body.
+  const Eigen::Matrix3d body2_R_body = Eigen::AngleAxisd(0.5 * 3.14159265358979323846, Eigen::Vector3d::UnitY())
+                                           .toRotationMatrix();
+  ASSERT_TRUE((body2_R_body * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX()));
+  auto in_body2 = [&](Eigen::Isometry3d m) {
+    m.linear() = body2_R_body * m.linear();
+    m.translation() = body2_R_body * m.translation();
+    return m;
+  };
+  RefinementOptions options;
+  options.ground_reference = GroundReference::kGravity;
+  MountRefiner refiner(options, in_body2(WrongMount(3.0, 1.5)));
+  std::mt19937 rng(11);
+  for (int i = 0; i < 30; ++i) {
+    GroundEvidence e = Frame(rng, 0.0, 0.02, 0.0, 0.4);
+    e.up_body = body2_R_body * Eigen::Vector3d::UnitZ();
+    refiner.AddFrame(e);
+  }
+  const MountRefinementResult r = refiner.Solve();
+  ASSERT_TRUE(r.applied()) << r.BriefReport();
+  EXPECT_LT(AngleDeg(in_body2(TrueMount()).linear(), r.body_T_camera_refined.linear()), 0.3) << r.BriefReport();
+}
+
 TEST(MountRefiner, SlidingWindowDropsTheOldestFrame) {
   RefinementOptions options;
   MountRefiner refiner(options, WrongMount(1.0, 0.0));

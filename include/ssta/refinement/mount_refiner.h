@@ -37,12 +37,14 @@ struct FrameGroundEstimate {
 
 /// A mount refinement's estimate, uncertainty and statistics.
 ///
-/// The correction is the rotation `body_R_correction` = AngleAxis of the vector
-/// (roll, pitch, 0) [rad] about BODY axes (x forward, y left): the smallest rotation that moves
-/// the ground normal, with no yaw. The refined mount is
-/// `body_T_camera_refined = [body_R_correction * R, t + (0, 0, height_correction_m)]` where
-/// `[R, t]` = `body_T_camera_initial`. Positive pitch rotates the camera about body y (nose
-/// down for a forward-looking camera), positive roll about body x.
+/// The correction is the rotation `body_R_correction` = AngleAxis of roll * a_roll +
+/// pitch * a_pitch [rad], two body axes perpendicular to the reference up direction: body x
+/// (forward) and body y (left) for the default body reference on a REP-103 body (z up); in
+/// general body x (or y) made perpendicular to up, and up cross that. It is the smallest
+/// rotation that tilts the ground normal, with no rotation about it (unobservable). The refined
+/// mount is `body_T_camera_refined = [body_R_correction * R, t + (0, 0, height_correction_m)]`
+/// where `[R, t]` = `body_T_camera_initial`. Positive pitch rotates the camera about body y
+/// (nose down for a forward-looking camera), positive roll about body x.
 struct MountRefinementResult {
   RefinementStatus status = RefinementStatus::kTooFewFrames;
   std::string message;  ///< one sentence for people: why this status

@@ -30,7 +30,8 @@ RobustLoss ParseRobustLoss(const std::string& name);
 std::string RobustLossName(RobustLoss loss);
 
 /// YAML section `refinement`: the estimation of a correction to cam0's mount rotation (pitch
-/// and roll about body axes; yaw is unobservable from the ground and held at zero) and,
+/// and roll about body axes perpendicular to up; rotation about up is unobservable from the
+/// ground and held at zero) and,
 /// optionally, of the camera's height, from the dominant ground planes of many frames.
 /// Angles in degrees as in the config files, lengths in metres.
 struct RefinementOptions {
