@@ -317,14 +317,19 @@ std::string MountRefinementResult::BriefReport() const {
   std::ostringstream r;
   r << std::fixed << std::setprecision(3);
   r << "mount refinement: " << RefinementStatusName(status) << " (" << message << ")\n";
-  r << "  pitch correction " << pitch_correction_deg << " +- " << pitch_sigma_deg << " deg, roll correction "
-    << roll_correction_deg << " +- " << roll_sigma_deg << " deg (1 sigma; prior " << prior_sigma_deg << " deg)";
-  if (std::isfinite(height_sigma_m)) r << ", height " << height_correction_m << " +- " << height_sigma_m << " m";
-  r << "\n  evidence: " << frames_used << " frames, " << points_used << " ground points; residual rms "
-    << residual_rms_m << " m, median " << residual_median_m << " m, " << outlier_points
-    << " beyond the loss scale; ground tilt rms " << ground_tilt_rms_deg << " deg\n";
-  r << "  solver: cost " << initial_cost << " -> " << final_cost << " in " << iterations << " iterations, "
-    << solve_ms << " ms\n";
+  const bool solved = status != RefinementStatus::kTooFewFrames;
+  if (solved) {
+    r << "  pitch correction " << pitch_correction_deg << " +- " << pitch_sigma_deg << " deg, roll correction "
+      << roll_correction_deg << " +- " << roll_sigma_deg << " deg (1 sigma; prior " << prior_sigma_deg << " deg)";
+    if (std::isfinite(height_sigma_m)) r << ", height " << height_correction_m << " +- " << height_sigma_m << " m";
+    r << "\n  evidence: " << frames_used << " frames, " << points_used << " ground points; residual rms "
+      << residual_rms_m << " m, median " << residual_median_m << " m, " << outlier_points
+      << " beyond the loss scale; ground tilt rms " << ground_tilt_rms_deg << " deg\n";
+    r << "  solver: cost " << initial_cost << " -> " << final_cost << " in " << iterations << " iterations, "
+      << solve_ms << " ms\n";
+  } else {
+    r << "  evidence: " << frames_used << " frames, " << points_used << " ground points; not solved\n";
+  }
   const Eigen::Matrix4d m = body_T_camera_refined.matrix();
   r << "  T_BS (cam0" << (applied() ? ", refined" : ", unchanged") << "):\n" << std::setprecision(6);
   for (int i = 0; i < 4; ++i) {
