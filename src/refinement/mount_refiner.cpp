@@ -181,6 +181,10 @@ MountRefinementResult MountRefiner::Solve() const {
   ceres::Problem problem;
   auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
   const double loss_scale = options_.loss_scale;
+  // One loss shared by every point residual; the problem deletes it once.
+  ceres::LossFunction* loss = options_.robust_loss == RobustLoss::kHuber
+                                  ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
+                                  : new ceres::CauchyLoss(loss_scale);
   for (std::size_t i = 0; i < window_.size(); ++i) {
     const GroundEvidence& frame = window_[i];
     const Eigen::Vector3d n_ref = ReferenceNormal(frame, options_.ground_reference);
@@ -190,9 +194,6 @@ MountRefinementResult MountRefiner::Solve() const {
     for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
     blocks[i].offset() = -mean / static_cast<double>(frame.camera_points.size());
     for (const Eigen::Vector3d& p : frame.camera_points) {
-      ceres::LossFunction* loss = options_.robust_loss == RobustLoss::kHuber
-                                      ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
-                                      : new ceres::CauchyLoss(loss_scale);
       problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
                                    new GroundPointResidual(body_R_camera * p, body_t_camera, correction_axes,
                                                            n_ref, tilt_axes, PointSigma(p, options_))),
