@@ -15,5 +15,6 @@ void RegisterQuery(CLI::App& app);
 void RegisterExport(CLI::App& app);
 void RegisterCalibrateStereo(CLI::App& app);
 void RegisterBench(CLI::App& app);
+void RegisterCalibrateMount(CLI::App& app);
 
 }  // namespace ssta::cli

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterExport(app);
   ssta::cli::RegisterEval(app);
   ssta::cli::RegisterCalibrateStereo(app);
+  ssta::cli::RegisterCalibrateMount(app);
   ssta::cli::RegisterBench(app);
   try {
     app.parse(argc, argv);

@@ -1,0 +1,104 @@
+// ssta calibrate-mount: refine cam0's mount rotation (pitch, roll) from the ground planes of a
+// sequence and write the corrected sensor.yaml files.
+
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "commands.h"
+#include "config_loading.h"
+#include "progress.h"
+#include "ssta/io/file_util.h"
+#include "ssta/refinement/mount_calibration.h"
+
+namespace ssta::cli {
+namespace {
+
+struct CalibrateMountArgs {
+  std::string sequence, out, out_cam1, out_dir, report, ground_reference = "body";
+  std::vector<std::string> config;
+  MountCalibrationOptions options;
+  bool quiet = false;
+};
+
+/// Where the two sensor.yaml files go: --out-dir DIR gives DIR/cam0/sensor.yaml and
+/// DIR/cam1/sensor.yaml (a drop-in for a sequence folder); --out FILE gives FILE for cam0 and
+/// --out-cam1, or cam1_sensor.yaml beside FILE, for cam1.
+std::pair<std::string, std::string> OutputPaths(const CalibrateMountArgs& a) {
+  namespace fs = std::filesystem;
+  if (!a.out_dir.empty()) {
+    return {(fs::path(a.out_dir) / "cam0" / "sensor.yaml").string(), (fs::path(a.out_dir) / "cam1" / "sensor.yaml").string()};
+  }
+  const fs::path cam1 = a.out_cam1.empty() ? fs::path(a.out).parent_path() / "cam1_sensor.yaml" : fs::path(a.out_cam1);
+  if (fs::path(a.out).lexically_normal() == cam1.lexically_normal()) {
+    throw Error("--out: " + a.out + " is also where cam1 would go; give --out-cam1");
+  }
+  return {a.out, cam1.string()};
+}
+
+void Run(const CalibrateMountArgs& a) {
+  if (a.out.empty() == a.out_dir.empty()) throw Error("--out: give exactly one of --out FILE and --out-dir DIR");
+  if (!a.out_cam1.empty() && a.out.empty()) throw Error("--out-cam1: only with --out");
+  const auto [cam0_path, cam1_path] = OutputPaths(a);
+  const Sequence sequence = Sequence::Open(a.sequence);
+  const Config config = LoadLayeredConfig(&sequence, a.config);
+  ProgressLine progress("calibrate-mount", !a.quiet);
+  const MountCalibration result = CalibrateMount(sequence, config, a.options,
+                                                 [&](int done, int total) { progress.Update(done, total); });
+  progress.Finish();
+  if (!a.quiet) std::cout << result.BriefReport();
+  if (!a.report.empty()) WriteTextAtomically(a.report, result.Json());
+  if (!result.refinement.applied()) {
+    throw Error(a.sequence + ": mount " + RefinementStatusName(result.refinement.status) + ": " +
+                result.refinement.message + "; nothing written");
+  }
+  for (const auto& path : {cam0_path, cam1_path}) {
+    const auto parent = std::filesystem::path(path).parent_path();
+    if (!parent.empty()) std::filesystem::create_directories(parent);
+  }
+  std::ostringstream note;
+  note << std::fixed << std::setprecision(3) << "ssta calibrate-mount: pitch " << result.refinement.pitch_correction_deg
+       << " +- " << result.refinement.pitch_sigma_deg << " deg, roll " << result.refinement.roll_correction_deg << " +- "
+       << result.refinement.roll_sigma_deg << " deg from " << result.refinement.frames_used << " frames of " << a.sequence;
+  SaveCameraCalibration(result.refined.left, cam0_path, note.str() + " (cam0)");
+  SaveCameraCalibration(result.refined.right, cam1_path, note.str() + " (cam1, from the rig)");
+  if (!a.quiet) std::cout << "wrote " << cam0_path << " and " << cam1_path << "\n";
+}
+
+}  // namespace
+
+void RegisterCalibrateMount(CLI::App& app) {
+  auto args = std::make_shared<CalibrateMountArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "calibrate-mount", "Refine cam0's mount pitch and roll from the ground seen over a sequence (Ceres)");
+  cmd->footer(
+      "The dominant ground plane of each frame is taken as parallel, on average, to the plane under\n"
+      "the wheels; the mount rotation that makes this true over all frames is estimated with its\n"
+      "1-sigma uncertainty. Yaw is not observable from the ground and is kept. Drive on flat or\n"
+      "uniformly sloped ground. Writes the refined cam0 sensor.yaml and the cam1 one that follows\n"
+      "from the rig only when the estimate is determined; when there are too few frames, the result\n"
+      "is not better determined than its prior, or the terrain is too rough for the model, it exits\n"
+      "with status 2 and writes nothing but --report. See docs/mount_calibration.md.");
+  cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
+  cmd->add_option("--out", args->out, "refined cam0 sensor.yaml to write (cam1 goes beside it as cam1_sensor.yaml)");
+  cmd->add_option("--out-cam1", args->out_cam1, "with --out: where the cam1 sensor.yaml goes instead");
+  cmd->add_option("--out-dir", args->out_dir, "instead of --out: write DIR/cam0/sensor.yaml and DIR/cam1/sensor.yaml");
+  cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
+  cmd->add_option("--max-frames", args->options.max_frames, "use at most N frames (0: all)");
+  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--ground-reference", args->ground_reference,
+                  "body: the ground is parallel to the plane under the wheels (body x-y; a z-up body); "
+                  "gravity: the ground is level, its normal is up from the IMU-corrected pose")
+      ->check(CLI::IsMember({"body", "gravity"}));
+  cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON");
+  cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");
+  cmd->callback([args] {
+    std::string error;
+    args->options.refinement.ground_reference = ParseGroundReference(args->ground_reference);
+    if (!args->options.IsValid(&error)) throw Error("--" + error);
+    Run(*args);
+  });
+}
+
+}  // namespace ssta::cli

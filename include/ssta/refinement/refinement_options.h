@@ -1,0 +1,86 @@
+#pragma once
+
+#include <string>
+
+namespace ssta {
+
+/// Which direction the ground normal is expected along, in the body frame (YAML
+/// `refinement.ground_reference`).
+enum class GroundReference {
+  /// "body": the vehicle rests on the ground, so the ground near it is the plane under the
+  /// wheels, the body's x-y plane (normal = body z). Needs no IMU and holds on a uniform slope.
+  kBody,
+  /// "gravity": the ground is level in the world, so its normal in the body is up_body from the
+  /// IMU-corrected pose (GravityProvider::UpInBody). Better when the body rocks on rough terrain
+  /// over level ground.
+  kGravity,
+};
+
+/// Parses "body" or "gravity"; throws ssta::Error naming `refinement.ground_reference` otherwise.
+GroundReference ParseGroundReference(const std::string& name);
+std::string GroundReferenceName(GroundReference reference);
+
+/// Robust loss on the ground-point residuals (YAML `refinement.robust_loss`).
+enum class RobustLoss {
+  kHuber,   ///< "huber": quadratic inside loss_scale, linear outside
+  kCauchy,  ///< "cauchy": log(1 + s^2); far outliers have almost no pull
+};
+
+RobustLoss ParseRobustLoss(const std::string& name);
+std::string RobustLossName(RobustLoss loss);
+
+/// YAML section `refinement`: the estimation of a correction to cam0's mount rotation (pitch
+/// and roll about body axes perpendicular to up; rotation about up is unobservable from the
+/// ground and held at zero) and,
+/// optionally, of the camera's height, from the dominant ground planes of many frames.
+/// Angles in degrees as in the config files, lengths in metres.
+struct RefinementOptions {
+  /// Ground points kept per frame after thinning (evenly spaced over the segment) [points].
+  int points_per_frame = 300;
+  /// A frame with fewer usable ground points than this is skipped [points].
+  int min_points_per_frame = 50;
+  /// Ground points farther than this from cam0 are not used (stereo depth error grows with the
+  /// square of the range) [m].
+  double max_range_m = 8.0;
+  /// Fewer frames than this with a ground plane: the correction is reported "not determined".
+  int min_frames = 5;
+  /// Standard deviation of a ground point about its frame's plane (stereo noise + texture) up
+  /// to point_sigma_range_m from cam0 [m].
+  double point_sigma_m = 0.03;
+  /// Beyond this range the sigma grows in proportion to the range: a disparity error moves a
+  /// ground point along its ray, which grazes the ground, so its height error grows about
+  /// linearly with range (depth error ~ range^2, times the grazing angle ~ 1 / range) [m].
+  double point_sigma_range_m = 3.0;
+  /// Robust loss on the point residuals, and where it leaves the quadratic, in multiples of
+  /// each point's sigma.
+  RobustLoss robust_loss = RobustLoss::kHuber;
+  double loss_scale = 2.0;
+  /// Expected direction of the ground normal in the body frame; see GroundReference.
+  GroundReference ground_reference = GroundReference::kBody;
+  /// How far each frame's ground plane may tilt away from the reference (terrain, suspension,
+  /// IMU error): 1-sigma of the prior on the per-frame tilt [deg].
+  double terrain_tilt_sigma_deg = 1.0;
+  /// Prior on the mount correction: zero with this 1-sigma per angle [deg].
+  double prior_sigma_deg = 5.0;
+  /// The correction is applied only when the posterior 1-sigma of pitch and of roll is at most
+  /// this fraction of prior_sigma_deg; otherwise the data added too little to the prior
+  /// ("not better determined than its prior") [ratio in (0, 1)].
+  double max_sigma_ratio = 0.5;
+  /// Height of the body origin above the wheel-contact plane [m]; negative: unknown. When
+  /// known, each frame's ground plane is expected this far below the body origin.
+  double body_height_m = -1.0;
+  /// 1-sigma of that per-frame ground height about body_height_m (terrain) [m].
+  double terrain_height_sigma_m = 0.05;
+  /// Also estimate a correction to cam0's height (body z of its T_BS translation). Needs
+  /// body_height_m; otherwise the height is indistinguishable from the ground's offset.
+  bool estimate_height = false;
+  /// Prior 1-sigma on the height correction [m].
+  double height_prior_sigma_m = 0.10;
+  /// Gauss-Newton / Levenberg-Marquardt iteration limit.
+  int max_iterations = 50;
+
+  /// Checks every field; the message starts with the key name ("max_range_m: ...").
+  bool IsValid(std::string* error) const;
+};
+
+}  // namespace ssta

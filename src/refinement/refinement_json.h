@@ -1,0 +1,17 @@
+#pragma once
+
+// Private helper: writes a MountRefinementResult into a JSON document being built, so that the
+// offline calibration can nest it in its own report.
+
+#include "core/json_writer.h"
+#include "ssta/refinement/mount_refiner.h"
+
+namespace ssta::internal {
+
+/// Writes `result` as one JSON object value (the caller has written its key, if any).
+void WriteRefinementJson(const MountRefinementResult& result, JsonWriter* json);
+
+/// Writes a rigid transform as a 4x4 row-major array of rows.
+void WriteTransformJson(const Eigen::Isometry3d& transform, JsonWriter* json);
+
+}  // namespace ssta::internal

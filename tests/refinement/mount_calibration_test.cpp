@@ -1,0 +1,182 @@
+// calibrate-mount on rendered sequences: a sensor.yaml with an injected mount error (pitch
+// +3 deg, roll +1.5 deg) against the truth in gt/extrinsics.yaml, an error-free sequence, the
+// degenerate cases, and the command line's files loaded back.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+
+#include "cli_runner.h"
+#include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
+#include "ssta/refinement/mount_calibration.h"
+#include "ssta/synth/sequence_synthesizer.h"
+#include "temp_dir.h"
+
+namespace ssta {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr int kFrames = 12;
+
+/// Small, quick yard: 320x240 with the default field of view.
+synth::SynthOptions SmallYard(double pitch_error_deg, double roll_error_deg) {
+  synth::SynthOptions o;
+  o.scene = "yard";
+  o.frames = kFrames;
+  o.seed = 3;
+  o.rig.width = 320;
+  o.rig.height = 240;
+  o.rig.focal_px = 210;
+  o.grid_resolution_m = 0.25;
+  o.faults.mount_pitch_error_deg = pitch_error_deg;
+  o.faults.mount_roll_error_deg = roll_error_deg;
+  return o;
+}
+
+/// Renders each sequence on first use, once for the whole suite (CTest runs every case in its
+/// own process, so a case renders only what it reads).
+class MountCalibrationTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { dir_ = std::make_unique<testing::TempDir>(); }
+  static void TearDownTestSuite() { dir_.reset(); }
+  static std::string Faulty() { return Rendered("faulty", 3.0, 1.5); }
+  static std::string Clean() { return Rendered("clean", 0.0, 0.0); }
+
+ private:
+  static std::string Rendered(const std::string& name, double pitch_error_deg, double roll_error_deg) {
+    const std::string path = *dir_ / name;
+    if (!fs::exists(path + "/gt/extrinsics.yaml")) {
+      synth::WriteSyntheticSequence(SmallYard(pitch_error_deg, roll_error_deg), path);
+    }
+    return path;
+  }
+  static std::unique_ptr<testing::TempDir> dir_;
+};
+std::unique_ptr<testing::TempDir> MountCalibrationTest::dir_;
+
+double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return Eigen::AngleAxisd(a.transpose() * b).angle() / kDeg;
+}
+
+Eigen::Matrix3d TrueRotation(const std::string& sequence) {
+  return LoadCameraCalibration(sequence + "/gt/extrinsics.yaml").body_T_camera.linear();
+}
+
+TEST_F(MountCalibrationTest, RecoversTheInjectedMountErrorWithinAFifthOfADegree) {
+  const Sequence sequence = Sequence::Open(Faulty());
+  const Eigen::Matrix3d truth = TrueRotation(Faulty());
+  ASSERT_NEAR(AngleDeg(truth, sequence.calibration().left.body_T_camera.linear()), 3.35, 0.05);
+  const MountCalibration c = CalibrateMount(sequence, Config{}, MountCalibrationOptions{});
+  const MountRefinementResult& r = c.refinement;
+  std::cout << c.BriefReport();
+  ASSERT_EQ(r.status, RefinementStatus::kDetermined) << r.message;
+  const double error_deg = AngleDeg(truth, r.body_T_camera_refined.linear());
+  std::cout << "refined vs true cam0 rotation: " << error_deg << " deg\n";
+  EXPECT_LT(error_deg, 0.2) << c.BriefReport();
+  EXPECT_NEAR(r.pitch_correction_deg, -3.0, 0.25);
+  EXPECT_NEAR(r.roll_correction_deg, -1.5, 0.25);
+  EXPECT_GT(r.pitch_sigma_deg, 0.0);
+  EXPECT_LT(r.pitch_sigma_deg, 0.5 * r.prior_sigma_deg);
+  EXPECT_GE(r.frames_used, kFrames - 2);
+  // cam1 follows from the rig: the pair's relative pose is unchanged.
+  EXPECT_TRUE(c.refined.LeftTRight().isApprox(sequence.calibration().LeftTRight(), 1e-9));
+  EXPECT_LT(AngleDeg(truth, c.refined.left.body_T_camera.linear()), 0.2);
+}
+
+TEST_F(MountCalibrationTest, ErrorFreeSequenceNeedsNoCorrection) {
+  const MountCalibration c = CalibrateMount(Sequence::Open(Clean()), Config{}, MountCalibrationOptions{});
+  ASSERT_TRUE(c.refinement.applied()) << c.refinement.message;
+  EXPECT_LT(std::abs(c.refinement.pitch_correction_deg), 0.2) << c.BriefReport();
+  EXPECT_LT(std::abs(c.refinement.roll_correction_deg), 0.2) << c.BriefReport();
+  EXPECT_LT(AngleDeg(TrueRotation(Clean()), c.refined.left.body_T_camera.linear()), 0.2);
+  std::cout << "error-free: pitch " << c.refinement.pitch_correction_deg << " deg, roll "
+            << c.refinement.roll_correction_deg << " deg\n";
+}
+
+TEST_F(MountCalibrationTest, NoUsableGroundPlaneIsAnError) {
+  MountCalibrationOptions options;
+  options.max_frames = 3;
+  options.refinement.max_range_m = 0.3;  // every ground point is farther than this
+  try {
+    CalibrateMount(Sequence::Open(Faulty()), Config{}, options);
+    FAIL() << "no error without ground planes";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("no frame has a usable ground plane"), std::string::npos) << m;
+    EXPECT_NE(m.find(Faulty()), std::string::npos) << m;
+  }
+}
+
+TEST_F(MountCalibrationTest, TooFewFramesAndTightPriorAreReportedAndNotApplied) {
+  const Sequence sequence = Sequence::Open(Faulty());
+  MountCalibrationOptions few;
+  few.max_frames = 2;
+  const MountCalibration a = CalibrateMount(sequence, Config{}, few);
+  EXPECT_EQ(a.refinement.status, RefinementStatus::kTooFewFrames);
+  EXPECT_TRUE(a.refined.left.body_T_camera.isApprox(sequence.calibration().left.body_T_camera));
+
+  MountCalibrationOptions tight;
+  tight.max_frames = 6;
+  tight.refinement.min_frames = 3;
+  tight.refinement.prior_sigma_deg = 0.02;
+  const MountCalibration b = CalibrateMount(sequence, Config{}, tight);
+  EXPECT_EQ(b.refinement.status, RefinementStatus::kNotBetterThanPrior) << b.refinement.message;
+  EXPECT_TRUE(b.refined.left.body_T_camera.isApprox(sequence.calibration().left.body_T_camera));
+  EXPECT_TRUE(b.refined.right.body_T_camera.isApprox(sequence.calibration().right.body_T_camera));
+}
+
+TEST_F(MountCalibrationTest, CliWritesSensorFilesThatOpenAsASequence) {
+  testing::TempDir dir;
+  const std::string report = dir / "report.json";
+  auto r = testing::RunSsta("calibrate-mount --sequence " + Faulty() + " --out-dir " + (dir / "rig") + " --report " +
+                            report + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string json = ReadTextFile(report);
+  for (const char* key : {"\"status\": \"determined\"", "\"pitch_sigma_deg\"", "\"cam1_T_BS\"", "\"skipped\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+
+  // A copy of the sequence with the written calibration opens and carries the truth.
+  const fs::path copy = dir.path() / "copy";
+  fs::copy(Faulty(), copy, fs::copy_options::recursive);
+  for (const char* cam : {"cam0", "cam1"}) {
+    fs::copy_file(dir.path() / "rig" / cam / "sensor.yaml", copy / cam / "sensor.yaml",
+                  fs::copy_options::overwrite_existing);
+  }
+  const Sequence refined = Sequence::Open(copy.string());
+  const Sequence original = Sequence::Open(Faulty());
+  EXPECT_EQ(refined.frames().size(), original.frames().size());
+  EXPECT_LT(AngleDeg(TrueRotation(Faulty()), refined.calibration().left.body_T_camera.linear()), 0.2);
+  EXPECT_TRUE(refined.calibration().LeftTRight().isApprox(original.calibration().LeftTRight(), 1e-9));
+  EXPECT_EQ(refined.calibration().left.fu, original.calibration().left.fu);
+  EXPECT_EQ(refined.calibration().left.width, original.calibration().left.width);
+
+  // --out FILE puts cam1 beside it.
+  r = testing::RunSsta("calibrate-mount --sequence " + Faulty() + " --out " + (dir / "one/cam0_sensor.yaml") + " -q");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const CameraCalibration cam0 = LoadCameraCalibration(dir / "one/cam0_sensor.yaml");
+  const CameraCalibration cam1 = LoadCameraCalibration(dir / "one/cam1_sensor.yaml");
+  EXPECT_TRUE(cam0.body_T_camera.isApprox(refined.calibration().left.body_T_camera, 1e-9));
+  EXPECT_TRUE(cam1.body_T_camera.isApprox(refined.calibration().right.body_T_camera, 1e-9));
+}
+
+TEST_F(MountCalibrationTest, CliWritesNothingWhenNotDetermined) {
+  testing::TempDir dir;
+  auto r = testing::RunSsta("calibrate-mount --sequence " + Faulty() + " --max-frames 2 --out " + (dir / "c0.yaml") +
+                            " --report " + (dir / "r.json") + " -q");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("too_few_frames"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "c0.yaml"));
+  EXPECT_TRUE(fs::exists(dir / "r.json"));
+
+  r = testing::RunSsta("calibrate-mount --sequence " + Faulty() + " -q");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace ssta

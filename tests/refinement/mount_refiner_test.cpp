@@ -1,0 +1,261 @@
+// MountRefiner on analytic worlds: ground points on known planes seen through a mount with a
+// known error, so the correction, its sign convention and the degenerate cases are exact.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "ssta/core/error.h"
+#include "ssta/refinement/mount_refiner.h"
+
+namespace ssta {
+namespace {
+
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+/// A camera 0.6 m above the body origin, 0.2 m ahead, looking forward and pitched down 15 deg.
+Eigen::Isometry3d TrueMount() {
+  Eigen::Matrix3d body_R_level;  // camera x right, y down, z forward -> body x fwd, y left, z up
+  body_R_level << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  Eigen::Isometry3d mount = Eigen::Isometry3d::Identity();
+  mount.linear() = Eigen::AngleAxisd(15 * kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix() * body_R_level;
+  mount.translation() = Eigen::Vector3d(0.2, 0.06, 0.6);
+  return mount;
+}
+
+/// The mount as a calibration file with an error would have it: rotated about body y by
+/// `pitch_deg`, then about body x by `roll_deg` (as `ssta synth` injects it).
+Eigen::Isometry3d WrongMount(double pitch_deg, double roll_deg) {
+  Eigen::Isometry3d m = TrueMount();
+  m.linear() = (Eigen::AngleAxisd(pitch_deg * kDeg, Eigen::Vector3d::UnitY()) *
+                Eigen::AngleAxisd(roll_deg * kDeg, Eigen::Vector3d::UnitX())).toRotationMatrix() *
+               m.linear();
+  return m;
+}
+
+/// One frame: ground points on the plane z_body = -body_height tilted by `tilt_deg` about body x
+/// (terrain), 1 to 7 m ahead, with Gaussian noise and a share of gross outliers, in the camera
+/// frame of the TRUE mount.
+GroundEvidence Frame(std::mt19937& rng, double tilt_deg, double noise_m, double outlier_share, double body_height) {
+  std::uniform_real_distribution<double> ahead(1.0, 7.0), side(-2.0, 2.0), unit(0.0, 1.0);
+  std::normal_distribution<double> noise(0.0, noise_m);
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(tilt_deg * kDeg, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Isometry3d camera_T_body = TrueMount().inverse();
+  GroundEvidence e;
+  e.usable = true;
+  for (int i = 0; i < 300; ++i) {
+    Eigen::Vector3d p_body = tilt * Eigen::Vector3d(ahead(rng), side(rng), 0.0) - Eigen::Vector3d(0, 0, body_height);
+    p_body.z() += noise(rng) + (unit(rng) < outlier_share ? 0.3 + 0.5 * unit(rng) : 0.0);
+    e.camera_points.push_back(camera_T_body * p_body);
+  }
+  return e;
+}
+
+double AngleDeg(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
+  return Eigen::AngleAxisd(a.transpose() * b).angle() / kDeg;
+}
+
+MountRefinementResult SolveFrames(const RefinementOptions& options, const Eigen::Isometry3d& configured, int frames,
+                                  double outlier_share = 0.0, double body_height = 0.4, double terrain_deg = 0.5) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> terrain(0.0, terrain_deg);
+  MountRefiner refiner(options, configured);
+  for (int i = 0; i < frames; ++i) refiner.AddFrame(Frame(rng, terrain(rng), 0.02, outlier_share, body_height));
+  return refiner.Solve();
+}
+
+TEST(MountRefiner, RecoversPitchAndRollOnAnalyticGround) {
+  RefinementOptions options;
+  const MountRefinementResult r = SolveFrames(options, WrongMount(3.0, 1.5), 30);
+  ASSERT_EQ(r.status, RefinementStatus::kDetermined) << r.message;
+  EXPECT_LT(AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear()), 0.3) << r.BriefReport();
+  // The correction undoes the error: about -3 deg about body y and -1.5 deg about body x.
+  EXPECT_NEAR(r.pitch_correction_deg, -3.0, 0.3);
+  EXPECT_NEAR(r.roll_correction_deg, -1.5, 0.3);
+  // 30 frames with 0.5 deg of terrain tilt under a 1 deg prior: sigma near 1/sqrt(30) deg.
+  EXPECT_GT(r.pitch_sigma_deg, 0.1);
+  EXPECT_LT(r.pitch_sigma_deg, 0.3);
+  EXPECT_NEAR(r.roll_sigma_deg, r.pitch_sigma_deg, 0.05);
+  EXPECT_EQ(r.frames_used, 30);
+  EXPECT_EQ(r.points_used, 30 * 300);
+  EXPECT_NEAR(r.residual_rms_m, 0.02, 0.005);
+  EXPECT_DOUBLE_EQ(r.height_correction_m, 0.0);
+  EXPECT_TRUE(r.body_T_camera_refined.translation().isApprox(TrueMount().translation()));
+}
+
+TEST(MountRefiner, RobustLossesIgnoreGrossOutliers) {
+  for (RobustLoss loss : {RobustLoss::kHuber, RobustLoss::kCauchy}) {
+    RefinementOptions options;
+    options.robust_loss = loss;
+    const MountRefinementResult r = SolveFrames(options, WrongMount(3.0, 1.5), 30, 0.15);
+    ASSERT_TRUE(r.applied()) << r.message;
+    EXPECT_LT(AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear()), 0.3) << RobustLossName(loss);
+    // About 15 % of the points are 0.3-0.8 m off the ground.
+    EXPECT_GT(r.outlier_points, 0.12 * r.points_used) << RobustLossName(loss);
+    EXPECT_LT(r.outlier_points, 0.20 * r.points_used) << RobustLossName(loss);
+    EXPECT_LT(r.residual_median_m, 0.03);
+  }
+}
+
+TEST(MountRefiner, EstimatesCameraHeightWhenTheBodyHeightIsKnown) {
+  RefinementOptions options;
+  options.body_height_m = 0.4;
+  options.estimate_height = true;
+  Eigen::Isometry3d configured = WrongMount(-2.0, 1.0);
+  configured.translation().z() += 0.05;  // the drawing says 5 cm too high
+  const MountRefinementResult r = SolveFrames(options, configured, 30);
+  ASSERT_TRUE(r.applied()) << r.message;
+  EXPECT_NEAR(r.height_correction_m, -0.05, 0.02);
+  EXPECT_GT(r.height_sigma_m, 0.0);
+  EXPECT_LT(r.height_sigma_m, 0.02);
+  EXPECT_NEAR(r.body_T_camera_refined.translation().z(), 0.6, 0.02);
+  EXPECT_LT(AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear()), 0.3);
+}
+
+TEST(MountRefiner, TooFewFramesIsNotDetermined) {
+  RefinementOptions options;
+  options.min_frames = 5;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 0.0);
+  const MountRefinementResult r = SolveFrames(options, configured, 4);
+  EXPECT_EQ(r.status, RefinementStatus::kTooFewFrames);
+  EXPECT_FALSE(r.applied());
+  EXPECT_NE(r.message.find("not determined"), std::string::npos) << r.message;
+  EXPECT_TRUE(r.body_T_camera_refined.isApprox(configured));
+  EXPECT_TRUE(std::isnan(r.pitch_sigma_deg));
+}
+
+TEST(MountRefiner, TightPriorIsNotBetterDetermined) {
+  RefinementOptions options;
+  options.prior_sigma_deg = 0.01;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  const MountRefinementResult r = SolveFrames(options, configured, 30);
+  EXPECT_EQ(r.status, RefinementStatus::kNotBetterThanPrior) << r.message;
+  EXPECT_FALSE(r.applied());
+  EXPECT_NE(r.message.find("not better determined than its prior"), std::string::npos);
+  EXPECT_TRUE(r.body_T_camera_refined.isApprox(configured));
+  // The prior dominates: the posterior sigma is close to the prior's.
+  EXPECT_GT(r.pitch_sigma_deg, 0.9 * options.prior_sigma_deg);
+  EXPECT_LE(r.pitch_sigma_deg, options.prior_sigma_deg * 1.0001);
+}
+
+TEST(MountRefiner, GroundRougherThanTheTiltPriorIsNotApplied) {
+  // The ground ahead tilts by 4 deg (1 sigma) from frame to frame; the model allows 1 deg.
+  RefinementOptions options;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  const MountRefinementResult r = SolveFrames(options, configured, 30, 0.0, 0.4, 4.0);
+  EXPECT_EQ(r.status, RefinementStatus::kTerrainTooRough) << r.BriefReport();
+  EXPECT_GT(r.ground_tilt_rms_deg, std::sqrt(2.0) * options.terrain_tilt_sigma_deg);
+  EXPECT_NE(r.message.find("not flat enough"), std::string::npos) << r.message;
+  EXPECT_TRUE(r.body_T_camera_refined.isApprox(configured));
+  // Told that the terrain is that rough, the same data is accepted, with a wider sigma.
+  options.terrain_tilt_sigma_deg = 4.0;
+  const MountRefinementResult wide = SolveFrames(options, configured, 30, 0.0, 0.4, 4.0);
+  EXPECT_EQ(wide.status, RefinementStatus::kDetermined) << wide.BriefReport();
+  EXPECT_GT(wide.roll_sigma_deg, 0.5);
+  EXPECT_LT(wide.ground_tilt_rms_deg, std::sqrt(2.0) * options.terrain_tilt_sigma_deg);
+}
+
+TEST(MountRefiner, GravityReferenceWorksInABodyFrameWhoseXIsUp) {
+  // EuRoC's body (its IMU) has x up: the same world seen through body' = R * body.
+  const Eigen::Matrix3d body2_R_body = Eigen::AngleAxisd(0.5 * 3.14159265358979323846, Eigen::Vector3d::UnitY())
+                                           .toRotationMatrix();
+  ASSERT_TRUE((body2_R_body * Eigen::Vector3d::UnitZ()).isApprox(Eigen::Vector3d::UnitX()));
+  auto in_body2 = [&](Eigen::Isometry3d m) {
+    m.linear() = body2_R_body * m.linear();
+    m.translation() = body2_R_body * m.translation();
+    return m;
+  };
+  RefinementOptions options;
+  options.ground_reference = GroundReference::kGravity;
+  MountRefiner refiner(options, in_body2(WrongMount(3.0, 1.5)));
+  std::mt19937 rng(11);
+  for (int i = 0; i < 30; ++i) {
+    GroundEvidence e = Frame(rng, 0.0, 0.02, 0.0, 0.4);
+    e.up_body = body2_R_body * Eigen::Vector3d::UnitZ();
+    refiner.AddFrame(e);
+  }
+  const MountRefinementResult r = refiner.Solve();
+  ASSERT_TRUE(r.applied()) << r.BriefReport();
+  EXPECT_LT(AngleDeg(in_body2(TrueMount()).linear(), r.body_T_camera_refined.linear()), 0.3) << r.BriefReport();
+}
+
+TEST(MountRefiner, SlidingWindowDropsTheOldestFrame) {
+  RefinementOptions options;
+  MountRefiner refiner(options, WrongMount(1.0, 0.0));
+  std::mt19937 rng(3);
+  for (int i = 0; i < 6; ++i) refiner.AddFrame(Frame(rng, 0.0, 0.02, 0.0, 0.4));
+  refiner.DropOldest();
+  EXPECT_EQ(refiner.NumFrames(), 5);
+  const MountRefinementResult r = refiner.Solve();
+  EXPECT_EQ(r.frames_used, 5);
+  EXPECT_TRUE(r.applied()) << r.message;
+  EXPECT_NEAR(r.pitch_correction_deg, -1.0, 0.3);
+}
+
+TEST(MountRefiner, ReportsAndJsonCarryTheEstimate) {
+  const MountRefinementResult r = SolveFrames(RefinementOptions{}, WrongMount(3.0, 1.5), 10);
+  const std::string report = r.BriefReport();
+  EXPECT_NE(report.find("pitch correction"), std::string::npos) << report;
+  const std::string json = r.Json();
+  for (const char* key : {"\"status\": \"determined\"", "\"pitch_sigma_deg\"", "\"roll_correction_deg\"",
+                          "\"body_T_camera_refined\"", "\"outlier_points\"", "\"frames\""}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
+  }
+}
+
+TEST(RefinementOptions, MessagesNameTheKey) {
+  std::string error;
+  EXPECT_TRUE(RefinementOptions{}.IsValid(&error)) << error;
+  RefinementOptions o;
+  o.prior_sigma_deg = 0.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("prior_sigma_deg:", 0), 0u) << error;
+  o = RefinementOptions{};
+  o.estimate_height = true;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("estimate_height:", 0), 0u) << error;
+  o = RefinementOptions{};
+  o.max_sigma_ratio = 1.0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("max_sigma_ratio:", 0), 0u) << error;
+  try {
+    MountRefiner refiner(o, TrueMount());
+    FAIL() << "invalid options accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("refinement.max_sigma_ratio:", 0), 0u) << e.what();
+  }
+  EXPECT_THROW(ParseRobustLoss("l2"), Error);
+  EXPECT_EQ(ParseGroundReference("gravity"), GroundReference::kGravity);
+}
+
+TEST(GroundEvidence, FrameWithoutGroundPlaneIsSkippedWithAReason) {
+  FrameResult frame;
+  frame.cloud = Image3f(4, 4, Eigen::Vector3f(0.f, 1.f, 3.f));
+  frame.segment_ids = ImageI32(4, 4, 0);
+  const GroundEvidence none = ExtractGroundEvidence(frame, Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(),
+                                                    RefinementOptions{});
+  EXPECT_FALSE(none.usable);
+  EXPECT_EQ(none.reason, "no dominant ground plane");
+
+  frame.analysis.ground.found = true;
+  frame.analysis.ground.segment_id = 0;
+  frame.analysis.quality.passed = true;
+  RefinementOptions options;
+  options.min_points_per_frame = 20;
+  options.points_per_frame = 30;
+  const GroundEvidence few = ExtractGroundEvidence(frame, Eigen::Matrix3d::Identity(), Eigen::Vector3d::UnitZ(), options);
+  EXPECT_FALSE(few.usable);
+  EXPECT_NE(few.reason.find("fewer than min_points_per_frame"), std::string::npos) << few.reason;
+
+  options.min_points_per_frame = 4;
+  options.points_per_frame = 8;
+  const Eigen::Matrix3d camera_R_rectified = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const GroundEvidence ok = ExtractGroundEvidence(frame, camera_R_rectified, Eigen::Vector3d::UnitZ(), options);
+  ASSERT_TRUE(ok.usable) << ok.reason;
+  EXPECT_EQ(ok.camera_points.size(), 8u);  // 16 thinned to 8
+  EXPECT_TRUE(ok.camera_points[0].isApprox(camera_R_rectified * Eigen::Vector3d(0, 1, 3)));
+}
+
+}  // namespace
+}  // namespace ssta
