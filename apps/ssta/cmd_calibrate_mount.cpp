@@ -16,7 +16,7 @@ namespace ssta::cli {
 namespace {
 
 struct CalibrateMountArgs {
-  std::string sequence, out, out_cam1, out_dir, report, ground_reference = "body";
+  std::string sequence, out, out_cam1, out_dir, report, ground_reference;
   std::vector<std::string> config;
   MountCalibrationOptions options;
   bool quiet = false;
@@ -43,8 +43,13 @@ void Run(const CalibrateMountArgs& a) {
   const auto [cam0_path, cam1_path] = OutputPaths(a);
   const Sequence sequence = Sequence::Open(a.sequence);
   const Config config = LoadLayeredConfig(&sequence, a.config);
+  MountCalibrationOptions options = a.options;
+  options.refinement = config.refinement;
+  if (!a.ground_reference.empty()) options.refinement.ground_reference = ParseGroundReference(a.ground_reference);
+  std::string invalid;
+  if (!options.IsValid(&invalid)) throw Error("--" + invalid);
   ProgressLine progress("calibrate-mount", !a.quiet);
-  const MountCalibration result = CalibrateMount(sequence, config, a.options,
+  const MountCalibration result = CalibrateMount(sequence, config, options,
                                                  [&](int done, int total) { progress.Update(done, total); });
   progress.Finish();
   if (!a.quiet) std::cout << result.BriefReport();
@@ -89,13 +94,13 @@ void RegisterCalibrateMount(CLI::App& app) {
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_option("--ground-reference", args->ground_reference,
                   "body: the ground is parallel to the plane under the wheels (body x-y; a z-up body); "
-                  "gravity: the ground is level, its normal is up from the IMU-corrected pose")
+                  "gravity: the ground is level, its normal is up from the IMU-corrected pose "
+                  "(default: refinement.ground_reference in the config, body)")
       ->check(CLI::IsMember({"body", "gravity"}));
   cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");
   cmd->callback([args] {
     std::string error;
-    args->options.refinement.ground_reference = ParseGroundReference(args->ground_reference);
     if (!args->options.IsValid(&error)) throw Error("--" + error);
     Run(*args);
   });

@@ -154,7 +154,8 @@ bool Config::IsValid(std::string* error) const {
          CheckSection(stereo, "stereo", error) && CheckSection(triangulation, "triangulation", error) &&
          CheckSection(normals, "normals", error) && CheckSection(segmentation, "segmentation", error) &&
          CheckSection(analysis, "analysis", error) && CheckSection(gravity, "gravity", error) &&
-         CheckSection(attitude, "attitude", error) && CheckSection(map, "map", error);
+         CheckSection(attitude, "attitude", error) && CheckSection(map, "map", error) &&
+         CheckSection(refinement, "refinement", error);
 }
 
 void ApplyConfigFile(const std::string& path, Config* config) {
@@ -222,6 +223,29 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.Read("free_space_clearance_m", &f.free_space_clearance_m);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
+    s.RejectUnknownKeys();
+  }
+  {
+    YamlSection s = root.Child("refinement");
+    RefinementOptions& r = c.refinement;
+    s.Read("points_per_frame", &r.points_per_frame);
+    s.Read("min_points_per_frame", &r.min_points_per_frame);
+    s.Read("max_range_m", &r.max_range_m);
+    s.Read("min_frames", &r.min_frames);
+    s.Read("point_sigma_m", &r.point_sigma_m);
+    s.Read("point_sigma_range_m", &r.point_sigma_range_m);
+    ReadEnum(s, "robust_loss", &r.robust_loss, [](const std::string& n) { return ParseRobustLoss(n); });
+    s.Read("loss_scale", &r.loss_scale);
+    ReadEnum(s, "ground_reference", &r.ground_reference,
+             [](const std::string& n) { return ParseGroundReference(n); });
+    s.Read("terrain_tilt_sigma_deg", &r.terrain_tilt_sigma_deg);
+    s.Read("prior_sigma_deg", &r.prior_sigma_deg);
+    s.Read("max_sigma_ratio", &r.max_sigma_ratio);
+    s.Read("body_height_m", &r.body_height_m);
+    s.Read("terrain_height_sigma_m", &r.terrain_height_sigma_m);
+    s.Read("estimate_height", &r.estimate_height);
+    s.Read("height_prior_sigma_m", &r.height_prior_sigma_m);
+    s.Read("max_iterations", &r.max_iterations);
     s.RejectUnknownKeys();
   }
   root.RejectUnknownKeys();
@@ -325,6 +349,25 @@ std::string ConfigToYaml(const Config& c) {
     << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
+  const RefinementOptions& r = c.refinement;
+  y << "refinement:\n"
+    << "  points_per_frame: " << r.points_per_frame << "\n"
+    << "  min_points_per_frame: " << r.min_points_per_frame << "\n"
+    << "  max_range_m: " << r.max_range_m << "\n"
+    << "  min_frames: " << r.min_frames << "\n"
+    << "  point_sigma_m: " << r.point_sigma_m << "\n"
+    << "  point_sigma_range_m: " << r.point_sigma_range_m << "\n"
+    << "  robust_loss: " << RobustLossName(r.robust_loss) << "\n"
+    << "  loss_scale: " << r.loss_scale << "\n"
+    << "  ground_reference: " << GroundReferenceName(r.ground_reference) << "\n"
+    << "  terrain_tilt_sigma_deg: " << r.terrain_tilt_sigma_deg << "\n"
+    << "  prior_sigma_deg: " << r.prior_sigma_deg << "\n"
+    << "  max_sigma_ratio: " << r.max_sigma_ratio << "\n"
+    << "  body_height_m: " << r.body_height_m << "\n"
+    << "  terrain_height_sigma_m: " << r.terrain_height_sigma_m << "\n"
+    << "  estimate_height: " << r.estimate_height << "\n"
+    << "  height_prior_sigma_m: " << r.height_prior_sigma_m << "\n"
+    << "  max_iterations: " << r.max_iterations << "\n";
   return y.str();
 }
 

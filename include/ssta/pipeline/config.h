@@ -10,6 +10,7 @@
 #include "ssta/pipeline/attitude_filter.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/mapping/map_options.h"
+#include "ssta/refinement/refinement_options.h"
 #include "ssta/stereo/rectifier.h"
 #include "ssta/stereo/stereo_matcher.h"
 #include "ssta/stereo/triangulator.h"
@@ -69,6 +70,7 @@ struct Config {
   GravityOptions gravity;
   AttitudeFilterOptions attitude;
   MappingOptions map;
+  RefinementOptions refinement;
 
   /// Validates every section; on failure the message reads "section.key: ...".
   bool IsValid(std::string* error) const;
