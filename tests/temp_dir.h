@@ -2,17 +2,24 @@
 
 // A temporary directory for one test, removed with everything in it when the test ends.
 
+#include <atomic>
+#include <chrono>
 #include <filesystem>
-#include <random>
 #include <string>
+
+#include <unistd.h>
 
 namespace ssta::testing {
 
 class TempDir {
  public:
   TempDir() {
-    std::random_device rd;
-    path_ = std::filesystem::temp_directory_path() / ("ssta_test_" + std::to_string(rd()) + std::to_string(rd()));
+    // Unique across processes (pid), runs (clock) and instances (counter).
+    static std::atomic<int> counter{0};
+    const auto ticks = std::chrono::steady_clock::now().time_since_epoch().count();
+    path_ = std::filesystem::temp_directory_path() /
+            ("ssta_test_" + std::to_string(::getpid()) + "_" + std::to_string(ticks) + "_" +
+             std::to_string(counter++));
     std::filesystem::create_directories(path_);
   }
   ~TempDir() {

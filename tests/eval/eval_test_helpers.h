@@ -3,8 +3,6 @@
 // Helpers for the eval tests: a temporary folder that removes itself, and builders for tiny
 // label images and grids written in the layouts the scorers read.
 
-#include <atomic>
-#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -12,40 +10,15 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
+#include "temp_dir.h"
 #include "ssta/core/image.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta::test {
 
-/// A fresh folder under the system temporary directory, removed with everything in it when the
-/// object goes out of scope.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    const auto ticks = std::chrono::steady_clock::now().time_since_epoch().count();
-    path_ = std::filesystem::temp_directory_path() /
-            ("ssta_eval_test_" + std::to_string(::getpid()) + "_" + std::to_string(ticks) + "_" +
-             std::to_string(counter++));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-
-  const std::filesystem::path& path() const { return path_; }
-  /// path() / relative as a string.
-  std::string operator/(const std::string& relative) const { return (path_ / relative).string(); }
-
- private:
-  std::filesystem::path path_;
-};
+/// The suite-wide temporary folder that removes itself (tests/temp_dir.h).
+using TempDir = ::ssta::testing::TempDir;
 
 /// An image from rows of values (all rows the same length), row 0 first.
 inline ImageU8 MakeLabels(std::initializer_list<std::initializer_list<int>> rows) {
