@@ -109,6 +109,68 @@ octomap::OcTreeKey KeyOfMortonCode(std::uint64_t code) {
   return octomap::OcTreeKey(compact(code), compact(code >> 1), compact(code >> 2));
 }
 
+/// Moves the key of `code` one voxel along axis `dim` (0 x, 1 y, 2 z) by `step` (+-1), with
+/// the wrap-around of a 16-bit key, without decoding the code.
+inline std::uint64_t StepMortonCode(std::uint64_t code, unsigned dim, int step) {
+  const std::uint64_t mask = 0x249249249249ull << dim;
+  const std::uint64_t bits = step > 0 ? ((code | ~mask) + 1) & mask : ((code & mask) - 1) & mask;
+  return bits | (code & ~mask);
+}
+
+/// Inserts into `codes` the Morton codes of exactly the voxels OcTreeBaseImpl::computeRayKeys
+/// (origin, end) puts in its KeyRay: the same Amanatides-Woo walk written out with the same
+/// types and arithmetic, stepping the Morton code instead of collecting keys. Returns false
+/// where computeRayKeys does (an end outside the addressable cube).
+bool InsertRayCodes(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
+                    CodeSet* codes) {
+  octomap::OcTreeKey key_origin, key_end;
+  if (!tree.coordToKeyChecked(origin, key_origin) || !tree.coordToKeyChecked(end, key_end)) return false;
+  if (key_origin == key_end) return true;
+  std::uint64_t code = TravOcTree::MortonCode(key_origin);
+  const std::uint64_t end_code = TravOcTree::MortonCode(key_end);
+  codes->Insert(code);
+
+  octomap::point3d direction = (end - origin);
+  const float length = static_cast<float>(direction.norm());
+  direction /= length;
+  const double resolution = tree.getResolution();
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  for (unsigned i = 0; i < 3; ++i) {
+    if (direction(i) > 0.0) {
+      step[i] = 1;
+    } else if (direction(i) < 0.0) {
+      step[i] = -1;
+    } else {
+      step[i] = 0;
+    }
+    if (step[i] != 0) {
+      double voxel_border = tree.keyToCoord(key_origin[i]);
+      voxel_border += static_cast<float>(step[i] * resolution * 0.5);
+      t_max[i] = (voxel_border - origin(i)) / direction(i);
+      t_delta[i] = resolution / std::fabs(direction(i));
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = std::numeric_limits<double>::max();
+    }
+  }
+  for (;;) {
+    unsigned dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    code = StepMortonCode(code, dim, step[dim]);
+    t_max[dim] += t_delta[dim];
+    if (code == end_code) return true;
+    const double dist_from_origin = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
+    if (dist_from_origin > length) return true;
+    codes->Insert(code);
+  }
+}
+
 /// Majority vote of the 1..3 verdicts, ties to the worse class; -1 when there are none.
 int MajorityClassIndex(const std::array<std::uint32_t, 3>& votes) {
   int best = -1;
@@ -307,15 +369,13 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   // 2. Free space: each voxel once (a flat set of Morton codes), occupied voxels of this frame
   // win.
   CodeSet free_codes(8 * hits.size() + 1024);
-  octomap::KeyRay ray;
   const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
                                 static_cast<float>(sensor_origin_world.y()),
                                 static_cast<float>(sensor_origin_world.z()));
   auto cast = [&](const Eigen::Vector3d& end) {
     const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
                              static_cast<float>(end.z()));
-    if (!tree.computeRayKeys(origin, e, ray)) return;
-    for (const octomap::OcTreeKey& key : ray) free_codes.Insert(TravOcTree::MortonCode(key));
+    InsertRayCodes(tree, origin, e, &free_codes);
   };
   // Rays to surface points stop short where they graze the surface (free_space_clearance_m).
   constexpr double kMaxShortening_m = 2.0;
