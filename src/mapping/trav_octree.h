@@ -69,14 +69,15 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   template <typename Update>
   void UpdateLeaf(const octomap::OcTreeKey& key, Update&& update);
 
-  /// The same tree as UpdateLeaf(keys[i], leaf -> update(leaf, i)) for every i, in any order,
-  /// but each inner node on the way is visited, pruned and refreshed once per batch instead of
-  /// once per key. Preconditions: `keys` are distinct and sorted by MortonCode. `unchanged(block,
-  /// first, last)` may return true when the updates of keys[first..last) would leave every
-  /// voxel of the pruned block `block` as it is; the block is then not expanded (expanding,
-  /// updating to the same values and pruning again gives the same tree).
+  /// The same tree as UpdateLeaf(key of codes[i], leaf -> update(leaf, i)) for every i, in any
+  /// order, but each inner node on the way is visited, pruned and refreshed once per batch
+  /// instead of once per key. Preconditions: `codes` are MortonCode values, distinct and sorted
+  /// ascending. `unchanged(block, first, last)` may return true when the updates of
+  /// codes[first..last) would leave every voxel of the pruned block `block` as it is; the block
+  /// is then not expanded (expanding, updating to the same values and pruning again gives the
+  /// same tree).
   template <typename Update, typename Unchanged>
-  void UpdateLeaves(const std::vector<octomap::OcTreeKey>& keys, Update&& update, Unchanged&& unchanged);
+  void UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update, Unchanged&& unchanged);
 
   /// The key's position along the Z-order curve that matches the tree's child order (bit
   /// depth of x, y, z from the most significant level down): sorting keys by it groups every
@@ -90,7 +91,7 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   void UpdateRecurs(TravNode* node, bool just_created, const octomap::OcTreeKey& key,
                     unsigned depth, Update& update);
   template <typename Update, typename Unchanged>
-  void UpdateBatchRecurs(TravNode* node, bool just_created, const std::vector<octomap::OcTreeKey>& keys,
+  void UpdateBatchRecurs(TravNode* node, bool just_created, const std::vector<std::uint64_t>& codes,
                          std::size_t first, std::size_t last, unsigned depth, Update& update,
                          Unchanged& unchanged);
 
@@ -149,21 +150,21 @@ inline std::uint64_t TravOcTree::MortonCode(const octomap::OcTreeKey& key) {
 }
 
 template <typename Update, typename Unchanged>
-void TravOcTree::UpdateLeaves(const std::vector<octomap::OcTreeKey>& keys, Update&& update,
+void TravOcTree::UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update,
                               Unchanged&& unchanged) {
-  if (keys.empty()) return;
+  if (codes.empty()) return;
   bool created_root = false;
   if (root == nullptr) {
     root = new TravNode();
     ++tree_size;
     created_root = true;
   }
-  UpdateBatchRecurs(root, created_root, keys, 0, keys.size(), 0, update, unchanged);
+  UpdateBatchRecurs(root, created_root, codes, 0, codes.size(), 0, update, unchanged);
 }
 
 template <typename Update, typename Unchanged>
 void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
-                                   const std::vector<octomap::OcTreeKey>& keys, std::size_t first,
+                                   const std::vector<std::uint64_t>& codes, std::size_t first,
                                    std::size_t last, unsigned depth, Update& update,
                                    Unchanged& unchanged) {
   if (depth == tree_depth) {
@@ -171,12 +172,13 @@ void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
     return;
   }
   if (!just_created && !nodeHasChildren(node) && unchanged(*node, first, last)) return;
-  const int level = static_cast<int>(tree_depth - 1 - depth);
+  // The child index at this depth is the code's 3-bit digit of this level (see MortonCode).
+  const unsigned shift = 3 * (tree_depth - 1 - depth);
   std::size_t begin = first;
   while (begin < last) {
-    const unsigned pos = octomap::computeChildIdx(keys[begin], level);
+    const auto pos = static_cast<unsigned>((codes[begin] >> shift) & 7u);
     std::size_t end = begin + 1;
-    while (end < last && octomap::computeChildIdx(keys[end], level) == pos) ++end;
+    while (end < last && static_cast<unsigned>((codes[end] >> shift) & 7u) == pos) ++end;
     bool child_created = false;
     if (!nodeChildExists(node, pos)) {
       if (!nodeHasChildren(node) && !just_created) {
@@ -186,7 +188,7 @@ void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
         child_created = true;
       }
     }
-    UpdateBatchRecurs(getNodeChild(node, pos), child_created, keys, begin, end, depth + 1, update,
+    UpdateBatchRecurs(getNodeChild(node, pos), child_created, codes, begin, end, depth + 1, update,
                       unchanged);
     begin = end;
   }

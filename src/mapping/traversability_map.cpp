@@ -96,17 +96,22 @@ class CodeSet {
   std::size_t size_ = 0;
 };
 
-/// The key whose TravOcTree::MortonCode is `code`.
-octomap::OcTreeKey KeyOfMortonCode(std::uint64_t code) {
-  auto compact = [](std::uint64_t v) {
-    v &= 0x249249249249ull;
-    v = (v | (v >> 2)) & 0x0C30C30C30C3ull;
-    v = (v | (v >> 4)) & 0x00F00F00F00Full;
-    v = (v | (v >> 8)) & 0x0000FF0000FFull;
-    v = (v | (v >> 16)) & 0xFFFFull;
-    return static_cast<octomap::key_type>(v);
-  };
-  return octomap::OcTreeKey(compact(code), compact(code >> 1), compact(code >> 2));
+/// Sorts (Morton code, payload) pairs by code: LSD radix sort on the 48 bits, 4 x 12.
+template <typename T>
+void SortByCode(std::vector<std::pair<std::uint64_t, T>>* items) {
+  constexpr int kBits = 12;
+  constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+  std::vector<std::pair<std::uint64_t, T>> scratch(items->size());
+  std::vector<std::size_t> start(kBuckets);
+  for (int pass = 0; pass < 48 / kBits; ++pass) {
+    const int shift = pass * kBits;
+    std::fill(start.begin(), start.end(), 0);
+    for (const auto& item : *items) ++start[(item.first >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& s : start) sum += std::exchange(s, sum);
+    for (const auto& item : *items) scratch[start[(item.first >> shift) & (kBuckets - 1)]++] = item;
+    items->swap(scratch);
+  }
 }
 
 /// Moves the key of `code` one voxel along axis `dim` (0 x, 1 y, 2 z) by `step` (+-1), with
@@ -408,11 +413,9 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     voxels.emplace_back(code, &acc);
     if (MajorityClassIndex(acc.votes) >= 0) ++stats.voxels_with_class;
   }
-  std::sort(voxels.begin(), voxels.end(),
-            [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<octomap::OcTreeKey> keys;
-  keys.reserve(voxels.size());
-  for (const auto& voxel : voxels) keys.push_back(KeyOfMortonCode(voxel.first));
+  SortByCode(&voxels);
+  std::vector<std::uint64_t> codes(voxels.size());
+  for (std::size_t i = 0; i < voxels.size(); ++i) codes[i] = voxels[i].first;
 
   const double decay = opt.class_free_decay_log_odds;
   const float clamp_min_log = tree.getClampingThresMinLog();
@@ -455,7 +458,7 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     }
     return true;
   };
-  tree.UpdateLeaves(keys, update, unchanged);
+  tree.UpdateLeaves(codes, update, unchanged);
   stats.voxels_hit = hits.size();
   ++impl_->frames_inserted;
   impl_->last_timestamp_ns = timestamp_ns;
