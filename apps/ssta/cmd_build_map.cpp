@@ -21,6 +21,7 @@ struct BuildMapArgs {
   std::vector<std::string> config;
   BuildMapOptions options;
   bool quiet = false;
+  bool sequential = false;
 };
 
 void Run(const BuildMapArgs& a) {
@@ -60,8 +61,12 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
+  cmd->add_flag("--sequential", args->sequential,
+                "classify and fuse one frame after the other (default: fuse each frame on a second thread while the "
+                "next is classified; the same map)");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
   cmd->callback([args] {
+    args->options.pipelined = !args->sequential;
     std::string error;
     if (!args->options.IsValid(&error)) throw Error("--" + error);
     Run(*args);

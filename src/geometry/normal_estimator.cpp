@@ -480,13 +480,23 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   const MinCounts min_counts(max_r);
   for (int v = 0; v < height; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
-    if (v >= max_r && v + max_r + 1 <= height) {
-      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
-    }
     std::uint8_t* radius = b.radius.row(v);
     const bool full_rows = v >= max_r && v + max_r + 1 <= height;
-    if (full_rows && width > 2 * max_r) {
-      CovarianceRow(max_r, width - max_r, max_r, min_counts.full[max_r], strip, plane, cxx, cxy,
+    // The vectorised full-radius kernel runs over the span of pixels that use the full radius
+    // only (none when no pixel is far enough to reach it, as on most of a VGA yard frame);
+    // such pixels lie in [max_r, width - max_r) since the border cuts every radius.
+    int first_full = width, end_full = 0;
+    if (full_rows) {
+      for (int u = 0; u < width; ++u) {
+        if (radius[u] == max_r) {
+          first_full = std::min(first_full, u);
+          end_full = u + 1;
+        }
+      }
+    }
+    if (end_full > first_full) {
+      StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
+      CovarianceRow(first_full, end_full, max_r, min_counts.full[max_r], strip, plane, cxx, cxy,
                     cxz, cyy, cyz, czz);
     }
     for (int u = 0; u < width; ++u) {

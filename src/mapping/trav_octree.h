@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 #include <octomap/OccupancyOcTreeBase.h>
 #include <octomap/OcTreeNode.h>
@@ -68,12 +69,31 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   template <typename Update>
   void UpdateLeaf(const octomap::OcTreeKey& key, Update&& update);
 
+  /// The same tree as UpdateLeaf(key of codes[i], leaf -> update(leaf, i)) for every i, in any
+  /// order, but each inner node on the way is visited, pruned and refreshed once per batch
+  /// instead of once per key. Preconditions: `codes` are MortonCode values, distinct and sorted
+  /// ascending. `unchanged(block, first, last)` may return true when the updates of
+  /// codes[first..last) would leave every voxel of the pruned block `block` as it is; the block
+  /// is then not expanded (expanding, updating to the same values and pruning again gives the
+  /// same tree).
+  template <typename Update, typename Unchanged>
+  void UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update, Unchanged&& unchanged);
+
+  /// The key's position along the Z-order curve that matches the tree's child order (bit
+  /// depth of x, y, z from the most significant level down): sorting keys by it groups every
+  /// subtree's keys together.
+  static std::uint64_t MortonCode(const octomap::OcTreeKey& key);
+
   static constexpr const char* kTreeType = "SstaTravOcTree";
 
  private:
   template <typename Update>
   void UpdateRecurs(TravNode* node, bool just_created, const octomap::OcTreeKey& key,
                     unsigned depth, Update& update);
+  template <typename Update, typename Unchanged>
+  void UpdateBatchRecurs(TravNode* node, bool just_created, const std::vector<std::uint64_t>& codes,
+                         std::size_t first, std::size_t last, unsigned depth, Update& update,
+                         Unchanged& unchanged);
 
   /// Registers the prototype with OctoMap's factory once, at static initialisation.
   class StaticMemberInitializer {
@@ -113,6 +133,65 @@ void TravOcTree::UpdateRecurs(TravNode* node, bool just_created, const octomap::
     }
   }
   UpdateRecurs(getNodeChild(node, pos), child_created, key, depth + 1, update);
+  if (!pruneNode(node)) node->updateOccupancyChildren();
+}
+
+inline std::uint64_t TravOcTree::MortonCode(const octomap::OcTreeKey& key) {
+  // Spreads the 16 bits of v to every third bit.
+  auto spread = [](std::uint64_t v) {
+    v = (v | (v << 16)) & 0x0000FF0000FFull;
+    v = (v | (v << 8)) & 0x00F00F00F00Full;
+    v = (v | (v << 4)) & 0x0C30C30C30C3ull;
+    v = (v | (v << 2)) & 0x249249249249ull;
+    return v;
+  };
+  // computeChildIdx: x is bit 0, y bit 1, z bit 2 of each level's child index.
+  return spread(key[0]) | (spread(key[1]) << 1) | (spread(key[2]) << 2);
+}
+
+template <typename Update, typename Unchanged>
+void TravOcTree::UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update,
+                              Unchanged&& unchanged) {
+  if (codes.empty()) return;
+  bool created_root = false;
+  if (root == nullptr) {
+    root = new TravNode();
+    ++tree_size;
+    created_root = true;
+  }
+  UpdateBatchRecurs(root, created_root, codes, 0, codes.size(), 0, update, unchanged);
+}
+
+template <typename Update, typename Unchanged>
+void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
+                                   const std::vector<std::uint64_t>& codes, std::size_t first,
+                                   std::size_t last, unsigned depth, Update& update,
+                                   Unchanged& unchanged) {
+  if (depth == tree_depth) {
+    update(*node, first);  // distinct keys: one per leaf
+    return;
+  }
+  if (!just_created && !nodeHasChildren(node) && unchanged(*node, first, last)) return;
+  // The child index at this depth is the code's 3-bit digit of this level (see MortonCode).
+  const unsigned shift = 3 * (tree_depth - 1 - depth);
+  std::size_t begin = first;
+  while (begin < last) {
+    const auto pos = static_cast<unsigned>((codes[begin] >> shift) & 7u);
+    std::size_t end = begin + 1;
+    while (end < last && static_cast<unsigned>((codes[end] >> shift) & 7u) == pos) ++end;
+    bool child_created = false;
+    if (!nodeChildExists(node, pos)) {
+      if (!nodeHasChildren(node) && !just_created) {
+        expandNode(node);  // a pruned block: its eight voxels get its payload
+      } else {
+        createNodeChild(node, pos);
+        child_created = true;
+      }
+    }
+    UpdateBatchRecurs(getNodeChild(node, pos), child_created, codes, begin, end, depth + 1, update,
+                      unchanged);
+    begin = end;
+  }
   if (!pruneNode(node)) node->updateOccupancyChildren();
 }
 

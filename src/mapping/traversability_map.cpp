@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <unordered_map>
 #include <utility>
+#include <vector>
 
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
@@ -40,6 +42,139 @@ struct FarAccumulator {
   Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
   std::uint32_t points = 0;
 };
+
+/// Hash of a Morton code (its low bits alone cluster).
+struct CodeHash {
+  std::size_t operator()(std::uint64_t code) const {
+    return static_cast<std::size_t>((code * 0x9E3779B97F4A7C15ull) >> 16);
+  }
+};
+
+/// A flat open-addressing set of Morton codes (48 bits, so all ones never occurs): the free
+/// voxels of one frame, ~10^5 insertions of ~10^6 without an allocation each.
+class CodeSet {
+ public:
+  explicit CodeSet(std::size_t expected) {
+    std::size_t capacity = 1024;
+    while (capacity < 2 * expected) capacity *= 2;
+    slots_.assign(capacity, kEmpty);
+  }
+  void Insert(std::uint64_t code) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    InsertNew(code);
+  }
+  std::size_t size() const { return size_; }
+  template <typename F>
+  void ForEach(F&& f) const {
+    for (const std::uint64_t code : slots_) {
+      if (code != kEmpty) f(code);
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  void InsertNew(std::uint64_t code) {
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = CodeHash{}(code) & mask;; i = (i + 1) & mask) {
+      if (slots_[i] == code) return;
+      if (slots_[i] == kEmpty) {
+        slots_[i] = code;
+        ++size_;
+        return;
+      }
+    }
+  }
+  void Grow() {
+    std::vector<std::uint64_t> old(2 * slots_.size(), kEmpty);
+    old.swap(slots_);
+    size_ = 0;
+    for (const std::uint64_t code : old) {
+      if (code != kEmpty) InsertNew(code);
+    }
+  }
+  std::vector<std::uint64_t> slots_;
+  std::size_t size_ = 0;
+};
+
+/// Sorts (Morton code, payload) pairs by code: LSD radix sort on the 48 bits, 4 x 12.
+template <typename T>
+void SortByCode(std::vector<std::pair<std::uint64_t, T>>* items) {
+  constexpr int kBits = 12;
+  constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+  std::vector<std::pair<std::uint64_t, T>> scratch(items->size());
+  std::vector<std::size_t> start(kBuckets);
+  for (int pass = 0; pass < 48 / kBits; ++pass) {
+    const int shift = pass * kBits;
+    std::fill(start.begin(), start.end(), 0);
+    for (const auto& item : *items) ++start[(item.first >> shift) & (kBuckets - 1)];
+    std::size_t sum = 0;
+    for (std::size_t& s : start) sum += std::exchange(s, sum);
+    for (const auto& item : *items) scratch[start[(item.first >> shift) & (kBuckets - 1)]++] = item;
+    items->swap(scratch);
+  }
+}
+
+/// Moves the key of `code` one voxel along axis `dim` (0 x, 1 y, 2 z) by `step` (+-1), with
+/// the wrap-around of a 16-bit key, without decoding the code.
+inline std::uint64_t StepMortonCode(std::uint64_t code, unsigned dim, int step) {
+  const std::uint64_t mask = 0x249249249249ull << dim;
+  const std::uint64_t bits = step > 0 ? ((code | ~mask) + 1) & mask : ((code & mask) - 1) & mask;
+  return bits | (code & ~mask);
+}
+
+/// Inserts into `codes` the Morton codes of exactly the voxels OcTreeBaseImpl::computeRayKeys
+/// (origin, end) puts in its KeyRay: the same Amanatides-Woo walk written out with the same
+/// types and arithmetic, stepping the Morton code instead of collecting keys. Returns false
+/// where computeRayKeys does (an end outside the addressable cube).
+bool InsertRayCodes(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
+                    CodeSet* codes) {
+  octomap::OcTreeKey key_origin, key_end;
+  if (!tree.coordToKeyChecked(origin, key_origin) || !tree.coordToKeyChecked(end, key_end)) return false;
+  if (key_origin == key_end) return true;
+  std::uint64_t code = TravOcTree::MortonCode(key_origin);
+  const std::uint64_t end_code = TravOcTree::MortonCode(key_end);
+  codes->Insert(code);
+
+  octomap::point3d direction = (end - origin);
+  const float length = static_cast<float>(direction.norm());
+  direction /= length;
+  const double resolution = tree.getResolution();
+  int step[3];
+  double t_max[3];
+  double t_delta[3];
+  for (unsigned i = 0; i < 3; ++i) {
+    if (direction(i) > 0.0) {
+      step[i] = 1;
+    } else if (direction(i) < 0.0) {
+      step[i] = -1;
+    } else {
+      step[i] = 0;
+    }
+    if (step[i] != 0) {
+      double voxel_border = tree.keyToCoord(key_origin[i]);
+      voxel_border += static_cast<float>(step[i] * resolution * 0.5);
+      t_max[i] = (voxel_border - origin(i)) / direction(i);
+      t_delta[i] = resolution / std::fabs(direction(i));
+    } else {
+      t_max[i] = std::numeric_limits<double>::max();
+      t_delta[i] = std::numeric_limits<double>::max();
+    }
+  }
+  for (;;) {
+    unsigned dim;
+    if (t_max[0] < t_max[1]) {
+      dim = t_max[0] < t_max[2] ? 0 : 2;
+    } else {
+      dim = t_max[1] < t_max[2] ? 1 : 2;
+    }
+    code = StepMortonCode(code, dim, step[dim]);
+    t_max[dim] += t_delta[dim];
+    if (code == end_code) return true;
+    const double dist_from_origin = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
+    if (dist_from_origin > length) return true;
+    codes->Insert(code);
+  }
+}
 
 /// Majority vote of the 1..3 verdicts, ties to the worse class; -1 when there are none.
 int MajorityClassIndex(const std::array<std::uint32_t, 3>& votes) {
@@ -199,9 +334,9 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     return stats;
   }
 
-  // 1. Thin the points: one accumulator per voxel.
-  std::unordered_map<octomap::OcTreeKey, VoxelAccumulator, octomap::OcTreeKey::KeyHash> hits;
-  std::unordered_map<octomap::OcTreeKey, FarAccumulator, octomap::OcTreeKey::KeyHash> far;
+  // 1. Thin the points: one accumulator per voxel, keyed by the voxel's Morton code.
+  std::unordered_map<std::uint64_t, VoxelAccumulator, CodeHash> hits;
+  std::unordered_map<std::uint64_t, FarAccumulator, CodeHash> far;
   hits.reserve(points.size() / 4 + 16);
   for (const ClassifiedPoint& point : points) {
     const Eigen::Vector3d p = point.world_p.cast<double>();
@@ -210,14 +345,15 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
       ++stats.points_rejected;
       continue;
     }
+    const std::uint64_t code = TravOcTree::MortonCode(key);
     if ((p - sensor_origin_world).norm() > opt.max_range_m) {
-      FarAccumulator& acc = far[key];
+      FarAccumulator& acc = far[code];
       acc.sum_p += p;
       ++acc.points;
       ++stats.points_beyond_range;
       continue;
     }
-    VoxelAccumulator& acc = hits[key];
+    VoxelAccumulator& acc = hits[code];
     acc.sum_p += p;
     ++acc.points;
     ++stats.points_hit;
@@ -235,20 +371,20 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     }
   }
 
-  // 2. Free space: each voxel once, occupied voxels of this frame win.
-  octomap::KeySet free_keys;
-  octomap::KeyRay ray;
+  // 2. Free space: each voxel once (a flat set of Morton codes), occupied voxels of this frame
+  // win.
+  CodeSet free_codes(8 * hits.size() + 1024);
   const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
                                 static_cast<float>(sensor_origin_world.y()),
                                 static_cast<float>(sensor_origin_world.z()));
   auto cast = [&](const Eigen::Vector3d& end) {
     const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
                              static_cast<float>(end.z()));
-    if (tree.computeRayKeys(origin, e, ray)) free_keys.insert(ray.begin(), ray.end());
+    InsertRayCodes(tree, origin, e, &free_codes);
   };
   // Rays to surface points stop short where they graze the surface (free_space_clearance_m).
   constexpr double kMaxShortening_m = 2.0;
-  for (const auto& [key, acc] : hits) {
+  for (const auto& [code, acc] : hits) {
     const Eigen::Vector3d end = acc.sum_p / acc.points;
     const Eigen::Vector3d d = end - sensor_origin_world;
     const double length = d.norm();
@@ -260,47 +396,69 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
       cast(end);
     }
   }
-  for (const auto& [key, acc] : far) {
+  for (const auto& [code, acc] : far) {
     const Eigen::Vector3d direction = (acc.sum_p / acc.points - sensor_origin_world).normalized();
     cast(sensor_origin_world + direction * opt.max_range_m);
   }
-  for (const auto& [key, acc] : hits) free_keys.erase(key);
 
-  // 3. Updates.
+  // 3. Updates: every voxel of the frame (free or hit, disjoint) once, in one pass over the
+  // tree in Z-order; the result equals updating them one by one.
+  std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>> voxels;
+  voxels.reserve(free_codes.size() + hits.size());
+  free_codes.ForEach([&](std::uint64_t code) {
+    if (hits.find(code) == hits.end()) voxels.emplace_back(code, nullptr);
+  });
+  stats.voxels_freed = voxels.size();
+  for (const auto& [code, acc] : hits) {
+    voxels.emplace_back(code, &acc);
+    if (MajorityClassIndex(acc.votes) >= 0) ++stats.voxels_with_class;
+  }
+  SortByCode(&voxels);
+  std::vector<std::uint64_t> codes(voxels.size());
+  for (std::size_t i = 0; i < voxels.size(); ++i) codes[i] = voxels[i].first;
+
   const double decay = opt.class_free_decay_log_odds;
-  for (const octomap::OcTreeKey& key : free_keys) {
-    tree.UpdateLeaf(key, [&](TravNode& node) {
+  const float clamp_min_log = tree.getClampingThresMinLog();
+  auto update = [&](TravNode& node, std::size_t i) {
+    const VoxelAccumulator* acc = voxels[i].second;
+    if (acc == nullptr) {
       tree.integrateMiss(&node);
       for (float& l : node.class_log_odds) l = DecayTowardsZero(l, decay);
-    });
-  }
-  stats.voxels_freed = free_keys.size();
-
-  for (const auto& [key, acc] : hits) {
-    const int winner = MajorityClassIndex(acc.votes);
-    if (winner >= 0) ++stats.voxels_with_class;
-    tree.UpdateLeaf(key, [&](TravNode& node) {
-      tree.integrateHit(&node);
-      node.last_seen_ns = timestamp_ns;
-      if (winner < 0) return;
-      for (int k = 0; k < 3; ++k) {
-        const double delta = k == winner ? opt.class_hit_log_odds : opt.class_miss_log_odds;
-        node.class_log_odds[k] =
-            Clamp(node.class_log_odds[k] + delta, opt.class_clamp_min, opt.class_clamp_max);
-      }
-      ++node.observations;
-      const double n = node.observations;
-      if (acc.slope_count > 0) {
-        const double v = acc.slope_sum / acc.slope_count;
-        node.slope_deg = static_cast<float>(node.slope_deg + (v - node.slope_deg) / n);
-      }
-      if (acc.step_count > 0) {
-        const double v = acc.step_sum / acc.step_count;
-        node.step_m = static_cast<float>(node.step_m + (v - node.step_m) / n);
-        node.max_step_m = std::max(node.max_step_m, static_cast<float>(acc.max_abs_step));
-      }
-    });
-  }
+      return;
+    }
+    tree.integrateHit(&node);
+    node.last_seen_ns = timestamp_ns;
+    const int winner = MajorityClassIndex(acc->votes);
+    if (winner < 0) return;
+    for (int k = 0; k < 3; ++k) {
+      const double delta = k == winner ? opt.class_hit_log_odds : opt.class_miss_log_odds;
+      node.class_log_odds[k] =
+          Clamp(node.class_log_odds[k] + delta, opt.class_clamp_min, opt.class_clamp_max);
+    }
+    ++node.observations;
+    const double n = node.observations;
+    if (acc->slope_count > 0) {
+      const double v = acc->slope_sum / acc->slope_count;
+      node.slope_deg = static_cast<float>(node.slope_deg + (v - node.slope_deg) / n);
+    }
+    if (acc->step_count > 0) {
+      const double v = acc->step_sum / acc->step_count;
+      node.step_m = static_cast<float>(node.step_m + (v - node.step_m) / n);
+      node.max_step_m = std::max(node.max_step_m, static_cast<float>(acc->max_abs_step));
+    }
+  };
+  // A free block at the lower clamp with no class evidence stays as it is under misses.
+  auto unchanged = [&](const TravNode& block, std::size_t first, std::size_t last) {
+    if (block.getLogOdds() != clamp_min_log) return false;
+    for (const float l : block.class_log_odds) {
+      if (l != 0.0f) return false;
+    }
+    for (std::size_t i = first; i < last; ++i) {
+      if (voxels[i].second != nullptr) return false;
+    }
+    return true;
+  };
+  tree.UpdateLeaves(codes, update, unchanged);
   stats.voxels_hit = hits.size();
   ++impl_->frames_inserted;
   impl_->last_timestamp_ns = timestamp_ns;

@@ -76,6 +76,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("acso_smoothness_weak", &o->acso_smoothness_weak);
   s.Read("acso_gamma_s", &o->acso_gamma_s);
   s.Read("acso_gamma_c", &o->acso_gamma_c);
+  s.Read("downscale", &o->downscale);
   s.RejectUnknownKeys();
 }
 
@@ -302,7 +303,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  acso_smoothness_strong: " << s.acso_smoothness_strong << "\n"
     << "  acso_smoothness_weak: " << s.acso_smoothness_weak << "\n"
     << "  acso_gamma_s: " << s.acso_gamma_s << "\n"
-    << "  acso_gamma_c: " << s.acso_gamma_c << "\n";
+    << "  acso_gamma_c: " << s.acso_gamma_c << "\n"
+    << "  downscale: " << s.downscale << "\n";
   y << "triangulation:\n"
     << "  min_range_m: " << c.triangulation.min_range_m << "\n"
     << "  max_range_m: " << c.triangulation.max_range_m << "\n";

@@ -3,9 +3,12 @@
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "core/json_escape.h"
+#include "pipeline/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
 
@@ -115,6 +118,11 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     throw Error(sequence.root() + ": frame " + std::to_string(t) + ": " + reason + " (strict: no frame may be skipped)");
   };
   if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
+  // Everything that touches the map or the summary runs as a job on `fusion`, in frame order,
+  // so the map and the summary are those of the sequential loop; with options.pipelined the
+  // fusion of frame k overlaps the classification of frame k+1. Declared after them: its
+  // destructor finishes the queued jobs before they go.
+  internal::OrderedWorker fusion(options.pipelined ? 1 : 0);
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
   for (const StereoFrame& frame : todo) {
@@ -123,6 +131,12 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       break;
     }
     const std::int64_t t = frame.timestamp_ns;
+    auto skip = [&](const std::string& reason) {
+      fusion.Submit([&, t, reason] {
+        fail_if_strict(t, reason);
+        summary.skipped.push_back({t, reason});
+      });
+    };
     std::optional<Eigen::Isometry3d> world_T_body;
     if (options.static_platform) {
       world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
@@ -130,39 +144,48 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       world_T_body = gravity.WorldTBodyAt(t);
     }
     if (!world_T_body) {
-      fail_if_strict(t, "no pose: " + sequence.NoPoseReason(t));
-      summary.skipped.push_back({t, "no pose: " + sequence.NoPoseReason(t)});
+      skip("no pose: " + sequence.NoPoseReason(t));
     } else {
+      std::shared_ptr<FrameResult> result;
       try {
         const ImageU8 left = ReadGreyImage(frame.left_path);
         const ImageU8 right = ReadGreyImage(frame.right_path);
         const Eigen::Vector3d up_camera =
             (sequence.calibration().left.body_T_camera.linear().transpose() *
              (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ())).normalized();
-        FrameResult result = pipeline.Process(left, right, up_camera);
-        result.timestamp_ns = t;
-        const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
-        const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
-        const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
-        if (!stats.inserted) {
-          fail_if_strict(t, "map rejected the frame: " + stats.reason);
-          summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
-        } else {
-          ++summary.frames_used;
-          summary.points_inserted += stats.points_hit;
-          if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
-        }
+        result = std::make_shared<FrameResult>(pipeline.Process(left, right, up_camera));
+        result->timestamp_ns = t;
       } catch (const Error& e) {
-        fail_if_strict(t, e.what());
-        summary.skipped.push_back({t, e.what()});
+        skip(e.what());
+      }
+      if (result) {
+        const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
+        fusion.Submit([&, t, result, world_T_rectified] {
+          try {
+            const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
+            const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
+            if (!stats.inserted) {
+              fail_if_strict(t, "map rejected the frame: " + stats.reason);
+              summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+            } else {
+              ++summary.frames_used;
+              summary.points_inserted += stats.points_hit;
+              if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
+            }
+          } catch (const Error& e) {
+            fail_if_strict(t, e.what());
+            summary.skipped.push_back({t, e.what()});
+          }
+        });
       }
     }
     ++done;
     if (config.map.checkpoint_every_frames > 0 && done % config.map.checkpoint_every_frames == 0) {
-      map.Save(options.map_path);
+      fusion.Submit([&] { map.Save(options.map_path); });
     }
     if (progress) progress(done, static_cast<int>(todo.size()));
   }
+  fusion.Drain();
   map.Save(options.map_path);
   summary.map_nodes = map.NumNodes();
   summary.map_file_bytes = std::filesystem::file_size(options.map_path);

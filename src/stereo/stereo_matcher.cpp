@@ -197,6 +197,7 @@ bool StereoMatcherOptions::IsValid(std::string* error) const {
     return Fail(error, "pcl_ratio_filter: must lie in [0, 100) (percent, 0 disables)");
   }
   if (pcl_peak_filter < 0) return Fail(error, "pcl_peak_filter: must be >= 0 (0 disables)");
+  if (downscale != 1 && downscale != 2) return Fail(error, "downscale: must be 1 or 2");
   if (acso_smoothness_weak < 0) return Fail(error, "acso_smoothness_weak: must be >= 0");
   if (acso_smoothness_strong < acso_smoothness_weak) {
     return Fail(error, "acso_smoothness_strong: must be >= acso_smoothness_weak");
@@ -226,6 +227,7 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
     throw Error("StereoMatcher: the left image is " + size(left) + " but the right image is " +
                 size(right));
   }
+  if (options_.downscale == 2) return ComputeAtHalfSize(left, right);
   const int min_width = options_.min_disparity + options_.num_disparities + options_.block_size;
   if (left.width() < min_width || left.height() < options_.block_size) {
     throw Error("StereoMatcher: the images are " + size(left) + " but need at least " +
@@ -256,6 +258,53 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
     for (int u = 0; u < disparity.width(); ++u) d[u] = src[u] > static_cast<float>(u) ? 0.0f : src[u];
   }
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
+  if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
+  return disparity;
+}
+
+ImageF StereoMatcher::ComputeAtHalfSize(const ImageU8& left, const ImageU8& right) const {
+  StereoMatcherOptions half = options_;
+  half.downscale = 1;
+  half.min_disparity = options_.min_disparity / 2;
+  half.num_disparities = std::max(16, (options_.num_disparities / 2 + 15) / 16 * 16);
+  const int min_block = options_.algorithm == MatcherType::kBlockMatching ? 5 : 3;
+  half.block_size = std::max(min_block, (options_.block_size / 2) | 1);
+  half.speckle_window_size = options_.speckle_window_size / 4;
+  half.speckle_range = std::max(1, options_.speckle_range / 2);
+  half.min_texture = 0.0;
+  const int width = left.width(), height = left.height();
+  const cv::Size half_size(std::max(1, width / 2), std::max(1, height / 2));
+  auto shrink = [&](const ImageU8& image) {
+    ImageU8 out(half_size.width, half_size.height);
+    cv::Mat dst(half_size.height, half_size.width, CV_8UC1, out.data());  // written in place
+    cv::resize(WrapConst(image), dst, half_size, 0, 0, cv::INTER_AREA);
+    return out;
+  };
+  const ImageF half_disparity = StereoMatcher(half).Compute(shrink(left), shrink(right));
+  // Bilinear between the four nearest half-size pixels where all are valid and within 1 px
+  // (half-size) of each other; else the nearest one, so that no value blends across an edge.
+  const int hw = half_size.width, hh = half_size.height;
+  auto at = [&](int v, int u) {
+    return half_disparity(std::clamp(v, 0, hh - 1), std::clamp(u, 0, hw - 1));
+  };
+  ImageF disparity(width, height, 0.0f);
+  for (int v = 0; v < height; ++v) {
+    // Full pixel v's centre lies at (v + 0.5) / 2 - 0.5 in half-size pixels.
+    const int v0 = v % 2 == 0 ? v / 2 - 1 : v / 2;
+    const float fv = v % 2 == 0 ? 0.75f : 0.25f;  // weight of row v0 + 1
+    float* d = disparity.row(v);
+    for (int u = 0; u < width; ++u) {
+      const int u0 = u % 2 == 0 ? u / 2 - 1 : u / 2;
+      const float fu = u % 2 == 0 ? 0.75f : 0.25f;
+      const float a = at(v0, u0), b = at(v0, u0 + 1), c = at(v0 + 1, u0), e = at(v0 + 1, u0 + 1);
+      const float lo = std::min({a, b, c, e}), hi = std::max({a, b, c, e});
+      if (lo > 0.0f && hi - lo <= 1.0f) {
+        d[u] = 2.0f * ((1 - fv) * ((1 - fu) * a + fu * b) + fv * ((1 - fu) * c + fu * e));
+      } else {
+        d[u] = 2.0f * at(v / 2, u / 2);
+      }
+    }
+  }
   if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
   return disparity;
 }

@@ -104,12 +104,14 @@ TEST(Bench, CommandRendersFramesAndReportsEveryStageWithTheMap) {
       "bench --frames 2 --warmup 1 --width 320 --height 240 --focal 210 --map --json " + dir / "bench.json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* row : {"rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)",
-                          "map update", "end to end", "peak memory", "map: "}) {
+                          "map update", "end to end", "pipelined interval", "pipelined latency", "peak memory",
+                          "map: "}) {
     EXPECT_NE(r.output.find(row), std::string::npos) << row << "\n" << r.output;
   }
   const std::string json = ReadTextFile(dir / "bench.json");
   EXPECT_NE(json.find("\"frames\": 2"), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"end to end\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"name\": \"pipelined interval\""), std::string::npos) << json;
 }
 
 TEST(Bench, CommandRunsOnARecordedSequenceWithoutTheMap) {

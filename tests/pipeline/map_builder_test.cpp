@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -115,6 +116,63 @@ TEST(BuildMap, ResumeEqualsOnePass) {
   const std::string sa((std::istreambuf_iterator<char>(a)), {}), sb((std::istreambuf_iterator<char>(b)), {});
   EXPECT_GT(sa.size(), 1000u);
   EXPECT_EQ(sa, sb);
+}
+
+std::string FileBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(f)), {});
+}
+
+TEST(BuildMap, PipelinedBuildEqualsSequentialByteForByte) {
+  testing::TempDir dir;
+  BuildMapOptions sequential;
+  sequential.static_platform = true;
+  sequential.pipelined = false;
+  sequential.map_path = dir / "sequential.ot";
+  BuildMapOptions pipelined = sequential;
+  pipelined.pipelined = true;
+  pipelined.map_path = dir / "pipelined.ot";
+  Config config = EurocConfig();
+  config.map.checkpoint_every_frames = 2;  // a checkpoint job between the frames
+  const BuildMapSummary a = BuildMap(Sequence::Open(kEuroc), "s", config, sequential);
+  const BuildMapSummary b = BuildMap(Sequence::Open(kEuroc), "s", config, pipelined);
+  EXPECT_EQ(a.frames_used, 3);
+  EXPECT_EQ(b.frames_used, a.frames_used);
+  EXPECT_EQ(b.points_inserted, a.points_inserted);
+  EXPECT_GT(a.points_inserted, 10000u);
+  EXPECT_EQ(b.map_nodes, a.map_nodes);
+  const std::string bytes_a = FileBytes(sequential.map_path), bytes_b = FileBytes(pipelined.map_path);
+  EXPECT_GT(bytes_a.size(), 10000u);
+  EXPECT_TRUE(bytes_a == bytes_b) << bytes_a.size() << " vs " << bytes_b.size() << " bytes";
+}
+
+TEST(BuildMap, PipelinedStrictRunStopsAtTheFirstUnusableFrameLikeTheSequentialOne) {
+  testing::TempDir dir;
+  // Frame 1 of 3 is not a PNG: strict runs fail there and save the map of frame 0.
+  const std::string seq = CopyWithFrames(dir, "a", 0, 2);
+  std::vector<fs::path> images;
+  for (const auto& e : fs::directory_iterator(fs::path(seq) / "mav0" / "cam1" / "data")) images.push_back(e.path());
+  ASSERT_EQ(images.size(), 3u);
+  std::sort(images.begin(), images.end());
+  std::ofstream(images[1], std::ios::binary) << "not a png";
+  std::string maps[2];
+  for (const bool pipelined : {false, true}) {
+    BuildMapOptions options;
+    options.static_platform = true;
+    options.strict = true;
+    options.pipelined = pipelined;
+    options.map_path = dir / (pipelined ? "p.ot" : "s.ot");
+    try {
+      BuildMap(Sequence::Open(seq), "s", EurocConfig(), options);
+      ADD_FAILURE() << "a strict run with a missing image must throw";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("strict"), std::string::npos) << e.what();
+    }
+    maps[pipelined] = FileBytes(options.map_path);
+    EXPECT_EQ(TraversabilityMap::Load(options.map_path).frames_inserted(), 1u);
+  }
+  EXPECT_GT(maps[0].size(), 1000u);
+  EXPECT_TRUE(maps[0] == maps[1]);
 }
 
 TEST(BuildMap, ResumeRefusesAnotherResolution) {

@@ -229,6 +229,28 @@ TEST(StereoMatcher, PclRatioFilterRejectsRepetitiveTexture) {
   EXPECT_LT(static_cast<double>(wrong_filtered) / scored, 0.02);
 }
 
+TEST(StereoMatcher, HalfSizeMatchingRecoversPlaneAndSquareAtFullResolution) {
+  // Even disparities (20, 36 px) so that the half-size images hold 10 and 18 px exactly.
+  const SyntheticPair pair = MakePair(320, 240, 20, 36, 150, 70, 90, 8, 72);
+  StereoMatcherOptions o = OptionsFor(MatcherType::kSemiGlobal);
+  o.downscale = 2;
+  const ImageF disparity = StereoMatcher(o).Compute(pair.left, pair.right);
+  ASSERT_EQ(disparity.width(), 320);
+  ASSERT_EQ(disparity.height(), 240);
+  const Score s = ScoreDisparity(disparity, pair);
+  EXPECT_GT(s.correct, 0.85) << "valid " << s.valid << ", wrong " << s.wrong;
+  EXPECT_LT(s.wrong, 0.05);
+  // Inside the square (36 px) and the background (20 px) the interpolation of equal values
+  // gives them back; at the square's edge no value lies between the two (no blending).
+  int between = 0;
+  for (std::size_t i = 0; i < disparity.size(); ++i) between += disparity[i] > 22.0f && disparity[i] < 34.0f;
+  EXPECT_LT(between, 50);
+  o.downscale = 3;
+  std::string error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("downscale:", 0), 0u) << error;
+}
+
 TEST(StereoMatcher, InvalidOptionsNameTheKey) {
   const auto error_of = [](const StereoMatcherOptions& o) {
     std::string error;

@@ -87,12 +87,22 @@ struct PipelineBenchOptions {
 /// wall and CPU time and, with `with_map`, the map update (ClassifiedPointsInWorld at
 /// config.map.pixel_stride + InsertFrame into a new map at config.map.fusion) and the map's size.
 /// Rows: rectify, match, triangulate, normals, segment, analyze, frame (Process), and with the
-/// map: map update, end to end (frame + map update). Poses and gravity as `ssta build-map`
-/// takes them (a frame without a pose is put at the origin, levelled by gravity).
+/// map: map update, end to end (frame + map update: the latency of the sequential loop).
+/// With the map, a second pass then runs the same frames as `ssta build-map` does by default
+/// (BuildMapOptions::pipelined: the map update of frame k on a second thread while frame k+1 is
+/// classified) into a fresh map, with the images of at most kMaxPipelinedFrames frames read
+/// beforehand, and adds the rows "pipelined interval" (wall time between two frames' map
+/// updates finishing; its frames/s is the pipeline's throughput) and "pipelined latency"
+/// (from the start of a frame's Process to the end of its map update). Peak memory is taken
+/// before that pass. Poses and gravity as `ssta build-map` takes them (a frame without a pose
+/// is put at the origin, levelled by gravity).
 /// Throws ssta::Error on invalid options or config, an unreadable image, or when the sequence
 /// has fewer frames than the warm-up needs plus one.
 BenchReport RunPipelineBench(const Sequence& sequence, const Config& config,
                              const PipelineBenchOptions& options);
+
+/// Frames measured by RunPipelineBench's pipelined pass (their images are held in memory).
+constexpr int kMaxPipelinedFrames = 100;
 
 /// Peak resident set size of this process so far [MiB] (getrusage's ru_maxrss).
 double PeakResidentMib();

@@ -28,6 +28,9 @@ struct BuildMapOptions {
   /// Any frame that cannot be used (no pose, unreadable image, ...) is an error instead of a
   /// skip with a reason; the map keeps what was fused before it.
   bool strict = false;
+  /// Fuse frame k into the map on a second thread while frame k+1 is classified (one frame
+  /// waits at most). The map and the summary are the same as without; only the time differs.
+  bool pipelined = true;
   bool IsValid(std::string* error) const;
 };
 
