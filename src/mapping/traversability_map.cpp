@@ -276,7 +276,10 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   }
   stats.voxels_freed = free_keys.size();
 
-  for (const auto& [key, acc] : hits) {
+  for (const auto& entry : hits) {
+    // Not a structured binding: C++17 lambdas cannot capture those (GCC allows it, clang not).
+    const octomap::OcTreeKey& key = entry.first;
+    const auto& acc = entry.second;
     const int winner = MajorityClassIndex(acc.votes);
     if (winner >= 0) ++stats.voxels_with_class;
     tree.UpdateLeaf(key, [&](TravNode& node) {
