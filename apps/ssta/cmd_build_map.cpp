@@ -41,7 +41,9 @@ void Run(const BuildMapArgs& a) {
     std::cout << summary.BriefReport() << "map: " << a.options.map_path << "\n";
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
-  if (summary.frames_used == 0) throw Error(a.sequence + ": no frame could be fused");
+  if (summary.frames_used == 0 && summary.frames_already_in_map == 0) {
+    throw Error(a.sequence + ": no frame could be fused");
+  }
   if (summary.interrupted) throw Error("interrupted; the map holds the frames fused so far (continue with --resume)");
 }
 
