@@ -7,6 +7,7 @@ packages=(
   build-essential cmake ccache pkg-config
   libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libceres-dev
   libyaml-cpp-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  clang libclang-rt-14-dev
 )
 
 missing=()

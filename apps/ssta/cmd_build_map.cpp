@@ -42,7 +42,9 @@ void Run(const BuildMapArgs& a) {
     std::cout << summary.BriefReport() << "map: " << a.options.map_path << "\n";
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
-  if (summary.frames_used == 0) throw Error(a.sequence + ": no frame could be fused");
+  if (summary.frames_used == 0 && summary.frames_already_in_map == 0) {
+    throw Error(a.sequence + ": no frame could be fused");
+  }
   if (summary.interrupted) throw Error("interrupted; the map holds the frames fused so far (continue with --resume)");
 }
 
@@ -54,7 +56,9 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
   cmd->add_option("--map", args->options.map_path, "map file to write (.ot)")->required();
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
-  cmd->add_flag("--resume", args->options.resume, "continue the existing map with this sequence");
+  cmd->add_flag("--resume", args->options.resume,
+                "continue the existing map: with another sequence, or finish an interrupted run of this one "
+                "(frames already in the map are not fused again)");
   cmd->add_flag("--static", args->options.static_platform,
                 "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
   cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");

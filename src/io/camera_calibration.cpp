@@ -6,6 +6,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
+#include "text_parsers.h"
 #include "yaml_reader.h"
 
 namespace ssta {
@@ -56,7 +57,13 @@ bool CameraCalibration::IsValid(std::string* error) const {
 }
 
 CameraCalibration LoadCameraCalibration(const std::string& path) {
-  const YAML::Node root = internal::ParseYaml(ReadTextFile(path), path);
+  return internal::ParseCameraCalibration(ReadTextFile(path), path);
+}
+
+namespace internal {
+
+CameraCalibration ParseCameraCalibration(const std::string& text, const std::string& path) {
+  const YAML::Node root = internal::ParseYaml(text, path);
   internal::YamlSection yaml(root, path, "");
   CameraCalibration c;
 
@@ -110,6 +117,8 @@ CameraCalibration LoadCameraCalibration(const std::string& path) {
   if (!c.IsValid(&error)) throw Error(path + ": " + error);
   return c;
 }
+
+}  // namespace internal
 
 void SaveCameraCalibration(const CameraCalibration& c, const std::string& path,
                            const std::string& comment) {

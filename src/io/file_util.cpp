@@ -1,5 +1,8 @@
 #include "ssta/io/file_util.h"
 
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -23,12 +26,30 @@ std::string TemporaryName(const std::string& path) {
   return name.str();
 }
 
-void SyncFile(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) throw Error(path + ": cannot reopen to flush to disk");
+void SyncFile(const std::string& path, const std::string& tmp) {
+  const int fd = ::open(tmp.c_str(), O_RDONLY);
+  if (fd < 0) throw Error(path + ": cannot reopen " + tmp + " to flush it to disk: " + std::strerror(errno));
   const int rc = ::fsync(fd);
+  const int fsync_errno = errno;
   ::close(fd);
-  if (rc != 0) throw Error(path + ": flushing to disk failed (disk full?)");
+  if (rc != 0) throw Error(path + ": flushing to disk failed: " + std::strerror(fsync_errno));
+}
+
+/// Test seam for full disks: with SSTA_TEST_WRITE_FAULT_AFTER_BYTES=K in the environment, a
+/// temporary file that holds more than K bytes is cut to K bytes and the write fails the way a
+/// full disk fails it (ENOSPC), before anything is renamed. The tests of "a failed write leaves
+/// the previous file intact" use it (a tmpfs needs root, chmod does not stop root).
+void InjectedWriteFault(const std::string& path, const std::string& tmp) {
+  const char* limit_text = std::getenv("SSTA_TEST_WRITE_FAULT_AFTER_BYTES");
+  if (limit_text == nullptr || *limit_text == '\0') return;
+  char* end = nullptr;
+  const unsigned long long limit = std::strtoull(limit_text, &end, 10);
+  if (*end != '\0') throw Error(std::string("SSTA_TEST_WRITE_FAULT_AFTER_BYTES: not a byte count: '") + limit_text + "'");
+  std::error_code ec;
+  const auto size = fs::file_size(tmp, ec);
+  if (ec || size <= limit) return;
+  fs::resize_file(tmp, limit, ec);
+  throw Error(path + ": write failed: " + std::strerror(ENOSPC));
 }
 
 }  // namespace
@@ -42,7 +63,8 @@ void WriteFileAtomically(const std::string& path,
   const std::string tmp = TemporaryName(path);
   try {
     write(tmp);
-    SyncFile(tmp);
+    InjectedWriteFault(path, tmp);
+    SyncFile(path, tmp);
     std::error_code ec;
     fs::rename(tmp, target, ec);
     if (ec) throw Error(path + ": cannot replace the file: " + ec.message());

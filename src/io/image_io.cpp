@@ -1,5 +1,7 @@
 #include "ssta/io/image_io.h"
 
+#include <array>
+#include <cstdint>
 #include <filesystem>
 
 #include <opencv2/imgcodecs.hpp>
@@ -11,11 +13,59 @@
 namespace ssta {
 namespace {
 
+std::uint32_t Crc32(const unsigned char* data, std::size_t n, std::uint32_t crc = 0xffffffffu) {
+  static const auto table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xffu] ^ (crc >> 8);
+  return crc;
+}
+
+std::uint32_t BigEndian32(const unsigned char* p) {
+  return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
+}
+
+/// Walks a PNG's chunks and checks each one's CRC, so that a truncated or damaged file is
+/// reported here in one line: handed to OpenCV, libpng would print its own complaint to
+/// stderr first.
+void CheckPng(const std::string& bytes, const std::string& path) {
+  const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
+  std::size_t pos = 8;  // after the signature
+  while (pos + 12 <= bytes.size()) {
+    const std::uint32_t length = BigEndian32(p + pos);
+    const std::string type(bytes, pos + 4, 4);
+    if (length > bytes.size() - pos - 12) break;  // the chunk runs past the end
+    const std::uint32_t crc = Crc32(p + pos + 4, length + 4) ^ 0xffffffffu;  // over type and data
+    if (crc != BigEndian32(p + pos + 8 + length)) {
+      throw Error(path + ": corrupt PNG (CRC error in its " + type + " chunk)");
+    }
+    if (type == "IEND") return;
+    pos += 12 + length;
+  }
+  throw Error(path + ": truncated PNG (the file ends before its IEND chunk)");
+}
+
 cv::Mat ReadMat(const std::string& path, int flags) {
   if (!std::filesystem::exists(path)) throw Error(path + ": image file not found");
+  const std::string bytes = ReadTextFile(path);
+  static const std::string kPngSignature("\x89PNG\r\n\x1a\n", 8);
+  if (bytes.compare(0, kPngSignature.size(), kPngSignature) == 0) CheckPng(bytes, path);
+  // JPEG: a file cut short lacks the end-of-image marker near its end (some writers pad after
+  // it); libjpeg would only warn on stderr and decode the rest as grey.
+  if (bytes.compare(0, 2, "\xff\xd8") == 0) {
+    const std::size_t tail = bytes.size() > 1024 ? bytes.size() - 1024 : 2;
+    if (bytes.find("\xff\xd9", tail) == std::string::npos) throw Error(path + ": truncated JPEG (no end-of-image marker)");
+  }
   cv::Mat m;
   try {
-    m = cv::imread(path, flags);
+    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+    m = cv::imdecode(buffer, flags);
   } catch (const cv::Exception& e) {
     throw Error(path + ": cannot decode image: " + e.what());
   }

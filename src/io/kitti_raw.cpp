@@ -1,6 +1,8 @@
 // KITTI raw drive reader: rectified grey stereo (image_00, image_01), OXTS poses, calibration.
 
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
@@ -8,7 +10,9 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
 #include "ssta/io/sequence.h"
+#include "text_parsers.h"
 
 namespace fs = std::filesystem;
 
@@ -17,24 +21,9 @@ namespace {
 
 constexpr double kEarthRadiusM = 6378137.0;  // as KITTI's development kit
 
-/// "key: v1 v2 ..." lines of a KITTI calibration file.
 std::map<std::string, std::vector<double>> ReadCalibFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": file not found");
-  std::map<std::string, std::vector<double>> out;
-  std::string line;
-  while (std::getline(in, line)) {
-    const auto colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    const std::string key = line.substr(0, colon);
-    std::istringstream values(line.substr(colon + 1));
-    std::vector<double> v;
-    double x;
-    while (values >> x) v.push_back(x);
-    if (values.fail() && !values.eof()) continue;  // text values (calib_time)
-    out[key] = v;
-  }
-  return out;
+  if (!fs::exists(path)) throw Error(path + ": file not found");
+  return internal::ParseKittiCalib(ReadTextFile(path));
 }
 
 const std::vector<double>& Need(const std::map<std::string, std::vector<double>>& calib, const std::string& key,
@@ -61,36 +50,79 @@ std::string FindCalib(const fs::path& drive, const std::string& name) {
   throw Error(drive.string() + ": " + name + " not found in the drive folder or its parent");
 }
 
-/// "2011-09-26 13:02:25.964389445" (UTC) -> ns since the epoch.
+/// "2011-09-26 13:02:25.964389445" (UTC) -> ns since the epoch. Fields are range-checked so
+/// that no arithmetic below can overflow.
 std::int64_t ParseKittiTime(const std::string& text, const std::string& where) {
-  std::tm tm{};
-  int year, month, day, hour, minute;
-  double seconds;
-  if (std::sscanf(text.c_str(), "%d-%d-%d %d:%d:%lf", &year, &month, &day, &hour, &minute, &seconds) != 6) {
-    throw Error(where + ": bad timestamp '" + text + "'");
+  int year = 0, month = 0, day = 0, hour = 0, minute = 0, second = 0, used = 0;
+  const auto bad = [&]() { return Error(where + ": bad timestamp '" + text + "'"); };
+  if (std::sscanf(text.c_str(), "%4d-%2d-%2d %2d:%2d:%2d%n", &year, &month, &day, &hour, &minute, &second, &used) != 6) {
+    throw bad();
   }
+  if (year < 1970 || year > 2200 || month < 1 || month > 12 || day < 1 || day > 31 || hour < 0 || hour > 23 ||
+      minute < 0 || minute > 59 || second < 0 || second > 60) {
+    throw bad();
+  }
+  // Optional fraction: '.' and up to nine digits are kept (more are ignored), then only blanks.
+  std::int64_t frac_ns = 0;
+  std::size_t pos = static_cast<std::size_t>(used);
+  if (pos < text.size() && text[pos] == '.') {
+    ++pos;
+    int digits = 0;
+    while (pos < text.size() && std::isdigit(static_cast<unsigned char>(text[pos]))) {
+      if (digits < 9) frac_ns = frac_ns * 10 + (text[pos] - '0');
+      ++digits;
+      ++pos;
+    }
+    if (digits == 0) throw bad();
+    for (; digits < 9; ++digits) frac_ns *= 10;
+  }
+  if (text.find_first_not_of(" \t\r", pos) != std::string::npos) throw bad();
+  std::tm tm{};
   tm.tm_year = year - 1900;
   tm.tm_mon = month - 1;
   tm.tm_mday = day;
   tm.tm_hour = hour;
   tm.tm_min = minute;
-  const auto whole = static_cast<std::int64_t>(std::floor(seconds));
-  tm.tm_sec = static_cast<int>(whole);
+  tm.tm_sec = second;
   const std::int64_t epoch_s = timegm(&tm);
-  // Read the fraction from the text to keep all nine digits.
-  std::int64_t frac_ns = 0;
-  const auto dot = text.rfind('.');
-  if (dot != std::string::npos) {
-    std::string digits = text.substr(dot + 1, 9);
-    digits.resize(9, '0');
-    frac_ns = std::stoll(digits);
-  }
   return epoch_s * 1'000'000'000LL + frac_ns;
 }
 
 std::vector<std::int64_t> ReadTimestamps(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": file not found");
+  if (!fs::exists(path)) throw Error(path + ": file not found");
+  return internal::ParseKittiTimestamps(ReadTextFile(path), path);
+}
+
+std::string Indexed(const fs::path& dir, std::size_t i, const char* ext) {
+  char name[32];
+  std::snprintf(name, sizeof(name), "%010zu%s", i, ext);
+  return (dir / name).string();
+}
+
+}  // namespace
+
+namespace internal {
+
+std::map<std::string, std::vector<double>> ParseKittiCalib(const std::string& text) {
+  std::istringstream in(text);
+  std::map<std::string, std::vector<double>> out;
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    const std::string key = line.substr(0, colon);
+    std::istringstream values(line.substr(colon + 1));
+    std::vector<double> v;
+    double x;
+    while (values >> x) v.push_back(x);
+    if (values.fail() && !values.eof()) continue;  // text values (calib_time)
+    out[key] = v;
+  }
+  return out;
+}
+
+std::vector<std::int64_t> ParseKittiTimestamps(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
   std::vector<std::int64_t> out;
   std::string line;
   int n = 0;
@@ -104,13 +136,20 @@ std::vector<std::int64_t> ReadTimestamps(const std::string& path) {
   return out;
 }
 
-std::string Indexed(const fs::path& dir, std::size_t i, const char* ext) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "%010zu%s", i, ext);
-  return (dir / name).string();
+std::vector<double> ParseOxtsRow(const std::string& text, const std::string& path) {
+  std::istringstream in(text);
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  if (v.size() < 6) throw Error(path + ": expected at least 6 numbers (lat lon alt roll pitch yaw)");
+  for (int k = 0; k < 6; ++k) {
+    if (!std::isfinite(v[k])) throw Error(path + ": NaN or infinite value");
+  }
+  if (std::abs(v[0]) >= 90.0) throw Error(path + ": latitude must lie strictly between -90 and 90 degrees");
+  return v;
 }
 
-}  // namespace
+}  // namespace internal
 
 Sequence Sequence::OpenKittiRaw(const std::string& path) {
   const fs::path drive(path);
@@ -135,6 +174,11 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
   const Eigen::Isometry3d velo_T_imu = RigidFrom(Need(imu, "R", 9, imu_file), Need(imu, "T", 3, imu_file));
   const Eigen::Isometry3d rect_T_cam0 = RigidFrom(r_rect, {0, 0, 0});
 
+  for (const double pixels : size) {
+    if (!(pixels >= 1 && pixels <= 100000) || pixels != std::floor(pixels)) {
+      throw Error(cam_file + ": S_rect_00: must be two positive whole numbers");
+    }
+  }
   CameraCalibration left;
   left.width = static_cast<int>(size[0]);
   left.height = static_cast<int>(size[1]);
@@ -157,6 +201,7 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
   // Frames: image_00 / image_01 by index (the synced drive has one row per index).
   const auto left_times = ReadTimestamps((drive / "image_00/timestamps.txt").string());
   const auto right_times = ReadTimestamps((drive / "image_01/timestamps.txt").string());
+  if (left_times.empty()) throw Error((drive / "image_00/timestamps.txt").string() + ": lists no frames (an empty sequence)");
   if (left_times.size() != right_times.size()) {
     throw Error(path + ": image_00 and image_01 list " + std::to_string(left_times.size()) + " and " +
                 std::to_string(right_times.size()) + " timestamps");
@@ -176,19 +221,13 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
   // OXTS -> poses (KITTI devkit: Mercator at the first latitude, R = Rz(yaw) Ry(pitch) Rx(roll),
   // relative to the first pose).
   const auto oxts_times = ReadTimestamps((drive / "oxts/timestamps.txt").string());
+  seq.pose_path = (drive / "oxts").string();
   double scale = 0.0;
   Eigen::Isometry3d first_inv = Eigen::Isometry3d::Identity();
   for (std::size_t i = 0; i < oxts_times.size(); ++i) {
     const std::string file = Indexed(drive / "oxts/data", i, ".txt");
-    std::ifstream in(file);
-    if (!in) throw Error(file + ": file not found");
-    std::vector<double> v;
-    double x;
-    while (in >> x) v.push_back(x);
-    if (v.size() < 6) throw Error(file + ": expected at least 6 numbers (lat lon alt roll pitch yaw)");
-    for (int k = 0; k < 6; ++k) {
-      if (!std::isfinite(v[k])) throw Error(file + ": NaN or infinite value");
-    }
+    if (!fs::exists(file)) throw Error(file + ": file not found");
+    const std::vector<double> v = internal::ParseOxtsRow(ReadTextFile(file), file);
     const double lat = v[0], lon = v[1], alt = v[2];
     if (i == 0) scale = std::cos(lat * M_PI / 180.0);
     const double mx = scale * lon * M_PI * kEarthRadiusM / 180.0;

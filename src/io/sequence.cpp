@@ -9,6 +9,8 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
+#include "text_parsers.h"
 #include "yaml_reader.h"
 
 namespace fs = std::filesystem;
@@ -17,6 +19,8 @@ namespace ssta {
 namespace {
 
 constexpr std::int64_t kPairToleranceNs = 1'000'000;  // 1 ms (INTERFACES section 2)
+// Pose files print unit quaternions to a few digits at least; a norm further off is damage.
+constexpr double kMaxQuaternionNormError = 0.01;
 
 std::string Trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r\n");
@@ -59,12 +63,13 @@ double ParseNumber(const std::string& text, const std::string& where) {
   return value;
 }
 
-/// Calls `row(cols, where)` for every data row of an ASL CSV (comment and blank lines skipped),
-/// after checking the column count and that the first column, a timestamp, strictly increases.
+/// Calls `row(t, cols, where, line)` for every data row of an ASL CSV given as text (comment
+/// and blank lines skipped), after checking the column count and that the first column, a
+/// timestamp, strictly increases.
 template <typename Row>
-void ForEachCsvRow(const std::string& path, std::size_t columns, const char* expected, Row row) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open");
+void ForEachCsvRow(const std::string& text, const std::string& path, std::size_t columns, const std::string& expected,
+                   Row row) {
+  std::istringstream in(text);
   std::string line;
   int n = 0;
   std::int64_t previous = 0;
@@ -88,28 +93,22 @@ void ForEachCsvRow(const std::string& path, std::size_t columns, const char* exp
   }
 }
 
-struct ImageEntry {
-  std::int64_t timestamp_ns;
-  std::string file;
-};
-
-std::vector<ImageEntry> ReadImageList(const std::string& cam_dir) {
+std::vector<internal::ImageListEntry> ReadImageList(const std::string& cam_dir) {
   const std::string csv = cam_dir + "/data.csv";
   if (!fs::exists(csv)) throw Error(csv + ": file not found");
-  std::vector<ImageEntry> out;
-  ForEachCsvRow(csv, 2, "'timestamp,filename'",
-                [&](std::int64_t t, const std::vector<std::string>& cols, const std::string&, int) {
-                  out.push_back({t, cam_dir + "/data/" + cols[1]});
-                });
+  auto out = internal::ParseAslImageList(ReadTextFile(csv), csv);
+  for (auto& entry : out) entry.file = cam_dir + "/data/" + entry.file;
   return out;
 }
 
 }  // namespace
 
-std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
+namespace internal {
+
+std::vector<CsvRow> ParseAslNumericCsv(const std::string& text, const std::string& path, int columns) {
   std::vector<CsvRow> rows;
   const std::string expected = std::to_string(columns) + " columns";
-  ForEachCsvRow(path, static_cast<std::size_t>(columns), expected.c_str(),
+  ForEachCsvRow(text, path, static_cast<std::size_t>(columns), expected,
                 [&](std::int64_t t, const std::vector<std::string>& cols, const std::string& where, int line) {
                   CsvRow row;
                   row.line = line;
@@ -118,6 +117,73 @@ std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
                   rows.push_back(std::move(row));
                 });
   return rows;
+}
+
+std::vector<ImageListEntry> ParseAslImageList(const std::string& text, const std::string& path) {
+  std::vector<ImageListEntry> out;
+  ForEachCsvRow(text, path, 2, "'timestamp,filename'",
+                [&](std::int64_t t, const std::vector<std::string>& cols, const std::string& where, int) {
+                  if (cols[1].empty()) throw Error(where + ": empty file name");
+                  out.push_back({t, cols[1]});
+                });
+  return out;
+}
+
+std::vector<ImuSample> ParseAslImuCsv(const std::string& text, const std::string& path) {
+  std::vector<ImuSample> out;
+  for (const auto& row : ParseAslNumericCsv(text, path, 7)) {
+    ImuSample s;
+    s.timestamp_ns = row.timestamp_ns;
+    s.angular_rate = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
+    s.specific_force = Eigen::Vector3d(row.values[3], row.values[4], row.values[5]);
+    out.push_back(s);
+  }
+  return out;
+}
+
+std::vector<PoseSample> ParseAslPoseCsv(const std::string& text, const std::string& path) {
+  // The column count comes from the first data row (EuRoC's ground truth has 17, pose0 has 8).
+  std::istringstream probe(text);
+  std::string first;
+  int first_line = 0;
+  for (std::string line; std::getline(probe, line);) {
+    ++first_line;
+    line = Trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    first = line;
+    break;
+  }
+  const int columns = first.empty() ? 8 : static_cast<int>(SplitCommas(first).size());
+  if (columns < 8) {
+    throw Error(path + ":" + std::to_string(first_line) + ": expected at least 8 columns (t, p, q), found " +
+                std::to_string(columns));
+  }
+  std::vector<PoseSample> out;
+  for (const auto& row : ParseAslNumericCsv(text, path, columns)) {
+    PoseSample p;
+    p.timestamp_ns = row.timestamp_ns;
+    p.world_p_body = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
+    Eigen::Quaterniond q(row.values[3], row.values[4], row.values[5], row.values[6]);
+    const double norm = q.norm();
+    if (!std::isfinite(norm)) throw Error(path + ":" + std::to_string(row.line) + ": quaternion too large to normalise");
+    if (norm < 1e-6) throw Error(path + ":" + std::to_string(row.line) + ": zero quaternion");
+    if (std::abs(norm - 1.0) > kMaxQuaternionNormError) {
+      std::ostringstream m;
+      m << path << ":" << row.line << ": quaternion norm " << norm << " is not 1 (a corrupt row?)";
+      throw Error(m.str());
+    }
+    q.normalize();
+    p.world_q_body = q;
+    out.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace internal
+
+std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
+  if (!fs::exists(path)) throw Error(path + ": file not found");
+  return internal::ParseAslNumericCsv(ReadTextFile(path), path, columns);
 }
 
 Sequence::Sequence(SequenceData data) : data_(std::move(data)) {}
@@ -144,6 +210,7 @@ Sequence Sequence::OpenAsl(const std::string& path) {
 
   const auto left = ReadImageList(cam0);
   const auto right = ReadImageList(cam1);
+  if (left.empty()) throw Error(cam0 + "/data.csv: lists no frames (an empty sequence)");
   // Pair by timestamp: exact, or the nearest right frame within 1 ms.
   std::vector<bool> right_used(right.size(), false);
   std::size_t j = 0;
@@ -180,13 +247,8 @@ Sequence Sequence::OpenAsl(const std::string& path) {
 
   const std::string imu_csv = seq.root + "/imu0/data.csv";
   if (fs::exists(imu_csv)) {
-    for (const auto& row : ReadAslNumericCsv(imu_csv, 7)) {
-      ImuSample s;
-      s.timestamp_ns = row.timestamp_ns;
-      s.angular_rate = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
-      s.specific_force = Eigen::Vector3d(row.values[3], row.values[4], row.values[5]);
-      seq.imu.push_back(s);
-    }
+    seq.imu = internal::ParseAslImuCsv(ReadTextFile(imu_csv), imu_csv);
+    seq.imu_path = imu_csv;
     const std::string imu_yaml = seq.root + "/imu0/sensor.yaml";
     if (fs::exists(imu_yaml)) {
       const YAML::Node root = internal::ParseYaml(ReadTextFile(imu_yaml), imu_yaml);
@@ -208,23 +270,8 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   std::string pose_csv = seq.root + "/pose0/data.csv";
   if (!fs::exists(pose_csv)) pose_csv = seq.root + "/state_groundtruth_estimate0/data.csv";
   if (fs::exists(pose_csv)) {
-    std::ifstream probe(pose_csv);
-    std::string header;
-    std::getline(probe, header);
-    std::string first;
-    std::getline(probe, first);
-    const int columns = first.empty() ? 8 : static_cast<int>(SplitCommas(Trim(first)).size());
-    if (columns < 8) throw Error(pose_csv + ":2: expected at least 8 columns (t, p, q)");
-    for (const auto& row : ReadAslNumericCsv(pose_csv, columns)) {
-      PoseSample p;
-      p.timestamp_ns = row.timestamp_ns;
-      p.world_p_body = Eigen::Vector3d(row.values[0], row.values[1], row.values[2]);
-      Eigen::Quaterniond q(row.values[3], row.values[4], row.values[5], row.values[6]);
-      if (q.norm() < 1e-6) throw Error(pose_csv + ":" + std::to_string(row.line) + ": zero quaternion");
-      q.normalize();
-      p.world_q_body = q;
-      seq.poses.push_back(p);
-    }
+    seq.poses = internal::ParseAslPoseCsv(ReadTextFile(pose_csv), pose_csv);
+    seq.pose_path = pose_csv;
   }
 
   for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(seq.root) / "vehicle.yaml"}) {
@@ -234,6 +281,22 @@ Sequence Sequence::OpenAsl(const std::string& path) {
     }
   }
   return Sequence(std::move(seq));
+}
+
+StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration& calibration) {
+  const auto read = [](const std::string& path, const CameraCalibration& c, const char* camera) {
+    ImageU8 image = ReadGreyImage(path);
+    if (image.width() != c.width || image.height() != c.height) {
+      throw Error(path + ": image is " + std::to_string(image.width()) + "x" + std::to_string(image.height()) +
+                  " px, the " + camera + " calibration (sensor.yaml resolution) says " + std::to_string(c.width) +
+                  "x" + std::to_string(c.height));
+    }
+    return image;
+  };
+  StereoImages out;
+  out.left = read(frame.left_path, calibration.left, "cam0");
+  out.right = read(frame.right_path, calibration.right, "cam1");
+  return out;
 }
 
 std::vector<StereoFrame> SelectFrames(const std::vector<StereoFrame>& frames, int every, int max_frames) {

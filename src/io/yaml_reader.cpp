@@ -57,7 +57,8 @@ YamlSection YamlSection::Child(const std::string& key) {
 void YamlSection::RejectUnknownKeys() const {
   if (!node_ || !node_.IsMap()) return;
   for (const auto& item : node_) {
-    const auto key = item.first.as<std::string>();
+    if (!item.first.IsScalar()) throw Error(file_ + ": " + (path_.empty() ? "top level" : path_) + ": keys must be plain names");
+    const auto key = item.first.Scalar();
     if (used_.count(key) == 0) throw Error(Name(key) + ": unknown key");
   }
 }

@@ -23,6 +23,7 @@
 #include <limits>
 #include <sstream>
 #include <streambuf>
+#include <vector>
 
 #include <yaml-cpp/yaml.h>
 
@@ -222,6 +223,52 @@ std::size_t VerifyTrailer(const std::string& bytes, const std::string& path) {
   return tag;
 }
 
+/// Walks the node stream [begin, end) the way OctoMap's reader will (a node's payload, then a
+/// byte whose bits say which of its eight children follow, depth first) without recursion,
+/// and checks what that reader does not: every node is complete, no node lies deeper than
+/// `max_depth`, every payload value is finite, the stream ends exactly at `end` and holds
+/// `expected_nodes` nodes. Only then may OctoMap's recursive reader, which trusts its input
+/// (a lying stream makes it recurse without bound or read uninitialised bytes), see it.
+void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std::uint64_t expected_nodes,
+                     const std::string& path) {
+  const std::string corrupt = path + ": corrupt map (";
+  MemoryStreamBuf buffer(begin, end);
+  std::istream in(&buffer);
+  std::vector<int> children_left;  // per open ancestor: children still to read
+  std::uint64_t nodes = 0;
+  internal::TravNode node;
+  const auto read_node = [&](unsigned depth) {
+    node.readData(in);
+    char children = 0;
+    in.read(&children, 1);
+    if (!in) throw Error(corrupt + "the node stream ends inside node " + std::to_string(nodes) + ")");
+    ++nodes;
+    const float values[] = {node.getValue(), node.class_log_odds[0], node.class_log_odds[1],
+                            node.class_log_odds[2], node.slope_deg, node.step_m, node.max_step_m};
+    for (const float v : values) {
+      if (!std::isfinite(v)) throw Error(corrupt + "node " + std::to_string(nodes - 1) + " holds NaN or infinity)");
+    }
+    const auto bits = static_cast<unsigned char>(children);
+    if (bits == 0) return;
+    if (depth >= max_depth) throw Error(corrupt + "a node lies deeper than the tree depth)");
+    int count = 0;
+    for (int i = 0; i < 8; ++i) count += (bits >> i) & 1;
+    children_left.push_back(count);
+  };
+  read_node(0);
+  while (!children_left.empty()) {
+    if (children_left.back() == 0) {
+      children_left.pop_back();
+      continue;
+    }
+    --children_left.back();
+    read_node(static_cast<unsigned>(children_left.size()));
+  }
+  if (buffer.consumed() != static_cast<std::size_t>(end - begin) || nodes != expected_nodes) {
+    throw Error(corrupt + "the node stream does not match its header)");
+  }
+}
+
 void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* options,
                   MapMetadata* metadata, std::uint64_t* frames, std::int64_t* last_ts,
                   std::string* software_version) {
@@ -305,10 +352,13 @@ void TraversabilityMap::Save(const std::string& path) const {
 }
 
 TraversabilityMap TraversabilityMap::Load(const std::string& path) {
-  const std::string bytes = ReadTextFile(path);  // binary-safe; throws naming the file
+  return internal::TraversabilityMapAccess::LoadFromBytes(ReadTextFile(path), path);  // binary-safe; throws naming the file
+}
+
+TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::string& bytes, const std::string& path) {
   const Header header = ParseHeader(bytes, path);
 
-  auto impl = std::make_unique<Impl>();
+  auto impl = std::make_unique<TraversabilityMap::Impl>();
   // The metadata (and with it the format version) is read before the node stream is trusted.
   ReadMetadata(header.metadata_yaml, path, &impl->options, &impl->metadata,
                &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version);
@@ -321,6 +371,8 @@ TraversabilityMap TraversabilityMap::Load(const std::string& path) {
 
   impl->tree = internal::MakeTree(impl->options);
   if (header.size > 0) {
+    CheckNodeStream(bytes.data() + header.data_begin, bytes.data() + data_end, impl->tree->getTreeDepth(),
+                    header.size, path);
     MemoryStreamBuf buffer(bytes.data() + header.data_begin, bytes.data() + data_end);
     std::istream in(&buffer);
     impl->tree->readData(in);

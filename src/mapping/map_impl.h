@@ -35,6 +35,9 @@ struct TraversabilityMapAccess {
   static const TravOcTree& Tree(const TraversabilityMap& map) { return *map.impl_->tree; }
   static TraversabilityMap::Impl& Impl(TraversabilityMap& map) { return *map.impl_; }
   static const TraversabilityMap::Impl& Impl(const TraversabilityMap& map) { return *map.impl_; }
+  /// TraversabilityMap::Load on the bytes of the file `path` (`path` only names it in
+  /// messages); the fuzz target calls it directly. Defined in map_file.cpp.
+  static TraversabilityMap LoadFromBytes(const std::string& bytes, const std::string& path);
   static TraversabilityMap FromImpl(std::unique_ptr<TraversabilityMap::Impl> impl) {
     return TraversabilityMap(std::move(impl));
   }

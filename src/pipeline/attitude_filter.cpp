@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "ssta/core/error.h"
 
@@ -15,6 +16,24 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
+/// The initial window is taken as the attitude at rest; when it looks at rest (slow rotation,
+/// steady |a|), the mean specific force must be gravity. An IMU in g, or with a scale error,
+/// would otherwise give a plausible up and silently wrong gating.
+void CheckGravityAtRest(const Eigen::Vector3d& mean_force, double mean_norm, double norm_spread, double mean_rate,
+                        int samples, const AttitudeFilterOptions& options, const std::string& imu_file) {
+  const bool at_rest = mean_rate < 0.5 && norm_spread <= 0.1 * mean_norm;
+  if (!at_rest) return;
+  const double reading = mean_force.norm();
+  if (std::abs(reading - kGravity) <= options.max_rest_gravity_error_mps2) return;
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                ": the IMU at rest reads %.3g m/s^2 (mean of the first %d samples), gravity is 9.81; off by more "
+                "than attitude.max_rest_gravity_error_mps2 = %g (accelerometer in g instead of m/s^2, or a scale "
+                "error?)",
+                reading, samples, options.max_rest_gravity_error_mps2);
+  throw Error(imu_file + text);
+}
+
 }  // namespace
 
 bool AttitudeFilterOptions::IsValid(std::string* error) const {
@@ -22,11 +41,14 @@ bool AttitudeFilterOptions::IsValid(std::string* error) const {
   if (!(ki >= 0 && ki <= 10)) return Fail(error, "ki: must be in [0, 10] 1/s^2");
   if (!(accel_gate > 0 && accel_gate <= 1)) return Fail(error, "accel_gate: must be in (0, 1]");
   if (!(init_window_s > 0 && init_window_s <= 10)) return Fail(error, "init_window_s: must be in (0, 10] s");
+  if (!(max_rest_gravity_error_mps2 > 0 && max_rest_gravity_error_mps2 <= kGravity)) {
+    return Fail(error, "max_rest_gravity_error_mps2: must be in (0, 9.81] m/s^2");
+  }
   return true;
 }
 
 GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isometry3d& body_T_imu,
-                           const AttitudeFilterOptions& options) {
+                           const AttitudeFilterOptions& options, const std::string& imu_file) {
   std::string error;
   if (!options.IsValid(&error)) throw Error("attitude." + error);
   if (imu.empty()) return;
@@ -35,11 +57,19 @@ GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isome
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   const auto init_end = imu.front().timestamp_ns + static_cast<std::int64_t>(options.init_window_s * 1e9);
   int n = 0;
+  double norm_sum = 0.0, norm_sq_sum = 0.0, rate_sum = 0.0;
   for (const ImuSample& s : imu) {
     if (s.timestamp_ns > init_end && n > 0) break;
     mean += s.specific_force;
+    const double a = s.specific_force.norm();
+    norm_sum += a;
+    norm_sq_sum += a * a;
+    rate_sum += s.angular_rate.norm();
     ++n;
   }
+  mean /= n;
+  CheckGravityAtRest(mean, norm_sum / n, std::sqrt(std::max(0.0, norm_sq_sum / n - (norm_sum / n) * (norm_sum / n))),
+                     rate_sum / n, n, options, imu_file);
   // world_q_imu maps IMU vectors into a world frame with z up (yaw is arbitrary).
   Eigen::Quaterniond world_q_imu = mean.norm() > 1e-6
                                        ? Eigen::Quaterniond::FromTwoVectors(mean.normalized(), Eigen::Vector3d::UnitZ())

@@ -308,8 +308,9 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
 
   for (int k = 0; k < options.warmup_frames + measured; ++k) {
     const StereoFrame& frame = sequence.frames()[static_cast<std::size_t>(k)];
-    const ImageU8 left = ReadGreyImage(frame.left_path);
-    const ImageU8 right = ReadGreyImage(frame.right_path);
+    const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+    const ImageU8& left = images.left;
+    const ImageU8& right = images.right;
     const std::int64_t t = frame.timestamp_ns;
     const Eigen::Isometry3d world_T_body =
         gravity.WorldTBodyAt(t).value_or(CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t)));

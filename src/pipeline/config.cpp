@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "io/yaml_reader.h"
+#include "pipeline/config_text.h"
 #include "ssta/io/file_util.h"
 
 namespace ssta {
@@ -160,7 +161,11 @@ bool Config::IsValid(std::string* error) const {
 }
 
 void ApplyConfigFile(const std::string& path, Config* config) {
-  YamlSection root(internal::ParseYaml(ReadTextFile(path), path), path, "");
+  internal::ApplyConfigText(ReadTextFile(path), path, config);
+}
+
+void internal::ApplyConfigText(const std::string& text, const std::string& path, Config* config) {
+  YamlSection root(internal::ParseYaml(text, path), path, "");
   Config c = *config;
   ReadVehicle(root.Child("vehicle"), &c.vehicle);
   {
@@ -204,6 +209,7 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.Read("ki", &c.attitude.ki);
     s.Read("accel_gate", &c.attitude.accel_gate);
     s.Read("init_window_s", &c.attitude.init_window_s);
+    s.Read("max_rest_gravity_error_mps2", &c.attitude.max_rest_gravity_error_mps2);
     s.RejectUnknownKeys();
   }
   {
@@ -333,7 +339,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  kp: " << c.attitude.kp << "\n"
     << "  ki: " << c.attitude.ki << "\n"
     << "  accel_gate: " << c.attitude.accel_gate << "\n"
-    << "  init_window_s: " << c.attitude.init_window_s << "\n";
+    << "  init_window_s: " << c.attitude.init_window_s << "\n"
+    << "  max_rest_gravity_error_mps2: " << c.attitude.max_rest_gravity_error_mps2 << "\n";
   const MapOptions& f = c.map.fusion;
   y << "map:\n"
     << "  resolution_m: " << f.resolution_m << "\n"

@@ -6,7 +6,7 @@ GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions&
                                  const AttitudeFilterOptions& attitude)
     : sequence_(sequence), gravity_(gravity) {
   if (!sequence.imu().empty() && gravity.source != GravitySource::kPose && gravity.source != GravitySource::kLevel) {
-    track_ = std::make_unique<GravityTrack>(sequence.imu(), sequence.body_T_imu(), attitude);
+    track_ = std::make_unique<GravityTrack>(sequence.imu(), sequence.body_T_imu(), attitude, sequence.imu_path());
   }
 }
 
@@ -21,12 +21,20 @@ Eigen::Vector3d GravityProvider::UpInBody(std::int64_t t, std::string* source_us
       if (auto up = track_->UpInBodyAt(t)) return answer(*up, "imu");
     }
     if (s == GravitySource::kImu) {
-      throw Error("gravity.source is 'imu' but there are no IMU samples at frame " + std::to_string(t));
+      const auto& imu = sequence_.imu();
+      if (imu.empty()) throw Error(sequence_.root() + ": gravity.source is 'imu' but the sequence has no IMU (imu0/data.csv)");
+      throw Error(sequence_.imu_path() + ": gravity.source is 'imu' but the IMU samples (" +
+                  std::to_string(imu.front().timestamp_ns) + " to " + std::to_string(imu.back().timestamp_ns) +
+                  " ns) do not cover frame " + std::to_string(t));
     }
   }
   if (s == GravitySource::kPose || s == GravitySource::kAuto) {
     if (auto pose = sequence_.WorldTBodyAt(t)) return answer(pose->linear().transpose() * Eigen::Vector3d::UnitZ(), "pose");
-    if (s == GravitySource::kPose) throw Error("gravity.source is 'pose' but there is no pose at frame " + std::to_string(t));
+    if (s == GravitySource::kPose) {
+      throw Error((sequence_.pose_path().empty() ? sequence_.root() : sequence_.pose_path()) +
+                  ": gravity.source is 'pose' but there is no pose at frame " + std::to_string(t) + ": " +
+                  sequence_.NoPoseReason(t));
+    }
   }
   if (s == GravitySource::kFixed) {
     const Eigen::Matrix3d body_R_camera = sequence_.calibration().left.body_T_camera.linear();

@@ -1,5 +1,6 @@
 #include "ssta/pipeline/map_builder.h"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
@@ -43,7 +44,9 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
     throw Error(m.str());
   }
   MapMetadata metadata = map.metadata();
-  metadata.sequences.push_back(sequence_name);
+  if (metadata.sequences.empty() || metadata.sequences.back() != sequence_name) {
+    metadata.sequences.push_back(sequence_name);
+  }
   map.set_metadata(metadata);
   return map;
 }
@@ -100,9 +103,27 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
                 "use --static if the platform stands still");
   }
+  if (!options.static_platform && !sequence.frames().empty()) {
+    // Poses that overlap no frame are a mismatched recording, not a few frames to skip.
+    const std::int64_t first = sequence.poses().front().timestamp_ns, last = sequence.poses().back().timestamp_ns;
+    const bool overlap = std::any_of(sequence.frames().begin(), sequence.frames().end(), [&](const StereoFrame& f) {
+      return f.timestamp_ns >= first && f.timestamp_ns <= last;
+    });
+    if (!overlap) {
+      throw Error(sequence.pose_path() + ": the poses (" + std::to_string(first) + " to " + std::to_string(last) +
+                  " ns) overlap none of the " + std::to_string(sequence.frames().size()) +
+                  " frames (" + std::to_string(sequence.frames().front().timestamp_ns) + " to " +
+                  std::to_string(sequence.frames().back().timestamp_ns) + " ns)");
+    }
+  }
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
   TraversabilityMap map = OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), pipeline.geometry()));
+  // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
+  const bool continues_this_sequence = options.resume && map.frames_inserted() > 0 &&
+                                       !map.metadata().sequences.empty() &&
+                                       map.metadata().sequences.back() == sequence_name;
+  const std::int64_t fused_up_to = map.last_timestamp_ns();
 
   // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
   Eigen::Isometry3d body_T_rectified = sequence.calibration().left.body_T_camera;
@@ -137,6 +158,12 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
         summary.skipped.push_back({t, reason});
       });
     };
+    if (continues_this_sequence && t <= fused_up_to) {
+      fusion.Submit([&] { ++summary.frames_already_in_map; });
+      ++done;
+      if (progress) progress(done, static_cast<int>(todo.size()));
+      continue;
+    }
     std::optional<Eigen::Isometry3d> world_T_body;
     if (options.static_platform) {
       world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
@@ -148,8 +175,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     } else {
       std::shared_ptr<FrameResult> result;
       try {
-        const ImageU8 left = ReadGreyImage(frame.left_path);
-        const ImageU8 right = ReadGreyImage(frame.right_path);
+        const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+        const ImageU8& left = images.left;
+        const ImageU8& right = images.right;
         const Eigen::Vector3d up_camera =
             (sequence.calibration().left.body_T_camera.linear().transpose() *
              (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ())).normalized();
@@ -196,7 +224,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
 std::string BuildMapSummary::BriefReport() const {
   std::ostringstream r;
   r << std::fixed << std::setprecision(1);
-  r << "frames: " << frames_used << " fused, " << skipped.size() << " skipped, " << quality_failed.size()
+  r << "frames: " << frames_used << " fused, ";
+  if (frames_already_in_map > 0) r << frames_already_in_map << " already in the resumed map, ";
+  r << skipped.size() << " skipped, " << quality_failed.size()
     << " failed the quality check (free space only) (of " << frames_listed << " listed)"
     << (interrupted ? "; interrupted, the map holds what was fused" : "") << "\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
@@ -216,7 +246,8 @@ std::string BuildMapSummary::Json() const {
     }
     j << "]";
   };
-  j << "{\n  \"frames_listed\": " << frames_listed << ",\n  \"frames_used\": " << frames_used << ",\n  \"skipped\": ";
+  j << "{\n  \"frames_listed\": " << frames_listed << ",\n  \"frames_used\": " << frames_used
+    << ",\n  \"frames_already_in_map\": " << frames_already_in_map << ",\n  \"skipped\": ";
   list(skipped);
   j << ",\n  \"quality_failed\": ";
   list(quality_failed);

@@ -77,8 +77,9 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   for (const StereoFrame& frame : todo) {
     const std::string name = std::to_string(frame.timestamp_ns);
     try {
-      const ImageU8 left = ReadGreyImage(frame.left_path);
-      const ImageU8 right = ReadGreyImage(frame.right_path);
+      const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+      const ImageU8& left = images.left;
+      const ImageU8& right = images.right;
       const Eigen::Vector3d up = gravity.UpInCamera(frame.timestamp_ns);
       FrameResult result = options.oracle_disparity
                                ? pipeline.ProcessWithDisparity(left, right, ReadOracleDisparity(sequence, name), up)

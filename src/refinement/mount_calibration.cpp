@@ -47,8 +47,9 @@ MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, 
   for (std::size_t i = 0; i < todo.size(); ++i) {
     const std::int64_t t = todo[i].timestamp_ns;
     try {
-      const ImageU8 left = ReadGreyImage(todo[i].left_path);
-      const ImageU8 right = ReadGreyImage(todo[i].right_path);
+      const StereoImages images = ReadStereoImages(todo[i], sequence.calibration());
+      const ImageU8& left = images.left;
+      const ImageU8& right = images.right;
       // Gravity through the configured (uncorrected) mount: it only steers the choice of the
       // ground segment, whose points are what the refinement uses.
       FrameResult frame = pipeline.Process(left, right, gravity.UpInCamera(t));

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iterator>
 
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
@@ -108,6 +109,45 @@ TEST_F(KittiRawFixture, MissingCalibrationNamesTheFile) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("calib_imu_to_velo.txt"), std::string::npos) << e.what();
   }
+}
+
+/// Sequence::Open's error message (fails the test when it opens).
+std::string OpenError(const fs::path& drive) {
+  try {
+    Sequence::Open(drive.string());
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "opened";
+  return "";
+}
+
+TEST_F(KittiRawFixture, AnImageSizeThatIsNoPixelCountIsAnError) {
+  // 1e300 used to be cast to int (undefined behaviour).
+  for (const char* size : {"1e300 375", "nan 375", "-1242 375", "1242.5 375", "0 375"}) {
+    std::string text;
+    {
+      std::ifstream in(date_ / "calib_cam_to_cam.txt");
+      text.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    std::ofstream(date_ / "calib_cam_to_cam.txt") << text.replace(text.find("1.242000e+03 3.750000e+02"), 25, size);
+    const std::string m = OpenError(drive_);
+    // ("nan" is no number to the reader: the key counts as missing.)
+    EXPECT_NE(m.find("calib_cam_to_cam.txt: "), std::string::npos) << size << ": " << m;
+    EXPECT_NE(m.find("S_rect_00"), std::string::npos) << size << ": " << m;
+    std::ofstream(date_ / "calib_cam_to_cam.txt") << text.replace(text.find(size), std::string(size).size(),
+                                                                  "1.242000e+03 3.750000e+02");
+  }
+}
+
+TEST_F(KittiRawFixture, AnEmptyDriveIsAnErrorNamingItsTimestamps) {
+  std::ofstream(drive_ / "image_00/timestamps.txt").close();
+  EXPECT_NE(OpenError(drive_).find("image_00/timestamps.txt: lists no frames"), std::string::npos);
+}
+
+TEST_F(KittiRawFixture, ABadTimestampNamesTheFileAndLine) {
+  std::ofstream(drive_ / "oxts/timestamps.txt", std::ios::app) << "2011-09-26 13:02:25.x\n";
+  EXPECT_NE(OpenError(drive_).find("oxts/timestamps.txt:4: bad timestamp"), std::string::npos);
 }
 
 }  // namespace

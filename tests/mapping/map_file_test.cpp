@@ -1,5 +1,6 @@
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -183,6 +184,66 @@ TEST(MapFile, MissingTruncatedOrDamagedFilesAreErrorsNamingTheFile) {
   ExpectLoadError(bad, "checksum");
   WriteBytes(bad, "hello\n");
   ExpectLoadError(bad, "not an OctoMap");
+}
+
+/// `header` (up to and including "data\n", its "size" line set to `nodes`) + `stream`, with
+/// a valid end marker: what a hand-made or bit-rotted-then-rehashed file could hold.
+std::string Sealed(const std::string& header, std::uint64_t nodes, const std::string& stream) {
+  std::string head = header;
+  const auto size_at = head.find("\nsize ");
+  head.replace(size_at + 1, head.find('\n', size_at + 1) - size_at - 1, "size " + std::to_string(nodes));
+  const std::string body = head + stream;
+  std::uint64_t hash = 14695981039346656037ull;
+  for (const char c : body) {
+    hash ^= static_cast<unsigned char>(c);
+    hash *= 1099511628211ull;
+  }
+  char trailer[96];
+  std::snprintf(trailer, sizeof(trailer), "\n# ssta-map-end bytes %zu fnv1a64 %016llx\n", body.size(),
+                static_cast<unsigned long long>(hash));
+  return body + trailer;
+}
+
+/// One node as TravNode::writeData writes it (40 bytes, `value` first), then its child bits.
+std::string Node(float value, unsigned char children) {
+  std::string out(40, '\0');
+  std::memcpy(out.data(), &value, sizeof(value));
+  return out + static_cast<char>(children);
+}
+
+TEST(MapFile, ANodeStreamThatLiesBehindAValidChecksumIsRejected) {
+  // OctoMap's reader recurses once per level and trusts the stream: a chain of 300000 nodes,
+  // each with one child, used to overflow the stack (a crash, not an error), a missing child
+  // made it read past the end, and NaN payloads went into the map.
+  const TempDir dir;
+  const std::string good = dir / "good.ot";
+  BuildMap(1).Save(good);
+  const std::string bytes = ReadBytes(good);
+  const std::string header = bytes.substr(0, bytes.find("\ndata\n") + 6);
+  const std::string bad = dir / "bad.ot";
+
+  std::string chain;
+  const int deep = 300000;
+  for (int i = 0; i < deep; ++i) chain += Node(0.0f, i + 1 < deep ? 0x01 : 0x00);
+  WriteBytes(bad, Sealed(header, deep, chain));
+  ExpectLoadError(bad, "deeper than the tree depth");
+
+  WriteBytes(bad, Sealed(header, 3, Node(0.0f, 0x03) + Node(0.0f, 0x00)));  // the second child is missing
+  ExpectLoadError(bad, "ends inside node 2");
+
+  WriteBytes(bad, Sealed(header, 1, Node(std::nanf(""), 0x00)));
+  ExpectLoadError(bad, "NaN or infinity");
+
+  WriteBytes(bad, Sealed(header, 1, Node(0.0f, 0x00) + "extra"));
+  ExpectLoadError(bad, "does not match its header");
+
+  WriteBytes(bad, Sealed(header, 2, Node(0.0f, 0x00)));  // the header counts a node too many
+  ExpectLoadError(bad, "does not match its header");
+
+  // The same sealing around the real stream loads: the test's file surgery is sound.
+  const std::string stream = bytes.substr(header.size(), bytes.rfind("\n# ssta-map-end") - header.size());
+  WriteBytes(bad, Sealed(header, BuildMap(1).NumNodes(), stream));
+  EXPECT_EQ(TraversabilityMap::Load(bad).NumNodes(), BuildMap(1).NumNodes());
 }
 
 TEST(MapFile, APlainOcTreeFileIsTheWrongTreeType) {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "ssta/core/error.h"
 #include "ssta/pipeline/attitude_filter.h"
 
 namespace ssta {
@@ -87,6 +88,50 @@ TEST(CorrectRollPitch, KeepsPositionAndYawAndTakesRollPitchFromUp) {
   EXPECT_TRUE(fixed.translation().isApprox(Eigen::Vector3d(1, 2, 3)));
   EXPECT_TRUE((fixed.linear().transpose() * Eigen::Vector3d::UnitZ()).isApprox(up_body, 1e-9));
   EXPECT_NEAR(std::atan2(fixed.linear()(1, 0), fixed.linear()(0, 0)), true_yaw, 1e-9);
+}
+
+std::vector<ImuSample> ScaleAccelerometer(std::vector<ImuSample> imu, double scale) {
+  for (ImuSample& s : imu) s.specific_force *= scale;
+  return imu;
+}
+
+std::string ErrorOf(const std::vector<ImuSample>& imu, const AttitudeFilterOptions& options) {
+  try {
+    const GravityTrack track(imu, Eigen::Isometry3d::Identity(), options, "seq/imu0/data.csv");
+    (void)track;
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(GravityTrack, AnImuAtRestReadingGInsteadOfMetresPerSecondSquaredIsAnError) {
+  const std::string m = ErrorOf(ScaleAccelerometer(SimulateImu(1.0, Eigen::Vector3d::Zero()), 1.0 / 9.81), {});
+  EXPECT_EQ(m.rfind("seq/imu0/data.csv: the IMU at rest reads 1 m/s^2", 0), 0u) << m;
+  EXPECT_NE(m.find("attitude.max_rest_gravity_error_mps2 = 0.5"), std::string::npos) << m;
+}
+
+TEST(GravityTrack, TheRestGravityThresholdIsConfigurable) {
+  // 6 % scale error: 0.59 m/s^2 off.
+  const auto imu = ScaleAccelerometer(SimulateImu(1.0, Eigen::Vector3d::Zero()), 1.06);
+  EXPECT_NE(ErrorOf(imu, {}), "");
+  AttitudeFilterOptions lenient;
+  lenient.max_rest_gravity_error_mps2 = 0.7;
+  EXPECT_EQ(ErrorOf(imu, lenient), "");
+  // 4 % is within the default.
+  EXPECT_EQ(ErrorOf(ScaleAccelerometer(SimulateImu(1.0, Eigen::Vector3d::Zero()), 1.04), {}), "");
+}
+
+TEST(GravityTrack, AStartThatIsNotAtRestIsNotJudged) {
+  // Shaking hard over the initial window (|a| swings by far more than 10 %): not at rest, so
+  // the mean is no measure of gravity and no error is raised.
+  auto imu = SimulateImu(1.0, Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < imu.size(); ++i) imu[i].specific_force *= (i % 2 == 0 ? 0.5 : 1.2);
+  EXPECT_EQ(ErrorOf(imu, {}), "");
+  // Spinning fast (2 rad/s) is not at rest either.
+  auto spinning = ScaleAccelerometer(SimulateImu(1.0, Eigen::Vector3d::Zero()), 0.5);
+  for (ImuSample& s : spinning) s.angular_rate += Eigen::Vector3d(0, 0, 2.0);
+  EXPECT_EQ(ErrorOf(spinning, {}), "");
 }
 
 }  // namespace

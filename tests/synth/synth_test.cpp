@@ -21,6 +21,7 @@
 #include "ssta/synth/scene.h"
 #include "ssta/synth/sequence_synthesizer.h"
 #include "ssta/synth/vehicle_trajectory.h"
+#include "temp_dir.h"
 
 namespace ssta::synth {
 namespace {
@@ -28,18 +29,13 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
-/// A temporary folder, removed with everything in it when the test ends.
+/// The shared temporary folder (tests/temp_dir.h), with the Sub() spelling used below.
 class TempDir {
  public:
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "ssta_synth_test_XXXXXX").string();
-    path_ = mkdtemp(pattern.data());
-  }
-  ~TempDir() { fs::remove_all(path_); }
-  std::string Sub(const std::string& name) const { return path_ + "/" + name; }
+  std::string Sub(const std::string& name) const { return dir_ / name; }
 
  private:
-  std::string path_;
+  testing::TempDir dir_;
 };
 
 /// Small, quick options: 320x240 with the default field of view (focal length halved).

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/image.h"
 #include "ssta/io/camera_calibration.h"
 
 namespace ssta {
@@ -46,7 +47,9 @@ struct SequenceData {
   std::vector<StereoFrame> frames;
   std::vector<SkippedFrame> skipped;
   std::vector<ImuSample> imu;
+  std::string imu_path;  ///< the file `imu` was read from ("" without IMU), for messages
   std::vector<PoseSample> poses;
+  std::string pose_path;  ///< the file (or folder) `poses` were read from ("" without them)
   Eigen::Isometry3d body_T_imu = Eigen::Isometry3d::Identity();
   std::optional<std::string> vehicle_config;
 };
@@ -82,7 +85,11 @@ class Sequence {
   const std::vector<StereoFrame>& frames() const { return data_.frames; }
   const std::vector<SkippedFrame>& skipped() const { return data_.skipped; }
   const std::vector<ImuSample>& imu() const { return data_.imu; }
+  /// The file the IMU samples were read from ("" without them).
+  const std::string& imu_path() const { return data_.imu_path; }
   const std::vector<PoseSample>& poses() const { return data_.poses; }
+  /// The file (KITTI: the folder) the poses were read from ("" without them).
+  const std::string& pose_path() const { return data_.pose_path; }
   /// Pose of the IMU in the body frame (imu0/sensor.yaml T_BS; identity when absent).
   const Eigen::Isometry3d& body_T_imu() const { return data_.body_T_imu; }
   /// `vehicle.yaml` shipped with the sequence, if any (a config file with a vehicle section).
@@ -100,6 +107,18 @@ class Sequence {
  private:
   SequenceData data_;
 };
+
+/// The grey images of one stereo frame.
+struct StereoImages {
+  ImageU8 left;
+  ImageU8 right;
+};
+
+/// Reads both images of `frame` and checks their size against the calibration's resolution
+/// (sensor.yaml), so a left and right of different sizes or a resized image is caught at the
+/// file. Throws ssta::Error naming the image file that is missing, unreadable, truncated or of
+/// the wrong size.
+StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration& calibration);
 
 /// Every `every`-th frame from the first, at most `max_frames` of them (0: no limit).
 /// Precondition: every >= 1, max_frames >= 0.

@@ -19,6 +19,10 @@ struct AttitudeFilterOptions {
   /// trusted (the vehicle is accelerating): the filter integrates the gyro alone then.
   double accel_gate = 0.15;
   double init_window_s = 0.2;  ///< [s] accelerometer samples averaged for the initial attitude
+  /// [m/s^2] When the IMU is at rest over the initial window (mean gyro rate below 0.5 rad/s,
+  /// spread of |a| below 10 % of its mean), the mean specific force must read 9.81 within this;
+  /// otherwise the accelerometer's units or scale are wrong and the recording is rejected.
+  double max_rest_gravity_error_mps2 = 0.5;
   bool IsValid(std::string* error) const;
 };
 
@@ -27,9 +31,12 @@ struct AttitudeFilterOptions {
 class GravityTrack {
  public:
   /// Runs the filter over `imu` (IMU sensor frame) and expresses its up in the body through
-  /// `body_T_imu`. Precondition: samples sorted by time (Sequence guarantees it).
+  /// `body_T_imu`. Precondition: samples sorted by time (Sequence guarantees it). Throws
+  /// ssta::Error naming `imu_file` (the file the samples came from, for the message) when the
+  /// IMU at rest over the initial window reads gravity off 9.81 by more than
+  /// options.max_rest_gravity_error_mps2.
   GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isometry3d& body_T_imu,
-               const AttitudeFilterOptions& options);
+               const AttitudeFilterOptions& options, const std::string& imu_file = "imu0/data.csv");
 
   /// Up in the body at `t`, interpolated between filter samples; nullopt outside the IMU time
   /// range or without samples.

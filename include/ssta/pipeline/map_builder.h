@@ -38,6 +38,8 @@ struct BuildMapOptions {
 struct BuildMapSummary {
   int frames_listed = 0;
   int frames_used = 0;
+  /// Frames a resumed run found already fused (an interrupted run of the same sequence).
+  int frames_already_in_map = 0;
   std::vector<SkippedFrame> skipped;         ///< not fused, and why
   std::vector<SkippedFrame> quality_failed;  ///< fused for free space only: no class verdicts
   std::size_t map_nodes = 0;
@@ -65,6 +67,9 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
 /// without a pose are skipped with a reason. The map is saved atomically every
 /// config.map.checkpoint_every_frames frames and at the end, also when `stop` turns true (the
 /// run then ends after the current frame). Throws ssta::Error on bad input before any work.
+/// With `resume`, when the map's last sequence is `sequence_name` (a run that was interrupted
+/// or killed), frames up to the map's last fused timestamp are already in it and are not fused
+/// again; another sequence is fused whole.
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
                          const BuildMapOptions& options, const BuildProgress& progress = {},
                          const std::atomic<bool>* stop = nullptr);
