@@ -148,6 +148,12 @@ bool AnalysisOptions::IsValid(std::string* error) const {
     return Fail(error, "min_ground_share: must be in [0, 1]");
   }
   if (!(max_ground_rms_m > 0)) return Fail(error, "max_ground_rms_m: must be positive");
+  if (!(ground_tolerance_px >= 0 && ground_tolerance_px <= 16)) {
+    return Fail(error, "ground_tolerance_px: must be in [0, 16] px (0: off)");
+  }
+  if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
+    return Fail(error, "ground_consistent_share: must be in (0, 1]");
+  }
   return true;
 }
 
@@ -341,6 +347,49 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
     } else if (c < cos_semi) {
       label = std::max<std::uint8_t>(label, static_cast<std::uint8_t>(TravClass::kSemiTraversable));
     }
+  }
+}
+
+void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                             const AnalysisOptions& options, AnalysisResult* result) {
+  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
+                 cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
+             "RefineByGroundDisparity: cloud, segment ids and labels differ in size");
+  SSTA_CHECK(focal_times_baseline > 0, "RefineByGroundDisparity: focal_times_baseline must be positive");
+  if (!(options.ground_tolerance_px > 0) || !result->ground.found || !result->quality.passed) return;
+  const Eigen::Vector3d n = result->ground.plane.head<3>();
+  const double plane_d = result->ground.plane[3];  // the camera's height above the plane
+  if (!(plane_d > 0)) return;
+  // Along the ray r = p / Z the plane lies at inverse depth -(n . r) / D, so its disparity there
+  // is fb * that: negative above the horizon, where no point is consistent.
+  const double fb = focal_times_baseline;
+  const int num_segments = static_cast<int>(result->segments.size());
+  std::vector<int> points(num_segments, 0), consistent(num_segments, 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    const Eigen::Vector3f& p = cloud[i];
+    if (id < 0 || id >= num_segments || !(p.z() > 0)) continue;  // also NaN
+    const Eigen::Vector3d ray(p.x() / p.z(), p.y() / p.z(), 1.0);
+    const double ground_disparity = -fb * n.dot(ray) / plane_d;
+    ++points[id];
+    if (std::abs(fb / p.z() - ground_disparity) <= options.ground_tolerance_px) ++consistent[id];
+  }
+  std::vector<bool> to_ground(num_segments, false);
+  bool any = false;
+  for (SegmentResult& seg : result->segments) {
+    const int id = seg.id;
+    if (id < 0 || id >= num_segments || !seg.small || seg.verdict == TravClass::kTraversable) continue;
+    if (points[id] == 0 || consistent[id] < options.ground_consistent_share * points[id]) continue;
+    to_ground[id] = any = true;
+    seg.verdict = TravClass::kTraversable;
+    seg.reason = Format("small, and on the ground plane within stereo noise:", 100.0 * consistent[id] / points[id],
+                        0, "% of its points within ground_tolerance_px of the plane's disparity");
+  }
+  if (!any) return;
+  const auto traversable = static_cast<std::uint8_t>(TravClass::kTraversable);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    if (id >= 0 && id < num_segments && to_ground[id] && result->labels[i] != 0) result->labels[i] = traversable;
   }
 }
 

@@ -69,6 +69,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("speckle_window_size", &o->speckle_window_size);
   s.Read("speckle_range", &o->speckle_range);
   s.Read("min_texture", &o->min_texture);
+  s.Read("border_margin", &o->border_margin);
   s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
   s.Read("pcl_peak_filter", &o->pcl_peak_filter);
   s.Read("pcl_preprocessing", &o->pcl_preprocessing);
@@ -101,6 +102,7 @@ void ReadGravity(YamlSection s, GravityOptions* o) {
 StereoMatcherOptions PipelineStereoDefaults() {
   StereoMatcherOptions o;
   o.block_size = 9;
+  o.border_margin = 4;
   return o;
 }
 
@@ -132,6 +134,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   AnalysisOptions o;
   o.small_segments = SmallSegmentPolicy::kAll;
   o.pixel_slopes = true;
+  o.ground_tolerance_px = 1.0;
   return o;
 }
 
@@ -194,6 +197,8 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     s.Read("min_plane_points", &c.analysis.min_plane_points);
     s.Read("min_ground_share", &c.analysis.min_ground_share);
     s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
+    s.Read("ground_tolerance_px", &c.analysis.ground_tolerance_px);
+    s.Read("ground_consistent_share", &c.analysis.ground_consistent_share);
     s.RejectUnknownKeys();
   }
   ReadGravity(root.Child("gravity"), &c.gravity);
@@ -296,6 +301,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  speckle_window_size: " << s.speckle_window_size << "\n"
     << "  speckle_range: " << s.speckle_range << "\n"
     << "  min_texture: " << s.min_texture << "\n"
+    << "  border_margin: " << s.border_margin << "\n"
     << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
     << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
@@ -322,7 +328,9 @@ std::string ConfigToYaml(const Config& c) {
     << "  small_segments: " << SmallSegmentPolicyName(c.analysis.small_segments) << "\n"
     << "  min_plane_points: " << c.analysis.min_plane_points << "\n"
     << "  min_ground_share: " << c.analysis.min_ground_share << "\n"
-    << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n";
+    << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n"
+    << "  ground_tolerance_px: " << c.analysis.ground_tolerance_px << "\n"
+    << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"
     << "  up_camera: [" << c.gravity.up_camera.x() << ", " << c.gravity.up_camera.y() << ", "
