@@ -135,6 +135,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.small_segments = SmallSegmentPolicy::kAll;
   o.pixel_slopes = true;
   o.ground_tolerance_px = 1.0;
+  o.pixel_slope_window_px = 31;
   return o;
 }
 
@@ -190,6 +191,7 @@ void ApplyConfigFile(const std::string& path, Config* config) {
     YamlSection s = root.Child("analysis");
     s.Read("inliers_min_ratio", &c.analysis.inliers_min_ratio);
     s.Read("pixel_slopes", &c.analysis.pixel_slopes);
+    s.Read("pixel_slope_window_px", &c.analysis.pixel_slope_window_px);
     ReadEnum(s, "step_reference", &c.analysis.step_reference,
              [](const std::string& n) { return ParseStepReference(n); });
     ReadEnum(s, "small_segments", &c.analysis.small_segments,
@@ -324,6 +326,7 @@ std::string ConfigToYaml(const Config& c) {
   y << "analysis:\n"
     << "  inliers_min_ratio: " << c.analysis.inliers_min_ratio << "\n"
     << "  pixel_slopes: " << c.analysis.pixel_slopes << "\n"
+    << "  pixel_slope_window_px: " << c.analysis.pixel_slope_window_px << "\n"
     << "  step_reference: " << StepReferenceName(c.analysis.step_reference) << "\n"
     << "  small_segments: " << SmallSegmentPolicyName(c.analysis.small_segments) << "\n"
     << "  min_plane_points: " << c.analysis.min_plane_points << "\n"

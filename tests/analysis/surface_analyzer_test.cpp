@@ -270,6 +270,48 @@ TEST(RefineByPixelSlope, SteepPixelsOfATraversableSegmentTakeTheirSlopeClass) {
   EXPECT_EQ(labels[4], 2);
 }
 
+TEST(RefineByPixelSlope, AveragingInsideTheSegmentStopsTheFlicker) {
+  // A 13 deg slope (traversable, semi from 15 deg) whose pixel normals alternate 13 +- 4 deg in
+  // a checkerboard, as stereo noise does: one pixel in two reads 17 deg. Beside it, in another
+  // segment, a 40 deg ramp that must not leak into the averages.
+  const Eigen::Vector3d up(0, -1, 0);
+  auto normal_at = [](double deg) {
+    const double r = deg * M_PI / 180.0;
+    return Eigen::Vector3f(0, -static_cast<float>(std::cos(r)), -static_cast<float>(std::sin(r)));
+  };
+  const int w = 40, h = 20;
+  Image3f normals(w, h, NanVector3f());
+  ImageI32 ids(w, h, 0);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      if (u >= 30) {
+        ids(v, u) = 1;
+        normals(v, u) = normal_at(40);
+      } else {
+        normals(v, u) = normal_at((u + v) % 2 ? 17.0 : 9.0);
+      }
+    }
+  }
+  auto count_semi = [&](const ImageU8& labels) {
+    int semi = 0;
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < 30; ++u) semi += labels(v, u) == 2;
+    }
+    return semi;
+  };
+  ImageU8 own(w, h, 1);
+  RefineByPixelSlope(normals, up, VehicleOptions{}, &own);
+  EXPECT_EQ(count_semi(own), 30 * h / 2);  // every other pixel flips
+
+  ImageU8 averaged(w, h, 1);
+  RefineByPixelSlope(normals, up, VehicleOptions{}, &averaged, &ids, 7);
+  EXPECT_EQ(count_semi(averaged), 0);
+  for (int v = 0; v < h; ++v) {
+    EXPECT_EQ(averaged(v, 29), 1) << "row " << v;   // next to the ramp: the ramp did not leak in
+    EXPECT_EQ(averaged(v, 30), 3) << "row " << v;   // the ramp keeps its own slope
+  }
+}
+
 TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {
   // Floor in columns 0..59; from column 60 a 12-degree ramp rises away to the right, 6 cm per
   // column: its centroid stands 0.24 m above the floor plane, a non-traversable "step" by eq. 5,

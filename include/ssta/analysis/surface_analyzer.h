@@ -50,6 +50,9 @@ struct AnalysisOptions {
   /// hillside has no segment boundary, and one PCA slope for the whole segment averages its
   /// steep flank away. false: the paper, one verdict per segment.
   bool pixel_slopes = false;
+  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
+  /// segment [px, odd]; 1: the pixel's own normal.
+  int pixel_slope_window_px = 1;
   /// How steps are measured; see StepReference.
   StepReference step_reference = StepReference::kDominantPlane;
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
@@ -141,8 +144,11 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 /// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
 /// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
 /// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
+/// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
+/// its own segment (`segment_ids`, required then): per-pixel normals of stereo points carry a few
+/// degrees of noise, and where the true slope is near a threshold the classes flicker.
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels);
+                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
 
 /// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
 /// dominant ground plane that passed the quality check, else does nothing). A point is
