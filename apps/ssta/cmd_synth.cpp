@@ -67,7 +67,7 @@ void RegisterSynth(CLI::App& app) {
       "  ramp     one plane of --ramp-slope-deg everywhere; the vehicle drives up it\n"
       "The way ahead is clear for 5.5 m (yard 6.5 m; ramp unlimited): about 80 frames at the\n"
       "default speed and rate. Longer runs are written with a warning.\n"
-      "Labels are 255 (don't care) for sky, beyond 20 m, pixels hidden from cam1 and a 1 px\n"
+      "Labels are 255 (don't care) for sky, beyond 12 m (--max-label-range), pixels hidden from cam1 and a 1 px\n"
       "band on class boundaries; vertical faces are non-traversable.");
   cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp")
       ->capture_default_str();

@@ -148,6 +148,15 @@ bool AnalysisOptions::IsValid(std::string* error) const {
     return Fail(error, "min_ground_share: must be in [0, 1]");
   }
   if (!(max_ground_rms_m > 0)) return Fail(error, "max_ground_rms_m: must be positive");
+  if (pixel_slope_window_px < 1 || pixel_slope_window_px % 2 == 0 || pixel_slope_window_px > 255) {
+    return Fail(error, "pixel_slope_window_px: must be odd and in [1, 255] px");
+  }
+  if (!(ground_tolerance_px >= 0 && ground_tolerance_px <= 16)) {
+    return Fail(error, "ground_tolerance_px: must be in [0, 16] px (0: off)");
+  }
+  if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
+    return Fail(error, "ground_consistent_share: must be in (0, 1]");
+  }
   return true;
 }
 
@@ -325,22 +334,128 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
   return result;
 }
 
+namespace {
+
+/// Sliding-window mean along one line of `n` samples, restricted to runs of equal segment id:
+/// out[i] = sum of the finite in[j] with |i - j| <= r and id[j] == id[i] over the run.
+/// `in` holds x, y, z and a weight (1 for a finite normal, 0 otherwise) per sample.
+void RunMean(const Eigen::Vector4d* in, const std::int32_t* ids, std::ptrdiff_t stride_in, std::ptrdiff_t stride_id,
+             int n, int r, Eigen::Vector4d* out, std::ptrdiff_t stride_out) {
+  int start = 0;
+  while (start < n) {
+    int end = start + 1;
+    const std::int32_t id = ids[start * stride_id];
+    while (end < n && ids[end * stride_id] == id) ++end;
+    // Window [i - r, i + r] clipped to the run [start, end).
+    Eigen::Vector4d acc = Eigen::Vector4d::Zero();
+    int lo = start, hi = start;  // acc sums [lo, hi)
+    for (int i = start; i < end; ++i) {
+      const int want_hi = std::min(end, i + r + 1), want_lo = std::max(start, i - r);
+      while (hi < want_hi) acc += in[hi++ * stride_in];
+      while (lo < want_lo) acc -= in[lo++ * stride_in];
+      out[i * stride_out] = acc;
+    }
+    start = end;
+  }
+}
+
+/// Mean of the finite unit normals in a window x window box around each pixel, counting only
+/// pixels of the same segment along each row and then each column (separable, so O(1) per
+/// pixel), normalised; NaN where it holds none. Averaging stays inside a segment, so a ramp's
+/// edge is not blurred into the ground next to it.
+Image3f SegmentBoxAverage(const Image3f& normals, const ImageI32& ids, int window) {
+  const int w = normals.width(), h = normals.height(), r = window / 2;
+  std::vector<Eigen::Vector4d> in(normals.size()), rows(normals.size());
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const Eigen::Vector3f& n = normals[i];
+    const bool ok = ids[i] >= 0 && std::isfinite(n.x()) && std::isfinite(n.y()) && std::isfinite(n.z());
+    in[i] = ok ? Eigen::Vector4d(n.x(), n.y(), n.z(), 1.0) : Eigen::Vector4d::Zero();
+  }
+  const std::int32_t* id = &ids[0];
+  for (int v = 0; v < h; ++v) {
+    const std::size_t o = static_cast<std::size_t>(v) * w;
+    RunMean(&in[o], id + o, 1, 1, w, r, &rows[o], 1);
+  }
+  std::vector<Eigen::Vector4d>& cols = in;  // reused
+  for (int u = 0; u < w; ++u) RunMean(&rows[u], id + u, w, w, h, r, &cols[u], w);
+  Image3f out(w, h, NanVector3f());
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const Eigen::Vector3d m = cols[i].head<3>();
+    if (ids[i] >= 0 && cols[i][3] >= 0.5 && m.norm() > 1e-9) out[i] = m.normalized().cast<float>();
+  }
+  return out;
+}
+
+}  // namespace
+
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels) {
+                        ImageU8* labels, const ImageI32* segment_ids, int window_px) {
   SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
              "normals and labels differ in size");
+  SSTA_CHECK(window_px >= 1 && window_px % 2 == 1, "RefineByPixelSlope: window_px must be odd and positive");
+  Image3f averaged;
+  if (window_px > 1) {
+    SSTA_CHECK(segment_ids != nullptr && segment_ids->width() == normals.width() &&
+                   segment_ids->height() == normals.height(),
+               "RefineByPixelSlope: averaging needs segment ids of the normals' size");
+    averaged = SegmentBoxAverage(normals, *segment_ids, window_px);
+  }
+  const Image3f& used = window_px > 1 ? averaged : normals;
   const Eigen::Vector3f up = up_camera.cast<float>();
   const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
   const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
   for (std::size_t i = 0; i < labels->size(); ++i) {
     std::uint8_t& label = (*labels)[i];
     if (label != 1 && label != 2) continue;
-    const float c = std::abs(normals[i].dot(up));  // NaN compares false: left as is
+    const float c = std::abs(used[i].dot(up));  // NaN compares false: left as is
     if (c < cos_max) {
       label = static_cast<std::uint8_t>(TravClass::kNonTraversable);
     } else if (c < cos_semi) {
       label = std::max<std::uint8_t>(label, static_cast<std::uint8_t>(TravClass::kSemiTraversable));
     }
+  }
+}
+
+void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                             const AnalysisOptions& options, AnalysisResult* result) {
+  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
+                 cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
+             "RefineByGroundDisparity: cloud, segment ids and labels differ in size");
+  SSTA_CHECK(focal_times_baseline > 0, "RefineByGroundDisparity: focal_times_baseline must be positive");
+  if (!(options.ground_tolerance_px > 0) || !result->ground.found || !result->quality.passed) return;
+  const Eigen::Vector3d n = result->ground.plane.head<3>();
+  const double plane_d = result->ground.plane[3];  // the camera's height above the plane
+  if (!(plane_d > 0)) return;
+  // Along the ray r = p / Z the plane lies at inverse depth -(n . r) / D, so its disparity there
+  // is fb * that: negative above the horizon, where no point is consistent.
+  const double fb = focal_times_baseline;
+  const int num_segments = static_cast<int>(result->segments.size());
+  std::vector<int> points(num_segments, 0), consistent(num_segments, 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    const Eigen::Vector3f& p = cloud[i];
+    if (id < 0 || id >= num_segments || !(p.z() > 0)) continue;  // also NaN
+    const Eigen::Vector3d ray(p.x() / p.z(), p.y() / p.z(), 1.0);
+    const double ground_disparity = -fb * n.dot(ray) / plane_d;
+    ++points[id];
+    if (std::abs(fb / p.z() - ground_disparity) <= options.ground_tolerance_px) ++consistent[id];
+  }
+  std::vector<bool> to_ground(num_segments, false);
+  bool any = false;
+  for (SegmentResult& seg : result->segments) {
+    const int id = seg.id;
+    if (id < 0 || id >= num_segments || !seg.small || seg.verdict == TravClass::kTraversable) continue;
+    if (points[id] == 0 || consistent[id] < options.ground_consistent_share * points[id]) continue;
+    to_ground[id] = any = true;
+    seg.verdict = TravClass::kTraversable;
+    seg.reason = Format("small, and on the ground plane within stereo noise:", 100.0 * consistent[id] / points[id],
+                        0, "% of its points within ground_tolerance_px of the plane's disparity");
+  }
+  if (!any) return;
+  const auto traversable = static_cast<std::uint8_t>(TravClass::kTraversable);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    if (id >= 0 && id < num_segments && to_ground[id] && result->labels[i] != 0) result->labels[i] = traversable;
   }
 }
 

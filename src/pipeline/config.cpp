@@ -70,6 +70,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("speckle_window_size", &o->speckle_window_size);
   s.Read("speckle_range", &o->speckle_range);
   s.Read("min_texture", &o->min_texture);
+  s.Read("border_margin", &o->border_margin);
   s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
   s.Read("pcl_peak_filter", &o->pcl_peak_filter);
   s.Read("pcl_preprocessing", &o->pcl_preprocessing);
@@ -103,6 +104,7 @@ void ReadGravity(YamlSection s, GravityOptions* o) {
 StereoMatcherOptions PipelineStereoDefaults() {
   StereoMatcherOptions o;
   o.block_size = 9;
+  o.border_margin = 4;
   return o;
 }
 
@@ -134,6 +136,8 @@ AnalysisOptions PipelineAnalysisDefaults() {
   AnalysisOptions o;
   o.small_segments = SmallSegmentPolicy::kAll;
   o.pixel_slopes = true;
+  o.ground_tolerance_px = 1.0;
+  o.pixel_slope_window_px = 31;
   return o;
 }
 
@@ -193,6 +197,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     YamlSection s = root.Child("analysis");
     s.Read("inliers_min_ratio", &c.analysis.inliers_min_ratio);
     s.Read("pixel_slopes", &c.analysis.pixel_slopes);
+    s.Read("pixel_slope_window_px", &c.analysis.pixel_slope_window_px);
     ReadEnum(s, "step_reference", &c.analysis.step_reference,
              [](const std::string& n) { return ParseStepReference(n); });
     ReadEnum(s, "small_segments", &c.analysis.small_segments,
@@ -200,6 +205,8 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("min_plane_points", &c.analysis.min_plane_points);
     s.Read("min_ground_share", &c.analysis.min_ground_share);
     s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
+    s.Read("ground_tolerance_px", &c.analysis.ground_tolerance_px);
+    s.Read("ground_consistent_share", &c.analysis.ground_consistent_share);
     s.RejectUnknownKeys();
   }
   ReadGravity(root.Child("gravity"), &c.gravity);
@@ -303,6 +310,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  speckle_window_size: " << s.speckle_window_size << "\n"
     << "  speckle_range: " << s.speckle_range << "\n"
     << "  min_texture: " << s.min_texture << "\n"
+    << "  border_margin: " << s.border_margin << "\n"
     << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
     << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
@@ -326,11 +334,14 @@ std::string ConfigToYaml(const Config& c) {
   y << "analysis:\n"
     << "  inliers_min_ratio: " << c.analysis.inliers_min_ratio << "\n"
     << "  pixel_slopes: " << c.analysis.pixel_slopes << "\n"
+    << "  pixel_slope_window_px: " << c.analysis.pixel_slope_window_px << "\n"
     << "  step_reference: " << StepReferenceName(c.analysis.step_reference) << "\n"
     << "  small_segments: " << SmallSegmentPolicyName(c.analysis.small_segments) << "\n"
     << "  min_plane_points: " << c.analysis.min_plane_points << "\n"
     << "  min_ground_share: " << c.analysis.min_ground_share << "\n"
-    << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n";
+    << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n"
+    << "  ground_tolerance_px: " << c.analysis.ground_tolerance_px << "\n"
+    << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"
     << "  up_camera: [" << c.gravity.up_camera.x() << ", " << c.gravity.up_camera.y() << ", "

@@ -98,8 +98,10 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.analysis = AnalyzeSurfaces(cloud, segmentation.labels, out.num_segments, out.up_rectified,
                                  config_.vehicle, config_.analysis);
   if (config_.analysis.pixel_slopes && out.analysis.quality.passed) {
-    RefineByPixelSlope(normals, out.up_rectified, config_.vehicle, &out.analysis.labels);
+    RefineByPixelSlope(normals, out.up_rectified, config_.vehicle, &out.analysis.labels, &segmentation.labels,
+                       config_.analysis.pixel_slope_window_px);
   }
+  RefineByGroundDisparity(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
   out.timings.analyze_ms = clock.LapMs();
 
   // Labels keep the full rectified size; outside the common area they stay unknown (0).

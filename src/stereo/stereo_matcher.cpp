@@ -211,6 +211,7 @@ bool StereoMatcherOptions::IsValid(std::string* error) const {
     return Fail(error, "acso_gamma_c: must be a whole number in [1, 1000] (PCL takes an int)");
   }
   if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
+  if (border_margin < 0 || border_margin > 64) return Fail(error, "border_margin: must be in [0, 64] px");
   return true;
 }
 
@@ -252,10 +253,12 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
       break;
   }
   ImageF disparity(left.width(), left.height(), 0.0f);
-  for (int v = 0; v < disparity.height(); ++v) {
+  const int m = options_.border_margin;
+  for (int v = m; v < disparity.height() - m; ++v) {
     const float* src = padded.row(v) + pad;
     float* d = disparity.row(v);
-    for (int u = 0; u < disparity.width(); ++u) d[u] = src[u] > static_cast<float>(u) ? 0.0f : src[u];
+    // Partners must lie inside the right image, at least m px off its left border.
+    for (int u = m; u < disparity.width() - m; ++u) d[u] = src[u] > static_cast<float>(u - m) ? 0.0f : src[u];
   }
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
   if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
@@ -272,6 +275,7 @@ ImageF StereoMatcher::ComputeAtHalfSize(const ImageU8& left, const ImageU8& righ
   half.speckle_window_size = options_.speckle_window_size / 4;
   half.speckle_range = std::max(1, options_.speckle_range / 2);
   half.min_texture = 0.0;
+  half.border_margin = (options_.border_margin + 1) / 2;
   const int width = left.width(), height = left.height();
   const cv::Size half_size(std::max(1, width / 2), std::max(1, height / 2));
   auto shrink = [&](const ImageU8& image) {

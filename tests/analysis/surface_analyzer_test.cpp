@@ -149,6 +149,60 @@ TEST(SurfaceAnalyzer, TinySegmentsAreJudgedByHeightButNotBySlope) {
   EXPECT_EQ(r.segments[2].verdict, TravClass::kUndecided);
 }
 
+// Disparities of the analytic world's points for a rig with f * b = 50 px m (f 420 px, b 0.12 m).
+constexpr double kFocalTimesBaseline = 50.0;
+
+TEST(RefineByGroundDisparity, SmallSegmentsOnTheGroundWithinNoiseBecomeTraversable) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  // A small patch 8 m ahead, tilted 40 degrees about x through a floor point: a noisy far
+  // fragment of the floor. Its farthest point stands 0.13 m above the floor: d = 50 / 8 px
+  // differs from the floor's along the same ray by less than 0.1 px.
+  const double s = 40.0 * M_PI / 180.0;
+  w.Paint(1, 0, 8, 0, 8, {0.0, 1.0, 8.0}, {1, 0, 0}, {0, -std::sin(s), std::cos(s)}, 0.025);
+  // A small patch 0.5 m above the floor 3 m ahead: 50 / 3 px against 50 / 6 px on the floor.
+  w.Paint(2, 8, 16, 0, 8, {0.0, 0.5, 3.0}, {1, 0, 0}, {0, 0, 1}, 0.02);
+  AnalysisOptions options;
+  options.small_segments = SmallSegmentPolicy::kAll;
+  options.min_plane_points = 30;
+  AnalysisResult r = w.Analyze({}, options);
+  ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+  ASSERT_TRUE(r.segments[1].small);
+  ASSERT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);  // 40 degrees by its own plane
+  ASSERT_EQ(r.segments[2].verdict, TravClass::kNonTraversable);  // 0.5 m step
+
+  AnalysisResult off = r;
+  RefineByGroundDisparity(w.cloud_, w.ids_, kFocalTimesBaseline, options, &off);  // tolerance 0: off
+  EXPECT_EQ(off.segments[1].verdict, TravClass::kNonTraversable);
+
+  options.ground_tolerance_px = 1.0;
+  RefineByGroundDisparity(w.cloud_, w.ids_, kFocalTimesBaseline, options, &r);
+  EXPECT_EQ(r.segments[1].verdict, TravClass::kTraversable) << r.segments[1].reason;
+  EXPECT_EQ(r.labels(3, 3), static_cast<std::uint8_t>(TravClass::kTraversable));
+  EXPECT_EQ(r.segments[2].verdict, TravClass::kNonTraversable);
+  EXPECT_EQ(r.labels(10, 3), static_cast<std::uint8_t>(TravClass::kNonTraversable));
+  EXPECT_EQ(r.segments[0].verdict, TravClass::kTraversable);
+
+  // The same far patch with a tolerance below its largest offset (~0.08 px) only partly agrees.
+  options.ground_tolerance_px = 0.01;
+  AnalysisResult tight = w.Analyze({}, options);
+  RefineByGroundDisparity(w.cloud_, w.ids_, kFocalTimesBaseline, options, &tight);
+  EXPECT_EQ(tight.segments[1].verdict, TravClass::kNonTraversable);
+}
+
+TEST(RefineByGroundDisparity, LargeSegmentsKeepTheirVerdicts) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 80);
+  PaintRamp(w, 1, 0, 100, 80, 100, 40.0);  // 2000 px: large, steep, starting on the floor
+  AnalysisOptions options;
+  options.ground_tolerance_px = 16.0;  // everything near the floor would pass
+  AnalysisResult r = w.Analyze({}, options);
+  ASSERT_FALSE(r.segments[1].small);
+  ASSERT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);
+  RefineByGroundDisparity(w.cloud_, w.ids_, kFocalTimesBaseline, options, &r);
+  EXPECT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);
+}
+
 TEST(SurfaceAnalyzer, GroundAboveTheCameraIsRejected) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 100, -0.5);  // a ceiling-like plane 0.5 m above the camera
@@ -214,6 +268,48 @@ TEST(RefineByPixelSlope, SteepPixelsOfATraversableSegmentTakeTheirSlopeClass) {
   EXPECT_EQ(labels[2], 3);
   EXPECT_EQ(labels[3], 3);
   EXPECT_EQ(labels[4], 2);
+}
+
+TEST(RefineByPixelSlope, AveragingInsideTheSegmentStopsTheFlicker) {
+  // A 13 deg slope (traversable, semi from 15 deg) whose pixel normals alternate 13 +- 4 deg in
+  // a checkerboard, as stereo noise does: one pixel in two reads 17 deg. Beside it, in another
+  // segment, a 40 deg ramp that must not leak into the averages.
+  const Eigen::Vector3d up(0, -1, 0);
+  auto normal_at = [](double deg) {
+    const double r = deg * M_PI / 180.0;
+    return Eigen::Vector3f(0, -static_cast<float>(std::cos(r)), -static_cast<float>(std::sin(r)));
+  };
+  const int w = 40, h = 20;
+  Image3f normals(w, h, NanVector3f());
+  ImageI32 ids(w, h, 0);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      if (u >= 30) {
+        ids(v, u) = 1;
+        normals(v, u) = normal_at(40);
+      } else {
+        normals(v, u) = normal_at((u + v) % 2 ? 17.0 : 9.0);
+      }
+    }
+  }
+  auto count_semi = [&](const ImageU8& labels) {
+    int semi = 0;
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < 30; ++u) semi += labels(v, u) == 2;
+    }
+    return semi;
+  };
+  ImageU8 own(w, h, 1);
+  RefineByPixelSlope(normals, up, VehicleOptions{}, &own);
+  EXPECT_EQ(count_semi(own), 30 * h / 2);  // every other pixel flips
+
+  ImageU8 averaged(w, h, 1);
+  RefineByPixelSlope(normals, up, VehicleOptions{}, &averaged, &ids, 7);
+  EXPECT_EQ(count_semi(averaged), 0);
+  for (int v = 0; v < h; ++v) {
+    EXPECT_EQ(averaged(v, 29), 1) << "row " << v;   // next to the ramp: the ramp did not leak in
+    EXPECT_EQ(averaged(v, 30), 3) << "row " << v;   // the ramp keeps its own slope
+  }
 }
 
 TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {

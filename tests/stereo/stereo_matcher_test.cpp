@@ -251,6 +251,32 @@ TEST(StereoMatcher, HalfSizeMatchingRecoversPlaneAndSquareAtFullResolution) {
   EXPECT_EQ(error.rfind("downscale:", 0), 0u) << error;
 }
 
+TEST(StereoMatcher, BorderMarginLeavesTheBordersWithoutDisparity) {
+  const SyntheticPair pair = MakePair(320, 240, 20, 36, 150, 70, 90, 8, 72);
+  StereoMatcherOptions o = OptionsFor(MatcherType::kSemiGlobal);
+  const ImageF full = StereoMatcher(o).Compute(pair.left, pair.right);
+  o.border_margin = 5;
+  const ImageF cut = StereoMatcher(o).Compute(pair.left, pair.right);
+  int inner_same = 0, inner = 0;
+  for (int v = 0; v < cut.height(); ++v) {
+    for (int u = 0; u < cut.width(); ++u) {
+      const bool border = v < 5 || v >= 235 || u < 5 || u >= 315;
+      // Background disparity 20: partners closer than 5 px to the right image's edge are u < 25.
+      const bool near_partner_edge = full(v, u) > 0 && u - full(v, u) < 5;
+      if (border || near_partner_edge) {
+        EXPECT_EQ(cut(v, u), 0.0f) << "u " << u << " v " << v;
+      } else {
+        ++inner;
+        inner_same += cut(v, u) == full(v, u);
+      }
+    }
+  }
+  EXPECT_EQ(inner_same, inner);  // elsewhere the margin changes nothing ...
+  int valid_left = 0;  // ... and the first columns whose partners lie inside still match
+  for (int v = 100; v < 140; ++v) valid_left += cut(v, 26) > 0;
+  EXPECT_GT(valid_left, 30);
+}
+
 TEST(StereoMatcher, InvalidOptionsNameTheKey) {
   const auto error_of = [](const StereoMatcherOptions& o) {
     std::string error;

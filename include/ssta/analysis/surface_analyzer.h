@@ -50,6 +50,9 @@ struct AnalysisOptions {
   /// hillside has no segment boundary, and one PCA slope for the whole segment averages its
   /// steep flank away. false: the paper, one verdict per segment.
   bool pixel_slopes = false;
+  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
+  /// segment [px, odd]; 1: the pixel's own normal.
+  int pixel_slope_window_px = 1;
   /// How steps are measured; see StepReference.
   StepReference step_reference = StepReference::kDominantPlane;
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
@@ -63,6 +66,14 @@ struct AnalysisOptions {
   /// must lie on it, and the largest RMS point-to-plane distance [m].
   double min_ground_share = 0.08;
   double max_ground_rms_m = 0.08;
+  /// Ground consistency in disparity space (RefineByGroundDisparity) [px]: a point whose
+  /// disparity lies within this of the dominant ground plane's disparity on the same pixel ray
+  /// is on the ground within stereo noise. Disparity noise does not grow with range, so the test
+  /// holds as well at 10 m as at 2 m, where slopes of noisy far patches do not. 0: off.
+  double ground_tolerance_px = 0.0;
+  /// Least share of a small segment's points that must be ground-consistent for the segment to
+  /// be taken as ground (traversable), (0, 1].
+  double ground_consistent_share = 0.9;
 
   bool IsValid(std::string* error) const;
 };
@@ -133,8 +144,24 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 /// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
 /// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
 /// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
+/// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
+/// its own segment (`segment_ids`, required then): per-pixel normals of stereo points carry a few
+/// degrees of noise, and where the true slope is near a threshold the classes flicker.
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels);
+                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
+
+/// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
+/// dominant ground plane that passed the quality check, else does nothing). A point is
+/// ground-consistent when |d - d_ground| <= ground_tolerance_px, with d = focal_times_baseline / Z
+/// its disparity and d_ground the disparity of the ground plane along the same pixel ray. A small
+/// segment (below inliers_min) that is not traversable and has at least ground_consistent_share
+/// of its points consistent becomes traversable: far from the camera, stereo noise breaks the
+/// ground into small fragments whose own planes tilt at random, while their disparities stay on
+/// the ground's. Large segments keep their verdicts: their planes are well determined.
+/// Updates result->labels and the verdicts and reasons of the segments it changes.
+/// `focal_times_baseline`: f * b of the rectified pair [px * m].
+void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                             const AnalysisOptions& options, AnalysisResult* result);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.

@@ -42,7 +42,7 @@ MapOptions PipelineMapDefaults();
 /// YAML section `map`: how frames are fused into a TraversabilityMap.
 struct MappingOptions {
   MapOptions fusion = PipelineMapDefaults();  ///< voxel size, range and the log-odds sensor model
-  int pixel_stride = 2;         ///< insert every n-th pixel in u and v (the map thins per voxel)
+  int pixel_stride = 1;         ///< insert every n-th pixel in u and v (the map thins per voxel)
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   bool IsValid(std::string* error) const;
 };

@@ -47,6 +47,10 @@ struct StereoMatcherOptions {
   /// [grey levels] pixels whose left-image standard deviation over the block window is below
   /// this get no disparity: sensor noise on a textureless sky or wall matches anywhere. 0: off.
   double min_texture = 0.0;
+  /// [px] pixels this close to an image border, or whose partner lies this close to the right
+  /// image's left border, get no disparity: their matching window (and SGBM's paths) run off the
+  /// image there and the disparities are biased. 0: off.
+  int border_margin = 0;
   // PCL matchers only.
   /// [%] ratio filter: reject a pixel whose best window cost (sum of absolute differences,
   /// block_size window) is not below (100 - value)% of the best cost at least 2 px away;

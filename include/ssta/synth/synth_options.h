@@ -29,7 +29,9 @@ struct RigOptions {
 struct RenderOptions {
   int supersample = 1;            ///< rays per pixel side (1 = none, 2 = 2x2 anti-aliasing)
   double sensor_noise_grey = 1.5; ///< std dev of the additive Gaussian pixel noise [grey levels]
-  double max_label_range_m = 20.0;///< labels beyond this range from cam0 are 255 (don't care) [m]
+  /// Labels beyond this range from cam0 are 255 (don't care) [m]: the map's default max_range_m,
+  /// and about where the default rig's depth noise (0.5 m at 10 m) stops resolving a 0.2 m step.
+  double max_label_range_m = 12.0;
   double max_ray_m = 120.0;       ///< rays that hit nothing within this distance see the sky [m]
   int boundary_band_px = 1;       ///< labels within this many px of a class change become 255
   bool shadows = true;            ///< cast sun shadows (about 5-20 % more render time)
