@@ -312,6 +312,7 @@ TEST(SynthGroundTruth, YardGridClassesAtKnownPlaces) {
   o.rig.height = 48;
   o.rig.focal_px = 42;
   o.grid_resolution_m = 0.1;
+  o.render.max_label_range_m = 20.0;  // the grid spans the label range: reach the 0.30 m step at 12.5 m
   WriteSyntheticSequence(o, tmp.Sub("seq"));
   const ImageU8 grid = ReadLabelImage(tmp.Sub("seq/gt/grid_classes.png"));
   const std::string yaml = ReadTextFile(tmp.Sub("seq/gt/grid.yaml"));
