@@ -8,6 +8,7 @@
 #include "core/json_escape.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
+#include "ssta/refinement/ground_evidence.h"
 
 namespace ssta {
 namespace {
@@ -43,6 +44,14 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
   metadata.sequences.push_back(sequence_name);
   map.set_metadata(metadata);
   return map;
+}
+
+/// The mount a build starts from: the one a resumed map recorded when it corrected this same
+/// configured mount, else the configured one.
+Eigen::Isometry3d StartMount(const TraversabilityMap& map, const Eigen::Isometry3d& configured) {
+  const std::optional<RefinedMount>& recorded = map.metadata().refined_mount;
+  if (recorded && recorded->configured.isApprox(configured, 1e-9)) return recorded->refined;
+  return configured;
 }
 
 }  // namespace
@@ -101,9 +110,21 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
   TraversabilityMap map = OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), pipeline.geometry()));
 
+  // cam0's mount: the configured one, or the online refinement's once a solve is applied.
+  const Eigen::Isometry3d body_T_camera_configured = sequence.calibration().left.body_T_camera;
+  const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
+  std::optional<OnlineMountRefiner> refiner;
+  if (config.refinement.online) {
+    refiner.emplace(config.refinement, body_T_camera_configured, StartMount(map, body_T_camera_configured));
+  }
+  Eigen::Isometry3d body_T_camera = refiner ? refiner->body_T_camera() : body_T_camera_configured;
   // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
-  Eigen::Isometry3d body_T_rectified = sequence.calibration().left.body_T_camera;
-  body_T_rectified.linear() = body_T_rectified.linear() * pipeline.geometry().rectified_R_camera.transpose();
+  auto rectified_in_body = [&] {
+    Eigen::Isometry3d body_T_rectified = body_T_camera;
+    body_T_rectified.linear() = body_T_camera.linear() * camera_R_rectified;
+    return body_T_rectified;
+  };
+  Eigen::Isometry3d body_T_rectified = rectified_in_body();
 
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
   BuildMapSummary summary;
@@ -136,9 +157,8 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       try {
         const ImageU8 left = ReadGreyImage(frame.left_path);
         const ImageU8 right = ReadGreyImage(frame.right_path);
-        const Eigen::Vector3d up_camera =
-            (sequence.calibration().left.body_T_camera.linear().transpose() *
-             (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ())).normalized();
+        const Eigen::Vector3d up_body = (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
+        const Eigen::Vector3d up_camera = (body_T_camera.linear().transpose() * up_body).normalized();
         FrameResult result = pipeline.Process(left, right, up_camera);
         result.timestamp_ns = t;
         const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
@@ -151,6 +171,14 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
           ++summary.frames_used;
           summary.points_inserted += stats.points_hit;
           if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
+        }
+        // The refined mount serves the frames after this one.
+        if (refiner && refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement))) {
+          body_T_camera = refiner->body_T_camera();
+          body_T_rectified = rectified_in_body();
+          MapMetadata metadata = map.metadata();
+          metadata.refined_mount = RefinedMount{body_T_camera_configured, body_T_camera};
+          map.set_metadata(metadata);
         }
       } catch (const Error& e) {
         fail_if_strict(t, e.what());
@@ -167,6 +195,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   summary.map_nodes = map.NumNodes();
   summary.map_file_bytes = std::filesystem::file_size(options.map_path);
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (refiner) summary.refinement = refiner->summary();
   return summary;
 }
 
@@ -181,6 +210,7 @@ std::string BuildMapSummary::BriefReport() const {
   r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
     << " points fused\n";
   r << "time: " << wall_s << " s (" << (wall_s > 0 ? frames_used / wall_s : 0.0) << " frames/s)\n";
+  if (refinement) r << refinement->BriefReport();
   return r.str();
 }
 
@@ -199,7 +229,9 @@ std::string BuildMapSummary::Json() const {
   list(quality_failed);
   j << ",\n  \"map_nodes\": " << map_nodes << ",\n  \"map_file_bytes\": " << map_file_bytes
     << ",\n  \"points_inserted\": " << points_inserted << ",\n  \"wall_s\": " << wall_s
-    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false") << "\n}\n";
+    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false");
+  if (refinement) j << ",\n  \"refinement\": " << refinement->Json();
+  j << "\n}\n";
   return j.str();
 }
 
