@@ -46,12 +46,11 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
   return map;
 }
 
-/// The mount a build starts from: the one a resumed map recorded when it corrected this same
-/// configured mount, else the configured one.
-Eigen::Isometry3d StartMount(const TraversabilityMap& map, const Eigen::Isometry3d& configured) {
+/// The refined mount a resumed map recorded when it corrected this same configured mount.
+std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, const Eigen::Isometry3d& configured) {
   const std::optional<RefinedMount>& recorded = map.metadata().refined_mount;
   if (recorded && recorded->configured.isApprox(configured, 1e-9)) return recorded->refined;
-  return configured;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -114,8 +113,11 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   const Eigen::Isometry3d body_T_camera_configured = sequence.calibration().left.body_T_camera;
   const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
   std::optional<OnlineMountRefiner> refiner;
+  bool resumed_mount = false;  // starts from the mount a resumed map recorded
   if (config.refinement.online) {
-    refiner.emplace(config.refinement, body_T_camera_configured, StartMount(map, body_T_camera_configured));
+    const std::optional<Eigen::Isometry3d> recorded = RecordedMount(map, body_T_camera_configured);
+    resumed_mount = recorded.has_value();
+    refiner.emplace(config.refinement, body_T_camera_configured, recorded.value_or(body_T_camera_configured));
   }
   Eigen::Isometry3d body_T_camera = refiner ? refiner->body_T_camera() : body_T_camera_configured;
   // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
@@ -136,6 +138,61 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     throw Error(sequence.root() + ": frame " + std::to_string(t) + ": " + reason + " (strict: no frame may be skipped)");
   };
   if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
+  // One frame through the pipeline with the mount in use (gravity in the camera).
+  auto process = [&](const StereoFrame& frame, const Eigen::Vector3d& up_body) {
+    const ImageU8 left = ReadGreyImage(frame.left_path);
+    const ImageU8 right = ReadGreyImage(frame.right_path);
+    FrameResult result = pipeline.Process(left, right, (body_T_camera.linear().transpose() * up_body).normalized());
+    result.timestamp_ns = frame.timestamp_ns;
+    return result;
+  };
+  auto fuse = [&](const FrameResult& result, const Eigen::Isometry3d& world_T_body) {
+    const std::int64_t t = result.timestamp_ns;
+    const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
+    const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
+    const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
+    if (!stats.inserted) {
+      fail_if_strict(t, "map rejected the frame: " + stats.reason);
+      summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+    } else {
+      ++summary.frames_used;
+      summary.points_inserted += stats.points_hit;
+      if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
+    }
+  };
+  // The frame's ground evidence to the refiner; an applied solve serves the frames after it.
+  auto refine = [&](const FrameResult& result, const Eigen::Vector3d& up_body) {
+    if (!refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement))) return;
+    body_T_camera = refiner->body_T_camera();
+    body_T_rectified = rectified_in_body();
+    MapMetadata metadata = map.metadata();
+    metadata.refined_mount = RefinedMount{body_T_camera_configured, body_T_camera};
+    map.set_metadata(metadata);
+  };
+  // Warm-up: until the first solve is applied (at most window_frames frames), frames give
+  // evidence but are not fused; then they are processed again with the refined mount and fused,
+  // so the map holds no frame seen through the configured mount when refinement succeeds. A
+  // start mount recorded by a resumed map needs no warm-up.
+  struct HeldFrame {
+    StereoFrame frame;
+    Eigen::Isometry3d world_T_body;
+  };
+  std::vector<HeldFrame> held;
+  bool warming_up = refiner && !resumed_mount;
+  int reprocessed = 0;
+  auto fuse_held = [&] {
+    warming_up = false;
+    for (const HeldFrame& h : held) {
+      try {
+        fuse(process(h.frame, h.world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()), h.world_T_body);
+        ++reprocessed;
+      } catch (const Error& e) {
+        fail_if_strict(h.frame.timestamp_ns, e.what());
+        summary.skipped.push_back({h.frame.timestamp_ns, e.what()});
+      }
+    }
+    held.clear();
+  };
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
   for (const StereoFrame& frame : todo) {
@@ -155,30 +212,17 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       summary.skipped.push_back({t, "no pose: " + sequence.NoPoseReason(t)});
     } else {
       try {
-        const ImageU8 left = ReadGreyImage(frame.left_path);
-        const ImageU8 right = ReadGreyImage(frame.right_path);
         const Eigen::Vector3d up_body = (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
-        const Eigen::Vector3d up_camera = (body_T_camera.linear().transpose() * up_body).normalized();
-        FrameResult result = pipeline.Process(left, right, up_camera);
-        result.timestamp_ns = t;
-        const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
-        const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
-        const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
-        if (!stats.inserted) {
-          fail_if_strict(t, "map rejected the frame: " + stats.reason);
-          summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+        const FrameResult result = process(frame, up_body);
+        if (warming_up) {
+          held.push_back({frame, *world_T_body});
+          refine(result, up_body);
+          if (refiner->summary().applied > 0 || static_cast<int>(held.size()) >= config.refinement.window_frames) {
+            fuse_held();
+          }
         } else {
-          ++summary.frames_used;
-          summary.points_inserted += stats.points_hit;
-          if (!result.analysis.quality.passed) summary.quality_failed.push_back({t, result.analysis.quality.reason});
-        }
-        // The refined mount serves the frames after this one.
-        if (refiner && refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement))) {
-          body_T_camera = refiner->body_T_camera();
-          body_T_rectified = rectified_in_body();
-          MapMetadata metadata = map.metadata();
-          metadata.refined_mount = RefinedMount{body_T_camera_configured, body_T_camera};
-          map.set_metadata(metadata);
+          fuse(result, *world_T_body);
+          if (refiner) refine(result, up_body);
         }
       } catch (const Error& e) {
         fail_if_strict(t, e.what());
@@ -191,11 +235,15 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     }
     if (progress) progress(done, static_cast<int>(todo.size()));
   }
+  fuse_held();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
   map.Save(options.map_path);
   summary.map_nodes = map.NumNodes();
   summary.map_file_bytes = std::filesystem::file_size(options.map_path);
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (refiner) summary.refinement = refiner->summary();
+  if (refiner) {
+    summary.refinement = refiner->summary();
+    summary.refinement->frames_reprocessed = reprocessed;
+  }
   return summary;
 }
 

@@ -95,7 +95,9 @@ std::string OnlineRefinementSummary::BriefReport() const {
     r << "  cam0 mount in use: pitch correction " << a.pitch_correction_deg << " +- " << a.pitch_sigma_deg
       << " deg, roll correction " << a.roll_correction_deg << " +- " << a.roll_sigma_deg
       << " deg (1 sigma, against sensor.yaml; last applied solve over " << a.frames_used << " frames)\n";
-    r << "  " << frames_before_first_applied << " frame(s) processed before the first applied solve\n";
+    r << "  " << frames_before_first_applied << " frame(s) processed before the first applied solve";
+    if (frames_reprocessed > 0) r << ", " << frames_reprocessed << " processed again with it before fusion";
+    r << "\n";
   } else if (!body_T_camera.isApprox(body_T_camera_configured, 1e-12)) {
     r << "  cam0 mount in use: the one the map recorded, " << AngleDeg(body_T_camera_configured, body_T_camera)
       << " deg from sensor.yaml; no solve applied in this run\n";
@@ -134,6 +136,8 @@ std::string OnlineRefinementSummary::Json() const {
   json.String(last_rejection);
   json.Key("frames_before_first_applied");
   json.Integer(frames_before_first_applied);
+  json.Key("frames_reprocessed");
+  json.Integer(frames_reprocessed);
   json.Key("solve_ms");
   json.Number(solve_ms);
   json.Key("angle_from_configured_deg");

@@ -288,7 +288,9 @@ TEST(OnlineMountRefiner, SolvesWhenTheWindowFirstFillsThenEveryKFramesAndApplies
     e.timestamp_ns = i;
     if (online.AddFrame(std::move(e))) changed_at.push_back(i);
     // The window never holds more than window_frames frames.
-    if (online.last_result()) EXPECT_LE(online.last_result()->frames_used, options.window_frames);
+    if (online.last_result()) {
+      EXPECT_LE(online.last_result()->frames_used, options.window_frames);
+    }
   }
   // Solves after frames 5, 9, 13, 17, 21, 25 (1-based): at indices 4, 8, ... 24.
   EXPECT_EQ(changed_at, (std::vector<int>{4, 8, 12, 16, 20, 24}));

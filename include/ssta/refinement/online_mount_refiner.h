@@ -29,6 +29,9 @@ struct OnlineRefinementSummary {
   /// Frames offered before the first applied solve: they were processed with the start mount.
   int frames_before_first_applied = 0;
   double solve_ms = 0.0;         ///< total solve + covariance time [ms]
+  /// Frames its user processed a second time with the refined mount (build-map's warm-up);
+  /// set by the user, 0 otherwise.
+  int frames_reprocessed = 0;
   /// The last applied solve (its correction and 1-sigma are relative to the configured mount);
   /// nullopt when none was applied.
   std::optional<MountRefinementResult> last_applied;
