@@ -49,6 +49,7 @@ bool OnlineMountRefiner::AddFrame(GroundEvidence evidence) {
     return false;
   }
   ++summary_.frames_with_evidence;
+  const std::int64_t evidence_timestamp = evidence.timestamp_ns;
   window_.AddFrame(std::move(evidence));
   while (window_.NumFrames() > options_.window_frames) window_.DropOldest();
   ++since_solve_;
@@ -61,6 +62,8 @@ bool OnlineMountRefiner::AddFrame(GroundEvidence evidence) {
   const MountRefinementResult& r = *last_result_;
   ++summary_.solves;
   summary_.solve_ms += r.solve_ms;
+  summary_.history.push_back({summary_.frames_offered, evidence_timestamp, r.status, r.pitch_correction_deg,
+                              r.roll_correction_deg, r.pitch_sigma_deg, r.roll_sigma_deg, r.frames_used});
   if (!r.applied()) {
     ++summary_.rejected[RejectedIndex(r.status)];
     summary_.last_rejection = RefinementStatusName(r.status) + ": " + r.message;
@@ -154,6 +157,29 @@ std::string OnlineRefinementSummary::Json() const {
   internal::WriteTransformJson(body_T_camera_start, &json);
   json.Key("body_T_camera");
   internal::WriteTransformJson(body_T_camera, &json);
+  json.Key("history");
+  json.BeginArray();
+  for (const OnlineSolve& h : history) {
+    json.BeginObject();
+    json.Key("frame");
+    json.Integer(h.frame);
+    json.Key("timestamp_ns");
+    json.Integer(h.timestamp_ns);
+    json.Key("status");
+    json.String(RefinementStatusName(h.status));
+    json.Key("pitch_correction_deg");
+    json.Number(h.pitch_correction_deg);
+    json.Key("roll_correction_deg");
+    json.Number(h.roll_correction_deg);
+    json.Key("pitch_sigma_deg");
+    json.Number(h.pitch_sigma_deg);
+    json.Key("roll_sigma_deg");
+    json.Number(h.roll_sigma_deg);
+    json.Key("frames_used");
+    json.Integer(h.frames_used);
+    json.EndObject();
+  }
+  json.EndArray();
   json.Key("no_evidence");
   json.BeginArray();
   for (const SkippedFrame& s : no_evidence) {

@@ -295,6 +295,12 @@ TEST(OnlineMountRefiner, SolvesWhenTheWindowFirstFillsThenEveryKFramesAndApplies
   // Solves after frames 5, 9, 13, 17, 21, 25 (1-based): at indices 4, 8, ... 24.
   EXPECT_EQ(changed_at, (std::vector<int>{4, 8, 12, 16, 20, 24}));
   const OnlineRefinementSummary& s = online.summary();
+  ASSERT_EQ(s.history.size(), 6u);
+  EXPECT_EQ(s.history[0].frame, 5);
+  EXPECT_EQ(s.history[0].timestamp_ns, 4);
+  EXPECT_EQ(s.history[0].frames_used, 5);
+  EXPECT_EQ(s.history[5].frames_used, 12);
+  EXPECT_EQ(s.history[5].pitch_correction_deg, s.last_applied->pitch_correction_deg);
   EXPECT_EQ(s.solves, 6);
   EXPECT_EQ(s.applied, 6);
   EXPECT_EQ(s.rejected_total(), 0);

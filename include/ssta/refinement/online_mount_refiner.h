@@ -15,6 +15,16 @@
 
 namespace ssta {
 
+/// One solve of the online refinement.
+struct OnlineSolve {
+  int frame = 0;                 ///< 1-based count of frames offered when it ran
+  std::int64_t timestamp_ns = 0; ///< of the frame that triggered it
+  RefinementStatus status = RefinementStatus::kTooFewFrames;
+  double pitch_correction_deg = 0.0, roll_correction_deg = 0.0;  ///< against sensor.yaml [deg]
+  double pitch_sigma_deg = 0.0, roll_sigma_deg = 0.0;            ///< 1-sigma [deg]
+  int frames_used = 0;           ///< frames in the window
+};
+
 /// What the online mount refinement did over a run of frames.
 struct OnlineRefinementSummary {
   int frames_offered = 0;        ///< frames whose evidence was offered (usable or not)
@@ -26,6 +36,7 @@ struct OnlineRefinementSummary {
   /// failed (RefinementStatus order after kDetermined).
   std::array<int, 4> rejected{};
   std::string last_rejection;    ///< the message of the last solve not applied; empty if none
+  std::vector<OnlineSolve> history;  ///< every solve, in order
   /// Frames offered before the first applied solve: they were processed with the start mount.
   int frames_before_first_applied = 0;
   double solve_ms = 0.0;         ///< total solve + covariance time [ms]
