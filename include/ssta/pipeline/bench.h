@@ -87,7 +87,8 @@ struct PipelineBenchOptions {
 /// wall and CPU time and, with `with_map`, the map update (ClassifiedPointsInWorld at
 /// config.map.pixel_stride + InsertFrame into a new map at config.map.fusion) and the map's size.
 /// Rows: rectify, match, triangulate, normals, segment, analyze, frame (Process), and with the
-/// map: map update, end to end (frame + map update). Poses and gravity as `ssta build-map`
+/// map: map update, end to end (frame + map update); with config.refinement.online: refine
+/// (online), the ground evidence and window update with the solves when due. Poses and gravity as `ssta build-map`
 /// takes them (a frame without a pose is put at the origin, levelled by gravity).
 /// Throws ssta::Error on invalid options or config, an unreadable image, or when the sequence
 /// has fewer frames than the warm-up needs plus one.
