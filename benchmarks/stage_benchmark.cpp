@@ -36,6 +36,8 @@
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
 #include "ssta/pipeline/map_builder.h"
+#include "ssta/refinement/ground_evidence.h"
+#include "ssta/refinement/online_mount_refiner.h"
 #include "ssta/stereo/rectifier.h"
 #include "ssta/stereo/stereo_matcher.h"
 #include "ssta/stereo/triangulator.h"
@@ -253,6 +255,26 @@ void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
   }
   CountFrames(state);
   state.counters["map_nodes"] = static_cast<double>(map.NumNodes());
+}
+
+/// The online mount refinement's cost per frame (build-map --refine): ground evidence from the
+/// processed frame, the sliding-window update and, every refinement.solve_every_frames frames,
+/// the Ceres solve + covariance over refinement.window_frames frames, amortized over the frames.
+void BM_OnlineRefinement(benchmark::State& state, const Dataset* d) {
+  const Eigen::Matrix3d camera_R_rectified =
+      Rectifier(d->calibration, d->config.rectification).geometry().rectified_R_camera.transpose();
+  const Eigen::Isometry3d& mount = d->calibration.left.body_T_camera;
+  OnlineMountRefiner online(d->config.refinement, mount, mount);
+  FrameCycle frames(*d);
+  for (auto _ : state) {
+    const BenchFrame& f = frames.Next();
+    GroundEvidence evidence =
+        ExtractGroundEvidence(f.result, camera_R_rectified, Eigen::Vector3d::UnitZ(), d->config.refinement);
+    benchmark::DoNotOptimize(online.AddFrame(std::move(evidence)));
+  }
+  CountFrames(state);
+  state.counters["solves"] = online.summary().solves;
+  state.counters["solve_ms"] = online.summary().solves > 0 ? online.summary().solve_ms / online.summary().solves : 0.0;
 }
 
 void BM_EndToEnd(benchmark::State& state, const Dataset* d) {
@@ -605,6 +627,7 @@ void RegisterAll() {
     add("Analyze/" + name, [get = get](benchmark::State& s) { BM_Analyze(s, get()); });
     add("Geometry/" + name, [get = get](benchmark::State& s) { BM_Geometry(s, get()); });
     add("MapUpdate/" + name, [get = get](benchmark::State& s) { BM_MapUpdate(s, get()); });
+    add("OnlineRefinement/" + name, [get = get](benchmark::State& s) { BM_OnlineRefinement(s, get()); });
     add("EndToEnd/" + name, [get = get](benchmark::State& s) { BM_EndToEnd(s, get()); });
     add("EndToEndWithMap/" + name, [get = get](benchmark::State& s) { BM_EndToEndWithMap(s, get()); });
     add("StockLabels/" + name, [get = get](benchmark::State& s) { BM_StockLabels(s, get()); });

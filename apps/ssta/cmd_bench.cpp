@@ -21,6 +21,7 @@ struct BenchArgs {
   std::string sequence, json, keep_rendered;
   std::vector<std::string> config;
   int frames = 30;
+  bool refine = false;  ///< sets refinement.online
   PipelineBenchOptions options;
   synth::SynthOptions synth;
 };
@@ -67,7 +68,8 @@ void Run(BenchArgs& a) {
     source = "synthetic " + a.synth.scene;
   }
   const Sequence sequence = Sequence::Open(a.sequence);
-  const Config config = LoadLayeredConfig(&sequence, a.config);
+  Config config = LoadLayeredConfig(&sequence, a.config);
+  if (a.refine) config.refinement.online = true;
   BenchReport report = RunPipelineBench(sequence, config, a.options);
   if (!source.empty()) report.source = source;
   std::cout << report.Table();
@@ -92,6 +94,8 @@ void RegisterBench(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--map", args->options.with_map,
                 "also fuse every frame into a map (config map section) and time the update");
+  cmd->add_flag("--refine", args->refine,
+                "also time the online mount refinement per frame (sets refinement.online, as build-map --refine)");
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
   cmd->add_option("--json", args->json, "also write the report as JSON to this file");
   cmd->add_option("--scene", args->synth.scene, "scene to render: yard | hills | dropoff | forest | ramp")

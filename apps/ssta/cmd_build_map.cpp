@@ -22,11 +22,13 @@ struct BuildMapArgs {
   BuildMapOptions options;
   bool quiet = false;
   bool sequential = false;
+  bool refine = false;  ///< sets refinement.online
 };
 
 void Run(const BuildMapArgs& a) {
   const Sequence sequence = Sequence::Open(a.sequence);
-  const Config config = LoadLayeredConfig(&sequence, a.config);
+  Config config = LoadLayeredConfig(&sequence, a.config);
+  if (a.refine) config.refinement.online = true;
   if (!a.options.resume && std::filesystem::exists(a.options.map_path) && !a.quiet) {
     std::cerr << "ssta: replacing " << a.options.map_path << " (use --resume to continue it)\n";
   }
@@ -64,6 +66,9 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file");
+  cmd->add_flag("--refine", args->refine,
+                "refine cam0's mount pitch and roll online from the ground (sets refinement.online; "
+                "docs/mount_calibration.md)");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--sequential", args->sequential,
                 "classify and fuse one frame after the other (default: fuse each frame on a second thread while the "

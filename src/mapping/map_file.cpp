@@ -139,6 +139,20 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const std::string& s : m.sequences) out << YAML::DoubleQuoted << s;
   out << YAML::EndSeq;
+  if (m.refined_mount) {
+    // 4x4 row-major, the first three rows (the last is 0 0 0 1).
+    auto matrix = [&](const char* key, const Eigen::Isometry3d& t) {
+      out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 4; ++j) out << num(t.matrix()(i, j));
+      }
+      out << YAML::EndSeq;
+    };
+    out << YAML::Key << "refined_mount" << YAML::Value << YAML::BeginMap;
+    matrix("configured_body_T_cam0", m.refined_mount->configured);
+    matrix("refined_body_T_cam0", m.refined_mount->refined);
+    out << YAML::EndMap;
+  }
   out << YAML::EndMap;
   if (!out.good()) throw InternalError(std::string("map metadata YAML: ") + out.GetLastError());
   return out.c_str();
@@ -316,6 +330,24 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
 
   metadata->calibration_summary = root.Require<std::string>("calibration_summary");
   metadata->sequences = root.Require<std::vector<std::string>>("sequences");
+  if (root.Has("refined_mount")) {
+    internal::YamlSection r = root.Child("refined_mount");
+    auto matrix = [&](const char* key) {
+      if (!r.Has(key)) throw Error(r.Name(key) + ": missing");
+      std::vector<double> v;
+      r.ReadList(key, &v, 12);
+      Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+      for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 4; ++j) t.matrix()(i, j) = v[4 * i + j];
+      }
+      const Eigen::Matrix3d rotation = t.linear();
+      if (!t.matrix().allFinite() || !(rotation.transpose() * rotation).isIdentity(1e-6) || rotation.determinant() < 0) {
+        throw Error(r.Name(key) + ": not a rigid transform");
+      }
+      return t;
+    };
+    metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
+  }
 }
 
 }  // namespace

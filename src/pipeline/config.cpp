@@ -260,6 +260,9 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("estimate_height", &r.estimate_height);
     s.Read("height_prior_sigma_m", &r.height_prior_sigma_m);
     s.Read("max_iterations", &r.max_iterations);
+    s.Read("online", &r.online);
+    s.Read("window_frames", &r.window_frames);
+    s.Read("solve_every_frames", &r.solve_every_frames);
     s.RejectUnknownKeys();
   }
   root.RejectUnknownKeys();
@@ -387,7 +390,10 @@ std::string ConfigToYaml(const Config& c) {
     << "  terrain_height_sigma_m: " << r.terrain_height_sigma_m << "\n"
     << "  estimate_height: " << r.estimate_height << "\n"
     << "  height_prior_sigma_m: " << r.height_prior_sigma_m << "\n"
-    << "  max_iterations: " << r.max_iterations << "\n";
+    << "  max_iterations: " << r.max_iterations << "\n"
+    << "  online: " << r.online << "\n"
+    << "  window_frames: " << r.window_frames << "\n"
+    << "  solve_every_frames: " << r.solve_every_frames << "\n";
   return y.str();
 }
 

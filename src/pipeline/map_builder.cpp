@@ -12,6 +12,7 @@
 #include "pipeline/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
+#include "ssta/refinement/ground_evidence.h"
 
 namespace ssta {
 namespace {
@@ -26,8 +27,10 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
   return s.str();
 }
 
+/// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
 TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
-                          const std::string& calibration) {
+                          const std::string& calibration, bool* continues_sequence) {
+  *continues_sequence = false;
   if (!options.resume) {
     MapMetadata metadata;
     metadata.vehicle = config.vehicle;
@@ -44,11 +47,17 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
     throw Error(m.str());
   }
   MapMetadata metadata = map.metadata();
-  if (metadata.sequences.empty() || metadata.sequences.back() != sequence_name) {
-    metadata.sequences.push_back(sequence_name);
-  }
+  *continues_sequence = !metadata.sequences.empty() && metadata.sequences.back() == sequence_name;
+  if (!*continues_sequence) metadata.sequences.push_back(sequence_name);
   map.set_metadata(metadata);
   return map;
+}
+
+/// The refined mount a resumed map recorded when it corrected this same configured mount.
+std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, const Eigen::Isometry3d& configured) {
+  const std::optional<RefinedMount>& recorded = map.metadata().refined_mount;
+  if (recorded && recorded->configured.isApprox(configured, 1e-9)) return recorded->refined;
+  return std::nullopt;
 }
 
 }  // namespace
@@ -118,16 +127,31 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   }
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  TraversabilityMap map = OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), pipeline.geometry()));
+  bool same_sequence = false;
+  TraversabilityMap map = OpenMap(options, config, sequence_name,
+                                  CalibrationSummary(sequence.calibration(), pipeline.geometry()), &same_sequence);
   // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
-  const bool continues_this_sequence = options.resume && map.frames_inserted() > 0 &&
-                                       !map.metadata().sequences.empty() &&
-                                       map.metadata().sequences.back() == sequence_name;
+  const bool continues_this_sequence = options.resume && map.frames_inserted() > 0 && same_sequence;
   const std::int64_t fused_up_to = map.last_timestamp_ns();
 
+  // cam0's mount: the configured one, or the online refinement's once a solve is applied.
+  const Eigen::Isometry3d body_T_camera_configured = sequence.calibration().left.body_T_camera;
+  const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
+  std::optional<OnlineMountRefiner> refiner;
+  bool resumed_mount = false;  // starts from the mount a resumed map recorded
+  if (config.refinement.online) {
+    const std::optional<Eigen::Isometry3d> recorded = RecordedMount(map, body_T_camera_configured);
+    resumed_mount = recorded.has_value();
+    refiner.emplace(config.refinement, body_T_camera_configured, recorded.value_or(body_T_camera_configured));
+  }
+  Eigen::Isometry3d body_T_camera = refiner ? refiner->body_T_camera() : body_T_camera_configured;
   // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
-  Eigen::Isometry3d body_T_rectified = sequence.calibration().left.body_T_camera;
-  body_T_rectified.linear() = body_T_rectified.linear() * pipeline.geometry().rectified_R_camera.transpose();
+  auto rectified_in_body = [&] {
+    Eigen::Isometry3d body_T_rectified = body_T_camera;
+    body_T_rectified.linear() = body_T_camera.linear() * camera_R_rectified;
+    return body_T_rectified;
+  };
+  Eigen::Isometry3d body_T_rectified = rectified_in_body();
 
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
   BuildMapSummary summary;
@@ -141,9 +165,80 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
   // Everything that touches the map or the summary runs as a job on `fusion`, in frame order,
   // so the map and the summary are those of the sequential loop; with options.pipelined the
-  // fusion of frame k overlaps the classification of frame k+1. Declared after them: its
+  // fusion of frame k overlaps the classification of frame k+1. The refiner and the mount in
+  // use stay on this thread: each job gets its pose by value. Declared after them: its
   // destructor finishes the queued jobs before they go.
   internal::OrderedWorker fusion(options.pipelined ? 1 : 0);
+  auto skip = [&](std::int64_t t, const std::string& reason) {
+    fusion.Submit([&, t, reason] {
+      fail_if_strict(t, reason);
+      summary.skipped.push_back({t, reason});
+    });
+  };
+  // One frame through the pipeline with the mount in use (gravity in the camera).
+  auto process = [&](const StereoFrame& frame, const Eigen::Vector3d& up_body) {
+    const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+    auto result = std::make_shared<FrameResult>(
+        pipeline.Process(images.left, images.right, (body_T_camera.linear().transpose() * up_body).normalized()));
+    result->timestamp_ns = frame.timestamp_ns;
+    return result;
+  };
+  auto fuse = [&](std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body) {
+    const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
+    fusion.Submit([&, result, world_T_rectified] {
+      const std::int64_t t = result->timestamp_ns;
+      try {
+        const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
+        const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
+        if (!stats.inserted) {
+          fail_if_strict(t, "map rejected the frame: " + stats.reason);
+          summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+        } else {
+          ++summary.frames_used;
+          summary.points_inserted += stats.points_hit;
+          if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
+        }
+      } catch (const Error& e) {
+        fail_if_strict(t, e.what());
+        summary.skipped.push_back({t, e.what()});
+      }
+    });
+  };
+  // The frame's ground evidence to the refiner; an applied solve serves the frames after it.
+  auto refine = [&](const FrameResult& result, const Eigen::Vector3d& up_body) {
+    if (!refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement))) return;
+    body_T_camera = refiner->body_T_camera();
+    body_T_rectified = rectified_in_body();
+    const RefinedMount mount{body_T_camera_configured, body_T_camera};
+    fusion.Submit([&, mount] {
+      MapMetadata metadata = map.metadata();
+      metadata.refined_mount = mount;
+      map.set_metadata(metadata);
+    });
+  };
+  // Warm-up: until the first solve is applied (at most window_frames frames), frames give
+  // evidence but are not fused; then they are processed again with the refined mount and fused,
+  // so the map holds no frame seen through the configured mount when refinement succeeds. A
+  // start mount recorded by a resumed map needs no warm-up.
+  struct HeldFrame {
+    StereoFrame frame;
+    Eigen::Isometry3d world_T_body;
+  };
+  std::vector<HeldFrame> held;
+  bool warming_up = refiner && !resumed_mount;
+  int reprocessed = 0;
+  auto fuse_held = [&] {
+    warming_up = false;
+    for (const HeldFrame& h : held) {
+      try {
+        fuse(process(h.frame, h.world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()), h.world_T_body);
+        ++reprocessed;
+      } catch (const Error& e) {
+        skip(h.frame.timestamp_ns, e.what());
+      }
+    }
+    held.clear();
+  };
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
   for (const StereoFrame& frame : todo) {
@@ -152,12 +247,6 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       break;
     }
     const std::int64_t t = frame.timestamp_ns;
-    auto skip = [&](const std::string& reason) {
-      fusion.Submit([&, t, reason] {
-        fail_if_strict(t, reason);
-        summary.skipped.push_back({t, reason});
-      });
-    };
     if (continues_this_sequence && t <= fused_up_to) {
       fusion.Submit([&] { ++summary.frames_already_in_map; });
       ++done;
@@ -171,40 +260,23 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       world_T_body = gravity.WorldTBodyAt(t);
     }
     if (!world_T_body) {
-      skip("no pose: " + sequence.NoPoseReason(t));
+      skip(t, "no pose: " + sequence.NoPoseReason(t));
     } else {
-      std::shared_ptr<FrameResult> result;
       try {
-        const StereoImages images = ReadStereoImages(frame, sequence.calibration());
-        const ImageU8& left = images.left;
-        const ImageU8& right = images.right;
-        const Eigen::Vector3d up_camera =
-            (sequence.calibration().left.body_T_camera.linear().transpose() *
-             (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ())).normalized();
-        result = std::make_shared<FrameResult>(pipeline.Process(left, right, up_camera));
-        result->timestamp_ns = t;
-      } catch (const Error& e) {
-        skip(e.what());
-      }
-      if (result) {
-        const Eigen::Isometry3d world_T_rectified = *world_T_body * body_T_rectified;
-        fusion.Submit([&, t, result, world_T_rectified] {
-          try {
-            const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
-            const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
-            if (!stats.inserted) {
-              fail_if_strict(t, "map rejected the frame: " + stats.reason);
-              summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
-            } else {
-              ++summary.frames_used;
-              summary.points_inserted += stats.points_hit;
-              if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
-            }
-          } catch (const Error& e) {
-            fail_if_strict(t, e.what());
-            summary.skipped.push_back({t, e.what()});
+        const Eigen::Vector3d up_body = (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
+        const std::shared_ptr<FrameResult> result = process(frame, up_body);
+        if (warming_up) {
+          held.push_back({frame, *world_T_body});
+          refine(*result, up_body);
+          if (refiner->summary().applied > 0 || static_cast<int>(held.size()) >= config.refinement.window_frames) {
+            fuse_held();
           }
-        });
+        } else {
+          fuse(result, *world_T_body);
+          if (refiner) refine(*result, up_body);
+        }
+      } catch (const Error& e) {
+        skip(t, e.what());
       }
     }
     ++done;
@@ -213,11 +285,16 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     }
     if (progress) progress(done, static_cast<int>(todo.size()));
   }
+  fuse_held();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
   fusion.Drain();
   map.Save(options.map_path);
   summary.map_nodes = map.NumNodes();
   summary.map_file_bytes = std::filesystem::file_size(options.map_path);
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (refiner) {
+    summary.refinement = refiner->summary();
+    summary.refinement->frames_reprocessed = reprocessed;
+  }
   return summary;
 }
 
@@ -234,6 +311,7 @@ std::string BuildMapSummary::BriefReport() const {
   r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
     << " points fused\n";
   r << "time: " << wall_s << " s (" << (wall_s > 0 ? frames_used / wall_s : 0.0) << " frames/s)\n";
+  if (refinement) r << refinement->BriefReport();
   return r.str();
 }
 
@@ -253,7 +331,9 @@ std::string BuildMapSummary::Json() const {
   list(quality_failed);
   j << ",\n  \"map_nodes\": " << map_nodes << ",\n  \"map_file_bytes\": " << map_file_bytes
     << ",\n  \"points_inserted\": " << points_inserted << ",\n  \"wall_s\": " << wall_s
-    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false") << "\n}\n";
+    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false");
+  if (refinement) j << ",\n  \"refinement\": " << refinement->Json();
+  j << "\n}\n";
   return j.str();
 }
 

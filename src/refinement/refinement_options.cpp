@@ -60,6 +60,8 @@ bool RefinementOptions::IsValid(std::string* error) const {
   }
   if (!Positive(height_prior_sigma_m)) return Fail(error, "height_prior_sigma_m: must be positive");
   if (max_iterations < 1) return Fail(error, "max_iterations: must be at least 1");
+  if (window_frames < min_frames) return Fail(error, "window_frames: must be at least min_frames");
+  if (solve_every_frames < 1) return Fail(error, "solve_every_frames: must be at least 1");
   return true;
 }
 

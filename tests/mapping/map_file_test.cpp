@@ -141,6 +141,26 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
 }
 
+TEST(MapFile, RefinedMountRoundTripsExactlyAndIsOptional) {
+  const TempDir dir;
+  TraversabilityMap map = BuildMap(2);
+  map.Save(dir / "plain.ot");
+  EXPECT_FALSE(TraversabilityMap::Load(dir / "plain.ot").metadata().refined_mount);
+
+  RefinedMount mount;
+  mount.configured.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  mount.configured.translation() = Eigen::Vector3d(0.2, 0.06, 0.6);
+  mount.refined = Eigen::AngleAxisd(-0.05, Eigen::Vector3d::UnitY()) * mount.configured;
+  MapMetadata metadata = map.metadata();
+  metadata.refined_mount = mount;
+  map.set_metadata(metadata);
+  map.Save(dir / "refined.ot");
+  const std::optional<RefinedMount> loaded = TraversabilityMap::Load(dir / "refined.ot").metadata().refined_mount;
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded->configured.matrix(), mount.configured.matrix());  // shortest exact decimals
+  EXPECT_EQ(loaded->refined.matrix(), mount.refined.matrix());
+}
+
 TEST(MapFile, IsAnOctoMapFileThatOctoMapsFactoryReads) {
   const TempDir dir;
   const TraversabilityMap map = BuildMap(2);

@@ -122,6 +122,15 @@ TEST(Bench, CommandRunsOnARecordedSequenceWithoutTheMap) {
   EXPECT_NE(r.output.find("kitti-street-pair: 1241x376, sgbm, 1 frames measured"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("frame (Process)"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("map update"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("refine (online)"), std::string::npos) << r.output;
+}
+
+TEST(Bench, RefineAddsTheOnlineRefinementRow) {
+  const testing::RunResult r = testing::RunSsta(std::string("bench --sequence ") + SSTA_TEST_DATA_DIR +
+                                                "/euroc-v1-01-mini --warmup 0 --frames 3 --refine --config " +
+                                                SSTA_CONFIG_DIR + "/sensors/euroc.yaml");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("refine (online)"), std::string::npos) << r.output;
 }
 
 TEST(Bench, CommandRejectsTooFewFramesByName) {

@@ -8,6 +8,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/refinement/mount_refiner.h"
+#include "ssta/refinement/online_mount_refiner.h"
 
 namespace ssta {
 namespace {
@@ -225,6 +226,14 @@ TEST(RefinementOptions, MessagesNameTheKey) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("refinement.max_sigma_ratio:", 0), 0u) << e.what();
   }
+  o = RefinementOptions{};
+  o.window_frames = o.min_frames - 1;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("window_frames:", 0), 0u) << error;
+  o = RefinementOptions{};
+  o.solve_every_frames = 0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error.rfind("solve_every_frames:", 0), 0u) << error;
   EXPECT_THROW(ParseRobustLoss("l2"), Error);
   EXPECT_EQ(ParseGroundReference("gravity"), GroundReference::kGravity);
 }
@@ -255,6 +264,113 @@ TEST(GroundEvidence, FrameWithoutGroundPlaneIsSkippedWithAReason) {
   ASSERT_TRUE(ok.usable) << ok.reason;
   EXPECT_EQ(ok.camera_points.size(), 8u);  // 16 thinned to 8
   EXPECT_TRUE(ok.camera_points[0].isApprox(camera_R_rectified * Eigen::Vector3d(0, 1, 3)));
+}
+
+GroundEvidence NoGround(std::int64_t t) {
+  GroundEvidence e;
+  e.timestamp_ns = t;
+  e.reason = "no dominant ground plane";
+  return e;
+}
+
+TEST(OnlineMountRefiner, SolvesWhenTheWindowFirstFillsThenEveryKFramesAndAppliesTheCorrection) {
+  RefinementOptions options;
+  options.min_frames = 5;
+  options.window_frames = 12;
+  options.solve_every_frames = 4;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  OnlineMountRefiner online(options, configured, configured);
+  std::mt19937 rng(11);
+  std::normal_distribution<double> terrain(0.0, 0.5);
+  std::vector<int> changed_at;
+  for (int i = 0; i < 25; ++i) {
+    GroundEvidence e = Frame(rng, terrain(rng), 0.02, 0.0, 0.4);
+    e.timestamp_ns = i;
+    if (online.AddFrame(std::move(e))) changed_at.push_back(i);
+    // The window never holds more than window_frames frames.
+    if (online.last_result()) {
+      EXPECT_LE(online.last_result()->frames_used, options.window_frames);
+    }
+  }
+  // Solves after frames 5, 9, 13, 17, 21, 25 (1-based): at indices 4, 8, ... 24.
+  EXPECT_EQ(changed_at, (std::vector<int>{4, 8, 12, 16, 20, 24}));
+  const OnlineRefinementSummary& s = online.summary();
+  ASSERT_EQ(s.history.size(), 6u);
+  EXPECT_EQ(s.history[0].frame, 5);
+  EXPECT_EQ(s.history[0].timestamp_ns, 4);
+  EXPECT_EQ(s.history[0].frames_used, 5);
+  EXPECT_EQ(s.history[5].frames_used, 12);
+  EXPECT_EQ(s.history[5].pitch_correction_deg, s.last_applied->pitch_correction_deg);
+  EXPECT_EQ(s.solves, 6);
+  EXPECT_EQ(s.applied, 6);
+  EXPECT_EQ(s.rejected_total(), 0);
+  EXPECT_EQ(s.frames_before_first_applied, 5);
+  EXPECT_EQ(online.last_result()->frames_used, 12);
+  ASSERT_TRUE(s.last_applied);
+  EXPECT_NEAR(s.last_applied->pitch_correction_deg, -3.0, 0.4);
+  EXPECT_NEAR(s.last_applied->roll_correction_deg, -1.5, 0.4);
+  EXPECT_LT(AngleDeg(TrueMount().linear(), online.body_T_camera().linear()), 0.4) << s.BriefReport();
+  EXPECT_TRUE(online.body_T_camera().isApprox(s.last_applied->body_T_camera_refined));
+  EXPECT_NE(s.Json().find("\"applied\": 6"), std::string::npos) << s.Json();
+  EXPECT_NE(s.BriefReport().find("6 solves, 6 applied, 0 rejected"), std::string::npos) << s.BriefReport();
+
+  // Deterministic: the same frames give the same mount, bit for bit.
+  OnlineMountRefiner again(options, configured, configured);
+  std::mt19937 rng2(11);
+  std::normal_distribution<double> terrain2(0.0, 0.5);
+  for (int i = 0; i < 25; ++i) again.AddFrame(Frame(rng2, terrain2(rng2), 0.02, 0.0, 0.4));
+  EXPECT_EQ(again.body_T_camera().matrix(), online.body_T_camera().matrix());
+}
+
+TEST(OnlineMountRefiner, FramesWithoutGroundPlaneAreCountedAndNeverSolvedOn) {
+  RefinementOptions options;
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  OnlineMountRefiner online(options, configured, configured);
+  std::mt19937 rng(5);
+  // Too little evidence: fewer frames with a ground plane than min_frames, among many without.
+  for (int i = 0; i < 20; ++i) {
+    const bool ground = i % 5 == 0;  // 4 of 20
+    EXPECT_FALSE(online.AddFrame(ground ? Frame(rng, 0.0, 0.02, 0.0, 0.4) : NoGround(i)));
+  }
+  const OnlineRefinementSummary& s = online.summary();
+  EXPECT_EQ(s.frames_offered, 20);
+  EXPECT_EQ(s.frames_with_evidence, 4);
+  ASSERT_EQ(s.no_evidence.size(), 16u);
+  EXPECT_EQ(s.no_evidence.front().timestamp_ns, 1);
+  EXPECT_EQ(s.no_evidence.front().reason, "no dominant ground plane");
+  EXPECT_EQ(s.solves, 0);
+  EXPECT_FALSE(online.last_result());
+  EXPECT_FALSE(s.last_applied);
+  EXPECT_TRUE(online.body_T_camera().isApprox(configured));
+  EXPECT_NE(s.BriefReport().find("no solve: fewer frames with ground evidence than min_frames"), std::string::npos)
+      << s.BriefReport();
+
+  // The fifth frame with a ground plane fills the window: now it solves and applies.
+  EXPECT_TRUE(online.AddFrame(Frame(rng, 0.0, 0.02, 0.0, 0.4)));
+  EXPECT_EQ(online.summary().applied, 1);
+  EXPECT_EQ(online.summary().frames_before_first_applied, 21);
+}
+
+TEST(OnlineMountRefiner, UndeterminedSolvesAreRejectedWithTheirReasonAndKeepTheMount) {
+  RefinementOptions options;
+  options.min_frames = 3;
+  options.window_frames = 6;
+  options.solve_every_frames = 3;
+  options.prior_sigma_deg = 0.02;  // the data can add nothing to so tight a prior
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
+  const Eigen::Isometry3d start = WrongMount(1.0, 0.5);  // e.g. from a resumed map
+  OnlineMountRefiner online(options, configured, start);
+  std::mt19937 rng(9);
+  for (int i = 0; i < 9; ++i) EXPECT_FALSE(online.AddFrame(Frame(rng, 0.0, 0.02, 0.0, 0.4)));
+  const OnlineRefinementSummary& s = online.summary();
+  EXPECT_EQ(s.solves, 3);
+  EXPECT_EQ(s.applied, 0);
+  EXPECT_EQ(s.rejected[1], 3);  // not_better_than_prior
+  EXPECT_EQ(s.last_rejection.rfind("not_better_than_prior: ", 0), 0u) << s.last_rejection;
+  EXPECT_TRUE(online.body_T_camera().isApprox(start));
+  EXPECT_NE(s.BriefReport().find("3 not_better_than_prior"), std::string::npos) << s.BriefReport();
+  EXPECT_NE(s.BriefReport().find("the one the map recorded"), std::string::npos) << s.BriefReport();
+  EXPECT_NE(s.Json().find("\"not_better_than_prior\": 3"), std::string::npos) << s.Json();
 }
 
 }  // namespace

@@ -1,7 +1,10 @@
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "ssta/analysis/vehicle_options.h"
 
@@ -49,10 +52,19 @@ struct MapOptions {
 };
 
 /// What a map remembers about how it was made. It is written into the map file with the voxels.
+/// cam0's mount as an online refinement (`ssta build-map --refine`) left it, with the mount from
+/// sensor.yaml it corrects: a resumed build with the same sensor.yaml starts from `refined`.
+struct RefinedMount {
+  Eigen::Isometry3d configured = Eigen::Isometry3d::Identity();  ///< body_T_cam0 of sensor.yaml
+  Eigen::Isometry3d refined = Eigen::Isometry3d::Identity();     ///< body_T_cam0 in use at the end
+};
+
 struct MapMetadata {
   VehicleOptions vehicle;           ///< the vehicle whose limits gave the classes (and costs)
   std::string calibration_summary;  ///< free text or YAML describing the stereo calibration
   std::vector<std::string> sequences;  ///< names of the sequences fused, in fusion order
+  /// Set by a build with online mount refinement once a solve was applied; nullopt otherwise.
+  std::optional<RefinedMount> refined_mount;
 };
 
 }  // namespace ssta

@@ -87,7 +87,9 @@ struct PipelineBenchOptions {
 /// wall and CPU time and, with `with_map`, the map update (ClassifiedPointsInWorld at
 /// config.map.pixel_stride + InsertFrame into a new map at config.map.fusion) and the map's size.
 /// Rows: rectify, match, triangulate, normals, segment, analyze, frame (Process), and with the
-/// map: map update, end to end (frame + map update: the latency of the sequential loop).
+/// map: map update, end to end (frame + map update: the latency of the sequential loop); with
+/// config.refinement.online: refine (online), the ground evidence and window update with the
+/// solves when due.
 /// With the map, a second pass then runs the same frames as `ssta build-map` does by default
 /// (BuildMapOptions::pipelined: the map update of frame k on a second thread while frame k+1 is
 /// classified) into a fresh map, with the images of at most kMaxPipelinedFrames frames read

@@ -13,6 +13,7 @@
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
+#include "ssta/refinement/online_mount_refiner.h"
 
 namespace ssta {
 
@@ -47,6 +48,8 @@ struct BuildMapSummary {
   std::size_t points_inserted = 0;
   double wall_s = 0.0;
   bool interrupted = false;  ///< stopped early on request; the map holds what was fused
+  /// What the online mount refinement did (config.refinement.online); nullopt when off.
+  std::optional<OnlineRefinementSummary> refinement;
 
   std::string BriefReport() const;
   std::string Json() const;
@@ -64,7 +67,12 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
 /// pitch corrected by the IMU attitude filter where there is an IMU (GravityProvider); frames
-/// without a pose are skipped with a reason. The map is saved atomically every
+/// without a pose are skipped with a reason. With config.refinement.online, each fused frame's
+/// ground evidence goes to an OnlineMountRefiner, and a determined solve replaces cam0's mount
+/// for the gravity (up in the camera) and the fusion pose (body_T_rectified) of every later
+/// frame; the map's metadata records the refined mount, and a resumed build whose cam0
+/// sensor.yaml mount equals the recorded configured one starts from the recorded refined one
+/// (a different sensor.yaml starts from its own). The map is saved atomically every
 /// config.map.checkpoint_every_frames frames and at the end, also when `stop` turns true (the
 /// run then ends after the current frame). Throws ssta::Error on bad input before any work.
 /// With `resume`, when the map's last sequence is `sequence_name` (a run that was interrupted

@@ -79,6 +79,16 @@ struct RefinementOptions {
   /// Gauss-Newton / Levenberg-Marquardt iteration limit.
   int max_iterations = 50;
 
+  /// `ssta build-map` refines the mount online while it fuses (`--refine` sets it): each solve
+  /// that is determined replaces cam0's mount for the gravity and the poses of later frames.
+  bool online = false;
+  /// Online: the sliding window keeps the ground evidence of this many most recent frames with
+  /// a usable ground plane [frames]; at least min_frames.
+  int window_frames = 30;
+  /// Online: solve once the window holds min_frames frames, then after every n-th further frame
+  /// with a usable ground plane [frames].
+  int solve_every_frames = 10;
+
   /// Checks every field; the message starts with the key name ("max_range_m: ...").
   bool IsValid(std::string* error) const;
 };
