@@ -336,54 +336,73 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 
 namespace {
 
-/// Sliding-window mean along one line of `n` samples, restricted to runs of equal segment id:
-/// out[i] = sum of the finite in[j] with |i - j| <= r and id[j] == id[i] over the run.
+/// Sliding-window sum along one line of `n` samples, restricted to runs of equal segment id:
+/// out[i] = sum of in[j] with |i - j| <= r and ids[j] == ids[i] within the run holding i.
 /// `in` holds x, y, z and a weight (1 for a finite normal, 0 otherwise) per sample.
-void RunMean(const Eigen::Vector4d* in, const std::int32_t* ids, std::ptrdiff_t stride_in, std::ptrdiff_t stride_id,
-             int n, int r, Eigen::Vector4d* out, std::ptrdiff_t stride_out) {
+void RunSum(const Eigen::Vector4f* in, const std::int32_t* ids, int n, int r, Eigen::Vector4f* out) {
   int start = 0;
   while (start < n) {
     int end = start + 1;
-    const std::int32_t id = ids[start * stride_id];
-    while (end < n && ids[end * stride_id] == id) ++end;
-    // Window [i - r, i + r] clipped to the run [start, end).
-    Eigen::Vector4d acc = Eigen::Vector4d::Zero();
+    while (end < n && ids[end] == ids[start]) ++end;
+    Eigen::Vector4f acc = Eigen::Vector4f::Zero();
     int lo = start, hi = start;  // acc sums [lo, hi)
     for (int i = start; i < end; ++i) {
       const int want_hi = std::min(end, i + r + 1), want_lo = std::max(start, i - r);
-      while (hi < want_hi) acc += in[hi++ * stride_in];
-      while (lo < want_lo) acc -= in[lo++ * stride_in];
-      out[i * stride_out] = acc;
+      while (hi < want_hi) acc += in[hi++];
+      while (lo < want_lo) acc -= in[lo++];
+      out[i] = acc;
     }
     start = end;
   }
 }
 
-/// Mean of the finite unit normals in a window x window box around each pixel, counting only
-/// pixels of the same segment along each row and then each column (separable, so O(1) per
-/// pixel), normalised; NaN where it holds none. Averaging stays inside a segment, so a ramp's
-/// edge is not blurred into the ground next to it.
-Image3f SegmentBoxAverage(const Image3f& normals, const ImageI32& ids, int window) {
+/// dst (h x w, row-major) = transpose of src (w x h, row-major), in tiles that stay in cache.
+template <typename T>
+void TransposeTiled(const T* src, int w, int h, T* dst) {
+  constexpr int kTile = 16;
+  for (int v0 = 0; v0 < h; v0 += kTile) {
+    for (int u0 = 0; u0 < w; u0 += kTile) {
+      const int v1 = std::min(h, v0 + kTile), u1 = std::min(w, u0 + kTile);
+      for (int v = v0; v < v1; ++v) {
+        for (int u = u0; u < u1; ++u) dst[static_cast<std::size_t>(u) * h + v] = src[static_cast<std::size_t>(v) * w + u];
+      }
+    }
+  }
+}
+
+/// Sums of the finite unit normals (x, y, z and their count) in a window x window box around
+/// each pixel, counting only pixels of the same segment along each row and then each column
+/// (separable, so O(1) per pixel; the column pass runs on transposed buffers), row-major in
+/// `*sums`. Staying inside a segment keeps a ramp's edge from blurring into the ground next to
+/// it. The buffers are kept per thread: fresh multi-megabyte buffers every frame cost more in
+/// page faults than the sums themselves.
+void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, std::vector<Eigen::Vector4f>* sums) {
   const int w = normals.width(), h = normals.height(), r = window / 2;
-  std::vector<Eigen::Vector4d> in(normals.size()), rows(normals.size());
-  for (std::size_t i = 0; i < normals.size(); ++i) {
+  const std::size_t size = normals.size();
+  thread_local std::vector<Eigen::Vector4f> scratch;
+  thread_local std::vector<std::int32_t> ids_t;
+  std::vector<Eigen::Vector4f>& a = *sums;
+  a.resize(size);
+  scratch.resize(size);
+  ids_t.resize(size);
+  for (std::size_t i = 0; i < size; ++i) {
     const Eigen::Vector3f& n = normals[i];
     const bool ok = ids[i] >= 0 && std::isfinite(n.x()) && std::isfinite(n.y()) && std::isfinite(n.z());
-    in[i] = ok ? Eigen::Vector4d(n.x(), n.y(), n.z(), 1.0) : Eigen::Vector4d::Zero();
+    a[i] = ok ? Eigen::Vector4f(n.x(), n.y(), n.z(), 1.0f) : Eigen::Vector4f::Zero();
   }
   const std::int32_t* id = &ids[0];
   for (int v = 0; v < h; ++v) {
     const std::size_t o = static_cast<std::size_t>(v) * w;
-    RunMean(&in[o], id + o, 1, 1, w, r, &rows[o], 1);
+    RunSum(&a[o], id + o, w, r, &scratch[o]);
   }
-  std::vector<Eigen::Vector4d>& cols = in;  // reused
-  for (int u = 0; u < w; ++u) RunMean(&rows[u], id + u, w, w, h, r, &cols[u], w);
-  Image3f out(w, h, NanVector3f());
-  for (std::size_t i = 0; i < normals.size(); ++i) {
-    const Eigen::Vector3d m = cols[i].head<3>();
-    if (ids[i] >= 0 && cols[i][3] >= 0.5 && m.norm() > 1e-9) out[i] = m.normalized().cast<float>();
+  // Transpose the row sums and the ids, sum along the former columns, transpose back.
+  TransposeTiled(scratch.data(), w, h, a.data());
+  TransposeTiled(id, w, h, ids_t.data());
+  for (int u = 0; u < w; ++u) {
+    const std::size_t o = static_cast<std::size_t>(u) * h;
+    RunSum(&a[o], &ids_t[o], h, r, &scratch[o]);
   }
-  return out;
+  TransposeTiled(scratch.data(), h, w, a.data());
 }
 
 }  // namespace
@@ -393,21 +412,27 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
   SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
              "normals and labels differ in size");
   SSTA_CHECK(window_px >= 1 && window_px % 2 == 1, "RefineByPixelSlope: window_px must be odd and positive");
-  Image3f averaged;
+  thread_local std::vector<Eigen::Vector4f> sums;
   if (window_px > 1) {
     SSTA_CHECK(segment_ids != nullptr && segment_ids->width() == normals.width() &&
                    segment_ids->height() == normals.height(),
                "RefineByPixelSlope: averaging needs segment ids of the normals' size");
-    averaged = SegmentBoxAverage(normals, *segment_ids, window_px);
+    SegmentBoxSums(normals, *segment_ids, window_px, &sums);
   }
-  const Image3f& used = window_px > 1 ? averaged : normals;
   const Eigen::Vector3f up = up_camera.cast<float>();
   const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
   const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
   for (std::size_t i = 0; i < labels->size(); ++i) {
     std::uint8_t& label = (*labels)[i];
     if (label != 1 && label != 2) continue;
-    const float c = std::abs(used[i].dot(up));  // NaN compares false: left as is
+    float c = std::numeric_limits<float>::quiet_NaN();  // NaN compares false: left as is
+    if (window_px > 1) {
+      const Eigen::Vector3f sum = sums[i].head<3>();
+      const float norm = sum.norm();
+      if (sums[i][3] >= 0.5f && norm > 1e-6f) c = std::abs(sum.dot(up)) / norm;
+    } else {
+      c = std::abs(normals[i].dot(up));
+    }
     if (c < cos_max) {
       label = static_cast<std::uint8_t>(TravClass::kNonTraversable);
     } else if (c < cos_semi) {
