@@ -87,6 +87,21 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   static constexpr const char* kTreeType = "SstaTravOcTree";
 
  private:
+  /// Child `pos` of `node` for an update, created if missing; a pruned block (a leaf that was not
+  /// just created) is expanded instead, so that its eight voxels keep its payload.
+  /// `*child_created`: the child is new.
+  TravNode* ChildForUpdate(TravNode* node, unsigned pos, bool just_created, bool* child_created) {
+    *child_created = false;
+    if (!nodeChildExists(node, pos)) {
+      if (!nodeHasChildren(node) && !just_created) {
+        expandNode(node);
+      } else {
+        createNodeChild(node, pos);
+        *child_created = true;
+      }
+    }
+    return getNodeChild(node, pos);
+  }
   template <typename Update>
   void UpdateRecurs(TravNode* node, bool just_created, const octomap::OcTreeKey& key,
                     unsigned depth, Update& update);
@@ -124,15 +139,8 @@ void TravOcTree::UpdateRecurs(TravNode* node, bool just_created, const octomap::
   }
   const unsigned pos = octomap::computeChildIdx(key, static_cast<int>(tree_depth - 1 - depth));
   bool child_created = false;
-  if (!nodeChildExists(node, pos)) {
-    if (!nodeHasChildren(node) && !just_created) {
-      expandNode(node);  // a pruned block: its eight voxels get its payload
-    } else {
-      createNodeChild(node, pos);
-      child_created = true;
-    }
-  }
-  UpdateRecurs(getNodeChild(node, pos), child_created, key, depth + 1, update);
+  TravNode* child = ChildForUpdate(node, pos, just_created, &child_created);
+  UpdateRecurs(child, child_created, key, depth + 1, update);
   if (!pruneNode(node)) node->updateOccupancyChildren();
 }
 
@@ -180,16 +188,8 @@ void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
     std::size_t end = begin + 1;
     while (end < last && static_cast<unsigned>((codes[end] >> shift) & 7u) == pos) ++end;
     bool child_created = false;
-    if (!nodeChildExists(node, pos)) {
-      if (!nodeHasChildren(node) && !just_created) {
-        expandNode(node);  // a pruned block: its eight voxels get its payload
-      } else {
-        createNodeChild(node, pos);
-        child_created = true;
-      }
-    }
-    UpdateBatchRecurs(getNodeChild(node, pos), child_created, codes, begin, end, depth + 1, update,
-                      unchanged);
+    TravNode* child = ChildForUpdate(node, pos, just_created, &child_created);
+    UpdateBatchRecurs(child, child_created, codes, begin, end, depth + 1, update, unchanged);
     begin = end;
   }
   if (!pruneNode(node)) node->updateOccupancyChildren();

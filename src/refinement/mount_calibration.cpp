@@ -105,16 +105,7 @@ std::string MountCalibration::Json() const {
   json.Key("pipeline_s");
   json.Number(pipeline_s);
   json.Key("skipped");
-  json.BeginArray();
-  for (const SkippedFrame& s : skipped) {
-    json.BeginObject();
-    json.Key("timestamp_ns");
-    json.Integer(s.timestamp_ns);
-    json.Key("reason");
-    json.String(s.reason);
-    json.EndObject();
-  }
-  json.EndArray();
+  internal::WriteSkippedFramesJson(skipped, &json);
   json.EndObject();
   return json.Take() + "\n";
 }

@@ -358,6 +358,19 @@ void WriteTransformJson(const Eigen::Isometry3d& transform, JsonWriter* json) {
   json->EndArray();
 }
 
+void WriteSkippedFramesJson(const std::vector<SkippedFrame>& frames, JsonWriter* json) {
+  json->BeginArray();
+  for (const SkippedFrame& s : frames) {
+    json->BeginObject();
+    json->Key("timestamp_ns");
+    json->Integer(s.timestamp_ns);
+    json->Key("reason");
+    json->String(s.reason);
+    json->EndObject();
+  }
+  json->EndArray();
+}
+
 void WriteRefinementJson(const MountRefinementResult& r, JsonWriter* json) {
   json->BeginObject();
   json->Key("status");

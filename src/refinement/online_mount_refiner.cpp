@@ -181,16 +181,7 @@ std::string OnlineRefinementSummary::Json() const {
   }
   json.EndArray();
   json.Key("no_evidence");
-  json.BeginArray();
-  for (const SkippedFrame& s : no_evidence) {
-    json.BeginObject();
-    json.Key("timestamp_ns");
-    json.Integer(s.timestamp_ns);
-    json.Key("reason");
-    json.String(s.reason);
-    json.EndObject();
-  }
-  json.EndArray();
+  internal::WriteSkippedFramesJson(no_evidence, &json);
   json.EndObject();
   return json.Take();
 }

@@ -4,6 +4,9 @@
 // offline calibration can nest it in its own report.
 
 #include "core/json_writer.h"
+#include <vector>
+
+#include "ssta/io/sequence.h"
 #include "ssta/refinement/mount_refiner.h"
 
 namespace ssta::internal {
@@ -13,5 +16,8 @@ void WriteRefinementJson(const MountRefinementResult& result, JsonWriter* json);
 
 /// Writes a rigid transform as a 4x4 row-major array of rows.
 void WriteTransformJson(const Eigen::Isometry3d& transform, JsonWriter* json);
+
+/// Writes frames as an array of {timestamp_ns, reason} objects.
+void WriteSkippedFramesJson(const std::vector<SkippedFrame>& frames, JsonWriter* json);
 
 }  // namespace ssta::internal
