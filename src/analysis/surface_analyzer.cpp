@@ -451,25 +451,31 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
   const Eigen::Vector3d n = result->ground.plane.head<3>();
   const double plane_d = result->ground.plane[3];  // the camera's height above the plane
   if (!(plane_d > 0)) return;
-  // Along the ray r = p / Z the plane lies at inverse depth -(n . r) / D, so its disparity there
-  // is fb * that: negative above the horizon, where no point is consistent.
+  // Along the ray r = p / Z the plane lies at inverse depth -(n . r) / D, so the point's
+  // disparity fb / Z differs from the plane's there by fb (n . p + D) / (Z D): its distance to
+  // the plane scaled by fb / (Z D). Above the horizon no point is consistent.
   const double fb = focal_times_baseline;
   const int num_segments = static_cast<int>(result->segments.size());
+  // Only small segments without a traversable verdict can change: the others' pixels are skipped.
+  std::vector<bool> candidate(num_segments, false);
+  for (const SegmentResult& seg : result->segments) {
+    if (seg.id >= 0 && seg.id < num_segments) candidate[seg.id] = seg.small && seg.verdict != TravClass::kTraversable;
+  }
   std::vector<int> points(num_segments, 0), consistent(num_segments, 0);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const int id = segment_ids[i];
-    const Eigen::Vector3f& p = cloud[i];
-    if (id < 0 || id >= num_segments || !(p.z() > 0)) continue;  // also NaN
-    const Eigen::Vector3d ray(p.x() / p.z(), p.y() / p.z(), 1.0);
-    const double ground_disparity = -fb * n.dot(ray) / plane_d;
+    if (id < 0 || id >= num_segments || !candidate[id]) continue;
+    const Eigen::Vector3d p = cloud[i].cast<double>();
+    if (!(p.z() > 0)) continue;  // also NaN
     ++points[id];
-    if (std::abs(fb / p.z() - ground_disparity) <= options.ground_tolerance_px) ++consistent[id];
+    const double residual_px = fb * (n.dot(p) + plane_d) / (p.z() * plane_d);
+    if (std::abs(residual_px) <= options.ground_tolerance_px) ++consistent[id];
   }
   std::vector<bool> to_ground(num_segments, false);
   bool any = false;
   for (SegmentResult& seg : result->segments) {
     const int id = seg.id;
-    if (id < 0 || id >= num_segments || !seg.small || seg.verdict == TravClass::kTraversable) continue;
+    if (id < 0 || id >= num_segments || !candidate[id]) continue;
     if (points[id] == 0 || consistent[id] < options.ground_consistent_share * points[id]) continue;
     to_ground[id] = any = true;
     seg.verdict = TravClass::kTraversable;
