@@ -60,7 +60,7 @@ void Run(const CalibrateMountArgs& a) {
   }
   for (const auto& path : {cam0_path, cam1_path}) {
     const auto parent = std::filesystem::path(path).parent_path();
-    if (!parent.empty()) std::filesystem::create_directories(parent);
+    if (!parent.empty()) MakeDirectories(parent.string());
   }
   std::ostringstream note;
   note << std::fixed << std::setprecision(3) << "ssta calibrate-mount: pitch " << result.refinement.pitch_correction_deg

@@ -53,14 +53,7 @@ void WriteCamera(const CameraCalibration& c, internal::JsonWriter* json) {
   for (double v : c.distortion) json->Number(v);
   json->EndArray();
   json->Key("T_BS");
-  json->BeginArray();
-  const Eigen::Matrix4d m = c.body_T_camera.matrix();
-  for (int r = 0; r < 4; ++r) {
-    json->BeginInlineArray();
-    for (int k = 0; k < 4; ++k) json->Number(m(r, k));
-    json->EndArray();
-  }
-  json->EndArray();
+  json->MatrixRows(c.body_T_camera.matrix());
   json->EndObject();
 }
 

@@ -103,4 +103,14 @@ std::string JsonWriter::Take() {
   return std::move(out_);
 }
 
+void JsonWriter::MatrixRows(const Eigen::MatrixXd& m) {
+  BeginArray();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    BeginInlineArray();
+    for (Eigen::Index c = 0; c < m.cols(); ++c) Number(m(r, c));
+    EndArray();
+  }
+  EndArray();
+}
+
 }  // namespace ssta::internal

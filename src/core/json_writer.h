@@ -9,6 +9,8 @@
 #include <string_view>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace ssta::internal {
 
 class JsonWriter {
@@ -29,6 +31,8 @@ class JsonWriter {
   void Integer(std::int64_t value);
   void Null();
   void Bool(bool value);
+  /// A matrix as an array of rows, one row per line (e.g. a 4x4 transform).
+  void MatrixRows(const Eigen::MatrixXd& m);
 
   /// The document; precondition: every Begin has its End.
   std::string Take();

@@ -95,7 +95,6 @@ void ForEachCsvRow(const std::string& text, const std::string& path, std::size_t
 
 std::vector<internal::ImageListEntry> ReadImageList(const std::string& cam_dir) {
   const std::string csv = cam_dir + "/data.csv";
-  if (!fs::exists(csv)) throw Error(csv + ": file not found");
   auto out = internal::ParseAslImageList(ReadTextFile(csv), csv);
   for (auto& entry : out) entry.file = cam_dir + "/data/" + entry.file;
   return out;
@@ -182,7 +181,6 @@ std::vector<PoseSample> ParseAslPoseCsv(const std::string& text, const std::stri
 }  // namespace internal
 
 std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
-  if (!fs::exists(path)) throw Error(path + ": file not found");
   return internal::ParseAslNumericCsv(ReadTextFile(path), path, columns);
 }
 

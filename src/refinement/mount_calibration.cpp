@@ -95,9 +95,9 @@ std::string MountCalibration::Json() const {
   json.Key("refinement");
   internal::WriteRefinementJson(refinement, &json);
   json.Key("cam0_T_BS");
-  internal::WriteTransformJson(refined.left.body_T_camera, &json);
+  json.MatrixRows(refined.left.body_T_camera.matrix());
   json.Key("cam1_T_BS");
-  internal::WriteTransformJson(refined.right.body_T_camera, &json);
+  json.MatrixRows(refined.right.body_T_camera.matrix());
   json.Key("frames_listed");
   json.Integer(frames_listed);
   json.Key("frames_processed");

@@ -347,17 +347,6 @@ std::string MountRefinementResult::Json() const {
 
 namespace internal {
 
-void WriteTransformJson(const Eigen::Isometry3d& transform, JsonWriter* json) {
-  const Eigen::Matrix4d m = transform.matrix();
-  json->BeginArray();
-  for (int i = 0; i < 4; ++i) {
-    json->BeginInlineArray();
-    for (int j = 0; j < 4; ++j) json->Number(m(i, j));
-    json->EndArray();
-  }
-  json->EndArray();
-}
-
 void WriteSkippedFramesJson(const std::vector<SkippedFrame>& frames, JsonWriter* json) {
   json->BeginArray();
   for (const SkippedFrame& s : frames) {
@@ -400,9 +389,9 @@ void WriteRefinementJson(const MountRefinementResult& r, JsonWriter* json) {
   json->Key("iterations");
   json->Integer(r.iterations);
   json->Key("body_T_camera_initial");
-  WriteTransformJson(r.body_T_camera_initial, json);
+  json->MatrixRows(r.body_T_camera_initial.matrix());
   json->Key("body_T_camera_refined");
-  WriteTransformJson(r.body_T_camera_refined, json);
+  json->MatrixRows(r.body_T_camera_refined.matrix());
   json->Key("frames");
   json->BeginArray();
   for (const FrameGroundEstimate& f : r.frames) {

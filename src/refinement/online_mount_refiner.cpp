@@ -152,11 +152,11 @@ std::string OnlineRefinementSummary::Json() const {
     json.Null();
   }
   json.Key("body_T_camera_configured");
-  internal::WriteTransformJson(body_T_camera_configured, &json);
+  json.MatrixRows(body_T_camera_configured.matrix());
   json.Key("body_T_camera_start");
-  internal::WriteTransformJson(body_T_camera_start, &json);
+  json.MatrixRows(body_T_camera_start.matrix());
   json.Key("body_T_camera");
-  internal::WriteTransformJson(body_T_camera, &json);
+  json.MatrixRows(body_T_camera.matrix());
   json.Key("history");
   json.BeginArray();
   for (const OnlineSolve& h : history) {

@@ -14,9 +14,6 @@ namespace ssta::internal {
 /// Writes `result` as one JSON object value (the caller has written its key, if any).
 void WriteRefinementJson(const MountRefinementResult& result, JsonWriter* json);
 
-/// Writes a rigid transform as a 4x4 row-major array of rows.
-void WriteTransformJson(const Eigen::Isometry3d& transform, JsonWriter* json);
-
 /// Writes frames as an array of {timestamp_ns, reason} objects.
 void WriteSkippedFramesJson(const std::vector<SkippedFrame>& frames, JsonWriter* json);
 
