@@ -102,9 +102,6 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
     }
     return getNodeChild(node, pos);
   }
-  template <typename Update>
-  void UpdateRecurs(TravNode* node, bool just_created, const octomap::OcTreeKey& key,
-                    unsigned depth, Update& update);
   template <typename Update, typename Unchanged>
   void UpdateBatchRecurs(TravNode* node, bool just_created, const std::vector<std::uint64_t>& codes,
                          std::size_t first, std::size_t last, unsigned depth, Update& update,
@@ -121,27 +118,9 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
 
 template <typename Update>
 void TravOcTree::UpdateLeaf(const octomap::OcTreeKey& key, Update&& update) {
-  bool created_root = false;
-  if (root == nullptr) {
-    root = new TravNode();
-    ++tree_size;
-    created_root = true;
-  }
-  UpdateRecurs(root, created_root, key, 0, update);
-}
-
-template <typename Update>
-void TravOcTree::UpdateRecurs(TravNode* node, bool just_created, const octomap::OcTreeKey& key,
-                              unsigned depth, Update& update) {
-  if (depth == tree_depth) {
-    update(*node);
-    return;
-  }
-  const unsigned pos = octomap::computeChildIdx(key, static_cast<int>(tree_depth - 1 - depth));
-  bool child_created = false;
-  TravNode* child = ChildForUpdate(node, pos, just_created, &child_created);
-  UpdateRecurs(child, child_created, key, depth + 1, update);
-  if (!pruneNode(node)) node->updateOccupancyChildren();
+  // A batch of one: the same walk, so one code path builds every tree.
+  UpdateLeaves({MortonCode(key)}, [&](TravNode& leaf, std::size_t) { update(leaf); },
+               [](const TravNode&, std::size_t, std::size_t) { return false; });
 }
 
 inline std::uint64_t TravOcTree::MortonCode(const octomap::OcTreeKey& key) {

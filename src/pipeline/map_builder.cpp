@@ -169,11 +169,14 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   // use stay on this thread: each job gets its pose by value. Declared after them: its
   // destructor finishes the queued jobs before they go.
   internal::OrderedWorker fusion(options.pipelined ? 1 : 0);
+  // A frame that cannot be used: an error in strict mode, else a skip with its reason. On the
+  // fusion thread (it touches the summary); `skip` queues it from this one.
+  auto record_skip = [&](std::int64_t t, const std::string& reason) {
+    fail_if_strict(t, reason);
+    summary.skipped.push_back({t, reason});
+  };
   auto skip = [&](std::int64_t t, const std::string& reason) {
-    fusion.Submit([&, t, reason] {
-      fail_if_strict(t, reason);
-      summary.skipped.push_back({t, reason});
-    });
+    fusion.Submit([&, t, reason] { record_skip(t, reason); });
   };
   // One frame through the pipeline with the mount in use (gravity in the camera).
   auto process = [&](const StereoFrame& frame, const Eigen::Vector3d& up_body) {
@@ -191,16 +194,14 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
         const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
         const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
         if (!stats.inserted) {
-          fail_if_strict(t, "map rejected the frame: " + stats.reason);
-          summary.skipped.push_back({t, "map rejected the frame: " + stats.reason});
+          record_skip(t, "map rejected the frame: " + stats.reason);
         } else {
           ++summary.frames_used;
           summary.points_inserted += stats.points_hit;
           if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
         }
       } catch (const Error& e) {
-        fail_if_strict(t, e.what());
-        summary.skipped.push_back({t, e.what()});
+        record_skip(t, e.what());
       }
     });
   };
@@ -240,7 +241,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     held.clear();
   };
   const auto start = std::chrono::steady_clock::now();
-  int done = 0;
+  int done = 0, already_in_map = 0;
   for (const StereoFrame& frame : todo) {
     if (stop && stop->load()) {
       summary.interrupted = true;
@@ -248,7 +249,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     }
     const std::int64_t t = frame.timestamp_ns;
     if (continues_this_sequence && t <= fused_up_to) {
-      fusion.Submit([&] { ++summary.frames_already_in_map; });
+      ++already_in_map;
       ++done;
       if (progress) progress(done, static_cast<int>(todo.size()));
       continue;
@@ -287,6 +288,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   }
   fuse_held();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
   fusion.Drain();
+  summary.frames_already_in_map = already_in_map;
   map.Save(options.map_path);
   summary.map_nodes = map.NumNodes();
   summary.map_file_bytes = std::filesystem::file_size(options.map_path);
