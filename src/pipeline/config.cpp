@@ -71,6 +71,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("speckle_range", &o->speckle_range);
   s.Read("min_texture", &o->min_texture);
   s.Read("border_margin", &o->border_margin);
+  s.Read("subpixel_window_px", &o->subpixel_window_px);
   s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
   s.Read("pcl_peak_filter", &o->pcl_peak_filter);
   s.Read("pcl_preprocessing", &o->pcl_preprocessing);
@@ -314,6 +315,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  speckle_range: " << s.speckle_range << "\n"
     << "  min_texture: " << s.min_texture << "\n"
     << "  border_margin: " << s.border_margin << "\n"
+    << "  subpixel_window_px: " << s.subpixel_window_px << "\n"
     << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
     << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
