@@ -10,6 +10,7 @@
 
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
 #include "temp_dir.h"
 
 namespace ssta {
@@ -120,6 +121,34 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   EXPECT_EQ(labels, 3u);
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "summary.json"));
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "overlay"));
+}
+
+TEST(Cli, ClassifyWritesDisparitiesInTheGroundTruthConvention) {
+  // With the true disparity as input, disparity/ must give back gt/disparity value for value:
+  // 16 bit, disparity * 256, 0 where there is none.
+  testing::TempDir dir;
+  const std::string seq = (dir / "seq");
+  auto r = RunSsta("synth --scene yard --frames 1 --width 160 --height 120 --focal 105 --out " + seq);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta("classify --sequence " + seq + " --oracle-disparity --disparity -q --out " + (dir / "o"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(seq) / "gt" / "disparity")) {
+    const ImageU16 truth = ReadImageU16(e.path().string());
+    const ImageU16 written = ReadImageU16((dir.path() / "o" / "disparity" / e.path().filename()).string());
+    ASSERT_EQ(written.width(), truth.width());
+    ASSERT_EQ(written.height(), truth.height());
+    std::size_t nonzero = 0, differ = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      nonzero += truth[i] != 0;
+      differ += written[i] != truth[i];
+    }
+    EXPECT_GT(nonzero, truth.size() / 2);
+    EXPECT_EQ(differ, 0u);
+    EXPECT_TRUE(fs::exists(dir.path() / "o" / "disparity_colour" / e.path().filename()));
+    ++files;
+  }
+  EXPECT_EQ(files, 1u);
 }
 
 }  // namespace
