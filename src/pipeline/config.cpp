@@ -218,6 +218,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("accel_gate", &c.attitude.accel_gate);
     s.Read("init_window_s", &c.attitude.init_window_s);
     s.Read("max_rest_gravity_error_mps2", &c.attitude.max_rest_gravity_error_mps2);
+    s.Read("init_gyro_bias", &c.attitude.init_gyro_bias);
     s.RejectUnknownKeys();
   }
   {
@@ -356,7 +357,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  ki: " << c.attitude.ki << "\n"
     << "  accel_gate: " << c.attitude.accel_gate << "\n"
     << "  init_window_s: " << c.attitude.init_window_s << "\n"
-    << "  max_rest_gravity_error_mps2: " << c.attitude.max_rest_gravity_error_mps2 << "\n";
+    << "  max_rest_gravity_error_mps2: " << c.attitude.max_rest_gravity_error_mps2 << "\n"
+    << "  init_gyro_bias: " << c.attitude.init_gyro_bias << "\n";
   const MapOptions& f = c.map.fusion;
   y << "map:\n"
     << "  resolution_m: " << f.resolution_m << "\n"
