@@ -76,7 +76,7 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); repeatable, later files win; overrides the sequence's vehicle.yaml");
   cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
-  cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png in false colour");
+  cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png (16 bit, disparity * 256, 0 = none: KITTI's and gt/'s convention) and disparity_colour/<ts>.png");
   cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");

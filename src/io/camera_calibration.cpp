@@ -17,7 +17,9 @@ bool Fail(std::string* error, const std::string& message) {
   return false;
 }
 
-bool IsRigid(const Eigen::Matrix4d& m, std::string* why) {
+}  // namespace
+
+bool IsRigidTransform(const Eigen::Matrix4d& m, std::string* why) {
   if (!m.allFinite()) return Fail(why, "contains NaN or infinite values");
   if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9)) {
     return Fail(why, "last row is not [0, 0, 0, 1]");
@@ -29,8 +31,6 @@ bool IsRigid(const Eigen::Matrix4d& m, std::string* why) {
   }
   return true;
 }
-
-}  // namespace
 
 bool CameraCalibration::HasDistortion() const {
   for (double d : distortion) {
@@ -52,7 +52,7 @@ bool CameraCalibration::IsValid(std::string* error) const {
     if (!std::isfinite(d)) return Fail(error, "distortion_coefficients: NaN or infinite value");
   }
   std::string why;
-  if (!IsRigid(body_T_camera.matrix(), &why)) return Fail(error, "T_BS: not a rigid transform: " + why);
+  if (!IsRigidTransform(body_T_camera.matrix(), &why)) return Fail(error, "T_BS: not a rigid transform: " + why);
   return true;
 }
 
@@ -77,7 +77,7 @@ CameraCalibration ParseCameraCalibration(const std::string& text, const std::str
   Eigen::Matrix4d mat;
   for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
   std::string why;
-  if (!IsRigid(mat, &why)) throw Error(yaml.Name("T_BS") + ": not a rigid transform: " + why);
+  if (!IsRigidTransform(mat, &why)) throw Error(yaml.Name("T_BS") + ": not a rigid transform: " + why);
   c.body_T_camera.matrix() = mat;
 
   std::vector<double> resolution;

@@ -30,6 +30,7 @@
 #include "io/yaml_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
+#include "ssta/io/camera_calibration.h"
 #include "ssta/io/file_util.h"
 
 #ifndef SSTA_VERSION
@@ -340,10 +341,8 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
       for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 4; ++j) t.matrix()(i, j) = v[4 * i + j];
       }
-      const Eigen::Matrix3d rotation = t.linear();
-      if (!t.matrix().allFinite() || !(rotation.transpose() * rotation).isIdentity(1e-6) || rotation.determinant() < 0) {
-        throw Error(r.Name(key) + ": not a rigid transform");
-      }
+      std::string why;
+      if (!IsRigidTransform(t.matrix(), &why)) throw Error(r.Name(key) + ": not a rigid transform: " + why);
       return t;
     };
     metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};

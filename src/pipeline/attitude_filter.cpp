@@ -19,10 +19,14 @@ bool Fail(std::string* error, const std::string& message) {
 /// The initial window is taken as the attitude at rest; when it looks at rest (slow rotation,
 /// steady |a|), the mean specific force must be gravity. An IMU in g, or with a scale error,
 /// would otherwise give a plausible up and silently wrong gating.
+/// The initial window looks at rest: slow rotation, steady |a|.
+bool LooksAtRest(double mean_norm, double norm_spread, double mean_rate) {
+  return mean_rate < 0.5 && norm_spread <= 0.1 * mean_norm;
+}
+
 void CheckGravityAtRest(const Eigen::Vector3d& mean_force, double mean_norm, double norm_spread, double mean_rate,
                         int samples, const AttitudeFilterOptions& options, const std::string& imu_file) {
-  const bool at_rest = mean_rate < 0.5 && norm_spread <= 0.1 * mean_norm;
-  if (!at_rest) return;
+  if (!LooksAtRest(mean_norm, norm_spread, mean_rate)) return;
   const double reading = mean_force.norm();
   if (std::abs(reading - kGravity) <= options.max_rest_gravity_error_mps2) return;
   char text[256];
@@ -54,13 +58,14 @@ GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isome
   if (imu.empty()) return;
 
   // Initial attitude: the mean accelerometer direction over the first window is up.
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), mean_rate = Eigen::Vector3d::Zero();
   const auto init_end = imu.front().timestamp_ns + static_cast<std::int64_t>(options.init_window_s * 1e9);
   int n = 0;
   double norm_sum = 0.0, norm_sq_sum = 0.0, rate_sum = 0.0;
   for (const ImuSample& s : imu) {
     if (s.timestamp_ns > init_end && n > 0) break;
     mean += s.specific_force;
+    mean_rate += s.angular_rate;
     const double a = s.specific_force.norm();
     norm_sum += a;
     norm_sq_sum += a * a;
@@ -68,13 +73,27 @@ GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isome
     ++n;
   }
   mean /= n;
-  CheckGravityAtRest(mean, norm_sum / n, std::sqrt(std::max(0.0, norm_sq_sum / n - (norm_sum / n) * (norm_sum / n))),
-                     rate_sum / n, n, options, imu_file);
+  mean_rate /= n;
+  const double norm_spread = std::sqrt(std::max(0.0, norm_sq_sum / n - (norm_sum / n) * (norm_sum / n)));
+  CheckGravityAtRest(mean, norm_sum / n, norm_spread, rate_sum / n, n, options, imu_file);
+  // The gyro bias from a start at rest. Were the mean rate a real rotation, its part across
+  // gravity would turn the accelerometer's direction by |w_perp| * window / 2 between the
+  // window's halves; at rest only vibration and noise move it (EuRoC, rotors turning: 0.54 of
+  // that). A real rotation turns it by about that much: above 0.75 the rate is not a bias.
+  Eigen::Vector3d integral = Eigen::Vector3d::Zero();
+  if (options.init_gyro_bias && n >= 4 && mean.norm() > 1e-6 && LooksAtRest(norm_sum / n, norm_spread, rate_sum / n)) {
+    Eigen::Vector3d first = Eigen::Vector3d::Zero(), second = Eigen::Vector3d::Zero();
+    for (int i = 0; i < n; ++i) (2 * i < n ? first : second) += imu[static_cast<std::size_t>(i)].specific_force;
+    const double turn = std::atan2(first.cross(second).norm(), first.dot(second));
+    const Eigen::Vector3d along = mean.normalized();
+    const double rate_across = (mean_rate - mean_rate.dot(along) * along).norm();
+    const double window_s = 1e-9 * static_cast<double>(imu[static_cast<std::size_t>(n - 1)].timestamp_ns - imu.front().timestamp_ns);
+    if (turn < 0.75 * rate_across * window_s / 2) integral = -mean_rate;  // the integral term converges to -bias
+  }
   // world_q_imu maps IMU vectors into a world frame with z up (yaw is arbitrary).
   Eigen::Quaterniond world_q_imu = mean.norm() > 1e-6
                                        ? Eigen::Quaterniond::FromTwoVectors(mean.normalized(), Eigen::Vector3d::UnitZ())
                                        : Eigen::Quaterniond::Identity();
-  Eigen::Vector3d integral = Eigen::Vector3d::Zero();
   const Eigen::Matrix3d body_R_imu = body_T_imu.linear();
 
   times_.reserve(imu.size());

@@ -71,6 +71,7 @@ void ReadStereo(YamlSection s, StereoMatcherOptions* o) {
   s.Read("speckle_range", &o->speckle_range);
   s.Read("min_texture", &o->min_texture);
   s.Read("border_margin", &o->border_margin);
+  s.Read("subpixel_window_px", &o->subpixel_window_px);
   s.Read("pcl_ratio_filter", &o->pcl_ratio_filter);
   s.Read("pcl_peak_filter", &o->pcl_peak_filter);
   s.Read("pcl_preprocessing", &o->pcl_preprocessing);
@@ -217,6 +218,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("accel_gate", &c.attitude.accel_gate);
     s.Read("init_window_s", &c.attitude.init_window_s);
     s.Read("max_rest_gravity_error_mps2", &c.attitude.max_rest_gravity_error_mps2);
+    s.Read("init_gyro_bias", &c.attitude.init_gyro_bias);
     s.RejectUnknownKeys();
   }
   {
@@ -314,6 +316,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  speckle_range: " << s.speckle_range << "\n"
     << "  min_texture: " << s.min_texture << "\n"
     << "  border_margin: " << s.border_margin << "\n"
+    << "  subpixel_window_px: " << s.subpixel_window_px << "\n"
     << "  pcl_ratio_filter: " << s.pcl_ratio_filter << "\n"
     << "  pcl_peak_filter: " << s.pcl_peak_filter << "\n"
     << "  pcl_preprocessing: " << s.pcl_preprocessing << "\n"
@@ -354,7 +357,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  ki: " << c.attitude.ki << "\n"
     << "  accel_gate: " << c.attitude.accel_gate << "\n"
     << "  init_window_s: " << c.attitude.init_window_s << "\n"
-    << "  max_rest_gravity_error_mps2: " << c.attitude.max_rest_gravity_error_mps2 << "\n";
+    << "  max_rest_gravity_error_mps2: " << c.attitude.max_rest_gravity_error_mps2 << "\n"
+    << "  init_gyro_bias: " << c.attitude.init_gyro_bias << "\n";
   const MapOptions& f = c.map.fusion;
   y << "map:\n"
     << "  resolution_m: " << f.resolution_m << "\n"

@@ -1,5 +1,6 @@
 #include "ssta/pipeline/frame_report.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <iomanip>
@@ -114,8 +115,16 @@ void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, con
   WriteImage(MakeOverlay(frame.left_rectified, frame.labels), out_dir + "/overlay/" + name + ".png");
   WriteTextAtomically(out_dir + "/frames/" + name + ".json", FrameReportJson(frame, name));
   if (disparity) {
+    // KITTI's convention (as gt/disparity): 16 bit, disparity * 256, 0 = none; and a picture.
     MakeDirectories(out_dir + "/disparity");
-    WriteImage(FalseColourDisparity(frame.disparity), out_dir + "/disparity/" + name + ".png");
+    MakeDirectories(out_dir + "/disparity_colour");
+    ImageU16 fixed(frame.disparity.width(), frame.disparity.height());
+    for (std::size_t i = 0; i < fixed.size(); ++i) {
+      const float d = frame.disparity[i];
+      fixed[i] = d > 0.0f ? static_cast<std::uint16_t>(std::min(65535L, std::lround(d * 256.0f))) : std::uint16_t{0};
+    }
+    WriteImage(fixed, out_dir + "/disparity/" + name + ".png");
+    WriteImage(FalseColourDisparity(frame.disparity), out_dir + "/disparity_colour/" + name + ".png");
   }
 }
 

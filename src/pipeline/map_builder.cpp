@@ -157,10 +157,16 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   BuildMapSummary summary;
   summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
   summary.skipped = sequence.skipped();
+  // Strict mode stops at the first unusable frame, once: the per-frame handlers below turn
+  // errors into skips, so they let this one through (it is still an ssta::Error for the CLI).
+  struct StrictStop : Error {
+    using Error::Error;
+  };
   auto fail_if_strict = [&](std::int64_t t, const std::string& reason) {
     if (!options.strict) return;
     map.Save(options.map_path);  // nothing fused so far is lost
-    throw Error(sequence.root() + ": frame " + std::to_string(t) + ": " + reason + " (strict: no frame may be skipped)");
+    throw StrictStop(sequence.root() + ": frame " + std::to_string(t) + ": " + reason +
+                     " (strict: no frame may be skipped)");
   };
   if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
   // Everything that touches the map or the summary runs as a job on `fusion`, in frame order,
@@ -190,19 +196,21 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
     fusion.Submit([&, result, world_T_rectified] {
       const std::int64_t t = result->timestamp_ns;
+      InsertStats stats;
       try {
         const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
-        const InsertStats stats = map.InsertFrame(points, world_T_rectified.translation(), t);
-        if (!stats.inserted) {
-          record_skip(t, "map rejected the frame: " + stats.reason);
-        } else {
-          ++summary.frames_used;
-          summary.points_inserted += stats.points_hit;
-          if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
-        }
+        stats = map.InsertFrame(points, world_T_rectified.translation(), t);
       } catch (const Error& e) {
         record_skip(t, e.what());
+        return;
       }
+      if (!stats.inserted) {
+        record_skip(t, "map rejected the frame: " + stats.reason);
+        return;
+      }
+      ++summary.frames_used;
+      summary.points_inserted += stats.points_hit;
+      if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
     });
   };
   // The frame's ground evidence to the refiner; an applied solve serves the frames after it.
@@ -234,6 +242,8 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       try {
         fuse(process(h.frame, h.world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()), h.world_T_body);
         ++reprocessed;
+      } catch (const StrictStop&) {
+        throw;
       } catch (const Error& e) {
         skip(h.frame.timestamp_ns, e.what());
       }
@@ -276,6 +286,8 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
           fuse(result, *world_T_body);
           if (refiner) refine(*result, up_body);
         }
+      } catch (const StrictStop&) {
+        throw;
       } catch (const Error& e) {
         skip(t, e.what());
       }

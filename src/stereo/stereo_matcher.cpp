@@ -132,6 +132,69 @@ void DropTexturelessPixels(const ImageU8& left, int block, double min_std, Image
   }
 }
 
+/// Sub-pixel refinement (StereoMatcherOptions::subpixel_window_px): two Gauss-Newton steps on
+/// the grey-level residual L(u) - R(u - d), aggregated over a window with box filters.
+void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, ImageF* disparity) {
+  const int width = disparity->width(), height = disparity->height();
+  cv::Mat l, r, grad;
+  WrapConst(left).convertTo(l, CV_32F);
+  WrapConst(right).convertTo(r, CV_32F);
+  cv::Sobel(r, grad, CV_32F, 1, 0, 1, 0.5);  // central difference along u
+  cv::Mat d(height, width, CV_32F, disparity->data());  // refined in place
+  const cv::Mat original = d.clone();
+  // Only windows whose disparities agree within 1 px (and hold no hole) are refined.
+  cv::Mat lo, hi;
+  const cv::Mat kernel = cv::Mat::ones(window, window, CV_8U);
+  cv::erode(original, lo, kernel);
+  cv::dilate(original, hi, kernel);
+  cv::Mat weighted(height, width, CV_32F), correction(height, width, CV_32F), weight(height, width, CV_32F);
+  const cv::Size box(window, window);
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    for (int v = 0; v < height; ++v) {
+      const float* lv = l.ptr<float>(v);
+      const float* rv = r.ptr<float>(v);
+      const float* gv = grad.ptr<float>(v);
+      const float* dv = d.ptr<float>(v);
+      float* pw = weighted.ptr<float>(v);
+      float* pc = correction.ptr<float>(v);
+      float* pg = weight.ptr<float>(v);
+      for (int u = 0; u < width; ++u) {
+        const float x = static_cast<float>(u) - dv[u];
+        if (!(dv[u] > 0.0f) || x < 1.0f || x > static_cast<float>(width - 2)) {
+          pw[u] = pc[u] = pg[u] = 0.0f;
+          continue;
+        }
+        const int i = static_cast<int>(x);
+        const float a = x - static_cast<float>(i);
+        const float rw = rv[i] + a * (rv[i + 1] - rv[i]);
+        const float gw = gv[i] + a * (gv[i + 1] - gv[i]);
+        const float g2 = gw * gw;
+        // R(u - d - delta) ~ rw - delta * gw = L(u)  =>  delta = -(L - rw) * gw / gw^2.
+        pw[u] = dv[u];
+        pc[u] = -(lv[u] - rw) * gw;
+        pg[u] = g2;
+      }
+    }
+    cv::boxFilter(weighted, weighted, CV_32F, box, cv::Point(-1, -1), true);
+    cv::boxFilter(correction, correction, CV_32F, box, cv::Point(-1, -1), false);
+    cv::boxFilter(weight, weight, CV_32F, box, cv::Point(-1, -1), false);
+    for (int v = 0; v < height; ++v) {
+      const float* o = original.ptr<float>(v);
+      const float* lov = lo.ptr<float>(v);
+      const float* hiv = hi.ptr<float>(v);
+      const float* pw = weighted.ptr<float>(v);
+      const float* pc = correction.ptr<float>(v);
+      const float* pg = weight.ptr<float>(v);
+      float* dv = d.ptr<float>(v);
+      for (int u = 0; u < width; ++u) {
+        if (!(o[u] > 0.0f) || !(lov[u] > 0.0f) || hiv[u] - lov[u] > 1.0f || !(pg[u] > 1e-3f)) continue;
+        const float refined = pw[u] + pc[u] / pg[u];
+        dv[u] = std::abs(refined - o[u]) <= 1.0f ? refined : o[u];
+      }
+    }
+  }
+}
+
 }  // namespace
 
 SgbmMode ParseSgbmMode(const std::string& name) {
@@ -212,6 +275,9 @@ bool StereoMatcherOptions::IsValid(std::string* error) const {
   }
   if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
   if (border_margin < 0 || border_margin > 64) return Fail(error, "border_margin: must be in [0, 64] px");
+  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
+    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
+  }
   return true;
 }
 
@@ -260,6 +326,7 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
     // Partners must lie inside the right image, at least m px off its left border.
     for (int u = m; u < disparity.width() - m; ++u) d[u] = src[u] > static_cast<float>(u - m) ? 0.0f : src[u];
   }
+  if (options_.subpixel_window_px > 0) RefineSubpixel(left, right, options_.subpixel_window_px, &disparity);
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
   if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
   return disparity;

@@ -159,6 +159,19 @@ TEST(MapFile, RefinedMountRoundTripsExactlyAndIsOptional) {
   ASSERT_TRUE(loaded);
   EXPECT_EQ(loaded->configured.matrix(), mount.configured.matrix());  // shortest exact decimals
   EXPECT_EQ(loaded->refined.matrix(), mount.refined.matrix());
+
+  // A mount that is no rigid transform (a scaled rotation) is refused on loading, by key.
+  mount.refined.linear() *= 1.01;
+  metadata.refined_mount = mount;
+  map.set_metadata(metadata);
+  map.Save(dir / "scaled.ot");
+  try {
+    TraversabilityMap::Load(dir / "scaled.ot");
+    ADD_FAILURE() << "a scaled mount loaded";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("refined_body_T_cam0: not a rigid transform: rotation part"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(MapFile, IsAnOctoMapFileThatOctoMapsFactoryReads) {

@@ -10,6 +10,7 @@
 
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
+#include "ssta/io/image_io.h"
 #include "temp_dir.h"
 
 namespace ssta {
@@ -120,6 +121,69 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   EXPECT_EQ(labels, 3u);
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "summary.json"));
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "overlay"));
+}
+
+TEST(Cli, ClassifyWritesDisparitiesInTheGroundTruthConvention) {
+  // With the true disparity as input, disparity/ must give back gt/disparity value for value:
+  // 16 bit, disparity * 256, 0 where there is none.
+  testing::TempDir dir;
+  const std::string seq = (dir / "seq");
+  auto r = RunSsta("synth --scene yard --frames 1 --width 160 --height 120 --focal 105 --out " + seq);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta("classify --sequence " + seq + " --oracle-disparity --disparity -q --out " + (dir / "o"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(fs::path(seq) / "gt" / "disparity")) {
+    const ImageU16 truth = ReadImageU16(e.path().string());
+    const ImageU16 written = ReadImageU16((dir.path() / "o" / "disparity" / e.path().filename()).string());
+    ASSERT_EQ(written.width(), truth.width());
+    ASSERT_EQ(written.height(), truth.height());
+    std::size_t nonzero = 0, differ = 0;
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      nonzero += truth[i] != 0;
+      differ += written[i] != truth[i];
+    }
+    EXPECT_GT(nonzero, truth.size() / 2);
+    EXPECT_EQ(differ, 0u);
+    EXPECT_TRUE(fs::exists(dir.path() / "o" / "disparity_colour" / e.path().filename()));
+    ++files;
+  }
+  EXPECT_EQ(files, 1u);
+}
+
+TEST(Cli, StrictStopsOnceWhenTheMapRejectsAFrame) {
+  // Poses 5 km away lie outside the map's addressable cube (+-3.3 km at 0.1 m): the map rejects
+  // the frames. Strict mode stops at the first with one error naming it once, in both the
+  // pipelined and the sequential build (the per-frame handlers once wrapped it a second time).
+  testing::TempDir dir;
+  const fs::path seq = dir.path() / "seq";
+  auto r = RunSsta("synth --scene yard --frames 2 --width 160 --height 120 --focal 105 --out " + seq.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string text = ReadTextFile((seq / "pose0" / "data.csv").string());
+  std::stringstream in(text), out;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#') {
+      const std::size_t a = line.find(','), b = line.find(',', a + 1);
+      line = line.substr(0, a + 1) + std::to_string(5000.0 + std::stod(line.substr(a + 1, b - a - 1))) + line.substr(b);
+    }
+    out << line << "\n";
+  }
+  WriteTextAtomically((seq / "pose0" / "data.csv").string(), out.str());
+  const auto count = [](const std::string& text, const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  };
+  for (const std::string mode : {"", " --sequential"}) {
+    r = RunSsta("build-map --strict -q --sequence " + seq.string() + " --map " + (dir / "m.ot") + mode);
+    EXPECT_EQ(r.exit_code, 2) << r.output;
+    EXPECT_EQ(count(r.output, "ssta: error:"), 1u) << r.output;
+    EXPECT_EQ(count(r.output, "map rejected the frame"), 1u) << r.output;
+    EXPECT_EQ(count(r.output, "strict: no frame may be skipped"), 1u) << r.output;
+  }
+  r = RunSsta("build-map --sequence " + seq.string() + " --map " + (dir / "m.ot"));
+  EXPECT_EQ(count(r.output, "map rejected the frame"), 2u) << r.output;  // both skipped, named
 }
 
 }  // namespace

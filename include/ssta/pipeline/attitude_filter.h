@@ -23,6 +23,14 @@ struct AttitudeFilterOptions {
   /// spread of |a| below 10 % of its mean), the mean specific force must read 9.81 within this;
   /// otherwise the accelerometer's units or scale are wrong and the recording is rejected.
   double max_rest_gravity_error_mps2 = 0.5;
+  /// When the IMU is at rest over the initial window (as above, and the accelerometer's mean
+  /// direction turns between the window's halves by less than 0.75 of what the mean gyro rate
+  /// across gravity would turn it, were that rate real), its mean gyro rate is the gyro bias
+  /// the filter starts from. Without this the integral term takes
+  /// kp/ki (10 s) to learn the bias, and meanwhile up leans by bias/kp: EuRoC's ADIS16448 reads
+  /// 0.08 rad/s at rest, 4.5 degrees. A start that only rotates about the vertical is not told
+  /// apart from rest: the yaw rate is then taken as bias and unlearnt over kp/ki.
+  bool init_gyro_bias = true;
   bool IsValid(std::string* error) const;
 };
 
