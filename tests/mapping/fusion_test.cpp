@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <random>
+#include <unordered_set>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -225,6 +227,89 @@ TEST(Fusion, OptionsAreValidatedNamingTheKey) {
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("class_clamp_max:", 0), 0u) << error;
   EXPECT_THROW(TraversabilityMap{options}, Error);
+}
+
+
+/// Hash of an OcTreeKey for the reference sets below.
+struct KeyHash {
+  std::size_t operator()(const octomap::OcTreeKey& k) const {
+    return (static_cast<std::size_t>(k[0]) << 32) ^ (static_cast<std::size_t>(k[1]) << 16) ^ k[2];
+  }
+};
+
+/// One frame of `count` points (one per voxel) uniform in [-extent, extent]^2 x [-1, 2] m about
+/// `origin`, into a fresh map with `options`; then every voxel must be what OctoMap's own ray
+/// walk (computeRayKeys) says: the union of the rays' keys minus the hit voxels is free after
+/// one miss, the hit voxels occupied after one hit, and nothing else is in the tree.
+void ExpectFreeSpaceIsComputeRayKeys(const MapOptions& options, const Eigen::Vector3d& origin, double extent,
+                                     int count, unsigned seed) {
+  TraversabilityMap map(options);
+  const internal::TravOcTree& tree = testing::Tree(map);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> xy(-extent, extent), z(-1.0, 2.0);
+  std::vector<ClassifiedPoint> points;
+  std::unordered_set<octomap::OcTreeKey, KeyHash> used;
+  while (static_cast<int>(points.size()) < count) {
+    const ClassifiedPoint p = Pt(origin.x() + xy(rng), origin.y() + xy(rng), origin.z() + z(rng),
+                                 TravClass::kTraversable);
+    if (used.insert(tree.coordToKey(p.world_p.x(), p.world_p.y(), p.world_p.z())).second) points.push_back(p);
+  }
+  const InsertStats stats = map.InsertFrame(points, origin, 1);
+
+  const octomap::point3d o(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                           static_cast<float>(origin.z()));
+  std::unordered_set<octomap::OcTreeKey, KeyHash> hit, free;
+  octomap::KeyRay ray;
+  for (const ClassifiedPoint& p : points) {
+    const Eigen::Vector3d w = p.world_p.cast<double>();
+    Eigen::Vector3d end = w;
+    if ((w - origin).norm() > options.max_range_m) {
+      end = origin + (w - origin).normalized() * options.max_range_m;  // as InsertFrame clips it
+    } else {
+      hit.insert(tree.coordToKey(w.x(), w.y(), w.z()));
+    }
+    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()), static_cast<float>(end.z()));
+    ASSERT_TRUE(tree.computeRayKeys(o, e, ray));
+    free.insert(ray.begin(), ray.end());
+  }
+  for (const auto& k : hit) free.erase(k);
+  ASSERT_EQ(stats.voxels_hit, hit.size());
+  ASSERT_EQ(stats.voxels_freed, free.size());
+
+  const float miss = octomap::logodds(options.occupancy_miss_prob);
+  const float hit_l = octomap::logodds(options.occupancy_hit_prob);
+  for (const auto& k : free) {
+    const internal::TravNode* node = tree.search(k);
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(node->getLogOdds(), miss);
+  }
+  for (const auto& k : hit) {
+    const internal::TravNode* node = tree.search(k);
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(node->getLogOdds(), hit_l);
+  }
+  // Nothing else: the leaves (pruned free blocks counted voxel by voxel) add up to both sets.
+  std::size_t free_voxels = 0, hit_voxels = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const std::size_t n = std::size_t{1} << (3 * (tree.getTreeDepth() - it.getDepth()));
+    (it->getLogOdds() < 0.0f ? free_voxels : hit_voxels) += n;
+  }
+  EXPECT_EQ(free_voxels, free.size());
+  EXPECT_EQ(hit_voxels, hit.size());
+}
+
+TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkInsideTheRayBox) {
+  MapOptions options;  // free_space_clearance_m 0: rays run to the points
+  // Points out to 17 m, so some lie beyond max_range_m (15 m) and clear space only.
+  ExpectFreeSpaceIsComputeRayKeys(options, {0.37, -1.21, 1.53}, 12.0, 3000, 11);
+}
+
+TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkWhenTheRayBoxIsTooLargeForABitmap) {
+  MapOptions options;
+  options.resolution_m = 1.0;
+  options.max_range_m = 1000.0;
+  // +-600 voxels in x and y: over 2^26 voxels in the rays' box, so the free voxels go to a set.
+  ExpectFreeSpaceIsComputeRayKeys(options, {-3.3, 7.9, 0.4}, 600.0, 300, 12);
 }
 
 }  // namespace
