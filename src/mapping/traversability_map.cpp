@@ -302,10 +302,25 @@ void WalkRay(const TravOcTree& tree, const octomap::point3d& origin, const octom
     t1 += sy ? t_delta[1] : 0.0;
     t2 += sz ? t_delta[2] : 0.0;
     if (key[0] == last[0] && key[1] == last[1] && key[2] == last[2]) return;
-    const double dist_from_origin = std::min(std::min(t0, t1), t2);
-    if (dist_from_origin > length) return;
+    // computeRayKeys: min(t_max) > length; the t are never NaN, so: all of them are.
+    if ((t0 > length) & (t1 > length) & (t2 > length)) return;
     visit(key);
   }
+}
+
+/// `norm > max_range` decided from the squared norm without the square root where the answer
+/// is clear (the root is correctly rounded, so only a squared norm within a relative 1e-9 of
+/// max_range^2 needs it).
+struct RangeTest {
+  explicit RangeTest(double max_range)
+      : max_range(max_range), below(max_range * max_range * (1.0 - 1e-9)),
+        above(max_range * max_range * (1.0 + 1e-9)) {}
+  double max_range, below, above;
+};
+inline bool BeyondRange(double squared_norm, const RangeTest& r) {
+  if (squared_norm < r.below) return false;
+  if (squared_norm > r.above) return true;
+  return std::sqrt(squared_norm) > r.max_range;
 }
 
 /// Majority vote of the 1..3 verdicts, ties to the worse class; -1 when there are none.
@@ -493,12 +508,13 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   scratch.hit_codes.clear();
   scratch.hit_keys.clear();
   far.clear();
+  const RangeTest range(opt.max_range_m);
   std::uint64_t last_code = ~std::uint64_t{0};
   VoxelIndex::Entry* entry = nullptr;  // of last_code (image neighbours share voxels)
   for (const ClassifiedPoint& point : points) {
     const Eigen::Vector3d p = point.world_p.cast<double>();
     octomap::OcTreeKey key;
-    if (!p.allFinite() || !tree.coordToKeyChecked(p.x(), p.y(), p.z(), key)) {
+    if (!p.allFinite() || !tree.CoordToKeyChecked(p.x(), p.y(), p.z(), &key)) {
       ++stats.points_rejected;
       continue;
     }
@@ -507,7 +523,7 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
       entry = &index.FindOrInsert(code);
       last_code = code;
     }
-    if ((p - sensor_origin_world).norm() > opt.max_range_m) {
+    if (BeyondRange((p - sensor_origin_world).squaredNorm(), range)) {
       if (entry->far < 0) {
         entry->far = static_cast<std::int32_t>(far.size());
         far.emplace_back();
