@@ -408,6 +408,8 @@ struct InsertScratch {
   std::vector<FarAccumulator> far;         ///< voxels of points beyond range
   std::vector<octomap::point3d> ray_ends;  ///< where each ray stops
   std::vector<octomap::OcTreeKey> ray_end_keys;
+  VoxelIndex ray_cells;  ///< free_space_ray_cell > 1: cell -> group
+  std::vector<std::pair<Eigen::Vector3d, std::uint32_t>> ray_groups;  ///< sum of ends, count
   FreeBitmap free_bitmap;
   bool free_bitmap_clean = true;  ///< false while bits may be set (an exception could leave some)
   CodeSet free_overflow;          ///< free voxels outside the bitmap's box
@@ -593,6 +595,31 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   for (const FarAccumulator& acc : far) {
     const Eigen::Vector3d direction = (acc.sum_p / acc.points - sensor_origin_world).normalized();
     add_ray(sensor_origin_world + direction * opt.max_range_m);
+  }
+  if (opt.free_space_ray_cell > 1) {
+    // One ray per cell of free_space_ray_cell^3 voxels holding ray ends, to their mean.
+    const int shift = opt.free_space_ray_cell == 2 ? 1 : opt.free_space_ray_cell == 4 ? 2 : 3;
+    VoxelIndex& cells = scratch.ray_cells;
+    auto& groups = scratch.ray_groups;
+    cells.Clear();
+    groups.clear();
+    for (std::size_t r = 0; r < ray_ends.size(); ++r) {
+      const octomap::OcTreeKey& k = ray_end_keys[r];
+      const octomap::OcTreeKey cell(static_cast<octomap::key_type>(k[0] >> shift),
+                                    static_cast<octomap::key_type>(k[1] >> shift),
+                                    static_cast<octomap::key_type>(k[2] >> shift));
+      VoxelIndex::Entry& e = cells.FindOrInsert(TravOcTree::MortonCode(cell));
+      if (e.hit < 0) {
+        e.hit = static_cast<std::int32_t>(groups.size());
+        groups.emplace_back(Eigen::Vector3d::Zero(), 0u);
+      }
+      auto& group = groups[static_cast<std::size_t>(e.hit)];
+      group.first += Eigen::Vector3d(ray_ends[r].x(), ray_ends[r].y(), ray_ends[r].z());
+      ++group.second;
+    }
+    ray_ends.clear();
+    ray_end_keys.clear();
+    for (const auto& [sum, count] : groups) add_ray(sum / count);
   }
   octomap::OcTreeKey key_origin;
   const bool origin_ok = tree.coordToKeyChecked(origin, key_origin);  // the float origin's key

@@ -34,7 +34,9 @@ TEST(TravOcTree, InlineCoordToKeyCheckedIsOctoMapsOwn) {
         octomap::OcTreeKey stock, own;
         const bool stock_ok = tree.coordToKeyChecked(x, y, z, stock);
         ASSERT_EQ(tree.CoordToKeyChecked(x, y, z, &own), stock_ok) << c << " res " << res;
-        if (stock_ok) ASSERT_EQ(own, stock) << c << " res " << res;
+        if (stock_ok) {
+          ASSERT_EQ(own, stock) << c << " res " << res;
+        }
       }
     }
   }
