@@ -125,6 +125,8 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "class_clamp_min" << YAML::Value << num(o.class_clamp_min);
   out << YAML::Key << "class_clamp_max" << YAML::Value << num(o.class_clamp_max);
   out << YAML::Key << "free_space_clearance_m" << YAML::Value << num(o.free_space_clearance_m);
+  // Only when not the exact 1, so files of exact-ray maps stay as they were (absent reads as 1).
+  if (o.free_space_ray_cell != 1) out << YAML::Key << "free_space_ray_cell" << YAML::Value << o.free_space_ray_cell;
   out << YAML::EndMap;
   const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
@@ -316,6 +318,8 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
   options->class_clamp_min = o.Require<double>("class_clamp_min");
   options->class_clamp_max = o.Require<double>("class_clamp_max");
   options->free_space_clearance_m = o.Require<double>("free_space_clearance_m");
+  options->free_space_ray_cell = 1;  // files of exact-ray maps do not name it
+  o.Read("free_space_ray_cell", &options->free_space_ray_cell);
   std::string error;
   if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
 

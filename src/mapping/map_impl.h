@@ -13,6 +13,10 @@
 
 namespace ssta {
 
+namespace internal {
+struct InsertScratch;  // InsertFrame's working buffers (traversability_map.cpp)
+}  // namespace internal
+
 struct TraversabilityMap::Impl {
   MapOptions options;
   MapMetadata metadata;
@@ -20,6 +24,9 @@ struct TraversabilityMap::Impl {
   std::uint64_t frames_inserted = 0;
   std::int64_t last_timestamp_ns = 0;
   std::string software_version;
+  /// InsertFrame's buffers, kept from frame to frame so that a frame allocates nothing once
+  /// they have grown; no map state (created on the first insert, never saved or compared).
+  std::shared_ptr<internal::InsertScratch> insert_scratch;
 };
 
 namespace internal {

@@ -49,6 +49,10 @@ bool MapOptions::IsValid(std::string* error) const {
   if (!(free_space_clearance_m >= 0.0 && free_space_clearance_m <= 5.0)) {
     return Fail(error, "free_space_clearance_m: must be in [0, 5] m");
   }
+  if (!(free_space_ray_cell == 1 || free_space_ray_cell == 2 || free_space_ray_cell == 4 ||
+        free_space_ray_cell == 8)) {
+    return Fail(error, "free_space_ray_cell: must be 1, 2, 4 or 8 voxels");
+  }
   if (!(class_clamp_max > 0.0 && class_clamp_max < 50.0)) {
     return Fail(error, "class_clamp_max: must be in (0, 50)");
   }

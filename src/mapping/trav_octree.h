@@ -4,6 +4,7 @@
 // mapping tests include this header (it pulls in OctoMap).
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <iosfwd>
 #include <string>
@@ -79,6 +80,17 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   template <typename Update, typename Unchanged>
   void UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update, Unchanged&& unchanged);
 
+  /// coordToKeyChecked(x, y, z, key) with the same arithmetic, inline: the per-point loop of
+  /// InsertFrame would otherwise pay a call and a store-to-load stall on the key per point.
+  bool CoordToKeyChecked(double x, double y, double z, octomap::OcTreeKey* key) const {
+    const int kx = CoordToScaledKey(x), ky = CoordToScaledKey(y), kz = CoordToScaledKey(z);
+    const auto limit = static_cast<int>(2 * tree_max_val);
+    if ((kx < 0) | (kx >= limit) | (ky < 0) | (ky >= limit) | (kz < 0) | (kz >= limit)) return false;
+    *key = octomap::OcTreeKey(static_cast<octomap::key_type>(kx), static_cast<octomap::key_type>(ky),
+                              static_cast<octomap::key_type>(kz));
+    return true;
+  }
+
   /// The key's position along the Z-order curve that matches the tree's child order (bit
   /// depth of x, y, z from the most significant level down): sorting keys by it groups every
   /// subtree's keys together.
@@ -101,6 +113,14 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
       }
     }
     return getNodeChild(node, pos);
+  }
+  /// OctoMap's floor(resolution_factor * c) + tree_max_val, or -1 when that lies outside
+  /// [-tree_max_val, tree_max_val) (where OctoMap's int conversion could overflow).
+  int CoordToScaledKey(double c) const {
+    const double scaled = std::floor(resolution_factor * c);
+    const auto half = static_cast<double>(tree_max_val);
+    if (!(scaled >= -half && scaled < half)) return -1;
+    return static_cast<int>(scaled) + static_cast<int>(tree_max_val);
   }
   template <typename Update, typename Unchanged>
   void UpdateBatchRecurs(TravNode* node, bool just_created, const std::vector<std::uint64_t>& codes,

@@ -51,13 +51,16 @@ struct CodeHash {
 };
 
 /// A flat open-addressing set of Morton codes (48 bits, so all ones never occurs): the free
-/// voxels of one frame, ~10^5 insertions of ~10^6 without an allocation each.
+/// voxels of a frame whose rays leave the FreeBitmap's box (rare), or of every ray when the box
+/// is too large for a bitmap.
 class CodeSet {
  public:
-  explicit CodeSet(std::size_t expected) {
-    std::size_t capacity = 1024;
-    while (capacity < 2 * expected) capacity *= 2;
-    slots_.assign(capacity, kEmpty);
+  CodeSet() { slots_.assign(1024, kEmpty); }
+  /// Empties the set, keeping its capacity.
+  void Clear() {
+    if (size_ == 0) return;
+    std::fill(slots_.begin(), slots_.end(), kEmpty);
+    size_ = 0;
   }
   void Insert(std::uint64_t code) {
     if (2 * (size_ + 1) > slots_.size()) Grow();
@@ -96,13 +99,146 @@ class CodeSet {
   std::size_t size_ = 0;
 };
 
+/// The voxels of one frame's points: Morton code -> index of the voxel's accumulator among the
+/// frame's in-range hits and among its far points (-1: none). Open addressing, flat, reused
+/// from frame to frame (one probe per point instead of an unordered_map node per voxel).
+class VoxelIndex {
+ public:
+  struct Entry {
+    std::uint64_t code;
+    std::int32_t hit;
+    std::int32_t far;
+  };
+  VoxelIndex() { slots_.assign(1024, Entry{kEmpty, -1, -1}); }
+  /// Empties the index, keeping its capacity.
+  void Clear() {
+    if (size_ == 0) return;
+    std::fill(slots_.begin(), slots_.end(), Entry{kEmpty, -1, -1});
+    size_ = 0;
+  }
+  /// The entry of `code`, created (both indices -1) if missing. Valid until the next call.
+  Entry& FindOrInsert(std::uint64_t code) {
+    if (2 * (size_ + 1) > slots_.size()) Grow();
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = CodeHash{}(code) & mask;; i = (i + 1) & mask) {
+      if (slots_[i].code == code) return slots_[i];
+      if (slots_[i].code == kEmpty) {
+        slots_[i].code = code;
+        ++size_;
+        return slots_[i];
+      }
+    }
+  }
+  /// The entry of `code`, or null.
+  const Entry* Find(std::uint64_t code) const {
+    const std::size_t mask = slots_.size() - 1;
+    for (std::size_t i = CodeHash{}(code) & mask;; i = (i + 1) & mask) {
+      if (slots_[i].code == code) return &slots_[i];
+      if (slots_[i].code == kEmpty) return nullptr;
+    }
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  void Grow() {
+    std::vector<Entry> old(2 * slots_.size(), Entry{kEmpty, -1, -1});
+    old.swap(slots_);
+    const std::size_t mask = slots_.size() - 1;
+    for (const Entry& e : old) {
+      if (e.code == kEmpty) continue;
+      std::size_t i = CodeHash{}(e.code) & mask;
+      while (slots_[i].code != kEmpty) i = (i + 1) & mask;
+      slots_[i] = e;
+    }
+  }
+  std::vector<Entry> slots_;
+  std::size_t size_ = 0;
+};
+
+/// One bit per voxel of a key box (x fastest): the free voxels of a frame whose rays stay in
+/// the box. Setting a bit is one read-modify-write near the ray's previous voxel, where a hash
+/// set probes a random slot of a table larger than the cache. All bits are zero between frames.
+class FreeBitmap {
+ public:
+  /// Largest box given a bitmap [voxels] (8 MiB of bits); larger boxes use a CodeSet.
+  static constexpr std::uint64_t kMaxVoxels = std::uint64_t{1} << 26;
+
+  /// Takes the box [lo, hi] (inclusive keys); false (and no box) when it holds more than
+  /// kMaxVoxels voxels.
+  bool Reset(const std::array<int, 3>& lo, const std::array<int, 3>& hi) {
+    std::uint64_t voxels = 1;
+    std::array<std::uint32_t, 3> size{};
+    for (int i = 0; i < 3; ++i) {
+      size[i] = static_cast<std::uint32_t>(hi[i] - lo[i] + 1);
+      voxels *= size[i];
+    }
+    if (voxels > kMaxVoxels) return false;
+    lo_ = lo;
+    size_ = size;
+    const std::size_t words = static_cast<std::size_t>((voxels + 63) / 64);
+    if (words_.size() < words) words_.resize(words, 0);
+    used_words_ = words;
+    return true;
+  }
+  /// Sets the bit of key (x, y, z); false when the key lies outside the box.
+  bool Set(const int* k) {
+    std::uint32_t index;
+    if (!Index(k, &index)) return false;
+    words_[index >> 6] |= std::uint64_t{1} << (index & 63);
+    return true;
+  }
+  /// Clears the bit of `key` if it lies in the box.
+  void Unset(const octomap::OcTreeKey& key) {
+    const int k[3] = {key[0], key[1], key[2]};
+    std::uint32_t index;
+    if (Index(k, &index)) words_[index >> 6] &= ~(std::uint64_t{1} << (index & 63));
+  }
+  /// Calls f(Morton code) for each set bit and clears the bits.
+  template <typename F>
+  void Drain(F&& f) {
+    for (std::size_t w = 0; w < used_words_; ++w) {
+      std::uint64_t bits = words_[w];
+      if (bits == 0) continue;
+      words_[w] = 0;
+      while (bits != 0) {
+        // < kMaxVoxels = 2^26: 32-bit divisions (half the latency of 64-bit ones).
+        const auto index = static_cast<std::uint32_t>(64 * w + static_cast<unsigned>(__builtin_ctzll(bits)));
+        bits &= bits - 1;
+        const std::uint32_t yz = index / size_[0];
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(lo_[0] + static_cast<int>(index % size_[0])),
+                                     static_cast<octomap::key_type>(lo_[1] + static_cast<int>(yz % size_[1])),
+                                     static_cast<octomap::key_type>(lo_[2] + static_cast<int>(yz / size_[1])));
+        f(TravOcTree::MortonCode(key));
+      }
+    }
+  }
+  /// Zeroes every bit (after an exception left some set).
+  void ClearAll() { std::fill(words_.begin(), words_.end(), 0); }
+
+ private:
+  bool Index(const int* k, std::uint32_t* index) const {
+    const auto x = static_cast<std::uint32_t>(k[0] - lo_[0]);
+    const auto y = static_cast<std::uint32_t>(k[1] - lo_[1]);
+    const auto z = static_cast<std::uint32_t>(k[2] - lo_[2]);
+    if (x >= size_[0] || y >= size_[1] || z >= size_[2]) return false;
+    *index = x + size_[0] * (y + size_[1] * z);
+    return true;
+  }
+  std::vector<std::uint64_t> words_;
+  std::size_t used_words_ = 0;
+  std::array<int, 3> lo_{};
+  std::array<std::uint32_t, 3> size_{};
+};
+
 /// Sorts (Morton code, payload) pairs by code: LSD radix sort on the 48 bits, 4 x 12.
+/// `scratch` is working space (any content).
 template <typename T>
-void SortByCode(std::vector<std::pair<std::uint64_t, T>>* items) {
+void SortByCode(std::vector<std::pair<std::uint64_t, T>>* items, std::vector<std::pair<std::uint64_t, T>>* scratch_items) {
   constexpr int kBits = 12;
   constexpr std::size_t kBuckets = std::size_t{1} << kBits;
-  std::vector<std::pair<std::uint64_t, T>> scratch(items->size());
-  std::vector<std::size_t> start(kBuckets);
+  std::vector<std::pair<std::uint64_t, T>>& scratch = *scratch_items;
+  scratch.resize(items->size());
+  std::array<std::size_t, kBuckets> start;
   for (int pass = 0; pass < 48 / kBits; ++pass) {
     const int shift = pass * kBits;
     std::fill(start.begin(), start.end(), 0);
@@ -114,26 +250,17 @@ void SortByCode(std::vector<std::pair<std::uint64_t, T>>* items) {
   }
 }
 
-/// Moves the key of `code` one voxel along axis `dim` (0 x, 1 y, 2 z) by `step` (+-1), with
-/// the wrap-around of a 16-bit key, without decoding the code.
-inline std::uint64_t StepMortonCode(std::uint64_t code, unsigned dim, int step) {
-  const std::uint64_t mask = 0x249249249249ull << dim;
-  const std::uint64_t bits = step > 0 ? ((code | ~mask) + 1) & mask : ((code & mask) - 1) & mask;
-  return bits | (code & ~mask);
-}
-
-/// Inserts into `codes` the Morton codes of exactly the voxels OcTreeBaseImpl::computeRayKeys
-/// (origin, end) puts in its KeyRay: the same Amanatides-Woo walk written out with the same
-/// types and arithmetic, stepping the Morton code instead of collecting keys. Returns false
-/// where computeRayKeys does (an end outside the addressable cube).
-bool InsertRayCodes(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
-                    CodeSet* codes) {
-  octomap::OcTreeKey key_origin, key_end;
-  if (!tree.coordToKeyChecked(origin, key_origin) || !tree.coordToKeyChecked(end, key_end)) return false;
-  if (key_origin == key_end) return true;
-  std::uint64_t code = TravOcTree::MortonCode(key_origin);
-  const std::uint64_t end_code = TravOcTree::MortonCode(key_end);
-  codes->Insert(code);
+/// Calls visit(key) with the key (int[3]) of exactly the voxels OcTreeBaseImpl::computeRayKeys
+/// (origin, end) puts in its KeyRay, in the same order: the same Amanatides-Woo walk written
+/// out with the same types and arithmetic (keys wrap around at 16 bits like OcTreeKey's).
+/// `key_origin`, `key_end`: the checked keys of origin and end.
+template <typename Visit>
+void WalkRay(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
+             const octomap::OcTreeKey& key_origin, const octomap::OcTreeKey& key_end, Visit&& visit) {
+  if (key_origin == key_end) return;
+  int key[3] = {key_origin[0], key_origin[1], key_origin[2]};
+  const int last[3] = {key_end[0], key_end[1], key_end[2]};
+  visit(key);
 
   octomap::point3d direction = (end - origin);
   const float length = static_cast<float>(direction.norm());
@@ -160,20 +287,40 @@ bool InsertRayCodes(const TravOcTree& tree, const octomap::point3d& origin, cons
       t_delta[i] = std::numeric_limits<double>::max();
     }
   }
+  // The step, without a branch on the axis (which a ray's voxels alternate unpredictably):
+  // the axis is computeRayKeys' choice, x if t_max x < y and x < z, else y if y < z, else z,
+  // and adding 0 leaves a t_max as it was.
+  double t0 = t_max[0], t1 = t_max[1], t2 = t_max[2];
   for (;;) {
-    unsigned dim;
-    if (t_max[0] < t_max[1]) {
-      dim = t_max[0] < t_max[2] ? 0 : 2;
-    } else {
-      dim = t_max[1] < t_max[2] ? 1 : 2;
-    }
-    code = StepMortonCode(code, dim, step[dim]);
-    t_max[dim] += t_delta[dim];
-    if (code == end_code) return true;
-    const double dist_from_origin = std::min(std::min(t_max[0], t_max[1]), t_max[2]);
-    if (dist_from_origin > length) return true;
-    codes->Insert(code);
+    const bool x_before_y = t0 < t1;
+    const bool before_z = (x_before_y ? t0 : t1) < t2;
+    const bool sx = x_before_y && before_z, sy = !x_before_y && before_z, sz = !before_z;
+    key[0] = (key[0] + (sx ? step[0] : 0)) & 0xFFFF;
+    key[1] = (key[1] + (sy ? step[1] : 0)) & 0xFFFF;
+    key[2] = (key[2] + (sz ? step[2] : 0)) & 0xFFFF;
+    t0 += sx ? t_delta[0] : 0.0;
+    t1 += sy ? t_delta[1] : 0.0;
+    t2 += sz ? t_delta[2] : 0.0;
+    if (key[0] == last[0] && key[1] == last[1] && key[2] == last[2]) return;
+    // computeRayKeys: min(t_max) > length; the t are never NaN, so: all of them are.
+    if ((t0 > length) & (t1 > length) & (t2 > length)) return;
+    visit(key);
   }
+}
+
+/// `norm > max_range` decided from the squared norm without the square root where the answer
+/// is clear (the root is correctly rounded, so only a squared norm within a relative 1e-9 of
+/// max_range^2 needs it).
+struct RangeTest {
+  explicit RangeTest(double max_range)
+      : max_range(max_range), below(max_range * max_range * (1.0 - 1e-9)),
+        above(max_range * max_range * (1.0 + 1e-9)) {}
+  double max_range, below, above;
+};
+inline bool BeyondRange(double squared_norm, const RangeTest& r) {
+  if (squared_norm < r.below) return false;
+  if (squared_norm > r.above) return true;
+  return std::sqrt(squared_norm) > r.max_range;
 }
 
 /// Majority vote of the 1..3 verdicts, ties to the worse class; -1 when there are none.
@@ -252,6 +399,23 @@ double BandFraction(double value, double semi, double max) {
 }  // namespace
 
 namespace internal {
+
+struct InsertScratch {
+  VoxelIndex voxel_index;                  ///< the frame's voxels -> accumulators
+  std::vector<VoxelAccumulator> hits;      ///< in-range voxels, in order of first point
+  std::vector<std::uint64_t> hit_codes;    ///< their Morton codes
+  std::vector<octomap::OcTreeKey> hit_keys;  ///< and keys
+  std::vector<FarAccumulator> far;         ///< voxels of points beyond range
+  std::vector<octomap::point3d> ray_ends;  ///< where each ray stops
+  std::vector<octomap::OcTreeKey> ray_end_keys;
+  VoxelIndex ray_cells;  ///< free_space_ray_cell > 1: cell -> group
+  std::vector<std::pair<Eigen::Vector3d, std::uint32_t>> ray_groups;  ///< sum of ends, count
+  FreeBitmap free_bitmap;
+  bool free_bitmap_clean = true;  ///< false while bits may be set (an exception could leave some)
+  CodeSet free_overflow;          ///< free voxels outside the bitmap's box
+  std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>> voxels, voxels_sort;
+  std::vector<std::uint64_t> codes;
+};
 
 std::unique_ptr<TravOcTree> MakeTree(const MapOptions& options) {
   auto tree = std::make_unique<TravOcTree>(options.resolution_m);
@@ -334,26 +498,51 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     return stats;
   }
 
+  if (!impl_->insert_scratch) impl_->insert_scratch = std::make_shared<internal::InsertScratch>();
+  internal::InsertScratch& scratch = *impl_->insert_scratch;
+
   // 1. Thin the points: one accumulator per voxel, keyed by the voxel's Morton code.
-  std::unordered_map<std::uint64_t, VoxelAccumulator, CodeHash> hits;
-  std::unordered_map<std::uint64_t, FarAccumulator, CodeHash> far;
-  hits.reserve(points.size() / 4 + 16);
+  VoxelIndex& index = scratch.voxel_index;
+  std::vector<VoxelAccumulator>& hits = scratch.hits;
+  std::vector<FarAccumulator>& far = scratch.far;
+  index.Clear();
+  hits.clear();
+  scratch.hit_codes.clear();
+  scratch.hit_keys.clear();
+  far.clear();
+  const RangeTest range(opt.max_range_m);
+  std::uint64_t last_code = ~std::uint64_t{0};
+  VoxelIndex::Entry* entry = nullptr;  // of last_code (image neighbours share voxels)
   for (const ClassifiedPoint& point : points) {
     const Eigen::Vector3d p = point.world_p.cast<double>();
     octomap::OcTreeKey key;
-    if (!p.allFinite() || !tree.coordToKeyChecked(p.x(), p.y(), p.z(), key)) {
+    if (!p.allFinite() || !tree.CoordToKeyChecked(p.x(), p.y(), p.z(), &key)) {
       ++stats.points_rejected;
       continue;
     }
     const std::uint64_t code = TravOcTree::MortonCode(key);
-    if ((p - sensor_origin_world).norm() > opt.max_range_m) {
-      FarAccumulator& acc = far[code];
+    if (code != last_code) {
+      entry = &index.FindOrInsert(code);
+      last_code = code;
+    }
+    if (BeyondRange((p - sensor_origin_world).squaredNorm(), range)) {
+      if (entry->far < 0) {
+        entry->far = static_cast<std::int32_t>(far.size());
+        far.emplace_back();
+      }
+      FarAccumulator& acc = far[static_cast<std::size_t>(entry->far)];
       acc.sum_p += p;
       ++acc.points;
       ++stats.points_beyond_range;
       continue;
     }
-    VoxelAccumulator& acc = hits[code];
+    if (entry->hit < 0) {
+      entry->hit = static_cast<std::int32_t>(hits.size());
+      hits.emplace_back();
+      scratch.hit_codes.push_back(code);
+      scratch.hit_keys.push_back(key);
+    }
+    VoxelAccumulator& acc = hits[static_cast<std::size_t>(entry->hit)];
     acc.sum_p += p;
     ++acc.points;
     ++stats.points_hit;
@@ -371,50 +560,129 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     }
   }
 
-  // 2. Free space: each voxel once (a flat set of Morton codes), occupied voxels of this frame
-  // win.
-  CodeSet free_codes(8 * hits.size() + 1024);
+  // 2. Free space: where each ray ends, then every voxel the rays pass once (one bit per voxel
+  // of the box the rays span, or a flat set of Morton codes if that box is too large); occupied
+  // voxels of this frame win.
   const octomap::point3d origin(static_cast<float>(sensor_origin_world.x()),
                                 static_cast<float>(sensor_origin_world.y()),
                                 static_cast<float>(sensor_origin_world.z()));
-  auto cast = [&](const Eigen::Vector3d& end) {
+  std::vector<octomap::point3d>& ray_ends = scratch.ray_ends;
+  std::vector<octomap::OcTreeKey>& ray_end_keys = scratch.ray_end_keys;
+  ray_ends.clear();
+  ray_end_keys.clear();
+  auto add_ray = [&](const Eigen::Vector3d& end) {
     const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
                              static_cast<float>(end.z()));
-    InsertRayCodes(tree, origin, e, &free_codes);
+    octomap::OcTreeKey key_end;
+    if (!tree.coordToKeyChecked(e, key_end)) return;  // as computeRayKeys: no ray
+    ray_ends.push_back(e);
+    ray_end_keys.push_back(key_end);
   };
   // Rays to surface points stop short where they graze the surface (free_space_clearance_m).
   constexpr double kMaxShortening_m = 2.0;
-  for (const auto& [code, acc] : hits) {
+  for (const VoxelAccumulator& acc : hits) {
     const Eigen::Vector3d end = acc.sum_p / acc.points;
     const Eigen::Vector3d d = end - sensor_origin_world;
     const double length = d.norm();
     if (opt.free_space_clearance_m > 0.0 && length > 1e-9) {
       const double sin_elevation = std::max(std::abs(d.z()) / length, 1e-3);
       const double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
-      if (shorten < length) cast(sensor_origin_world + d * ((length - shorten) / length));
+      if (shorten < length) add_ray(sensor_origin_world + d * ((length - shorten) / length));
     } else {
-      cast(end);
+      add_ray(end);
     }
   }
-  for (const auto& [code, acc] : far) {
+  for (const FarAccumulator& acc : far) {
     const Eigen::Vector3d direction = (acc.sum_p / acc.points - sensor_origin_world).normalized();
-    cast(sensor_origin_world + direction * opt.max_range_m);
+    add_ray(sensor_origin_world + direction * opt.max_range_m);
+  }
+  if (opt.free_space_ray_cell > 1) {
+    // One ray per cell of free_space_ray_cell^3 voxels holding ray ends, to their mean.
+    const int shift = opt.free_space_ray_cell == 2 ? 1 : opt.free_space_ray_cell == 4 ? 2 : 3;
+    VoxelIndex& cells = scratch.ray_cells;
+    auto& groups = scratch.ray_groups;
+    cells.Clear();
+    groups.clear();
+    for (std::size_t r = 0; r < ray_ends.size(); ++r) {
+      const octomap::OcTreeKey& k = ray_end_keys[r];
+      const octomap::OcTreeKey cell(static_cast<octomap::key_type>(k[0] >> shift),
+                                    static_cast<octomap::key_type>(k[1] >> shift),
+                                    static_cast<octomap::key_type>(k[2] >> shift));
+      VoxelIndex::Entry& e = cells.FindOrInsert(TravOcTree::MortonCode(cell));
+      if (e.hit < 0) {
+        e.hit = static_cast<std::int32_t>(groups.size());
+        groups.emplace_back(Eigen::Vector3d::Zero(), 0u);
+      }
+      auto& group = groups[static_cast<std::size_t>(e.hit)];
+      group.first += Eigen::Vector3d(ray_ends[r].x(), ray_ends[r].y(), ray_ends[r].z());
+      ++group.second;
+    }
+    ray_ends.clear();
+    ray_end_keys.clear();
+    for (const auto& [sum, count] : groups) add_ray(sum / count);
+  }
+  octomap::OcTreeKey key_origin;
+  const bool origin_ok = tree.coordToKeyChecked(origin, key_origin);  // the float origin's key
+  CodeSet& overflow = scratch.free_overflow;
+  overflow.Clear();
+  FreeBitmap& bitmap = scratch.free_bitmap;
+  if (!scratch.free_bitmap_clean) bitmap.ClearAll();
+  scratch.free_bitmap_clean = false;
+  bool use_bitmap = false;
+  if (origin_ok) {
+    // The box of the rays' end voxels, one voxel wider (a walk may overshoot by one in float).
+    std::array<int, 3> lo{}, hi{};
+    for (int i = 0; i < 3; ++i) lo[i] = hi[i] = key_origin[i];
+    for (const octomap::OcTreeKey& k : ray_end_keys) {
+      for (int i = 0; i < 3; ++i) {
+        lo[i] = std::min(lo[i], static_cast<int>(k[i]));
+        hi[i] = std::max(hi[i], static_cast<int>(k[i]));
+      }
+    }
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::max(lo[i] - 1, 0);
+      hi[i] = std::min(hi[i] + 1, 0xFFFF);
+    }
+    use_bitmap = bitmap.Reset(lo, hi);
+    for (std::size_t r = 0; r < ray_ends.size(); ++r) {
+      if (use_bitmap) {
+        WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
+          if (!bitmap.Set(k)) overflow.Insert(TravOcTree::MortonCode(octomap::OcTreeKey(
+                                  static_cast<octomap::key_type>(k[0]), static_cast<octomap::key_type>(k[1]),
+                                  static_cast<octomap::key_type>(k[2]))));
+        });
+      } else {
+        WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
+          overflow.Insert(TravOcTree::MortonCode(octomap::OcTreeKey(static_cast<octomap::key_type>(k[0]),
+                                                                   static_cast<octomap::key_type>(k[1]),
+                                                                   static_cast<octomap::key_type>(k[2]))));
+        });
+      }
+    }
   }
 
   // 3. Updates: every voxel of the frame (free or hit, disjoint) once, in one pass over the
   // tree in Z-order; the result equals updating them one by one.
-  std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>> voxels;
-  voxels.reserve(free_codes.size() + hits.size());
-  free_codes.ForEach([&](std::uint64_t code) {
-    if (hits.find(code) == hits.end()) voxels.emplace_back(code, nullptr);
-  });
-  stats.voxels_freed = voxels.size();
-  for (const auto& [code, acc] : hits) {
-    voxels.emplace_back(code, &acc);
-    if (MajorityClassIndex(acc.votes) >= 0) ++stats.voxels_with_class;
+  std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>>& voxels = scratch.voxels;
+  voxels.clear();
+  auto add_free = [&](std::uint64_t code) {
+    const VoxelIndex::Entry* e = index.Find(code);
+    if (e == nullptr || e->hit < 0) voxels.emplace_back(code, nullptr);
+  };
+  if (use_bitmap) {
+    for (const octomap::OcTreeKey& key : scratch.hit_keys) bitmap.Unset(key);  // hits win
+    bitmap.Drain([&](std::uint64_t code) { voxels.emplace_back(code, nullptr); });
   }
-  SortByCode(&voxels);
-  std::vector<std::uint64_t> codes(voxels.size());
+  scratch.free_bitmap_clean = true;
+  overflow.ForEach(add_free);
+  stats.voxels_freed = voxels.size();
+  for (std::size_t h = 0; h < hits.size(); ++h) {
+    voxels.emplace_back(scratch.hit_codes[h], &hits[h]);
+    if (MajorityClassIndex(hits[h].votes) >= 0) ++stats.voxels_with_class;
+  }
+  SortByCode(&voxels, &scratch.voxels_sort);
+  std::vector<std::uint64_t>& codes = scratch.codes;
+  codes.resize(voxels.size());
   for (std::size_t i = 0; i < voxels.size(); ++i) codes[i] = voxels[i].first;
 
   const double decay = opt.class_free_decay_log_odds;

@@ -237,6 +237,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("class_clamp_min", &f.class_clamp_min);
     s.Read("class_clamp_max", &f.class_clamp_max);
     s.Read("free_space_clearance_m", &f.free_space_clearance_m);
+    s.Read("free_space_ray_cell", &f.free_space_ray_cell);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
     s.RejectUnknownKeys();
@@ -374,6 +375,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  class_clamp_min: " << f.class_clamp_min << "\n"
     << "  class_clamp_max: " << f.class_clamp_max << "\n"
     << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
+    << "  free_space_ray_cell: " << f.free_space_ray_cell << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
   const RefinementOptions& r = c.refinement;

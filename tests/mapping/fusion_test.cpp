@@ -1,5 +1,7 @@
 #include <algorithm>
 #include <cmath>
+#include <random>
+#include <unordered_set>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -225,6 +227,203 @@ TEST(Fusion, OptionsAreValidatedNamingTheKey) {
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("class_clamp_max:", 0), 0u) << error;
   EXPECT_THROW(TraversabilityMap{options}, Error);
+  options = MapOptions{};
+  options.free_space_ray_cell = 3;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("free_space_ray_cell:", 0), 0u) << error;
+}
+
+
+/// Hash of an OcTreeKey for the reference sets below.
+struct KeyHash {
+  std::size_t operator()(const octomap::OcTreeKey& k) const {
+    return (static_cast<std::size_t>(k[0]) << 32) ^ (static_cast<std::size_t>(k[1]) << 16) ^ k[2];
+  }
+};
+
+/// One frame of `count` points (one per voxel) uniform in [-extent, extent]^2 x [-1, 2] m about
+/// `origin`, into a fresh map with `options`; then every voxel must be what OctoMap's own ray
+/// walk (computeRayKeys) says: the union of the rays' keys minus the hit voxels is free after
+/// one miss, the hit voxels occupied after one hit, and nothing else is in the tree.
+void ExpectFreeSpaceIsComputeRayKeys(const MapOptions& options, const Eigen::Vector3d& origin, double extent,
+                                     int count, unsigned seed) {
+  TraversabilityMap map(options);
+  const internal::TravOcTree& tree = testing::Tree(map);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> xy(-extent, extent), z(-1.0, 2.0);
+  std::vector<ClassifiedPoint> points;
+  std::unordered_set<octomap::OcTreeKey, KeyHash> used;
+  while (static_cast<int>(points.size()) < count) {
+    const ClassifiedPoint p = Pt(origin.x() + xy(rng), origin.y() + xy(rng), origin.z() + z(rng),
+                                 TravClass::kTraversable);
+    if (used.insert(tree.coordToKey(p.world_p.x(), p.world_p.y(), p.world_p.z())).second) points.push_back(p);
+  }
+  const InsertStats stats = map.InsertFrame(points, origin, 1);
+
+  const octomap::point3d o(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                           static_cast<float>(origin.z()));
+  std::unordered_set<octomap::OcTreeKey, KeyHash> hit, free;
+  octomap::KeyRay ray;
+  for (const ClassifiedPoint& p : points) {
+    const Eigen::Vector3d w = p.world_p.cast<double>();
+    Eigen::Vector3d end = w;
+    if ((w - origin).norm() > options.max_range_m) {
+      end = origin + (w - origin).normalized() * options.max_range_m;  // as InsertFrame clips it
+    } else {
+      hit.insert(tree.coordToKey(w.x(), w.y(), w.z()));
+    }
+    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()), static_cast<float>(end.z()));
+    ASSERT_TRUE(tree.computeRayKeys(o, e, ray));
+    free.insert(ray.begin(), ray.end());
+  }
+  for (const auto& k : hit) free.erase(k);
+  ASSERT_EQ(stats.voxels_hit, hit.size());
+  ASSERT_EQ(stats.voxels_freed, free.size());
+
+  const float miss = octomap::logodds(options.occupancy_miss_prob);
+  const float hit_l = octomap::logodds(options.occupancy_hit_prob);
+  for (const auto& k : free) {
+    const internal::TravNode* node = tree.search(k);
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(node->getLogOdds(), miss);
+  }
+  for (const auto& k : hit) {
+    const internal::TravNode* node = tree.search(k);
+    ASSERT_NE(node, nullptr);
+    ASSERT_EQ(node->getLogOdds(), hit_l);
+  }
+  // Nothing else: the leaves (pruned free blocks counted voxel by voxel) add up to both sets.
+  std::size_t free_voxels = 0, hit_voxels = 0;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const std::size_t n = std::size_t{1} << (3 * (tree.getTreeDepth() - it.getDepth()));
+    (it->getLogOdds() < 0.0f ? free_voxels : hit_voxels) += n;
+  }
+  EXPECT_EQ(free_voxels, free.size());
+  EXPECT_EQ(hit_voxels, hit.size());
+}
+
+TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkInsideTheRayBox) {
+  MapOptions options;  // free_space_clearance_m 0: rays run to the points
+  // Points out to 17 m, so some lie beyond max_range_m (15 m) and clear space only.
+  ExpectFreeSpaceIsComputeRayKeys(options, {0.37, -1.21, 1.53}, 12.0, 3000, 11);
+}
+
+TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkWhenTheRayBoxIsTooLargeForABitmap) {
+  MapOptions options;
+  options.resolution_m = 1.0;
+  options.max_range_m = 1000.0;
+  // +-600 voxels in x and y: over 2^26 voxels in the rays' box, so the free voxels go to a set.
+  ExpectFreeSpaceIsComputeRayKeys(options, {-3.3, 7.9, 0.4}, 600.0, 300, 12);
+}
+
+
+/// The full-resolution voxels of the tree's leaves, split by occupancy log-odds sign.
+void LeafVoxels(const internal::TravOcTree& tree, std::unordered_set<octomap::OcTreeKey, KeyHash>* free,
+                std::unordered_set<octomap::OcTreeKey, KeyHash>* occupied) {
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    const octomap::OcTreeKey base = it.getIndexKey();
+    const unsigned n = 1u << (tree.getTreeDepth() - it.getDepth());
+    for (unsigned i = 0; i < n; ++i) {
+      for (unsigned j = 0; j < n; ++j) {
+        for (unsigned k = 0; k < n; ++k) {
+          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + i),
+                                       static_cast<octomap::key_type>(base[1] + j),
+                                       static_cast<octomap::key_type>(base[2] + k));
+          (it->getLogOdds() < 0.0f ? free : occupied)->insert(key);
+        }
+      }
+    }
+  }
+}
+
+TEST(Fusion, CoarseRaysCastOneRayPerCellToTheMeanOfItsEnds) {
+  // Closed form by OctoMap's own walk: with free_space_ray_cell 2 the free voxels are the
+  // computeRayKeys voxels of one ray per 2x2x2 cell of ray ends, to the mean of its ends.
+  MapOptions options;
+  options.free_space_ray_cell = 2;
+  TraversabilityMap map(options);
+  const internal::TravOcTree& tree = testing::Tree(map);
+  const Eigen::Vector3d origin(0.37, -1.21, 1.53);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> xy(-8.0, 8.0), z(-1.0, 0.5);
+  std::vector<ClassifiedPoint> points;
+  std::unordered_set<octomap::OcTreeKey, KeyHash> used;
+  while (points.size() < 2000) {
+    const ClassifiedPoint p = Pt(origin.x() + xy(rng), origin.y() + xy(rng), origin.z() + z(rng), TravClass::kTraversable);
+    if (used.insert(tree.coordToKey(p.world_p.x(), p.world_p.y(), p.world_p.z())).second) points.push_back(p);
+  }
+  const InsertStats stats = map.InsertFrame(points, origin, 1);
+  ASSERT_EQ(stats.points_beyond_range, 0u);  // all within 15 m: one ray per point, in order
+
+  std::vector<octomap::OcTreeKey> cells;  // in order of first end, as the sums are
+  std::vector<std::pair<Eigen::Vector3d, int>> sums;
+  std::unordered_set<octomap::OcTreeKey, KeyHash> hit, free;
+  for (const ClassifiedPoint& p : points) {
+    const octomap::OcTreeKey k = tree.coordToKey(p.world_p.x(), p.world_p.y(), p.world_p.z());
+    hit.insert(k);
+    const octomap::OcTreeKey cell(static_cast<octomap::key_type>(k[0] / 2), static_cast<octomap::key_type>(k[1] / 2),
+                                  static_cast<octomap::key_type>(k[2] / 2));
+    const auto found = std::find(cells.begin(), cells.end(), cell);
+    if (found == cells.end()) {
+      cells.push_back(cell);
+      sums.emplace_back(p.world_p.cast<double>(), 1);
+    } else {
+      auto& s = sums[static_cast<std::size_t>(found - cells.begin())];
+      s.first += p.world_p.cast<double>();
+      ++s.second;
+    }
+  }
+  ASSERT_LT(sums.size(), points.size());  // some cells do hold several ends
+  const octomap::point3d o(static_cast<float>(origin.x()), static_cast<float>(origin.y()), static_cast<float>(origin.z()));
+  octomap::KeyRay ray;
+  for (const auto& [sum, n] : sums) {
+    const Eigen::Vector3d mean = sum / n;
+    ASSERT_TRUE(tree.computeRayKeys(o, octomap::point3d(static_cast<float>(mean.x()), static_cast<float>(mean.y()),
+                                                        static_cast<float>(mean.z())), ray));
+    free.insert(ray.begin(), ray.end());
+  }
+  for (const auto& k : hit) free.erase(k);
+  std::unordered_set<octomap::OcTreeKey, KeyHash> map_free, map_hit;
+  LeafVoxels(tree, &map_free, &map_hit);
+  EXPECT_EQ(map_hit, hit);
+  EXPECT_EQ(map_free, free);
+  EXPECT_EQ(stats.voxels_freed, free.size());
+}
+
+TEST(Fusion, CoarseRaysKeepTheOccupiedVoxelsAndFreeOnlyNearTheExactRays) {
+  // The floor-and-box world seen from four sides: the same voxels end occupied with exact and
+  // with coarse rays, and each voxel a coarse ray frees lies within `cell` voxels (Chebyshev)
+  // of a voxel the exact rays free or hit (the mean ray runs inside the cone of the cell's rays).
+  const std::vector<Eigen::Vector3d> origins = {{1.5, 1.25, 3.0}, {-2.0, 1.2, 1.5}, {4.9, 0.3, 1.2}, {1.4, 4.6, 2.2}};
+  for (const int cell : {2, 4}) {
+    MapOptions coarse_options;
+    coarse_options.free_space_ray_cell = cell;
+    TraversabilityMap exact, coarse(coarse_options);
+    for (std::size_t f = 0; f < origins.size(); ++f) {
+      exact.InsertFrame(testing::FloorAndBox(), origins[f], static_cast<std::int64_t>(f));
+      coarse.InsertFrame(testing::FloorAndBox(), origins[f], static_cast<std::int64_t>(f));
+    }
+    std::unordered_set<octomap::OcTreeKey, KeyHash> exact_free, exact_occupied, coarse_free, coarse_occupied;
+    LeafVoxels(testing::Tree(exact), &exact_free, &exact_occupied);
+    LeafVoxels(testing::Tree(coarse), &coarse_free, &coarse_occupied);
+    EXPECT_EQ(coarse_occupied, exact_occupied) << "cell " << cell;
+    ASSERT_GT(coarse_free.size(), 0u);
+    for (const auto& k : coarse_free) {
+      bool near = false;
+      for (int dx = -cell; dx <= cell && !near; ++dx) {
+        for (int dy = -cell; dy <= cell && !near; ++dy) {
+          for (int dz = -cell; dz <= cell && !near; ++dz) {
+            const octomap::OcTreeKey n(static_cast<octomap::key_type>(k[0] + dx), static_cast<octomap::key_type>(k[1] + dy),
+                                       static_cast<octomap::key_type>(k[2] + dz));
+            near = exact_free.count(n) > 0 || exact_occupied.count(n) > 0;
+          }
+        }
+      }
+      ASSERT_TRUE(near) << "cell " << cell << ": voxel " << k[0] << " " << k[1] << " " << k[2];
+    }
+    // Fewer rays, fewer voxels walked, but the carved volume stays comparable.
+    EXPECT_GT(coarse_free.size(), exact_free.size() / 2) << "cell " << cell;
+  }
 }
 
 }  // namespace

@@ -134,6 +134,8 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(loaded.frames_inserted(), 4u);
   EXPECT_EQ(loaded.last_timestamp_ns(), 1003);
   EXPECT_EQ(loaded.software_version(), map.software_version());
+  EXPECT_EQ(loaded.options().free_space_ray_cell, 1);  // exact rays: not named in the file
+  EXPECT_EQ(ReadBytes(path).find("free_space_ray_cell"), std::string::npos);
   // Saving the loaded map again gives the same bytes.
   loaded.Save(dir / "again.ot");
   EXPECT_EQ(ReadBytes(dir / "again.ot"), ReadBytes(path));
@@ -333,6 +335,19 @@ TEST(MapFile, SaveIntoAMissingFolderNamesTheFile) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
+}
+
+
+TEST(MapFile, CoarseRaysTravelWithTheMapFile) {
+  const TempDir dir;
+  MapOptions options;
+  options.free_space_ray_cell = 4;
+  TraversabilityMap map(options);
+  map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), 1);
+  map.Save(dir / "coarse.ot");
+  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "coarse.ot");
+  EXPECT_EQ(loaded.options().free_space_ray_cell, 4);
+  ExpectSameTrees(Tree(map), Tree(loaded));
 }
 
 }  // namespace

@@ -1,6 +1,8 @@
+#include <cmath>
 #include <memory>
 #include <random>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <octomap/AbstractOcTree.h>
@@ -13,6 +15,32 @@ namespace {
 using internal::TravNode;
 using internal::TravOcTree;
 using testing::Tree;
+
+TEST(TravOcTree, InlineCoordToKeyCheckedIsOctoMapsOwn) {
+  std::mt19937 rng(5);
+  for (const double res : {0.1, 0.05, 0.25}) {
+    MapOptions options;
+    options.resolution_m = res;
+    const TraversabilityMap map(options);
+    const TravOcTree& tree = Tree(map);
+    const double edge = 32768 * res;  // the addressable cube is [-edge, edge)
+    std::vector<double> coords = {0.0, -0.0, res, -res, 0.5 * res, edge, -edge, std::nextafter(edge, 0.0),
+                                  std::nextafter(-edge, 0.0), std::nextafter(-edge, -1e9), 1e9, -1e9};
+    std::uniform_real_distribution<double> near_edge(-1.01 * edge, 1.01 * edge);
+    for (int i = 0; i < 20000; ++i) coords.push_back(near_edge(rng));
+    for (const double c : coords) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const double x = axis == 0 ? c : 1.0, y = axis == 1 ? c : -2.0, z = axis == 2 ? c : 0.3;
+        octomap::OcTreeKey stock, own;
+        const bool stock_ok = tree.coordToKeyChecked(x, y, z, stock);
+        ASSERT_EQ(tree.CoordToKeyChecked(x, y, z, &own), stock_ok) << c << " res " << res;
+        if (stock_ok) {
+          ASSERT_EQ(own, stock) << c << " res " << res;
+        }
+      }
+    }
+  }
+}
 
 TEST(TravOcTree, WorldToKeyToWorldStaysWithinHalfAVoxel) {
   std::mt19937 rng(7);

@@ -45,6 +45,12 @@ struct MapOptions {
   /// runs within one voxel of nearer ground for its last resolution/sin(elevation) metres and
   /// would clear the ground seen before. 0 disables it (OctoMap's usual carving); >= 0.
   double free_space_clearance_m = 0.0;
+  /// Free-space rays whose ends fall in the same cell of this many voxels per edge (aligned to
+  /// the voxel grid) are cast once, to the mean of their ends: an approximation that walks
+  /// fewer rays. 1: one ray per hit voxel and per far voxel (exact, OctoMap's carving); 2, 4
+  /// or 8. Each voxel a cell's ray frees lies within `free_space_ray_cell` voxels of a voxel
+  /// one of the exact rays frees or hits.
+  int free_space_ray_cell = 1;
 
   /// True when every field is in range; otherwise `*error` (when not null) gets a message that
   /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
