@@ -127,7 +127,7 @@ MapOptions PipelineMapDefaults() {
   o.max_range_m = 13.0;
   o.occupied_threshold_prob = 0.8;
   o.occupancy_miss_prob = 0.45;
-  o.class_free_decay_log_odds = 0.2;
+  o.class_free_decay_log_odds = 0.1;
   o.free_space_clearance_m = 0.1;
   return o;
 }
