@@ -243,14 +243,15 @@ void BM_Geometry(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
-/// ClassifiedPointsInWorld + InsertFrame into one map that keeps growing over the iterations
+/// MapPointsOfFrame + InsertFrame into one map that keeps growing over the iterations
 /// (the frames cycle, so after the first round it revisits the same voxels).
 void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
   TraversabilityMap map(d->config.map.fusion);
+  const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    const auto points = ClassifiedPointsInWorld(f.result, f.world_T_rectified, d->config.map.pixel_stride);
+    const auto points = MapPointsOfFrame(f.result, f.world_T_rectified, d->config, geometry);
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);
@@ -294,7 +295,7 @@ void BM_EndToEndWithMap(benchmark::State& state, const Dataset* d) {
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
     const FrameResult r = pipeline.Process(f.left, f.right, f.up_camera);
-    const auto points = ClassifiedPointsInWorld(r, f.world_T_rectified, d->config.map.pixel_stride);
+    const auto points = MapPointsOfFrame(r, f.world_T_rectified, d->config, pipeline.geometry());
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);

@@ -105,7 +105,7 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
       auto result = std::make_shared<FrameResult>(pipeline.Process(in.left, in.right, up_camera));
       const Eigen::Isometry3d world_T_rectified = in.world_T_body * body_T_rectified;
       fusion.Submit([&, k, result, world_T_rectified] {
-        const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
+        const auto points = MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry());
         map.InsertFrame(points, world_T_rectified.translation(), inputs[k].t);
         finished[k] = Clock::now();
       });
@@ -341,7 +341,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     if (options.with_map) {
       const Timer map_timer;
       const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
-      const auto points = ClassifiedPointsInWorld(result, world_T_rectified, config.map.pixel_stride);
+      const auto points = MapPointsOfFrame(result, world_T_rectified, config, pipeline.geometry());
       map.InsertFrame(points, world_T_rectified.translation(), t);
       map_wall = map_timer.WallMs();
       map_cpu = map_timer.CpuMs();

@@ -125,10 +125,10 @@ SegmenterOptions PipelineSegmenterDefaults() {
 
 MapOptions PipelineMapDefaults() {
   MapOptions o;
-  o.max_range_m = 12.0;
+  o.max_range_m = 13.0;
   o.occupied_threshold_prob = 0.8;
   o.occupancy_miss_prob = 0.45;
-  o.class_free_decay_log_odds = 0.2;
+  o.class_free_decay_log_odds = 0.1;
   o.free_space_clearance_m = 0.1;
   return o;
 }
@@ -152,6 +152,7 @@ bool GravityOptions::IsValid(std::string* error) const {
 bool MappingOptions::IsValid(std::string* error) const {
   if (!fusion.IsValid(error)) return false;
   if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
+  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
   if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
   return true;
 }
@@ -239,6 +240,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("free_space_clearance_m", &f.free_space_clearance_m);
     s.Read("free_space_ray_cell", &f.free_space_ray_cell);
     s.Read("pixel_stride", &c.map.pixel_stride);
+    s.Read("min_texture", &c.map.min_texture);
     s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
     s.RejectUnknownKeys();
   }
@@ -377,6 +379,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
     << "  free_space_ray_cell: " << f.free_space_ray_cell << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
+    << "  min_texture: " << c.map.min_texture << "\n"
     << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
   const RefinementOptions& r = c.refinement;
   y << "refinement:\n"

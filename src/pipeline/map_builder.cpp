@@ -74,9 +74,12 @@ bool BuildMapOptions::IsValid(std::string* error) const {
 }
 
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
-                                                     const Eigen::Isometry3d& world_T_rectified, int stride) {
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
+                                                     const ImageU8* keep) {
   SSTA_CHECK(stride >= 1, "stride must be at least 1");
   const Image3f& cloud = frame.cloud;
+  SSTA_CHECK(keep == nullptr || (keep->width() == cloud.width() && keep->height() == cloud.height()),
+             "the keep mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
   std::vector<ClassifiedPoint> points;
   points.reserve(cloud.size() / (stride * stride) + 1);
@@ -84,7 +87,7 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
   for (int v = 0; v < cloud.height(); v += stride) {
     for (int u = 0; u < cloud.width(); u += stride) {
       const Eigen::Vector3f& p = cloud(v, u);
-      if (!IsFinite(p)) continue;
+      if (!IsFinite(p) || (keep != nullptr && (*keep)(v, u) == 0)) continue;
       ClassifiedPoint out;
       out.world_p = transform * p;
       out.cls = static_cast<TravClass>(labels(v, u));
@@ -100,6 +103,61 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
     }
   }
   return points;
+}
+
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
+  SSTA_CHECK(block >= 1, "block must be at least 1");
+  const int w = geometry.crop_width, h = geometry.crop_height;
+  const int full_w = left_rectified.width(), full_h = left_rectified.height();
+  SSTA_CHECK(geometry.crop_u0 >= 0 && geometry.crop_v0 >= 0 && geometry.crop_u0 + w <= full_w &&
+                 geometry.crop_v0 + h <= full_h,
+             "the common area must lie inside the rectified image");
+  // Integral images of grey and grey^2 over the crop plus the window's margin (exact in 64 bits).
+  const int r = block / 2;
+  const int x0 = std::max(0, geometry.crop_u0 - r), x1 = std::min(full_w, geometry.crop_u0 + w + r);
+  const int y0 = std::max(0, geometry.crop_v0 - r), y1 = std::min(full_h, geometry.crop_v0 + h + r);
+  const int iw = x1 - x0 + 1;
+  std::vector<std::int64_t> sum(static_cast<std::size_t>(iw) * (y1 - y0 + 1), 0), sum_sq(sum.size(), 0);
+  for (int y = y0; y < y1; ++y) {
+    std::int64_t row = 0, row_sq = 0;
+    const std::size_t above = static_cast<std::size_t>(y - y0) * iw, here = above + iw;
+    for (int x = x0; x < x1; ++x) {
+      const std::int64_t g = left_rectified(y, x);
+      row += g;
+      row_sq += g * g;
+      sum[here + x - x0 + 1] = sum[above + x - x0 + 1] + row;
+      sum_sq[here + x - x0 + 1] = sum_sq[above + x - x0 + 1] + row_sq;
+    }
+  }
+  // std >= min_std  <=>  n * sum_sq - sum^2 >= n^2 * min_std^2.
+  const double min_var = min_std * min_std;
+  ImageU8 keep(w, h, 0);
+  for (int v = 0; v < h; ++v) {
+    const int fv = v + geometry.crop_v0;
+    const int a = std::max(y0, fv - r) - y0, b = std::min(y1, fv + r + 1) - y0;
+    for (int u = 0; u < w; ++u) {
+      const int fu = u + geometry.crop_u0;
+      const int c = std::max(x0, fu - r) - x0, d = std::min(x1, fu + r + 1) - x0;
+      auto box = [&](const std::vector<std::int64_t>& s) {
+        return s[static_cast<std::size_t>(b) * iw + d] - s[static_cast<std::size_t>(a) * iw + d] -
+               s[static_cast<std::size_t>(b) * iw + c] + s[static_cast<std::size_t>(a) * iw + c];
+      };
+      const std::int64_t n = static_cast<std::int64_t>(b - a) * (d - c);
+      const std::int64_t s1 = box(sum);
+      const double spread = static_cast<double>(n * box(sum_sq) - s1 * s1);
+      keep(v, u) = spread >= static_cast<double>(n) * static_cast<double>(n) * min_var ? 1 : 0;
+    }
+  }
+  return keep;
+}
+
+std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                                              const Config& config, const RectifiedGeometry& geometry) {
+  if (config.map.min_texture <= 0.0) {
+    return ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride);
+  }
+  const ImageU8 keep = TexturedPixels(frame.left_rectified, geometry, config.stereo.block_size, config.map.min_texture);
+  return ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, &keep);
 }
 
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
@@ -198,7 +256,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
-        const auto points = ClassifiedPointsInWorld(*result, world_T_rectified, config.map.pixel_stride);
+        const auto points = MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry());
         stats = map.InsertFrame(points, world_T_rectified.translation(), t);
       } catch (const Error& e) {
         record_skip(t, e.what());

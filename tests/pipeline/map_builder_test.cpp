@@ -44,6 +44,43 @@ TEST(ClassifiedPointsInWorld, TransformsEveryStrideThPointWithItsSegmentVerdict)
   EXPECT_TRUE(std::isnan(points[1].slope_deg));
 }
 
+TEST(ClassifiedPointsInWorld, LeavesOutPixelsTheKeepMaskDrops) {
+  FrameResult f;
+  f.cloud = Image3f(3, 1, Eigen::Vector3f(1, 2, 3));
+  f.segment_ids = ImageI32(3, 1, -1);
+  f.analysis.labels = ImageU8(3, 1, 1);
+  ImageU8 keep(3, 1, 1);
+  keep(0, 1) = 0;
+  EXPECT_EQ(ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1, &keep).size(), 2u);
+}
+
+TEST(TexturedPixels, KeepsPixelsWhoseWindowStdReachesTheThreshold) {
+  // A 12x8 image, blank (grey 100) except a 0/6 checker in columns 8..11: a window's std is
+  // 3 where it lies on the checker only, less where it also covers the blank part.
+  ImageU8 image(12, 8, 100);
+  for (int v = 0; v < 8; ++v) {
+    for (int u = 8; u < 12; ++u) image(v, u) = (u + v) % 2 == 0 ? 0 : 6;
+  }
+  RectifiedGeometry g;
+  g.crop_u0 = 1;
+  g.crop_v0 = 2;
+  g.crop_width = 10;
+  g.crop_height = 4;
+  const ImageU8 keep = TexturedPixels(image, g, 3, 2.0);
+  ASSERT_EQ(keep.width(), 10);
+  ASSERT_EQ(keep.height(), 4);
+  for (int v = 0; v < 4; ++v) {
+    // Crop column u is image column u + 1; the 3x3 window at image column 8 covers one blank
+    // column (3 of 9 pixels at 100: std ~ 46, kept); at 6 and before it is all blank (std 0).
+    for (int u = 0; u <= 5; ++u) EXPECT_EQ(keep(v, u), 0) << v << "," << u;
+    for (int u = 6; u < 10; ++u) EXPECT_EQ(keep(v, u), 1) << v << "," << u;
+  }
+  // On the checker alone the std of a 3x3 window is 6 * sqrt(4/9 * 5/9) = 2.98: dropped at 3.
+  const ImageU8 strict = TexturedPixels(image, g, 3, 3.0);
+  EXPECT_EQ(strict(1, 8), 0);
+  EXPECT_EQ(strict(1, 7), 1);  // the window covers the blank column: a large std
+}
+
 TEST(BuildMap, EurocStaticMapHasATraversableFloor) {
   testing::TempDir dir;
   BuildMapOptions options;

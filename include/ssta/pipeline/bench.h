@@ -41,7 +41,7 @@ struct BenchRow {
 /// The process after one measured frame: its memory and, with a map, the map's size.
 struct FrameSample {
   int frame = 0;             ///< 0-based index of the measured frame
-  double update_ms = 0.0;    ///< wall time of ClassifiedPointsInWorld + InsertFrame [ms]; 0 without map
+  double update_ms = 0.0;    ///< wall time of MapPointsOfFrame + InsertFrame [ms]; 0 without map
   std::size_t points = 0;    ///< points given to InsertFrame; 0 without map
   std::size_t nodes = 0;     ///< octree nodes after the update (TraversabilityMap::NumNodes); 0 without map
   double rss_mib = 0.0;      ///< resident memory of the process after the frame [MiB]
@@ -84,7 +84,7 @@ struct PipelineBenchOptions {
 
 /// Runs the FramePipeline over the frames of `sequence` (images are read before the clock
 /// starts), recording per frame each stage's wall time (StageTimings), the whole Process call's
-/// wall and CPU time and, with `with_map`, the map update (ClassifiedPointsInWorld at
+/// wall and CPU time and, with `with_map`, the map update (MapPointsOfFrame at
 /// config.map.pixel_stride + InsertFrame into a new map at config.map.fusion) and the map's size.
 /// Rows: rectify, match, triangulate, normals, segment, analyze, frame (Process), and with the
 /// map: map update, end to end (frame + map update: the latency of the sequential loop); with

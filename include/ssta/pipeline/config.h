@@ -43,6 +43,10 @@ MapOptions PipelineMapDefaults();
 struct MappingOptions {
   MapOptions fusion = PipelineMapDefaults();  ///< voxel size, range and the log-odds sensor model
   int pixel_stride = 1;         ///< insert every n-th pixel in u and v (the map thins per voxel)
+  /// Pixels whose left-image grey-level standard deviation over the stereo block is below this
+  /// are not inserted (sky and blank areas: matching noise); 0: off. Unlike stereo.min_texture
+  /// it leaves the per-frame classification as it is. In [0, 128).
+  double min_texture = 2.0;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   bool IsValid(std::string* error) const;
 };

@@ -60,9 +60,23 @@ using BuildProgress = std::function<void(int done, int total)>;
 
 /// The classified points of one frame in the world frame, every `stride`-th pixel of the
 /// common area with a 3D point: class (0 without depth is never emitted), the slope and step of
-/// its segment. `world_T_rectified` maps the rectified cam0 frame into the world.
+/// its segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
+/// (the common area's size), pixels where it is 0 are left out.
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
-                                                     const Eigen::Isometry3d& world_T_rectified, int stride);
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
+                                                     const ImageU8* keep = nullptr);
+
+/// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
+/// left image) has texture: the grey-level standard deviation of the full image over the
+/// `block` x `block` window around the pixel (clipped at the image border) is at least
+/// `min_std`; 0 elsewhere. Sky and other blank areas, where matching finds noise.
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
+
+/// The points build-map inserts for a frame: ClassifiedPointsInWorld at map.pixel_stride, without
+/// the untextured pixels (map.min_texture over stereo.block_size windows). The per-frame
+/// classification is not changed by this: it only keeps noise matches out of the map.
+std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                                              const Config& config, const RectifiedGeometry& geometry);
 
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
