@@ -216,6 +216,11 @@ bool NormalOptions::IsValid(std::string* error) const {
     return Fail(error, "smoothing_size_px: must be in [" + std::to_string(kMinSmoothingSizePx) +
                            ", " + std::to_string(kMaxSmoothingSizePx) + "] pixels");
   }
+  if (subsample != 1 && subsample != 2) return Fail(error, "subsample: must be 1 or 2");
+  if (subsample == 2 && smoothing_size_px / 2 < kMinSmoothingSizePx) {
+    return Fail(error, "smoothing_size_px: must be at least " +
+                           std::to_string(2 * kMinSmoothingSizePx) + " with subsample 2");
+  }
   if (!(max_depth_change_factor > 0.0 && max_depth_change_factor <= 100.0)) {
     return Fail(error, "max_depth_change_factor: must be in (0, 100] 1/m (inverse-depth jump)");
   }
@@ -242,6 +247,9 @@ struct NormalEstimator::Buffers {
   // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
   double fx_px = 0.0;
   double fy_px = 0.0;
+  // subsample 2: the (even row, even column) points and the estimator that runs on them.
+  Image3f half_cloud;
+  std::unique_ptr<NormalEstimator> half;
 };
 
 NormalEstimator::NormalEstimator(const NormalOptions& options)
@@ -267,6 +275,10 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
     b.edge = ImageU8(width, height, 0);
   }
   if (cloud.empty()) return b.normals;
+  if (options_.subsample == 2) {
+    ComputeSubsampled(cloud);
+    return b.normals;
+  }
 
   PrepareFrame(cloud);
   ComputeWindowRadii(cloud);
@@ -286,6 +298,50 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
       break;
   }
   return b.normals;
+}
+
+// The estimator runs on the (even row, even column) points with half the smoothing size, so
+// its windows cover the same metric area; each pixel with a valid point then takes its 2 x 2
+// block's normal, turned towards its own point (NaN when the block's even pixel has none).
+void NormalEstimator::ComputeSubsampled(const Image3f& cloud) {
+  Buffers& b = *buffers_;
+  const int width = cloud.width();
+  const int height = cloud.height();
+  const int half_width = (width + 1) / 2, half_height = (height + 1) / 2;
+  if (!b.half) {
+    NormalOptions half_options = options_;
+    half_options.subsample = 1;
+    half_options.smoothing_size_px = options_.smoothing_size_px / 2;
+    b.half = std::make_unique<NormalEstimator>(half_options);
+  }
+  if (b.half_cloud.width() != half_width || b.half_cloud.height() != half_height) {
+    b.half_cloud = Image3f(half_width, half_height, NanVector3f());
+  }
+  for (int v = 0; v < half_height; ++v) {
+    const Eigen::Vector3f* src = cloud.row(2 * v);
+    Eigen::Vector3f* dst = b.half_cloud.row(v);
+    for (int u = 0; u < half_width; ++u) dst[u] = src[2 * u];
+  }
+  const Image3f& half_normals = b.half->Compute(b.half_cloud);
+  const ImageU8& half_radius = b.half->window_radius_px();
+  for (int v = 0; v < height; ++v) {
+    const Eigen::Vector3f* points = cloud.row(v);
+    const Eigen::Vector3f* block_normals = half_normals.row(v / 2);
+    const std::uint8_t* block_radius = half_radius.row(v / 2);
+    Eigen::Vector3f* normals = b.normals.row(v);
+    std::uint8_t* radius = b.radius.row(v);
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector3f& p = points[u];
+      const Eigen::Vector3f& n = block_normals[u / 2];
+      if (!IsValidPoint(p) || !std::isfinite(n.x())) {
+        normals[u] = NanVector3f();
+        radius[u] = 0;
+        continue;
+      }
+      normals[u] = n.dot(p) > 0.0f ? Eigen::Vector3f(-n) : n;
+      radius[u] = static_cast<std::uint8_t>(std::min(255, 2 * block_radius[u / 2]));
+    }
+  }
 }
 
 // One raster pass: inverse depth per pixel, depth-edge pixels (horizontal and vertical
