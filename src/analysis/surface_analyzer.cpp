@@ -356,35 +356,65 @@ void RunSum(const Eigen::Vector4f* in, const std::int32_t* ids, int n, int r, Ei
   }
 }
 
-/// dst (h x w, row-major) = transpose of src (w x h, row-major), in tiles that stay in cache.
-template <typename T>
-void TransposeTiled(const T* src, int w, int h, T* dst) {
-  constexpr int kTile = 16;
-  for (int v0 = 0; v0 < h; v0 += kTile) {
-    for (int u0 = 0; u0 < w; u0 += kTile) {
-      const int v1 = std::min(h, v0 + kTile), u1 = std::min(w, u0 + kTile);
-      for (int v = v0; v < v1; ++v) {
-        for (int u = u0; u < u1; ++u) dst[static_cast<std::size_t>(u) * h + v] = src[static_cast<std::size_t>(v) * w + u];
+/// RunSum down every column of the row-major w x h image `in` at once, into `out`: per column
+/// the same additions and subtractions in the same order as RunSum over that column (so the
+/// same sums to the bit), but streaming rows instead of transposing the image twice.
+/// `run_end` (w x h) receives, per pixel, the row where its column's run of equal ids ends.
+void ColumnRunSums(const Eigen::Vector4f* in, const std::int32_t* ids, int w, int h, int r,
+                   std::vector<std::int32_t>* run_end, std::vector<Eigen::Vector4f>* acc,
+                   std::vector<std::int32_t>* cursors, Eigen::Vector4f* out) {
+  const std::size_t stride = static_cast<std::size_t>(w);
+  run_end->resize(stride * h);
+  std::int32_t* end = run_end->data();
+  for (int v = h - 1; v >= 0; --v) {
+    std::int32_t* e = end + stride * v;
+    const std::int32_t* id = ids + stride * v;
+    if (v == h - 1) {
+      std::fill(e, e + w, h);
+      continue;
+    }
+    const std::int32_t* id_below = id + stride;
+    const std::int32_t* e_below = e + stride;
+    for (int u = 0; u < w; ++u) e[u] = id[u] == id_below[u] ? e_below[u] : v + 1;
+  }
+  acc->resize(stride);
+  cursors->resize(3 * stride);
+  Eigen::Vector4f* sum = acc->data();
+  std::int32_t* start = cursors->data();  // per column: first row of the current run
+  std::int32_t* lo = start + stride;      // sum holds rows [lo, hi) of the column
+  std::int32_t* hi = lo + stride;
+  for (int v = 0; v < h; ++v) {
+    const std::int32_t* id = ids + stride * v;
+    const std::int32_t* e = end + stride * v;
+    Eigen::Vector4f* o = out + stride * v;
+    for (int u = 0; u < w; ++u) {
+      if (v == 0 || id[u] != id[u - stride]) {
+        sum[u].setZero();
+        start[u] = lo[u] = hi[u] = v;
       }
+      const int want_hi = std::min(e[u], v + r + 1), want_lo = std::max(start[u], v - r);
+      while (hi[u] < want_hi) sum[u] += in[stride * hi[u]++ + u];
+      while (lo[u] < want_lo) sum[u] -= in[stride * lo[u]++ + u];
+      o[u] = sum[u];
     }
   }
 }
 
 /// Sums of the finite unit normals (x, y, z and their count) in a window x window box around
 /// each pixel, counting only pixels of the same segment along each row and then each column
-/// (separable, so O(1) per pixel; the column pass runs on transposed buffers), row-major in
-/// `*sums`. Staying inside a segment keeps a ramp's edge from blurring into the ground next to
-/// it. The buffers are kept per thread: fresh multi-megabyte buffers every frame cost more in
-/// page faults than the sums themselves.
+/// (separable, so O(1) per pixel), row-major in `*sums`. Staying inside a segment keeps a
+/// ramp's edge from blurring into the ground next to it. The buffers are kept per thread:
+/// fresh multi-megabyte buffers every frame cost more in page faults than the sums themselves.
 void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, std::vector<Eigen::Vector4f>* sums) {
   const int w = normals.width(), h = normals.height(), r = window / 2;
   const std::size_t size = normals.size();
   thread_local std::vector<Eigen::Vector4f> scratch;
-  thread_local std::vector<std::int32_t> ids_t;
+  thread_local std::vector<std::int32_t> run_end;
+  thread_local std::vector<Eigen::Vector4f> column_acc;
+  thread_local std::vector<std::int32_t> column_cursors;
   std::vector<Eigen::Vector4f>& a = *sums;
   a.resize(size);
   scratch.resize(size);
-  ids_t.resize(size);
   for (std::size_t i = 0; i < size; ++i) {
     const Eigen::Vector3f& n = normals[i];
     const bool ok = ids[i] >= 0 && std::isfinite(n.x()) && std::isfinite(n.y()) && std::isfinite(n.z());
@@ -395,14 +425,7 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, std
     const std::size_t o = static_cast<std::size_t>(v) * w;
     RunSum(&a[o], id + o, w, r, &scratch[o]);
   }
-  // Transpose the row sums and the ids, sum along the former columns, transpose back.
-  TransposeTiled(scratch.data(), w, h, a.data());
-  TransposeTiled(id, w, h, ids_t.data());
-  for (int u = 0; u < w; ++u) {
-    const std::size_t o = static_cast<std::size_t>(u) * h;
-    RunSum(&a[o], &ids_t[o], h, r, &scratch[o]);
-  }
-  TransposeTiled(scratch.data(), h, w, a.data());
+  ColumnRunSums(scratch.data(), id, w, h, r, &run_end, &column_acc, &column_cursors, a.data());
 }
 
 }  // namespace

@@ -463,14 +463,20 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
     return bottom[u + r + 1] - bottom[u - r] - top[u + r + 1] + top[u - r];
   };
 
+  // The chessboard distance D to the nearest edge pixel changes by at most 1 between
+  // neighbours, and a pixel whose radius the edges cut has D = r + 1 at most: so the next pixel's
+  // radius is at most r + 1, and the shrinking starts there instead of at the smoothing radius
+  // (same result, since every window larger than the first edge-free one holds an edge).
   const int base_radius = options_.smoothing_size_px / 2;
   for (int v = 0; v < height; ++v) {
     const float* rho = b.inverse_depth.row(v);
     std::uint8_t* r_out = b.radius.row(v);
     const int border_v = std::min(v, height - 1 - v);
+    int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
     for (int u = 0; u < width; ++u) {
       if (!(rho[u] > 0.0f)) {
         r_out[u] = 0;
+        edge_bound = std::numeric_limits<int>::max();
         continue;
       }
       int r = base_radius;
@@ -479,8 +485,10 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
                                         kMinDepthScale, kMaxDepthScale);
         r = static_cast<int>(options_.smoothing_size_px * scale) / 2;
       }
-      r = std::min({r, border_v, u, width - 1 - u});
+      const int uncut = std::min({r, border_v, u, width - 1 - u});
+      r = std::min(uncut, edge_bound);
       while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
+      edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
       r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
     }
   }
