@@ -236,6 +236,7 @@ struct NormalEstimator::Buffers {
   std::vector<std::int32_t> last_valid_row;  // per column, for the vertical edge scan
   std::vector<float> last_inverse_depth;     // per column, 1/Z at last_valid_row [1/m]
   std::vector<float> edge_threshold;         // inverse-depth jump per gap length [1/m]
+  std::vector<float> radius_threshold;       // depth-dependent radius: see ComputeWindowRadii
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
   internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
   std::vector<float> row_soa;             // covariance: per-row structure of arrays
@@ -468,11 +469,37 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
   // radius is at most r + 1, and the shrinking starts there instead of at the smoothing radius
   // (same result, since every window larger than the first edge-free one holds an edge).
   const int base_radius = options_.smoothing_size_px / 2;
+  // Depth-dependent radius of inverse depth rho: non-increasing in rho (each rounded step is
+  // monotonic), so rather than a square root and a division per pixel, the smallest rho at
+  // which it is <= k is found once per k (bisection over the float bit patterns), and each
+  // pixel walks from its left neighbour's radius - the same integers.
+  auto depth_radius = [&](float rho) {
+    const double scale =
+        std::clamp(std::sqrt(1.0 / (rho * kReferenceDepthM)), kMinDepthScale, kMaxDepthScale);
+    return static_cast<int>(options_.smoothing_size_px * scale) / 2;
+  };
+  const int far_radius = depth_radius(std::numeric_limits<float>::min());
+  const int near_radius = depth_radius(std::numeric_limits<float>::max());
+  std::vector<float>& at_most = b.radius_threshold;  // [k]: smallest rho with radius <= k
+  if (options_.depth_dependent_smoothing) {
+    at_most.assign(static_cast<std::size_t>(far_radius) + 1, 0.0f);
+    for (int k = near_radius; k < far_radius; ++k) {
+      std::uint32_t lo = 0x00800000u, hi = 0x7f7fffffu;  // smallest normal .. largest float
+      while (lo < hi) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        float rho;
+        std::memcpy(&rho, &mid, sizeof rho);
+        if (depth_radius(rho) <= k) hi = mid; else lo = mid + 1;
+      }
+      std::memcpy(&at_most[k], &lo, sizeof lo);
+    }
+  }
   for (int v = 0; v < height; ++v) {
     const float* rho = b.inverse_depth.row(v);
     std::uint8_t* r_out = b.radius.row(v);
     const int border_v = std::min(v, height - 1 - v);
     int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
+    int depth_r = far_radius;
     for (int u = 0; u < width; ++u) {
       if (!(rho[u] > 0.0f)) {
         r_out[u] = 0;
@@ -481,9 +508,10 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
       }
       int r = base_radius;
       if (options_.depth_dependent_smoothing) {
-        const double scale = std::clamp(std::sqrt(1.0 / (rho[u] * kReferenceDepthM)),
-                                        kMinDepthScale, kMaxDepthScale);
-        r = static_cast<int>(options_.smoothing_size_px * scale) / 2;
+        const float p = std::max(rho[u], std::numeric_limits<float>::min());
+        while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
+        while (p < at_most[depth_r]) ++depth_r;
+        r = depth_r;
       }
       const int uncut = std::min({r, border_v, u, width - 1 - u});
       r = std::min(uncut, edge_bound);

@@ -356,6 +356,38 @@ TEST(NormalEstimator, SubsampledNormalsEqualFullOnesOnPlanes) {
   }
 }
 
+// Without depth edges the depth-dependent radius is min(side(Z) / 2, distance to the border)
+// with side(Z) = floor(smoothing_size_px * clamp(sqrt(Z / 5 m), 0.5, 2)): every pixel of a
+// tilted plane (depths of several metres, so radii from 5 to 13 px) gets exactly that.
+TEST(NormalEstimator, DepthDependentRadiusFollowsTheFormulaExactly) {
+  const PinholeCamera camera;
+  const Image3f cloud = TiltedPlaneScene().Render(camera);
+  NormalOptions options;
+  options.smoothing_size_px = 17;
+  options.depth_dependent_smoothing = true;
+  NormalEstimator estimator(options);
+  estimator.Compute(cloud);
+  const ImageU8& radius = estimator.window_radius_px();
+  int checked = 0, min_r = 255, max_r = 0;
+  for (int v = 0; v < cloud.height(); ++v) {
+    for (int u = 0; u < cloud.width(); ++u) {
+      if (!IsFinite(cloud(v, u))) continue;
+      const float rho = 1.0f / cloud(v, u).z();
+      const double scale = std::clamp(std::sqrt(1.0 / (rho * 5.0)), 0.5, 2.0);
+      const int r = std::min({static_cast<int>(17 * scale) / 2, v, u, cloud.height() - 1 - v,
+                              cloud.width() - 1 - u});
+      ASSERT_EQ(radius(v, u), r >= 1 ? r : 0) << "v " << v << " u " << u;
+      ++checked;
+      if (r == static_cast<int>(17 * scale) / 2) {
+        min_r = std::min(min_r, r);
+        max_r = std::max(max_r, r);
+      }
+    }
+  }
+  EXPECT_GT(checked, 300000);
+  EXPECT_LT(min_r, max_r);  // the depths span several radii
+}
+
 TEST(NormalOptions, ValidationNamesTheKey) {
   std::string error;
   EXPECT_TRUE(NormalOptions{}.IsValid(&error));
