@@ -373,6 +373,8 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnR
   const int slots = std::min(h, 2 * r + 2);
   thread_local std::vector<Eigen::Vector4f> row_in, ring, column_sum, out;
   thread_local std::vector<std::int32_t> cursors;
+  thread_local std::vector<Eigen::Vector4f*> row_slot;  // row j's slot in the ring
+  thread_local std::vector<const std::int32_t*> id_row;  // row j of the ids
   row_in.resize(stride);
   ring.resize(stride * slots);
   column_sum.resize(stride);
@@ -382,7 +384,13 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnR
   std::int32_t* lo = start + stride;     // column_sum holds rows [lo, hi) of the column
   std::int32_t* hi = lo + stride;
   Eigen::Vector4f* sum = column_sum.data();
-  auto row_sums = [&](int j) { return ring.data() + stride * static_cast<std::size_t>(j % slots); };
+  row_slot.resize(static_cast<std::size_t>(h));
+  id_row.resize(static_cast<std::size_t>(h));
+  for (int j = 0; j < h; ++j) {
+    row_slot[j] = ring.data() + stride * static_cast<std::size_t>(j % slots);
+    id_row[j] = ids.row(j);
+  }
+  auto row_sums = [&](int j) { return row_slot[j]; };
   int next_row = 0;  // the next row whose row sums are not made yet
   for (int v = 0; v < h; ++v) {
     for (const int need = std::min(h - 1, v + r); next_row <= need; ++next_row) {
@@ -402,7 +410,7 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnR
       }
       // The run goes on while the ids below equal this one (its end, for RunSum).
       const int want_lo = std::max(start[u], v - r), limit = std::min(h, v + r + 1);
-      while (hi[u] < limit && ids(hi[u], u) == id[u]) sum[u] += row_sums(hi[u]++)[u];
+      while (hi[u] < limit && id_row[hi[u]][u] == id[u]) sum[u] += row_sums(hi[u]++)[u];
       while (lo[u] < want_lo) sum[u] -= row_sums(lo[u]++)[u];
       out[u] = sum[u];
     }
