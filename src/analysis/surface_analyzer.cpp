@@ -356,53 +356,66 @@ void RunSum(const Eigen::Vector4f* in, const std::int32_t* ids, int n, int r, Ei
   }
 }
 
-/// dst (h x w, row-major) = transpose of src (w x h, row-major), in tiles that stay in cache.
-template <typename T>
-void TransposeTiled(const T* src, int w, int h, T* dst) {
-  constexpr int kTile = 16;
-  for (int v0 = 0; v0 < h; v0 += kTile) {
-    for (int u0 = 0; u0 < w; u0 += kTile) {
-      const int v1 = std::min(h, v0 + kTile), u1 = std::min(w, u0 + kTile);
-      for (int v = v0; v < v1; ++v) {
-        for (int u = u0; u < u1; ++u) dst[static_cast<std::size_t>(u) * h + v] = src[static_cast<std::size_t>(v) * w + u];
-      }
-    }
-  }
-}
-
 /// Sums of the finite unit normals (x, y, z and their count) in a window x window box around
 /// each pixel, counting only pixels of the same segment along each row and then each column
-/// (separable, so O(1) per pixel; the column pass runs on transposed buffers), row-major in
-/// `*sums`. Staying inside a segment keeps a ramp's edge from blurring into the ground next to
-/// it. The buffers are kept per thread: fresh multi-megabyte buffers every frame cost more in
-/// page faults than the sums themselves.
-void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, std::vector<Eigen::Vector4f>* sums) {
+/// (separable, so O(1) per pixel). Staying inside a segment keeps a ramp's edge from blurring
+/// into the ground next to it. Calls on_row(v, sums) with the sums of each row v in turn.
+///
+/// The row sums (RunSum) are made just in time into a ring of the 2r + 2 rows the column pass
+/// needs, and the column pass runs down all columns at once, streaming rows: per column the
+/// same additions and subtractions in the same order as RunSum over that column, so the same
+/// sums to the bit as summing whole transposed images, with cache-resident buffers instead of
+/// several frame-sized ones. The buffers are kept per thread (no allocation per frame).
+template <typename OnRow>
+void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnRow&& on_row) {
   const int w = normals.width(), h = normals.height(), r = window / 2;
-  const std::size_t size = normals.size();
-  thread_local std::vector<Eigen::Vector4f> scratch;
-  thread_local std::vector<std::int32_t> ids_t;
-  std::vector<Eigen::Vector4f>& a = *sums;
-  a.resize(size);
-  scratch.resize(size);
-  ids_t.resize(size);
-  for (std::size_t i = 0; i < size; ++i) {
-    const Eigen::Vector3f& n = normals[i];
-    const bool ok = ids[i] >= 0 && std::isfinite(n.x()) && std::isfinite(n.y()) && std::isfinite(n.z());
-    a[i] = ok ? Eigen::Vector4f(n.x(), n.y(), n.z(), 1.0f) : Eigen::Vector4f::Zero();
+  const std::size_t stride = static_cast<std::size_t>(w);
+  const int slots = std::min(h, 2 * r + 2);
+  thread_local std::vector<Eigen::Vector4f> row_in, ring, column_sum, out;
+  thread_local std::vector<std::int32_t> cursors;
+  thread_local std::vector<Eigen::Vector4f*> row_slot;  // row j's slot in the ring
+  thread_local std::vector<const std::int32_t*> id_row;  // row j of the ids
+  row_in.resize(stride);
+  ring.resize(stride * slots);
+  column_sum.resize(stride);
+  out.resize(stride);
+  cursors.resize(3 * stride);
+  std::int32_t* start = cursors.data();  // per column: first row of the current run
+  std::int32_t* lo = start + stride;     // column_sum holds rows [lo, hi) of the column
+  std::int32_t* hi = lo + stride;
+  Eigen::Vector4f* sum = column_sum.data();
+  row_slot.resize(static_cast<std::size_t>(h));
+  id_row.resize(static_cast<std::size_t>(h));
+  for (int j = 0; j < h; ++j) {
+    row_slot[j] = ring.data() + stride * static_cast<std::size_t>(j % slots);
+    id_row[j] = ids.row(j);
   }
-  const std::int32_t* id = &ids[0];
+  auto row_sums = [&](int j) { return row_slot[j]; };
+  int next_row = 0;  // the next row whose row sums are not made yet
   for (int v = 0; v < h; ++v) {
-    const std::size_t o = static_cast<std::size_t>(v) * w;
-    RunSum(&a[o], id + o, w, r, &scratch[o]);
+    for (const int need = std::min(h - 1, v + r); next_row <= need; ++next_row) {
+      const Eigen::Vector3f* n = normals.row(next_row);
+      const std::int32_t* id = ids.row(next_row);
+      for (int u = 0; u < w; ++u) {
+        const bool ok = id[u] >= 0 && std::isfinite(n[u].x()) && std::isfinite(n[u].y()) && std::isfinite(n[u].z());
+        row_in[u] = ok ? Eigen::Vector4f(n[u].x(), n[u].y(), n[u].z(), 1.0f) : Eigen::Vector4f::Zero();
+      }
+      RunSum(row_in.data(), id, w, r, row_sums(next_row));
+    }
+    const std::int32_t* id = ids.row(v);
+    for (int u = 0; u < w; ++u) {
+      if (v == 0 || id[u] != id[u - stride]) {  // a run starts
+        sum[u].setZero();
+        start[u] = lo[u] = hi[u] = v;
+      }
+      // The run goes on while the ids below equal this one (its end, for RunSum).
+      const int want_lo = std::max(start[u], v - r), limit = std::min(h, v + r + 1);
+      while (hi[u] < limit && id_row[hi[u]][u] == id[u]) sum[u] += row_sums(hi[u]++)[u];
+      while (lo[u] < want_lo) sum[u] -= row_sums(lo[u]++)[u];
+      out[u] = sum[u];
+    }
+    on_row(v, out.data());
   }
-  // Transpose the row sums and the ids, sum along the former columns, transpose back.
-  TransposeTiled(scratch.data(), w, h, a.data());
-  TransposeTiled(id, w, h, ids_t.data());
-  for (int u = 0; u < w; ++u) {
-    const std::size_t o = static_cast<std::size_t>(u) * h;
-    RunSum(&a[o], &ids_t[o], h, r, &scratch[o]);
-  }
-  TransposeTiled(scratch.data(), h, w, a.data());
 }
 
 }  // namespace
@@ -412,33 +425,39 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
   SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
              "normals and labels differ in size");
   SSTA_CHECK(window_px >= 1 && window_px % 2 == 1, "RefineByPixelSlope: window_px must be odd and positive");
-  thread_local std::vector<Eigen::Vector4f> sums;
-  if (window_px > 1) {
-    SSTA_CHECK(segment_ids != nullptr && segment_ids->width() == normals.width() &&
-                   segment_ids->height() == normals.height(),
-               "RefineByPixelSlope: averaging needs segment ids of the normals' size");
-    SegmentBoxSums(normals, *segment_ids, window_px, &sums);
-  }
   const Eigen::Vector3f up = up_camera.cast<float>();
   const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
   const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
-  for (std::size_t i = 0; i < labels->size(); ++i) {
-    std::uint8_t& label = (*labels)[i];
-    if (label != 1 && label != 2) continue;
-    float c = std::numeric_limits<float>::quiet_NaN();  // NaN compares false: left as is
-    if (window_px > 1) {
-      const Eigen::Vector3f sum = sums[i].head<3>();
-      const float norm = sum.norm();
-      if (sums[i][3] >= 0.5f && norm > 1e-6f) c = std::abs(sum.dot(up)) / norm;
-    } else {
-      c = std::abs(normals[i].dot(up));
-    }
+  // c: |cos| of the slope at the pixel; NaN compares false: the label is left as is.
+  auto refine = [&](std::uint8_t& label, float c) {
     if (c < cos_max) {
       label = static_cast<std::uint8_t>(TravClass::kNonTraversable);
     } else if (c < cos_semi) {
       label = std::max<std::uint8_t>(label, static_cast<std::uint8_t>(TravClass::kSemiTraversable));
     }
+  };
+  if (window_px == 1) {
+    for (std::size_t i = 0; i < labels->size(); ++i) {
+      std::uint8_t& label = (*labels)[i];
+      if (label == 1 || label == 2) refine(label, std::abs(normals[i].dot(up)));
+    }
+    return;
   }
+  SSTA_CHECK(segment_ids != nullptr && segment_ids->width() == normals.width() &&
+                 segment_ids->height() == normals.height(),
+             "RefineByPixelSlope: averaging needs segment ids of the normals' size");
+  SegmentBoxSums(normals, *segment_ids, window_px, [&](int v, const Eigen::Vector4f* sums) {
+    std::uint8_t* row = labels->row(v);
+    for (int u = 0; u < labels->width(); ++u) {
+      std::uint8_t& label = row[u];
+      if (label != 1 && label != 2) continue;
+      float c = std::numeric_limits<float>::quiet_NaN();
+      const Eigen::Vector3f sum = sums[u].head<3>();
+      const float norm = sum.norm();
+      if (sums[u][3] >= 0.5f && norm > 1e-6f) c = std::abs(sum.dot(up)) / norm;
+      refine(label, c);
+    }
+  });
 }
 
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,

@@ -216,6 +216,11 @@ bool NormalOptions::IsValid(std::string* error) const {
     return Fail(error, "smoothing_size_px: must be in [" + std::to_string(kMinSmoothingSizePx) +
                            ", " + std::to_string(kMaxSmoothingSizePx) + "] pixels");
   }
+  if (subsample != 1 && subsample != 2) return Fail(error, "subsample: must be 1 or 2");
+  if (subsample == 2 && smoothing_size_px / 2 < kMinSmoothingSizePx) {
+    return Fail(error, "smoothing_size_px: must be at least " +
+                           std::to_string(2 * kMinSmoothingSizePx) + " with subsample 2");
+  }
   if (!(max_depth_change_factor > 0.0 && max_depth_change_factor <= 100.0)) {
     return Fail(error, "max_depth_change_factor: must be in (0, 100] 1/m (inverse-depth jump)");
   }
@@ -231,6 +236,7 @@ struct NormalEstimator::Buffers {
   std::vector<std::int32_t> last_valid_row;  // per column, for the vertical edge scan
   std::vector<float> last_inverse_depth;     // per column, 1/Z at last_valid_row [1/m]
   std::vector<float> edge_threshold;         // inverse-depth jump per gap length [1/m]
+  std::vector<float> radius_threshold;       // depth-dependent radius: see ComputeWindowRadii
   internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
   internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
   std::vector<float> row_soa;             // covariance: per-row structure of arrays
@@ -242,6 +248,9 @@ struct NormalEstimator::Buffers {
   // Pinhole scale recovered from the cloud (X/Z = (u - cu) / fx): 0 when it cannot be.
   double fx_px = 0.0;
   double fy_px = 0.0;
+  // subsample 2: the (even row, even column) points and the estimator that runs on them.
+  Image3f half_cloud;
+  std::unique_ptr<NormalEstimator> half;
 };
 
 NormalEstimator::NormalEstimator(const NormalOptions& options)
@@ -267,6 +276,10 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
     b.edge = ImageU8(width, height, 0);
   }
   if (cloud.empty()) return b.normals;
+  if (options_.subsample == 2) {
+    ComputeSubsampled(cloud);
+    return b.normals;
+  }
 
   PrepareFrame(cloud);
   ComputeWindowRadii(cloud);
@@ -286,6 +299,50 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
       break;
   }
   return b.normals;
+}
+
+// The estimator runs on the (even row, even column) points with half the smoothing size, so
+// its windows cover the same metric area; each pixel with a valid point then takes its 2 x 2
+// block's normal, turned towards its own point (NaN when the block's even pixel has none).
+void NormalEstimator::ComputeSubsampled(const Image3f& cloud) {
+  Buffers& b = *buffers_;
+  const int width = cloud.width();
+  const int height = cloud.height();
+  const int half_width = (width + 1) / 2, half_height = (height + 1) / 2;
+  if (!b.half) {
+    NormalOptions half_options = options_;
+    half_options.subsample = 1;
+    half_options.smoothing_size_px = options_.smoothing_size_px / 2;
+    b.half = std::make_unique<NormalEstimator>(half_options);
+  }
+  if (b.half_cloud.width() != half_width || b.half_cloud.height() != half_height) {
+    b.half_cloud = Image3f(half_width, half_height, NanVector3f());
+  }
+  for (int v = 0; v < half_height; ++v) {
+    const Eigen::Vector3f* src = cloud.row(2 * v);
+    Eigen::Vector3f* dst = b.half_cloud.row(v);
+    for (int u = 0; u < half_width; ++u) dst[u] = src[2 * u];
+  }
+  const Image3f& half_normals = b.half->Compute(b.half_cloud);
+  const ImageU8& half_radius = b.half->window_radius_px();
+  for (int v = 0; v < height; ++v) {
+    const Eigen::Vector3f* points = cloud.row(v);
+    const Eigen::Vector3f* block_normals = half_normals.row(v / 2);
+    const std::uint8_t* block_radius = half_radius.row(v / 2);
+    Eigen::Vector3f* normals = b.normals.row(v);
+    std::uint8_t* radius = b.radius.row(v);
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector3f& p = points[u];
+      const Eigen::Vector3f& n = block_normals[u / 2];
+      if (!IsValidPoint(p) || !std::isfinite(n.x())) {
+        normals[u] = NanVector3f();
+        radius[u] = 0;
+        continue;
+      }
+      normals[u] = n.dot(p) > 0.0f ? Eigen::Vector3f(-n) : n;
+      radius[u] = static_cast<std::uint8_t>(std::min(255, 2 * block_radius[u / 2]));
+    }
+  }
 }
 
 // One raster pass: inverse depth per pixel, depth-edge pixels (horizontal and vertical
@@ -407,24 +464,59 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
     return bottom[u + r + 1] - bottom[u - r] - top[u + r + 1] + top[u - r];
   };
 
+  // The chessboard distance D to the nearest edge pixel changes by at most 1 between
+  // neighbours, and a pixel whose radius the edges cut has D = r + 1 at most: so the next pixel's
+  // radius is at most r + 1, and the shrinking starts there instead of at the smoothing radius
+  // (same result, since every window larger than the first edge-free one holds an edge).
   const int base_radius = options_.smoothing_size_px / 2;
+  // Depth-dependent radius of inverse depth rho: non-increasing in rho (each rounded step is
+  // monotonic), so rather than a square root and a division per pixel, the smallest rho at
+  // which it is <= k is found once per k (bisection over the float bit patterns), and each
+  // pixel walks from its left neighbour's radius - the same integers.
+  auto depth_radius = [&](float rho) {
+    const double scale =
+        std::clamp(std::sqrt(1.0 / (rho * kReferenceDepthM)), kMinDepthScale, kMaxDepthScale);
+    return static_cast<int>(options_.smoothing_size_px * scale) / 2;
+  };
+  const int far_radius = depth_radius(std::numeric_limits<float>::min());
+  const int near_radius = depth_radius(std::numeric_limits<float>::max());
+  std::vector<float>& at_most = b.radius_threshold;  // [k]: smallest rho with radius <= k
+  if (options_.depth_dependent_smoothing) {
+    at_most.assign(static_cast<std::size_t>(far_radius) + 1, 0.0f);
+    for (int k = near_radius; k < far_radius; ++k) {
+      std::uint32_t lo = 0x00800000u, hi = 0x7f7fffffu;  // smallest normal .. largest float
+      while (lo < hi) {
+        const std::uint32_t mid = lo + (hi - lo) / 2;
+        float rho;
+        std::memcpy(&rho, &mid, sizeof rho);
+        if (depth_radius(rho) <= k) hi = mid; else lo = mid + 1;
+      }
+      std::memcpy(&at_most[k], &lo, sizeof lo);
+    }
+  }
   for (int v = 0; v < height; ++v) {
     const float* rho = b.inverse_depth.row(v);
     std::uint8_t* r_out = b.radius.row(v);
     const int border_v = std::min(v, height - 1 - v);
+    int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
+    int depth_r = far_radius;
     for (int u = 0; u < width; ++u) {
       if (!(rho[u] > 0.0f)) {
         r_out[u] = 0;
+        edge_bound = std::numeric_limits<int>::max();
         continue;
       }
       int r = base_radius;
       if (options_.depth_dependent_smoothing) {
-        const double scale = std::clamp(std::sqrt(1.0 / (rho[u] * kReferenceDepthM)),
-                                        kMinDepthScale, kMaxDepthScale);
-        r = static_cast<int>(options_.smoothing_size_px * scale) / 2;
+        const float p = std::max(rho[u], std::numeric_limits<float>::min());
+        while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
+        while (p < at_most[depth_r]) ++depth_r;
+        r = depth_r;
       }
-      r = std::min({r, border_v, u, width - 1 - u});
+      const int uncut = std::min({r, border_v, u, width - 1 - u});
+      r = std::min(uncut, edge_bound);
       while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
+      edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
       r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
     }
   }

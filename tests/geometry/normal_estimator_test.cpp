@@ -294,6 +294,100 @@ TEST(NormalEstimator, WindowRadiusIsReportedAndCutAtEdges) {
   EXPECT_EQ(radius(240, u - 1), 0);
 }
 
+// subsample 2: normals from the even points with half the window, shared by 2 x 2 blocks.
+// On planes (a tilted plane; ground at grazing angles up to 20 m; a box before a wall) they
+// equal the per-pixel normals within 0.05 degrees wherever both exist, lose few pixels, and
+// stay NaN where the point is invalid.
+TEST(NormalEstimator, SubsampledNormalsEqualFullOnesOnPlanes) {
+  const PinholeCamera camera;
+  struct Case {
+    const char* name;
+    Scene scene;
+    double max_range_m;
+    double min_coverage;  // of the full estimator's normals
+  };
+  const Case cases[] = {{"tilted_plane", TiltedPlaneScene(), 30.0, 0.97},
+                        {"ground", test::GroundScene(1.0), 20.0, 0.97},
+                        {"box_before_wall", BoxBeforeWallScene(), 30.0, 0.97}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Image3f truth;
+    Image3f cloud = c.scene.Render(camera, &truth, c.max_range_m);
+    // Some invalid points, away from the even grid and on it.
+    for (int u = 100; u < 110; ++u) cloud(201, u) = NanVector3f();
+    for (int u = 300; u < 310; ++u) cloud(260, u) = NanVector3f();
+    for (const bool adaptive : {false, true}) {
+      SCOPED_TRACE(adaptive ? "depth-dependent" : "fixed window");
+      NormalOptions options;
+      options.smoothing_size_px = 31;
+      options.depth_dependent_smoothing = adaptive;
+      const Image3f full = EstimateNormals(cloud, options);
+      options.subsample = 2;
+      NormalEstimator estimator(options);
+      const Image3f& half = estimator.Compute(cloud);
+      int both = 0, full_only = 0, half_only = 0;
+      double max_deg = 0.0, max_truth_deg = 0.0;
+      for (int v = 0; v < cloud.height(); ++v) {
+        for (int u = 0; u < cloud.width(); ++u) {
+          if (!IsFinite(cloud(v, u))) {
+            EXPECT_FALSE(IsFinite(half(v, u)));
+            EXPECT_EQ(estimator.window_radius_px()(v, u), 0);
+            continue;
+          }
+          const bool f = IsFinite(full(v, u)), h = IsFinite(half(v, u));
+          both += f && h;
+          full_only += f && !h;
+          half_only += h && !f;
+          if (!h) continue;
+          EXPECT_NEAR(half(v, u).norm(), 1.0f, 1e-5f);
+          EXPECT_LT(half(v, u).dot(cloud(v, u)), 0.0f);  // towards the camera
+          EXPECT_GT(estimator.window_radius_px()(v, u), 0);
+          if (f) max_deg = std::max(max_deg, AngleDeg(half(v, u), full(v, u)));
+          if (IsFinite(truth(v, u))) max_truth_deg = std::max(max_truth_deg, AngleDeg(half(v, u), truth(v, u)));
+        }
+      }
+      RecordProperty(std::string(c.name) + (adaptive ? "_adaptive" : "") + "_subsampled_max_deg",
+                     std::to_string(max_deg));
+      EXPECT_LT(max_deg, 0.05);
+      EXPECT_LT(max_truth_deg, 0.05);
+      EXPECT_GT(both, c.min_coverage * (both + full_only));
+      EXPECT_LT(half_only, 0.01 * both);
+    }
+  }
+}
+
+// Without depth edges the depth-dependent radius is min(side(Z) / 2, distance to the border)
+// with side(Z) = floor(smoothing_size_px * clamp(sqrt(Z / 5 m), 0.5, 2)): every pixel of a
+// tilted plane (depths of several metres, so radii from 5 to 13 px) gets exactly that.
+TEST(NormalEstimator, DepthDependentRadiusFollowsTheFormulaExactly) {
+  const PinholeCamera camera;
+  const Image3f cloud = TiltedPlaneScene().Render(camera);
+  NormalOptions options;
+  options.smoothing_size_px = 17;
+  options.depth_dependent_smoothing = true;
+  NormalEstimator estimator(options);
+  estimator.Compute(cloud);
+  const ImageU8& radius = estimator.window_radius_px();
+  int checked = 0, min_r = 255, max_r = 0;
+  for (int v = 0; v < cloud.height(); ++v) {
+    for (int u = 0; u < cloud.width(); ++u) {
+      if (!IsFinite(cloud(v, u))) continue;
+      const float rho = 1.0f / cloud(v, u).z();
+      const double scale = std::clamp(std::sqrt(1.0 / (rho * 5.0)), 0.5, 2.0);
+      const int r = std::min({static_cast<int>(17 * scale) / 2, v, u, cloud.height() - 1 - v,
+                              cloud.width() - 1 - u});
+      ASSERT_EQ(radius(v, u), r >= 1 ? r : 0) << "v " << v << " u " << u;
+      ++checked;
+      if (r == static_cast<int>(17 * scale) / 2) {
+        min_r = std::min(min_r, r);
+        max_r = std::max(max_r, r);
+      }
+    }
+  }
+  EXPECT_GT(checked, 300000);
+  EXPECT_LT(min_r, max_r);  // the depths span several radii
+}
+
 TEST(NormalOptions, ValidationNamesTheKey) {
   std::string error;
   EXPECT_TRUE(NormalOptions{}.IsValid(&error));
@@ -313,6 +407,16 @@ TEST(NormalOptions, ValidationNamesTheKey) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("max_depth_change_factor:", 0), 0u);
   }
+  options = NormalOptions{};
+  options.subsample = 3;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("subsample:", 0), 0u) << error;
+  options.subsample = 2;
+  options.smoothing_size_px = 5;  // half of it: below the 3 x 3 minimum
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("smoothing_size_px:", 0), 0u) << error;
+  options.smoothing_size_px = 6;
+  EXPECT_TRUE(options.IsValid(&error)) << error;
 }
 
 TEST(NormalMethod, NamesRoundTripAndUnknownNamesAreErrors) {

@@ -70,6 +70,7 @@ TEST(Config, ErrorsNameTheKey) {
   EXPECT_NE(ErrorOf("stereo:\n  num_disparities: 50\n").find("stereo.num_disparities"), std::string::npos);
   EXPECT_NE(ErrorOf("stereo:\n  algorithm: magic\n").find("stereo.algorithm"), std::string::npos);
   EXPECT_NE(ErrorOf("normals:\n  method: guess\n").find("normals.method"), std::string::npos);
+  EXPECT_NE(ErrorOf("normals:\n  subsample: 4\n").find("normals.subsample"), std::string::npos);
   EXPECT_NE(ErrorOf("segmentation:\n  roughness_deg: -1\n").find("segmentation.roughness_deg"), std::string::npos);
   EXPECT_NE(ErrorOf("analysis:\n  inliers_min_ratio: 2\n").find("analysis.inliers_min_ratio"), std::string::npos);
   EXPECT_NE(ErrorOf("gravity:\n  source: moon\n").find("gravity.source"), std::string::npos);

@@ -68,6 +68,14 @@ struct NormalOptions {
   /// error 1.6 -> 0.8 degrees beyond 10 m, but 4.3 -> 7.0 degrees closer than 2.5 m).
   bool depth_dependent_smoothing = false;
 
+  /// 1: a normal per pixel. 2: normals on every 2nd pixel in each direction only - the
+  /// estimator runs on the cloud's (even row, even column) points with half the smoothing size
+  /// (the same metric window, a quarter of the points), and each pixel with a valid point takes
+  /// the normal of its 2 x 2 block's even pixel (NaN when that one has none). About 3x faster;
+  /// planes stay exact (< 0.05 degree, tested), depth-edge gaps widen to whole blocks. Off by
+  /// default: it costs 0.02 to 0.04 of mean IoU on the rendered scenes (docs/performance.md).
+  int subsample = 1;
+
   /// On failure writes a message starting with the offending key (e.g.
   /// "smoothing_size_px: must be in [3, 201]") to *error when error is not null.
   bool IsValid(std::string* error) const;
@@ -104,7 +112,8 @@ class NormalEstimator {
   const Image3f& Compute(const Image3f& cloud_camera);
 
   /// Window half-size [px] used at each pixel by the last Compute: the window is
-  /// (2r+1) x (2r+1); 0 where no normal was computed.
+  /// (2r+1) x (2r+1); 0 where no normal was computed. With subsample 2: twice the radius of the
+  /// half-resolution window, in full-resolution pixels (the window spans 4r + 1 of them).
   const ImageU8& window_radius_px() const;
 
   const NormalOptions& options() const { return options_; }
@@ -117,6 +126,7 @@ class NormalEstimator {
   void ComputeCovariance(const Image3f& cloud);
   void ComputeAverage3dGradient(const Image3f& cloud);
   void ComputeAverageDepthChange(const Image3f& cloud);
+  void ComputeSubsampled(const Image3f& cloud);
 
   NormalOptions options_;
   std::unique_ptr<Buffers> buffers_;
