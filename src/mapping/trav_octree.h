@@ -194,4 +194,19 @@ void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
   if (!pruneNode(node)) node->updateOccupancyChildren();
 }
 
+/// Calls fn(key) for every full-resolution voxel of a leaf at `depth` whose lowest voxel is
+/// `base` (a pruned leaf covers 2^(tree_depth - depth) voxels along each axis).
+template <typename Fn>
+void ForEachVoxelOfLeaf(const octomap::OcTreeKey& base, unsigned tree_depth, unsigned depth, Fn&& fn) {
+  const unsigned n = 1u << (tree_depth - depth);
+  for (unsigned i = 0; i < n; ++i) {
+    for (unsigned j = 0; j < n; ++j) {
+      for (unsigned k = 0; k < n; ++k) {
+        fn(octomap::OcTreeKey(static_cast<octomap::key_type>(base[0] + i), static_cast<octomap::key_type>(base[1] + j),
+                              static_cast<octomap::key_type>(base[2] + k)));
+      }
+    }
+  }
+}
+
 }  // namespace ssta::internal

@@ -941,17 +941,9 @@ std::vector<CellInfo> TraversabilityMap::SurfaceCells() const {
                                 it.getZ() - half + 0.5 * res, base)) {
       continue;
     }
-    const unsigned n = 1u << (tree.getTreeDepth() - it.getDepth());
-    for (unsigned i = 0; i < n; ++i) {
-      for (unsigned j = 0; j < n; ++j) {
-        for (unsigned k = 0; k < n; ++k) {
-          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + i),
-                                       static_cast<octomap::key_type>(base[1] + j),
-                                       static_cast<octomap::key_type>(base[2] + k));
-          cells.push_back(internal::DescribeCell(*this, tree, &*it, key));
-        }
-      }
-    }
+    internal::ForEachVoxelOfLeaf(base, tree.getTreeDepth(), it.getDepth(), [&](const octomap::OcTreeKey& key) {
+      cells.push_back(internal::DescribeCell(*this, tree, &*it, key));
+    });
   }
   return cells;
 }

@@ -321,18 +321,9 @@ TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkWhenTheRayBoxIsTooLargeForABitmap)
 void LeafVoxels(const internal::TravOcTree& tree, std::unordered_set<octomap::OcTreeKey, KeyHash>* free,
                 std::unordered_set<octomap::OcTreeKey, KeyHash>* occupied) {
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    const octomap::OcTreeKey base = it.getIndexKey();
-    const unsigned n = 1u << (tree.getTreeDepth() - it.getDepth());
-    for (unsigned i = 0; i < n; ++i) {
-      for (unsigned j = 0; j < n; ++j) {
-        for (unsigned k = 0; k < n; ++k) {
-          const octomap::OcTreeKey key(static_cast<octomap::key_type>(base[0] + i),
-                                       static_cast<octomap::key_type>(base[1] + j),
-                                       static_cast<octomap::key_type>(base[2] + k));
-          (it->getLogOdds() < 0.0f ? free : occupied)->insert(key);
-        }
-      }
-    }
+    internal::ForEachVoxelOfLeaf(it.getIndexKey(), tree.getTreeDepth(), it.getDepth(), [&](const octomap::OcTreeKey& key) {
+      (it->getLogOdds() < 0.0f ? free : occupied)->insert(key);
+    });
   }
 }
 
