@@ -13,6 +13,7 @@
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
 #include "ssta/refinement/ground_evidence.h"
+#include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
 namespace {
@@ -106,49 +107,8 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
 }
 
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
-  SSTA_CHECK(block >= 1, "block must be at least 1");
-  const int w = geometry.crop_width, h = geometry.crop_height;
-  const int full_w = left_rectified.width(), full_h = left_rectified.height();
-  SSTA_CHECK(geometry.crop_u0 >= 0 && geometry.crop_v0 >= 0 && geometry.crop_u0 + w <= full_w &&
-                 geometry.crop_v0 + h <= full_h,
-             "the common area must lie inside the rectified image");
-  // Integral images of grey and grey^2 over the crop plus the window's margin (exact in 64 bits).
-  const int r = block / 2;
-  const int x0 = std::max(0, geometry.crop_u0 - r), x1 = std::min(full_w, geometry.crop_u0 + w + r);
-  const int y0 = std::max(0, geometry.crop_v0 - r), y1 = std::min(full_h, geometry.crop_v0 + h + r);
-  const int iw = x1 - x0 + 1;
-  std::vector<std::int64_t> sum(static_cast<std::size_t>(iw) * (y1 - y0 + 1), 0), sum_sq(sum.size(), 0);
-  for (int y = y0; y < y1; ++y) {
-    std::int64_t row = 0, row_sq = 0;
-    const std::size_t above = static_cast<std::size_t>(y - y0) * iw, here = above + iw;
-    for (int x = x0; x < x1; ++x) {
-      const std::int64_t g = left_rectified(y, x);
-      row += g;
-      row_sq += g * g;
-      sum[here + x - x0 + 1] = sum[above + x - x0 + 1] + row;
-      sum_sq[here + x - x0 + 1] = sum_sq[above + x - x0 + 1] + row_sq;
-    }
-  }
-  // std >= min_std  <=>  n * sum_sq - sum^2 >= n^2 * min_std^2.
-  const double min_var = min_std * min_std;
-  ImageU8 keep(w, h, 0);
-  for (int v = 0; v < h; ++v) {
-    const int fv = v + geometry.crop_v0;
-    const int a = std::max(y0, fv - r) - y0, b = std::min(y1, fv + r + 1) - y0;
-    for (int u = 0; u < w; ++u) {
-      const int fu = u + geometry.crop_u0;
-      const int c = std::max(x0, fu - r) - x0, d = std::min(x1, fu + r + 1) - x0;
-      auto box = [&](const std::vector<std::int64_t>& s) {
-        return s[static_cast<std::size_t>(b) * iw + d] - s[static_cast<std::size_t>(a) * iw + d] -
-               s[static_cast<std::size_t>(b) * iw + c] + s[static_cast<std::size_t>(a) * iw + c];
-      };
-      const std::int64_t n = static_cast<std::int64_t>(b - a) * (d - c);
-      const std::int64_t s1 = box(sum);
-      const double spread = static_cast<double>(n * box(sum_sq) - s1 * s1);
-      keep(v, u) = spread >= static_cast<double>(n) * static_cast<double>(n) * min_var ? 1 : 0;
-    }
-  }
-  return keep;
+  return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
+                     block, min_std);
 }
 
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -114,21 +115,11 @@ ImageU8 PadLeft(const ImageU8& image, int pad) {
 }
 
 /// Invalidates the disparity where the left image's standard deviation over a block x block
-/// window is below `min_std` grey levels (box filters of I and I^2: O(1) per pixel).
+/// window is below `min_std` grey levels (TextureMask).
 void DropTexturelessPixels(const ImageU8& left, int block, double min_std, ImageF* disparity) {
-  cv::Mat image;
-  WrapConst(left).convertTo(image, CV_32F);
-  cv::Mat mean, mean_sq;
-  cv::boxFilter(image, mean, CV_32F, cv::Size(block, block));
-  cv::boxFilter(image.mul(image), mean_sq, CV_32F, cv::Size(block, block));
-  const float min_var = static_cast<float>(min_std * min_std);
-  for (int v = 0; v < disparity->height(); ++v) {
-    const float* m = mean.ptr<float>(v);
-    const float* m2 = mean_sq.ptr<float>(v);
-    float* d = disparity->row(v);
-    for (int u = 0; u < disparity->width(); ++u) {
-      if (m2[u] - m[u] * m[u] < min_var) d[u] = 0.0f;
-    }
+  const ImageU8 keep = TextureMask(left, 0, 0, left.width(), left.height(), block, min_std);
+  for (std::size_t i = 0; i < keep.size(); ++i) {
+    if (keep[i] == 0) (*disparity)[i] = 0.0f;
   }
 }
 
@@ -196,6 +187,53 @@ void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, Image
 }
 
 }  // namespace
+
+ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std) {
+  SSTA_CHECK(block >= 1, "block must be at least 1");
+  const int full_w = image.width(), full_h = image.height();
+  SSTA_CHECK(u0 >= 0 && v0 >= 0 && w >= 0 && h >= 0 && u0 + w <= full_w && v0 + h <= full_h,
+             "the area must lie inside the image");
+  // Integral images of grey and grey^2 over the area plus the window's margin (exact in 64 bits).
+  const int r = block / 2;
+  const int x0 = std::max(0, u0 - r), x1 = std::min(full_w, u0 + w + r);
+  const int y0 = std::max(0, v0 - r), y1 = std::min(full_h, v0 + h + r);
+  const int iw = x1 - x0 + 1;
+  // Kept per thread between calls: build-map masks every frame.
+  thread_local std::vector<std::int64_t> sum, sum_sq;
+  sum.assign(static_cast<std::size_t>(iw) * (y1 - y0 + 1), 0);
+  sum_sq.assign(sum.size(), 0);
+  for (int y = y0; y < y1; ++y) {
+    std::int64_t row = 0, row_sq = 0;
+    const std::size_t above = static_cast<std::size_t>(y - y0) * iw, here = above + iw;
+    for (int x = x0; x < x1; ++x) {
+      const std::int64_t g = image(y, x);
+      row += g;
+      row_sq += g * g;
+      sum[here + x - x0 + 1] = sum[above + x - x0 + 1] + row;
+      sum_sq[here + x - x0 + 1] = sum_sq[above + x - x0 + 1] + row_sq;
+    }
+  }
+  // std >= min_std  <=>  n * sum_sq - sum^2 >= n^2 * min_std^2.
+  const double min_var = min_std * min_std;
+  ImageU8 keep(w, h, 0);
+  for (int v = 0; v < h; ++v) {
+    const int fv = v + v0;
+    const int a = std::max(y0, fv - r) - y0, b = std::min(y1, fv + r + 1) - y0;
+    for (int u = 0; u < w; ++u) {
+      const int fu = u + u0;
+      const int c = std::max(x0, fu - r) - x0, d = std::min(x1, fu + r + 1) - x0;
+      auto box = [&](const std::vector<std::int64_t>& s) {
+        return s[static_cast<std::size_t>(b) * iw + d] - s[static_cast<std::size_t>(a) * iw + d] -
+               s[static_cast<std::size_t>(b) * iw + c] + s[static_cast<std::size_t>(a) * iw + c];
+      };
+      const std::int64_t n = static_cast<std::int64_t>(b - a) * (d - c);
+      const std::int64_t s1 = box(sum);
+      const double spread = static_cast<double>(n * box(sum_sq) - s1 * s1);
+      keep(v, u) = spread >= static_cast<double>(n) * static_cast<double>(n) * min_var ? 1 : 0;
+    }
+  }
+  return keep;
+}
 
 SgbmMode ParseSgbmMode(const std::string& name) {
   if (name == "3way") return SgbmMode::kThreeWay;

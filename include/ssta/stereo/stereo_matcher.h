@@ -31,6 +31,12 @@ MatcherType ParseMatcherType(const std::string& name);
 /// The YAML name of `type` (inverse of ParseMatcherType).
 std::string MatcherTypeName(MatcherType type);
 
+/// 1 where `image` has texture in the area of w x h pixels at (u0, v0): the grey-level standard
+/// deviation over the `block` x `block` window around the pixel (clipped at the image border,
+/// which may lie outside the area) is at least `min_std`; 0 elsewhere. Exact (64-bit integral
+/// images). The mask of `stereo.min_texture` and of `map.min_texture`.
+ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std);
+
 /// YAML section `stereo`.
 struct StereoMatcherOptions {
   MatcherType algorithm = MatcherType::kSemiGlobal;
