@@ -94,7 +94,7 @@ void RegisterEval(CLI::App& app) {
       "grid", "Score an exported grid (ssta export --format grid) against gt/grid_classes.png");
   AddCommon(grid, grid_args.get(), "export prefix: reads PREFIX_classes.png and PREFIX.yaml");
   grid->add_option("--picture", grid_args->picture_path,
-                   "write a truth | prediction | errors PNG on the truth grid (north up)");
+                   "write a truth | prediction | errors PNG on the truth grid (north up), cropped to the scored cells");
   grid->callback([grid_args] {
     const GridEvalSummary summary = EvaluateExportedGrid(grid_args->prediction, grid_args->sequence);
     Report(summary, *grid_args);

@@ -61,22 +61,46 @@ ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted) {
 }
 
 ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted) {
-  constexpr int kMinHeight = 240;  // [px] wanted panel height
-  constexpr int kMaxWidth = 4096;  // [px] panel width not to exceed by enlarging
+  constexpr int kMinHeight = 360;  // [px] wanted panel height
+  constexpr int kMaxWidth = 1200;  // [px] panel width not to exceed by enlarging
+  constexpr int kMargin = 10;      // [cells] kept around the scored area
   internal::CheckTruthIds(truth.classes, truth.source);
   internal::CheckPredictedIds(predicted.classes, predicted.source);
   const ImageU8 resampled = ResampleToGrid(predicted, truth);
-  const int h = std::max(1, truth.classes.height());
-  const int w = std::max(1, truth.classes.width());
+  // The scored area (truth 1..3) with a margin: the truth grid of a sequence spans every place
+  // any frame could see, most of it don't-care, and the map would be a speck in it.
+  const ImageU8& t = truth.classes;
+  int u0 = t.width(), v0 = t.height(), u1 = -1, v1 = -1;
+  for (int v = 0; v < t.height(); ++v) {
+    for (int u = 0; u < t.width(); ++u) {
+      if (t(v, u) < 1 || t(v, u) > 3) continue;
+      u0 = std::min(u0, u);
+      u1 = std::max(u1, u);
+      v0 = std::min(v0, v);
+      v1 = std::max(v1, v);
+    }
+  }
+  if (u1 < 0) {  // nothing scored: the whole grid
+    u0 = v0 = 0;
+    u1 = t.width() - 1;
+    v1 = t.height() - 1;
+  } else {
+    u0 = std::max(0, u0 - kMargin);
+    v0 = std::max(0, v0 - kMargin);
+    u1 = std::min(t.width() - 1, u1 + kMargin);
+    v1 = std::min(t.height() - 1, v1 + kMargin);
+  }
+  const int w = std::max(1, u1 - u0 + 1);
+  const int h = std::max(1, v1 - v0 + 1);
   const int scale = std::max(1, std::min((kMinHeight + h - 1) / h, kMaxWidth / w));
-  auto enlarge = [scale](const ImageU8& in) {
-    ImageU8 out(in.width() * scale, in.height() * scale);
+  auto crop_and_enlarge = [&](const ImageU8& in) {
+    ImageU8 out(w * scale, h * scale);
     for (int v = 0; v < out.height(); ++v) {
-      for (int u = 0; u < out.width(); ++u) out(v, u) = in(v / scale, u / scale);
+      for (int u = 0; u < out.width(); ++u) out(v, u) = in(v0 + v / scale, u0 + u / scale);
     }
     return out;
   };
-  return MakeComparisonPicture(enlarge(truth.classes), enlarge(resampled));
+  return MakeComparisonPicture(crop_and_enlarge(t), crop_and_enlarge(resampled));
 }
 
 GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence) {

@@ -139,11 +139,33 @@ TEST(eval_ScoreGrid, ResampledPredictionAndPictureLiveOnTheTruthGrid) {
   ASSERT_EQ(resampled.width(), 4);
   ASSERT_EQ(resampled.height(), 2);
   for (std::size_t i = 0; i < expected.size(); ++i) EXPECT_EQ(resampled[i], expected[i]) << i;
-  // 2 rows enlarged to 120 px each; truth cell (0, 0) is traversable green at the panel start.
+  // 2 rows enlarged to 180 px each; truth cell (0, 0) is traversable green at the panel start.
   const ImageRgb picture = MakeGridComparisonPicture(truth, predicted);
-  EXPECT_EQ(picture.height(), 18 + 240 + 4 + 22);
-  EXPECT_EQ(picture(18 + 119, 4 + 119), (Rgb8{0, 255, 0}));
-  EXPECT_EQ(picture(18 + 120, 4 + 120), (Rgb8{255, 0, 0}));  // truth cell (1, 1): non-traversable
+  EXPECT_EQ(picture.height(), 18 + 360 + 4 + 22);
+  EXPECT_EQ(picture(18 + 179, 4 + 179), (Rgb8{0, 255, 0}));
+  EXPECT_EQ(picture(18 + 180, 4 + 180), (Rgb8{255, 0, 0}));  // truth cell (1, 1): non-traversable
+}
+
+TEST(eval_ScoreGrid, PictureIsCroppedToTheScoredCellsAndAMargin) {
+  // 200 x 100 cells of don't-care with a 4 x 3 block of truth at columns 50..53, rows 40..42;
+  // the prediction marks the block's first cell non-traversable.
+  ImageU8 t(200, 100, 255), p(200, 100, 0);
+  for (int v = 40; v <= 42; ++v) {
+    for (int u = 50; u <= 53; ++u) t(v, u) = 1;
+  }
+  p(40, 50) = 3;
+  const ClassGrid truth = MakeGrid(t, 1.0, 0.0, 0.0, "t");
+  const ClassGrid predicted = MakeGrid(p, 1.0, 0.0, 0.0, "p");
+  const ImageRgb picture = MakeGridComparisonPicture(truth, predicted);
+  // Crop: columns 40..63, rows 30..52 (24 x 23 cells); scale ceil(360 / 23) = 16 px per cell.
+  const int scale = 16, panel_w = 24 * scale;
+  EXPECT_EQ(picture.height(), 18 + 23 * scale + 4 + 22);
+  EXPECT_EQ(picture.width(), 3 * panel_w + 4 * 4);
+  const int y = 18 + 10 * scale, x_truth = 4 + 10 * scale, x_pred = x_truth + panel_w + 4;
+  EXPECT_EQ(picture(y, x_truth), (Rgb8{0, 255, 0}));         // first truth cell
+  EXPECT_EQ(picture(y - 1, x_truth), (Rgb8{255, 255, 255}));  // the margin: don't care
+  EXPECT_EQ(picture(y, x_pred), (Rgb8{255, 0, 0}));           // its prediction
+  EXPECT_EQ(picture(y, x_pred + panel_w + 4), (Rgb8{255, 0, 255}));  // errors panel: wrong
 }
 
 TEST(eval_ScoreGrid, RejectsPredictedValuesAboveFour) {

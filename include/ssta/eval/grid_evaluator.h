@@ -22,8 +22,10 @@ ConfusionMatrix ScoreGrid(const ClassGrid& truth, const ClassGrid& predicted);
 ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth);
 
 /// MakeComparisonPicture of the truth grid and the resampled prediction (north up: image row 0
-/// is the largest y), cells enlarged to whole pixel blocks so that small grids are at least
-/// 240 pixels high (unless a panel would grow wider than 4096 pixels). Throws ssta::Error on invalid class values as ScoreGrid.
+/// is the largest y), cropped to the scored cells (truth 1..3) and 10 cells around them (the
+/// whole grid when nothing is scored), cells enlarged to whole pixel blocks so that a panel is
+/// at least 360 pixels high unless it would grow wider than 1200 pixels. Throws ssta::Error on
+/// invalid class values as ScoreGrid.
 ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted);
 
 /// Result of EvaluateExportedGrid.
