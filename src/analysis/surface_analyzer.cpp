@@ -157,6 +157,12 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
     return Fail(error, "ground_consistent_share: must be in (0, 1]");
   }
+  if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
+    return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
+  }
+  if (!(face_min_slope_deg > 0 && face_min_slope_deg < 90)) {
+    return Fail(error, "face_min_slope_deg: must be in (0, 90) degrees");
+  }
   return true;
 }
 
@@ -506,6 +512,64 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const int id = segment_ids[i];
     if (id >= 0 && id < num_segments && to_ground[id] && result->labels[i] != 0) result->labels[i] = traversable;
+  }
+}
+
+void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                            const AnalysisOptions& options, ImageU8* labels) {
+  if (options.face_window_px == 0) return;
+  SSTA_CHECK(disparity.width() == labels->width() && disparity.height() == labels->height(),
+             "RefineByDisparityFaces: disparity and labels differ in size");
+  SSTA_CHECK(options.face_window_px >= 3 && options.face_window_px % 2 == 1,
+             "RefineByDisparityFaces: face_window_px must be odd and at least 3");
+  SSTA_CHECK(f > 0, "RefineByDisparityFaces: focal length must be positive");
+  constexpr float kMaxRowJumpPx = 0.5f;  // a larger step between rows is a depth edge, not a face
+  const int w = disparity.width(), h = disparity.height(), k = options.face_window_px / 2;
+  const Eigen::Vector3d up = up_camera.normalized();
+  const double sin_min = std::sin(options.face_min_slope_deg * M_PI / 180.0);
+  double sum_jj = 0.0;
+  for (int j = -k; j <= k; ++j) sum_jj += static_cast<double>(j) * j;
+  // Per column of the current row: sum of d, sum of j * d over the window, and whether the window
+  // holds an invalid pixel or a jump. Summed row by row over the window so that the inner loops
+  // run along contiguous rows.
+  thread_local std::vector<float> sum_d, sum_jd;
+  thread_local std::vector<std::uint8_t> broken;
+  sum_d.resize(w);
+  sum_jd.resize(w);
+  broken.resize(w);
+  for (int v = k; v + k < h; ++v) {
+    const std::uint8_t* label_row = labels->row(v);
+    bool any = false;
+    for (int u = 0; u < w && !any; ++u) any = label_row[u] == 1 || label_row[u] == 2 || label_row[u] == 4;
+    if (!any) continue;
+    std::fill(sum_d.begin(), sum_d.end(), 0.0f);
+    std::fill(sum_jd.begin(), sum_jd.end(), 0.0f);
+    std::fill(broken.begin(), broken.end(), 0);
+    for (int j = -k; j <= k; ++j) {
+      const float* d = disparity.row(v + j);
+      const float* above = disparity.row(v + j - (j > -k ? 1 : 0));
+      const float fj = static_cast<float>(j);
+      for (int u = 0; u < w; ++u) {
+        // NaN and non-positive disparities fail the first test.
+        broken[u] |= !(d[u] > 0.0f) | (std::abs(d[u] - above[u]) > kMaxRowJumpPx);
+        sum_d[u] += d[u];
+        sum_jd[u] += fj * d[u];
+      }
+    }
+    std::uint8_t* out = labels->row(v);
+    const double y = v - cv;
+    for (int u = 0; u < w; ++u) {
+      const std::uint8_t c = out[u];
+      if (broken[u] || (c != 1 && c != 2 && c != 4)) continue;
+      const double d = sum_d[u] / (2 * k + 1);      // fitted disparity at the pixel
+      const double slope = sum_jd[u] / sum_jj;       // fitted dd/dv [px per row]
+      const double q = slope / d;
+      const Eigen::Vector3d tangent(-(u - cu) * q, 1.0 - y * q, -f * q);
+      const double norm = tangent.norm();
+      if (norm > 0 && std::abs(tangent.dot(up)) > sin_min * norm) {
+        out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+      }
+    }
   }
 }
 

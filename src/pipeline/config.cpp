@@ -140,6 +140,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.pixel_slopes = true;
   o.ground_tolerance_px = 1.0;
   o.pixel_slope_window_px = 31;
+  o.face_window_px = 11;
   return o;
 }
 
@@ -210,6 +211,8 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
     s.Read("ground_tolerance_px", &c.analysis.ground_tolerance_px);
     s.Read("ground_consistent_share", &c.analysis.ground_consistent_share);
+    s.Read("face_window_px", &c.analysis.face_window_px);
+    s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
   }
   ReadGravity(root.Child("gravity"), &c.gravity);
@@ -352,7 +355,9 @@ std::string ConfigToYaml(const Config& c) {
     << "  min_ground_share: " << c.analysis.min_ground_share << "\n"
     << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n"
     << "  ground_tolerance_px: " << c.analysis.ground_tolerance_px << "\n"
-    << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n";
+    << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n"
+    << "  face_window_px: " << c.analysis.face_window_px << "\n"
+    << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"
     << "  up_camera: [" << c.gravity.up_camera.x() << ", " << c.gravity.up_camera.y() << ", "

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
 
 #include <Eigen/Geometry>
 
@@ -343,6 +346,212 @@ TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {
   EXPECT_EQ(reach.segments[1].verdict, TravClass::kTraversable);
   EXPECT_EQ(reach.segments[2].verdict, TravClass::kNonTraversable);
   EXPECT_NEAR(reach.segments[2].step_m, 0.3, 0.02);
+}
+
+// Disparity of a camera 0.8 m above level ground, pitched 15 deg down (f 420 px, b 0.12 m,
+// 640 x 480): ground up to `face_m` ahead, then a vertical face `height_m` tall towards the
+// camera and the level top of the step behind it; or, with `ramp_deg` > 0, a ramp rising away at
+// that angle from `face_m` on. Ray cast in closed form: d = b / t for the hit at t * (u-cu, v-cv, f).
+struct StepScene {
+  static constexpr double kF = 420, kB = 0.12, kH = 0.8, kCu = 320, kCv = 240;
+  double pitch = 15 * M_PI / 180;
+  double face_m = 3.0, height_m = 0.15, ramp_deg = 0.0;
+  Eigen::Vector3d Up() const { return {0, -std::cos(pitch), -std::sin(pitch)}; }
+  Eigen::Vector3d Forward() const { return {0, -std::sin(pitch), std::cos(pitch)}; }
+  /// 0: ground, 1: face (or ramp), 2: top, -1: sky.
+  int Hit(int u, int v, double* t) const {
+    const Eigen::Vector3d r(u - kCu, v - kCv, kF);
+    const double ru = Up().dot(r), rf = Forward().dot(r);
+    if (ramp_deg > 0) {
+      // Ramp plane through the ground line at face_m, normal tilted towards the camera.
+      const double a = ramp_deg * M_PI / 180;
+      const Eigen::Vector3d n = std::cos(a) * Up() - std::sin(a) * Forward();
+      const Eigen::Vector3d p0 = -kH * Up() + face_m * Forward();
+      if (ru < 0 && -kH / ru * rf < face_m) {
+        *t = -kH / ru;
+        return 0;
+      }
+      const double nr = n.dot(r);
+      if (nr >= 0) return -1;
+      *t = n.dot(p0) / nr;
+      return 1;
+    }
+    if (ru < 0 && -kH / ru * rf < face_m) {
+      *t = -kH / ru;
+      return 0;
+    }
+    if (rf > 0) {
+      const double tf = face_m / rf;
+      const double above = tf * ru + kH;  // height of the hit above the ground
+      if (above >= 0 && above <= height_m) {
+        *t = tf;
+        return 1;
+      }
+    }
+    if (Up().dot(r) < 0) {
+      *t = -(kH - height_m) / ru;
+      return 2;
+    }
+    return -1;
+  }
+  void Render(ImageF* disparity, ImageI32* part) const {
+    *disparity = ImageF(640, 480, std::numeric_limits<float>::quiet_NaN());
+    *part = ImageI32(640, 480, -1);
+    for (int v = 0; v < 480; ++v) {
+      for (int u = 0; u < 640; ++u) {
+        double t = 0;
+        const int hit = Hit(u, v, &t);
+        (*part)(v, u) = hit;
+        if (hit >= 0) (*disparity)(v, u) = static_cast<float>(kB / t);
+      }
+    }
+  }
+};
+
+AnalysisOptions FaceOptions() {
+  AnalysisOptions o;
+  o.face_window_px = 11;
+  o.face_min_slope_deg = 40;
+  return o;
+}
+
+TEST(RefineByDisparityFaces, FindsTheFrontOfACurbAndLeavesGroundAndTopAlone) {
+  StepScene scene;  // a 15 cm curb 3 m ahead: its face spans ~20 rows
+  ImageF d;
+  ImageI32 part;
+  scene.Render(&d, &part);
+  ImageU8 labels(640, 480, 1);
+  RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), FaceOptions(), &labels);
+  // Rows of the face in the centre column, and the counts per part away from its borders (the
+  // 11-row windows of the 5 rows next to a border straddle it).
+  int face_rows = 0, face_hits = 0, ground_hits = 0, top_hits = 0, ground_far = 0, top_far = 0;
+  for (int v = 0; v < 480; ++v) {
+    face_rows += part(v, 320) == 1;
+    for (int u = 0; u < 640; ++u) {
+      bool near_border = false;
+      for (int j = -6; j <= 6 && !near_border; ++j) {
+        near_border = v + j >= 0 && v + j < 480 && part(v + j, u) != part(v, u);
+      }
+      if (near_border) continue;
+      const bool face = labels(v, u) == 3;
+      face_hits += part(v, u) == 1 && face;
+      ground_far += part(v, u) == 0;
+      ground_hits += part(v, u) == 0 && face;
+      top_far += part(v, u) == 2;
+      top_hits += part(v, u) == 2 && face;
+    }
+  }
+  EXPECT_GE(face_rows, 18);
+  EXPECT_LE(face_rows, 24);
+  int face_inner = 0;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      bool inner = part(v, u) == 1;
+      for (int j = -6; j <= 6 && inner; ++j) inner = v + j >= 0 && v + j < 480 && part(v + j, u) == 1;
+      face_inner += inner;
+    }
+  }
+  ASSERT_GT(face_inner, 640 * 5);
+  EXPECT_EQ(face_hits, face_inner);  // every face pixel whose window lies on the face
+  EXPECT_GT(ground_far, 100000);
+  EXPECT_EQ(ground_hits, 0);
+  EXPECT_GT(top_far, 10000);
+  EXPECT_EQ(top_hits, 0);
+}
+
+TEST(RefineByDisparityFaces, KeepsRampsGentlerThanTheThresholdAndOnlyTouchesDrivableOrUndecided) {
+  for (const double ramp : {18.0, 30.0, 50.0}) {
+    StepScene scene;
+    scene.ramp_deg = ramp;
+    scene.face_m = 4.0;
+    ImageF d;
+    ImageI32 part;
+    scene.Render(&d, &part);
+    ImageU8 labels(640, 480, 2);
+    RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), FaceOptions(), &labels);
+    int ramp_px = 0, flagged = 0;
+    for (int v = 6; v < 474; ++v) {
+      for (int u = 0; u < 640; ++u) {
+        bool inner = part(v, u) == 1;
+        for (int j = -6; j <= 6 && inner; ++j) inner = part(v + j, u) == 1;
+        if (!inner) continue;
+        ++ramp_px;
+        flagged += labels(v, u) == 3;
+      }
+    }
+    ASSERT_GT(ramp_px, 1000) << ramp;
+    // The tangent along a column of a plane rising away lies in the plane: its slope along
+    // the column is below the ramp's, and equal at the centre column.
+    if (ramp < 40) {
+      EXPECT_EQ(flagged, 0) << ramp;
+    } else {
+      EXPECT_GT(flagged, ramp_px * 9 / 10) << ramp;
+    }
+  }
+  // Classes other than 1, 2 and 4 stay as they are; 4 (undecided) on a face becomes 3.
+  StepScene scene;
+  ImageF d;
+  ImageI32 part;
+  scene.Render(&d, &part);
+  int v_face = -1;
+  for (int v = 0; v < 480 && v_face < 0; ++v) {
+    if (part(v, 320) == 1 && part(v - 6, 320) == 1 && part(v + 6, 320) == 1) v_face = v;
+  }
+  ASSERT_GE(v_face, 0);
+  for (const std::uint8_t c : {0, 3, 4}) {
+    ImageU8 labels(640, 480, c);
+    RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), FaceOptions(), &labels);
+    EXPECT_EQ(labels(v_face, 320), c == 4 ? 3 : c) << int(c);
+  }
+}
+
+TEST(RefineByDisparityFaces, IgnoresBoundedNoiseOnGroundAndDepthEdges) {
+  StepScene scene;
+  scene.face_m = 100.0;  // no face in view: ground only
+  ImageF d;
+  ImageI32 part;
+  scene.Render(&d, &part);
+  // Uniform noise of +-0.17 px (about SGBM's spread, sigma 0.1 px), from a fixed LCG.
+  std::uint32_t state = 12345;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    state = state * 1664525u + 1013904223u;
+    if (std::isfinite(d[i])) d[i] += static_cast<float>(((state >> 8) / 16777216.0 - 0.5) * 0.34);
+  }
+  // A hole: columns 300..339 from row 300 down lie 3 px of disparity farther than the ground
+  // (a window across its upper edge fits a falling disparity, which reads as a steep surface
+  // unless the jump stops it). A near box: columns 400..439 from row 300 down at 1.5 m.
+  for (int v = 300; v < 480; ++v) {
+    for (int u = 300; u < 340; ++u) d(v, u) -= 3.0f;
+    for (int u = 400; u < 440; ++u) d(v, u) = static_cast<float>(StepScene::kF * StepScene::kB / 1.5);
+  }
+  ImageU8 labels(640, 480, 1);
+  RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), FaceOptions(), &labels);
+  int flagged_ground = 0, valid = 0;
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      if (u >= 400 && u < 440 && v >= 295) continue;  // the box and the windows touching its top
+      valid += std::isfinite(d(v, u));
+      flagged_ground += labels(v, u) == 3;
+    }
+  }
+  ASSERT_GT(valid, 150000);
+  EXPECT_EQ(flagged_ground, 0);
+  // The box's face towards the camera (constant disparity) is a face.
+  EXPECT_EQ(labels(400, 420), 3);
+}
+
+TEST(AnalysisOptions, RejectsBadFaceSettingsNamingTheKey) {
+  AnalysisOptions o;
+  std::string error;
+  o.face_window_px = 4;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("face_window_px"), std::string::npos) << error;
+  o.face_window_px = 11;
+  o.face_min_slope_deg = 90;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("face_min_slope_deg"), std::string::npos) << error;
+  o.face_min_slope_deg = 40;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {

@@ -74,6 +74,11 @@ struct AnalysisOptions {
   /// Least share of a small segment's points that must be ground-consistent for the segment to
   /// be taken as ground (traversable), (0, 1].
   double ground_consistent_share = 0.9;
+  /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
+  /// fitted along each image column [px, odd, >= 3]; 0: off.
+  int face_window_px = 0;
+  /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
+  double face_min_slope_deg = 40.0;
 
   bool IsValid(std::string* error) const;
 };
@@ -162,6 +167,21 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
 /// `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
                              const AnalysisOptions& options, AnalysisResult* result);
+
+/// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
+/// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
+/// becomes non-traversable. The disparity is fitted by a line over face_window_px rows around the
+/// pixel (a window with an invalid pixel or a jump over 0.5 px between rows is skipped); with d
+/// and d' = dd/dv from the fit, the surface's tangent along the column is
+/// (0, 1, 0) - (u - cu, v - cv, f) * d' / d (X = ray * b / d, differentiated), and its angle to
+/// the plane normal to `up_camera` is the slope tested. On level ground d' is b/h px per row
+/// (h: camera height) at every range; on a face towards the camera d is constant. Faces a few
+/// pixels tall (the front of a curb or a step) vanish in the normals' smoothing windows, which
+/// are 31 px wide; eleven rows of disparity keep them.
+/// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
+/// focal length and principal point [px].
+void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                            const AnalysisOptions& options, ImageU8* labels);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.
