@@ -157,6 +157,12 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
     return Fail(error, "ground_consistent_share: must be in (0, 1]");
   }
+  if (!(fragment_tolerance_px >= 0 && fragment_tolerance_px <= 16)) {
+    return Fail(error, "fragment_tolerance_px: must be in [0, 16] px (0: off)");
+  }
+  if (!(fragment_consistent_share > 0 && fragment_consistent_share <= 1)) {
+    return Fail(error, "fragment_consistent_share: must be in (0, 1]");
+  }
   if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
     return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
   }
@@ -569,6 +575,87 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
       if (norm > 0 && std::abs(tangent.dot(up)) > sin_min * norm) {
         out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
       }
+    }
+  }
+}
+
+void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                            const AnalysisOptions& options, AnalysisResult* result) {
+  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
+                 cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
+             "RefineByFragmentPlanes: cloud, segment ids and labels differ in size");
+  SSTA_CHECK(focal_times_baseline > 0, "RefineByFragmentPlanes: focal_times_baseline must be positive");
+  if (!(options.fragment_tolerance_px > 0) || !result->quality.passed) return;
+  constexpr double kMinPlaneDistanceM = 0.05;  // planes nearer the camera have no stable disparity
+  const int num_segments = static_cast<int>(result->segments.size());
+  std::vector<char> fragment(num_segments, 0), surface(num_segments, 0);
+  for (const SegmentResult& seg : result->segments) {
+    fragment[seg.id] = seg.small && seg.inliers > 0;
+    surface[seg.id] = !seg.small && seg.has_plane && std::abs(seg.plane(3)) > kMinPlaneDistanceM;
+  }
+  // The large segments each fragment touches (a handful at most; kept as small vectors).
+  std::vector<std::vector<int>> touches(num_segments);
+  auto link = [&](int a, int b) {
+    if (a < 0 || b < 0 || a == b) return;
+    if (fragment[a] && surface[b]) {
+      std::vector<int>& t = touches[a];
+      if (std::find(t.begin(), t.end(), b) == t.end()) t.push_back(b);
+    } else if (fragment[b] && surface[a]) {
+      std::vector<int>& t = touches[b];
+      if (std::find(t.begin(), t.end(), a) == t.end()) t.push_back(a);
+    }
+  };
+  const int w = cloud.width(), h = cloud.height();
+  for (int v = 0; v < h; ++v) {
+    const std::int32_t* row = segment_ids.row(v);
+    const std::int32_t* below = v + 1 < h ? segment_ids.row(v + 1) : nullptr;
+    for (int u = 0; u < w; ++u) {
+      if (u + 1 < w && row[u] != row[u + 1]) link(row[u], row[u + 1]);
+      if (below && row[u] != below[u]) link(row[u], below[u]);
+    }
+  }
+  // Points of each fragment within the tolerance of each touched plane.
+  const double fb = focal_times_baseline;
+  std::vector<int> points(num_segments, 0);
+  std::vector<std::vector<int>> consistent(num_segments);
+  for (int id = 0; id < num_segments; ++id) consistent[id].assign(touches[id].size(), 0);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    if (id < 0 || id >= num_segments || touches[id].empty()) continue;
+    const Eigen::Vector3d p = cloud[i].cast<double>();
+    if (!(p.z() > 0)) continue;  // also NaN
+    ++points[id];
+    for (std::size_t k = 0; k < touches[id].size(); ++k) {
+      const Eigen::Vector4d& plane = result->segments[touches[id][k]].plane;
+      const double residual_px = fb * (plane.head<3>().dot(p) + plane(3)) / (p.z() * plane(3));
+      consistent[id][k] += std::abs(residual_px) <= options.fragment_tolerance_px;
+    }
+  }
+  std::vector<int> host(num_segments, -1);
+  bool any = false;
+  for (int id = 0; id < num_segments; ++id) {
+    int best = -1, best_count = 0;
+    for (std::size_t k = 0; k < touches[id].size(); ++k) {
+      if (consistent[id][k] > best_count) {
+        best_count = consistent[id][k];
+        best = touches[id][k];
+      }
+    }
+    if (best < 0 || best_count < options.fragment_consistent_share * points[id]) continue;
+    SegmentResult& seg = result->segments[id];
+    const SegmentResult& big = result->segments[best];
+    host[id] = best;
+    any = true;
+    seg.verdict = big.verdict;
+    seg.reason = Format("small, on the plane of segment", best, 0, "") +
+                 Format(" within stereo noise:", 100.0 * best_count / points[id], 0, "% of its points") +
+                 " (" + std::string(ClassName(big.verdict)) + ")";
+  }
+  if (!any) return;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const int id = segment_ids[i];
+    if (id >= 0 && id < num_segments && host[id] >= 0 && result->labels[i] != 0) {
+      result->labels[i] = static_cast<std::uint8_t>(result->segments[host[id]].verdict);
     }
   }
 }

@@ -141,6 +141,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.ground_tolerance_px = 1.0;
   o.pixel_slope_window_px = 31;
   o.face_window_px = 11;
+  o.fragment_tolerance_px = 1.5;
   return o;
 }
 
@@ -211,6 +212,8 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("max_ground_rms_m", &c.analysis.max_ground_rms_m);
     s.Read("ground_tolerance_px", &c.analysis.ground_tolerance_px);
     s.Read("ground_consistent_share", &c.analysis.ground_consistent_share);
+    s.Read("fragment_tolerance_px", &c.analysis.fragment_tolerance_px);
+    s.Read("fragment_consistent_share", &c.analysis.fragment_consistent_share);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
@@ -356,6 +359,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  max_ground_rms_m: " << c.analysis.max_ground_rms_m << "\n"
     << "  ground_tolerance_px: " << c.analysis.ground_tolerance_px << "\n"
     << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n"
+    << "  fragment_tolerance_px: " << c.analysis.fragment_tolerance_px << "\n"
+    << "  fragment_consistent_share: " << c.analysis.fragment_consistent_share << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"

@@ -102,6 +102,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
                        config_.analysis.pixel_slope_window_px);
   }
   RefineByGroundDisparity(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
+  RefineByFragmentPlanes(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
   if (out.analysis.quality.passed) {
     RefineByDisparityFaces(out.disparity, g.f, g.cu, g.cv, out.up_rectified, config_.analysis, &out.analysis.labels);
   }

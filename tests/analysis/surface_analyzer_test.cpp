@@ -193,6 +193,63 @@ TEST(RefineByGroundDisparity, SmallSegmentsOnTheGroundWithinNoiseBecomeTraversab
   EXPECT_EQ(tight.segments[1].verdict, TravClass::kNonTraversable);
 }
 
+TEST(RefineByFragmentPlanes, FragmentsOnAnAdjacentPlaneTakeItsVerdict) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 60);
+  // An 18 deg ramp, 0.6 m long from its foot: 1200 px (large), semi-traversable by slope, its
+  // centroid 0.09 m above the floor.
+  PaintRamp(w, 1, 0, 30, 60, 100, 18.0);
+  const double s18 = 18.0 * M_PI / 180.0, s40 = 40.0 * M_PI / 180.0;
+  const Eigen::Vector3d along18(0, -std::sin(s18), std::cos(s18));
+  const Eigen::Vector3d ramp_point = Eigen::Vector3d(0.5, 1.0, 2.0) + 10 * 0.02 * along18 + Eigen::Vector3d(0.2, 0, 0);
+  // A fragment of the ramp 4 cm across whose own plane tilts at 40 deg (noise): its points stay
+  // within 1.5 cm of the ramp's plane, ~0.3 px of disparity here.
+  w.Paint(2, 10, 18, 70, 78, ramp_point, {1, 0, 0}, {0, -std::sin(s40), std::cos(s40)}, 0.005);
+  // A box top 0.3 m above the ramp's plane beside it: ~5 px off in disparity.
+  const Eigen::Vector3d ramp_up(0, -std::cos(s18), -std::sin(s18));
+  w.Paint(3, 20, 28, 88, 96, ramp_point + 0.3 * ramp_up + Eigen::Vector3d(0.36, 0.2 * -along18.y(), 0),
+          {1, 0, 0}, along18, 0.02);
+  // A tilted floor fragment cut off from every large segment by a ring without depth.
+  for (int v = 79; v < 90; ++v) {
+    for (int u = 19; u < 30; ++u) {
+      w.cloud_(v, u) = NanVector3f();
+      w.ids_(v, u) = -1;
+    }
+  }
+  w.Paint(4, 80, 88, 20, 28, {-0.4, 1.0, 3.6}, {1, 0, 0}, {0, -std::sin(s40), std::cos(s40)}, 0.005);
+  AnalysisOptions options;
+  options.small_segments = SmallSegmentPolicy::kAll;
+  options.min_plane_points = 30;
+  AnalysisResult r = w.Analyze({}, options);
+  ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+  ASSERT_FALSE(r.segments[1].small);
+  ASSERT_EQ(r.segments[1].verdict, TravClass::kSemiTraversable) << r.segments[1].reason;
+  for (const int id : {2, 3, 4}) {
+    ASSERT_TRUE(r.segments[id].small) << id;
+    ASSERT_EQ(r.segments[id].verdict, TravClass::kNonTraversable) << id << ": " << r.segments[id].reason;
+  }
+
+  AnalysisResult off = r;
+  RefineByFragmentPlanes(w.cloud_, w.ids_, kFocalTimesBaseline, options, &off);  // tolerance 0: off
+  EXPECT_EQ(off.segments[2].verdict, TravClass::kNonTraversable);
+
+  options.fragment_tolerance_px = 1.5;
+  RefineByFragmentPlanes(w.cloud_, w.ids_, kFocalTimesBaseline, options, &r);
+  EXPECT_EQ(r.segments[2].verdict, TravClass::kSemiTraversable) << r.segments[2].reason;
+  EXPECT_NE(r.segments[2].reason.find("segment 1"), std::string::npos) << r.segments[2].reason;
+  EXPECT_EQ(r.labels(14, 74), static_cast<std::uint8_t>(TravClass::kSemiTraversable));
+  EXPECT_EQ(r.segments[3].verdict, TravClass::kNonTraversable) << r.segments[3].reason;
+  EXPECT_EQ(r.labels(24, 92), static_cast<std::uint8_t>(TravClass::kNonTraversable));
+  EXPECT_EQ(r.segments[4].verdict, TravClass::kNonTraversable) << r.segments[4].reason;
+  EXPECT_EQ(r.segments[0].verdict, TravClass::kTraversable);
+
+  // Too tight a tolerance for the tilted fragment's spread: it keeps its own verdict.
+  options.fragment_tolerance_px = 0.05;
+  AnalysisResult tight = w.Analyze({}, options);
+  RefineByFragmentPlanes(w.cloud_, w.ids_, kFocalTimesBaseline, options, &tight);
+  EXPECT_EQ(tight.segments[2].verdict, TravClass::kNonTraversable);
+}
+
 TEST(RefineByGroundDisparity, LargeSegmentsKeepTheirVerdicts) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 80);
@@ -540,7 +597,7 @@ TEST(RefineByDisparityFaces, IgnoresBoundedNoiseOnGroundAndDepthEdges) {
   EXPECT_EQ(labels(400, 420), 3);
 }
 
-TEST(AnalysisOptions, RejectsBadFaceSettingsNamingTheKey) {
+TEST(AnalysisOptions, RejectsBadFaceAndFragmentSettingsNamingTheKey) {
   AnalysisOptions o;
   std::string error;
   o.face_window_px = 4;
@@ -552,6 +609,13 @@ TEST(AnalysisOptions, RejectsBadFaceSettingsNamingTheKey) {
   EXPECT_NE(error.find("face_min_slope_deg"), std::string::npos) << error;
   o.face_min_slope_deg = 40;
   EXPECT_TRUE(o.IsValid(&error)) << error;
+  o.fragment_tolerance_px = -1;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("fragment_tolerance_px"), std::string::npos) << error;
+  o.fragment_tolerance_px = 1.5;
+  o.fragment_consistent_share = 0;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("fragment_consistent_share"), std::string::npos) << error;
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {

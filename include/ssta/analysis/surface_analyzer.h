@@ -74,6 +74,12 @@ struct AnalysisOptions {
   /// Least share of a small segment's points that must be ground-consistent for the segment to
   /// be taken as ground (traversable), (0, 1].
   double ground_consistent_share = 0.9;
+  /// Fragments on a neighbour's plane (RefineByFragmentPlanes) [px]: a small segment whose
+  /// points lie within this of the plane of an adjacent large segment, in disparity along their
+  /// pixel rays, is a piece of that surface that stereo noise broke off. 0: off.
+  double fragment_tolerance_px = 0.0;
+  /// Least share of a small segment's points that must lie that close, (0, 1].
+  double fragment_consistent_share = 0.9;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;
@@ -182,6 +188,19 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
                             const AnalysisOptions& options, ImageU8* labels);
+
+/// Fragments (AnalysisOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
+/// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
+/// small segments whose own planes tilt at random and whose centroids may stand off the dominant
+/// plane: as obstacles (small_segments: all) they paint ramps and far ground non-traversable.
+/// A small segment takes the verdict of the large segment (not small, with a plane not through
+/// the camera) it touches (4-connected) whose plane holds the most of its points within
+/// fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the test of
+/// RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share of them.
+/// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
+/// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
+void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                            const AnalysisOptions& options, AnalysisResult* result);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.
