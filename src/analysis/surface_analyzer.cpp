@@ -163,6 +163,7 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(fragment_consistent_share > 0 && fragment_consistent_share <= 1)) {
     return Fail(error, "fragment_consistent_share: must be in (0, 1]");
   }
+  if (fragment_host_min_points < 3) return Fail(error, "fragment_host_min_points: must be at least 3");
   if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
     return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
   }
@@ -591,16 +592,22 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
   std::vector<char> fragment(num_segments, 0), surface(num_segments, 0);
   for (const SegmentResult& seg : result->segments) {
     fragment[seg.id] = seg.small && seg.inliers > 0;
-    surface[seg.id] = !seg.small && seg.has_plane && std::abs(seg.plane(3)) > kMinPlaneDistanceM;
+    surface[seg.id] = seg.inliers >= options.fragment_host_min_points && seg.has_plane &&
+                      std::abs(seg.plane(3)) > kMinPlaneDistanceM;
   }
-  // The large segments each fragment touches (a handful at most; kept as small vectors).
+  // A host has a well-determined plane: at least fragment_host_min_points points, and more
+  // than twice the fragment's.
+  auto hosts = [&](int host, int frag) {
+    return result->segments[host].inliers > 2 * result->segments[frag].inliers;
+  };
+  // The hosts each fragment touches (a handful at most; kept as small vectors).
   std::vector<std::vector<int>> touches(num_segments);
   auto link = [&](int a, int b) {
     if (a < 0 || b < 0 || a == b) return;
-    if (fragment[a] && surface[b]) {
+    if (fragment[a] && surface[b] && hosts(b, a)) {
       std::vector<int>& t = touches[a];
       if (std::find(t.begin(), t.end(), b) == t.end()) t.push_back(b);
-    } else if (fragment[b] && surface[a]) {
+    } else if (fragment[b] && surface[a] && hosts(a, b)) {
       std::vector<int>& t = touches[b];
       if (std::find(t.begin(), t.end(), a) == t.end()) t.push_back(a);
     }

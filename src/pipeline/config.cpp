@@ -214,6 +214,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("ground_consistent_share", &c.analysis.ground_consistent_share);
     s.Read("fragment_tolerance_px", &c.analysis.fragment_tolerance_px);
     s.Read("fragment_consistent_share", &c.analysis.fragment_consistent_share);
+    s.Read("fragment_host_min_points", &c.analysis.fragment_host_min_points);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
@@ -361,6 +362,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  ground_consistent_share: " << c.analysis.ground_consistent_share << "\n"
     << "  fragment_tolerance_px: " << c.analysis.fragment_tolerance_px << "\n"
     << "  fragment_consistent_share: " << c.analysis.fragment_consistent_share << "\n"
+    << "  fragment_host_min_points: " << c.analysis.fragment_host_min_points << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"

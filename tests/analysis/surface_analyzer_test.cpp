@@ -248,6 +248,20 @@ TEST(RefineByFragmentPlanes, FragmentsOnAnAdjacentPlaneTakeItsVerdict) {
   AnalysisResult tight = w.Analyze({}, options);
   RefineByFragmentPlanes(w.cloud_, w.ids_, kFocalTimesBaseline, options, &tight);
   EXPECT_EQ(tight.segments[2].verdict, TravClass::kNonTraversable);
+
+  // A host may itself be below inliers_min (a ramp seen from afar), not below
+  // fragment_host_min_points.
+  options.fragment_tolerance_px = 1.5;
+  options.inliers_min_ratio = 0.2;  // 2000 px: the 1200 px ramp is small now
+  for (const int host_min : {1000, 1500}) {
+    options.fragment_host_min_points = host_min;
+    AnalysisResult small_host = w.Analyze({}, options);
+    ASSERT_TRUE(small_host.segments[1].small);
+    const TravClass ramp = small_host.segments[1].verdict;
+    ASSERT_NE(ramp, TravClass::kNonTraversable) << small_host.segments[1].reason;
+    RefineByFragmentPlanes(w.cloud_, w.ids_, kFocalTimesBaseline, options, &small_host);
+    EXPECT_EQ(small_host.segments[2].verdict, host_min <= 1200 ? ramp : TravClass::kNonTraversable) << host_min;
+  }
 }
 
 TEST(RefineByGroundDisparity, LargeSegmentsKeepTheirVerdicts) {
@@ -616,6 +630,10 @@ TEST(AnalysisOptions, RejectsBadFaceAndFragmentSettingsNamingTheKey) {
   o.fragment_consistent_share = 0;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("fragment_consistent_share"), std::string::npos) << error;
+  o.fragment_consistent_share = 0.9;
+  o.fragment_host_min_points = 2;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("fragment_host_min_points"), std::string::npos) << error;
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {

@@ -80,6 +80,9 @@ struct AnalysisOptions {
   double fragment_tolerance_px = 0.0;
   /// Least share of a small segment's points that must lie that close, (0, 1].
   double fragment_consistent_share = 0.9;
+  /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
+  /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
+  int fragment_host_min_points = 1000;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;
@@ -193,10 +196,12 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
 /// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
 /// small segments whose own planes tilt at random and whose centroids may stand off the dominant
 /// plane: as obstacles (small_segments: all) they paint ramps and far ground non-traversable.
-/// A small segment takes the verdict of the large segment (not small, with a plane not through
-/// the camera) it touches (4-connected) whose plane holds the most of its points within
-/// fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the test of
-/// RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share of them.
+/// A small segment takes the verdict of the host it touches (4-connected) whose plane holds the
+/// most of its points within fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the
+/// test of RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share
+/// of them. A host is a segment with a plane not through the camera, at least
+/// fragment_host_min_points points and more than twice the fragment's; verdicts are taken as
+/// they were before this step (one pass).
 /// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
 /// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
