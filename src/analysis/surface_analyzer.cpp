@@ -532,50 +532,58 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   SSTA_CHECK(f > 0, "RefineByDisparityFaces: focal length must be positive");
   constexpr float kMaxRowJumpPx = 0.5f;  // a larger step between rows is a depth edge, not a face
   const int w = disparity.width(), h = disparity.height(), k = options.face_window_px / 2;
+  if (h < 2 * k + 1) return;
   const Eigen::Vector3d up = up_camera.normalized();
   const double sin_min = std::sin(options.face_min_slope_deg * M_PI / 180.0);
+  const double sin2_min = sin_min * sin_min;
   double sum_jj = 0.0;
   for (int j = -k; j <= k; ++j) sum_jj += static_cast<double>(j) * j;
-  // Per column of the current row: sum of d, sum of j * d over the window, and whether the window
-  // holds an invalid pixel or a jump. Summed row by row over the window so that the inner loops
-  // run along contiguous rows.
-  thread_local std::vector<float> sum_d, sum_jd;
-  thread_local std::vector<std::uint8_t> broken;
-  sum_d.resize(w);
-  sum_jd.resize(w);
-  broken.resize(w);
-  for (int v = k; v + k < h; ++v) {
-    const std::uint8_t* label_row = labels->row(v);
-    bool any = false;
-    for (int u = 0; u < w && !any; ++u) any = label_row[u] == 1 || label_row[u] == 2 || label_row[u] == 4;
-    if (!any) continue;
-    std::fill(sum_d.begin(), sum_d.end(), 0.0f);
-    std::fill(sum_jd.begin(), sum_jd.end(), 0.0f);
-    std::fill(broken.begin(), broken.end(), 0);
+  const double inv_n = 1.0 / (2 * k + 1), inv_jj = 1.0 / sum_jj;
+  // Per column, slid down the rows: s1 = sum of d over the window, s2 = sum of j * d (j the row
+  // offset from the centre), and how many rows of the window are invalid or jump from the row
+  // above (a jump into the window's first row does not count). Invalid rows add 0 to the sums.
+  thread_local std::vector<double> s1, s2;
+  thread_local std::vector<int> bad;
+  s1.assign(w, 0.0);
+  s2.assign(w, 0.0);
+  bad.assign(w, 0);
+  auto value = [&](int v, int u) {
+    const float d = disparity(v, u);
+    return d > 0.0f ? static_cast<double>(d) : 0.0;  // NaN and d <= 0 count as 0
+  };
+  auto invalid = [&](int v, int u) { return !(disparity(v, u) > 0.0f); };
+  // A jump between row r - 1 and row r (r >= 1).
+  auto jump = [&](int r, int u) { return std::abs(disparity(r, u) - disparity(r - 1, u)) > kMaxRowJumpPx; };
+  for (int u = 0; u < w; ++u) {
     for (int j = -k; j <= k; ++j) {
-      const float* d = disparity.row(v + j);
-      const float* above = disparity.row(v + j - (j > -k ? 1 : 0));
-      const float fj = static_cast<float>(j);
-      for (int u = 0; u < w; ++u) {
-        // NaN and non-positive disparities fail the first test.
-        broken[u] |= !(d[u] > 0.0f) | (std::abs(d[u] - above[u]) > kMaxRowJumpPx);
-        sum_d[u] += d[u];
-        sum_jd[u] += fj * d[u];
-      }
+      const int r = k + j;
+      s1[u] += value(r, u);
+      s2[u] += j * value(r, u);
+      bad[u] += invalid(r, u) + (j > -k && jump(r, u));
     }
+  }
+  for (int v = k;; ++v) {
     std::uint8_t* out = labels->row(v);
     const double y = v - cv;
     for (int u = 0; u < w; ++u) {
       const std::uint8_t c = out[u];
-      if (broken[u] || (c != 1 && c != 2 && c != 4)) continue;
-      const double d = sum_d[u] / (2 * k + 1);      // fitted disparity at the pixel
-      const double slope = sum_jd[u] / sum_jj;       // fitted dd/dv [px per row]
-      const double q = slope / d;
+      if (bad[u] != 0 || (c != 1 && c != 2 && c != 4)) continue;
+      const double d = s1[u] * inv_n;        // fitted disparity at the pixel
+      const double q = s2[u] * inv_jj / d;   // fitted dd/dv over d
       const Eigen::Vector3d tangent(-(u - cu) * q, 1.0 - y * q, -f * q);
-      const double norm = tangent.norm();
-      if (norm > 0 && std::abs(tangent.dot(up)) > sin_min * norm) {
+      const double rise = tangent.dot(up);
+      if (rise * rise > sin2_min * tangent.squaredNorm()) {
         out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
       }
+    }
+    if (v + k + 1 >= h) break;
+    // Slide the window one row down: row v - k leaves, row v + k + 1 enters.
+    const int leave = v - k, enter = v + k + 1;
+    for (int u = 0; u < w; ++u) {
+      const double out_d = value(leave, u), in_d = value(enter, u);
+      s1[u] += in_d - out_d;
+      s2[u] += k * out_d + (k + 1) * in_d - s1[u];
+      bad[u] += invalid(enter, u) + jump(enter, u) - invalid(leave, u) - jump(leave + 1, u);
     }
   }
 }
