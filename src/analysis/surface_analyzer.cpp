@@ -157,6 +157,12 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
     return Fail(error, "ground_consistent_share: must be in (0, 1]");
   }
+  if (undecided_fill_radius_px < 0 || undecided_fill_radius_px > 64) {
+    return Fail(error, "undecided_fill_radius_px: must be in [0, 64] px (0: off)");
+  }
+  if (!(undecided_fill_share > 0.5 && undecided_fill_share <= 1)) {
+    return Fail(error, "undecided_fill_share: must be in (0.5, 1]");
+  }
   if (!(fragment_tolerance_px >= 0 && fragment_tolerance_px <= 16)) {
     return Fail(error, "fragment_tolerance_px: must be in [0, 16] px (0: off)");
   }
@@ -671,6 +677,54 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
     const int id = segment_ids[i];
     if (id >= 0 && id < num_segments && host[id] >= 0 && result->labels[i] != 0) {
       result->labels[i] = static_cast<std::uint8_t>(result->segments[host[id]].verdict);
+    }
+  }
+}
+
+void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
+  const int r = options.undecided_fill_radius_px;
+  if (r <= 0) return;
+  constexpr std::uint8_t kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
+  const int w = labels->width(), h = labels->height();
+  bool any = false;
+  for (std::size_t i = 0; i < labels->size() && !any; ++i) any = (*labels)[i] == kUndecided;
+  if (!any) return;
+  // Integral images of the three decided classes: (w + 1) x (h + 1), row-major, per thread.
+  const std::size_t stride = static_cast<std::size_t>(w) + 1;
+  thread_local std::vector<std::int32_t> integral[3];
+  for (auto& table : integral) table.assign(stride * (h + 1), 0);
+  for (int v = 0; v < h; ++v) {
+    const std::uint8_t* row = labels->row(v);
+    std::int32_t run[3] = {0, 0, 0};
+    for (int u = 0; u < w; ++u) {
+      const std::uint8_t c = row[u];
+      for (int k = 0; k < 3; ++k) {
+        run[k] += c == k + 1;
+        integral[k][(v + 1) * stride + u + 1] = integral[k][v * stride + u + 1] + run[k];
+      }
+    }
+  }
+  auto box = [&](int k, int u0, int v0, int u1, int v1) {  // inclusive-exclusive corners
+    const std::vector<std::int32_t>& t = integral[k];
+    return t[v1 * stride + u1] - t[v0 * stride + u1] - t[v1 * stride + u0] + t[v0 * stride + u0];
+  };
+  for (int v = 0; v < h; ++v) {
+    std::uint8_t* row = labels->row(v);
+    const int v0 = std::max(0, v - r), v1 = std::min(h, v + r + 1);
+    for (int u = 0; u < w; ++u) {
+      if (row[u] != kUndecided) continue;
+      const int u0 = std::max(0, u - r), u1 = std::min(w, u + r + 1);
+      int counts[3], decided = 0, best = 0;
+      for (int k = 0; k < 3; ++k) {
+        counts[k] = box(k, u0, v0, u1, v1);
+        decided += counts[k];
+        if (counts[k] > counts[best]) best = k;
+      }
+      // Labels change only after the window sums are taken from the integral images, so the
+      // pass reads the labels as they were.
+      if (decided > 0 && counts[best] >= options.undecided_fill_share * decided) {
+        row[u] = static_cast<std::uint8_t>(best + 1);
+      }
     }
   }
 }

@@ -142,6 +142,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.pixel_slope_window_px = 31;
   o.face_window_px = 11;
   o.fragment_tolerance_px = 1.5;
+  o.undecided_fill_radius_px = 4;
   return o;
 }
 
@@ -215,6 +216,8 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("fragment_tolerance_px", &c.analysis.fragment_tolerance_px);
     s.Read("fragment_consistent_share", &c.analysis.fragment_consistent_share);
     s.Read("fragment_host_min_points", &c.analysis.fragment_host_min_points);
+    s.Read("undecided_fill_radius_px", &c.analysis.undecided_fill_radius_px);
+    s.Read("undecided_fill_share", &c.analysis.undecided_fill_share);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
@@ -363,6 +366,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  fragment_tolerance_px: " << c.analysis.fragment_tolerance_px << "\n"
     << "  fragment_consistent_share: " << c.analysis.fragment_consistent_share << "\n"
     << "  fragment_host_min_points: " << c.analysis.fragment_host_min_points << "\n"
+    << "  undecided_fill_radius_px: " << c.analysis.undecided_fill_radius_px << "\n"
+    << "  undecided_fill_share: " << c.analysis.undecided_fill_share << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"

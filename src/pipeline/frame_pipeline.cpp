@@ -105,6 +105,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   RefineByFragmentPlanes(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
   if (out.analysis.quality.passed) {
     RefineByDisparityFaces(out.disparity, g.f, g.cu, g.cv, out.up_rectified, config_.analysis, &out.analysis.labels);
+    FillUndecidedByConsensus(config_.analysis, &out.analysis.labels);
   }
   out.timings.analyze_ms = clock.LapMs();
 

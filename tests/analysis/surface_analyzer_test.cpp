@@ -611,7 +611,57 @@ TEST(RefineByDisparityFaces, IgnoresBoundedNoiseOnGroundAndDepthEdges) {
   EXPECT_EQ(labels(400, 420), 3);
 }
 
-TEST(AnalysisOptions, RejectsBadFaceAndFragmentSettingsNamingTheKey) {
+TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
+  AnalysisOptions options;
+  options.undecided_fill_radius_px = 1;
+  options.undecided_fill_share = 0.9;
+  // Row 1: undecided amid 8 traversable -> traversable. Row 4: 7 traversable and 1
+  // non-traversable around it (0.875 < 0.9) -> stays. Unknown (0) neighbours do not vote.
+  ImageU8 labels(5, 9, 1);
+  labels(1, 2) = 4;
+  labels(4, 2) = 4;
+  labels(3, 3) = 3;
+  labels(7, 2) = 4;
+  labels(6, 1) = labels(6, 2) = labels(6, 3) = labels(7, 1) = 0;  // unknown above and left
+  ImageU8 before = labels;
+  FillUndecidedByConsensus(options, &labels);
+  EXPECT_EQ(labels(1, 2), 1);
+  EXPECT_EQ(labels(4, 2), 4);
+  EXPECT_EQ(labels(7, 2), 1);  // 4 traversable voters, 4 unknown
+  EXPECT_EQ(labels(3, 3), 3);
+  options.undecided_fill_share = 0.85;
+  FillUndecidedByConsensus(options, &before);
+  EXPECT_EQ(before(4, 2), 1);
+  // Off: nothing changes.
+  ImageU8 off(5, 5, 1);
+  off(2, 2) = 4;
+  options.undecided_fill_radius_px = 0;
+  FillUndecidedByConsensus(options, &off);
+  EXPECT_EQ(off(2, 2), 4);
+}
+
+TEST(FillUndecidedByConsensus, LeavesSplitWindowsAndWideGapsUndecided) {
+  AnalysisOptions options;
+  options.undecided_fill_radius_px = 4;
+  // Traversable left of column 20, non-traversable from column 22, undecided in columns 20-21
+  // (an obstacle's outline), and a 12 px wide band of undecided rows 30..41 across the image.
+  ImageU8 labels(40, 60, 1);
+  for (int v = 0; v < 60; ++v) {
+    for (int u = 0; u < 40; ++u) {
+      if (u >= 22) labels(v, u) = 3;
+      if (u == 20 || u == 21 || (v >= 30 && v < 42)) labels(v, u) = 4;
+    }
+  }
+  FillUndecidedByConsensus(options, &labels);
+  EXPECT_EQ(labels(10, 20), 4);  // 4 columns of each class in its window: split
+  EXPECT_EQ(labels(10, 21), 4);
+  EXPECT_EQ(labels(31, 5), 1);   // the band's edge rows see traversable rows within 4 px
+  EXPECT_EQ(labels(31, 35), 3);
+  EXPECT_EQ(labels(35, 5), 4);   // its middle sees no decided pixel: one pass, no spreading
+  EXPECT_EQ(labels(36, 35), 4);
+}
+
+TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
   AnalysisOptions o;
   std::string error;
   o.face_window_px = 4;
@@ -634,6 +684,14 @@ TEST(AnalysisOptions, RejectsBadFaceAndFragmentSettingsNamingTheKey) {
   o.fragment_host_min_points = 2;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("fragment_host_min_points"), std::string::npos) << error;
+  o.fragment_host_min_points = 1000;
+  o.undecided_fill_share = 0.5;  // a tie could pick either class
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("undecided_fill_share"), std::string::npos) << error;
+  o.undecided_fill_share = 0.9;
+  o.undecided_fill_radius_px = -1;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("undecided_fill_radius_px"), std::string::npos) << error;
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {

@@ -83,6 +83,11 @@ struct AnalysisOptions {
   /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
   /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
   int fragment_host_min_points = 1000;
+  /// Undecided pixels amid a consensus (FillUndecidedByConsensus): the half side of the square
+  /// window around an undecided pixel [px]; 0: off.
+  int undecided_fill_radius_px = 0;
+  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
+  double undecided_fill_share = 0.9;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;
@@ -176,6 +181,14 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
 /// `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
                              const AnalysisOptions& options, AnalysisResult* result);
+
+/// Undecided pixels amid a consensus (AnalysisOptions::undecided_fill_radius_px > 0): an
+/// undecided pixel (4) takes the class (1..3) that at least undecided_fill_share of the decided
+/// pixels in the (2 r + 1)^2 window around it hold. Tiny segments along obstacle outlines and
+/// in far ground get no verdict of their own (too few points for a plane); where everything
+/// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
+/// edge against the ground), they stay undecided. One pass on the labels as they were.
+void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 
 /// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
 /// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
