@@ -94,6 +94,7 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
   metadata.vehicle = config.vehicle;
   TraversabilityMap map(config.map.fusion, metadata);
   std::vector<Clock::time_point> started(inputs.size()), finished(inputs.size());
+  std::vector<ClassifiedPoint> map_points;  // reused as build-map does (one fusion job at a time)
   {
     internal::OrderedWorker fusion(1);
     for (std::size_t k = 0; k < inputs.size(); ++k) {
@@ -105,8 +106,8 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
       auto result = std::make_shared<FrameResult>(pipeline.Process(in.left, in.right, up_camera));
       const Eigen::Isometry3d world_T_rectified = in.world_T_body * body_T_rectified;
       fusion.Submit([&, k, result, world_T_rectified] {
-        const auto points = MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry());
-        map.InsertFrame(points, world_T_rectified.translation(), inputs[k].t);
+        MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry(), &map_points);
+        map.InsertFrame(map_points, world_T_rectified.translation(), inputs[k].t);
         finished[k] = Clock::now();
       });
     }
@@ -291,6 +292,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
   TraversabilityMap map(config.map.fusion, metadata);
+  std::vector<ClassifiedPoint> points;  // the map points of the frame, reused as build-map does
 
   BenchReport report;
   report.source = sequence.root();
@@ -341,7 +343,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     if (options.with_map) {
       const Timer map_timer;
       const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
-      const auto points = MapPointsOfFrame(result, world_T_rectified, config, pipeline.geometry());
+      MapPointsOfFrame(result, world_T_rectified, config, pipeline.geometry(), &points);
       map.InsertFrame(points, world_T_rectified.translation(), t);
       map_wall = map_timer.WallMs();
       map_cpu = map_timer.CpuMs();

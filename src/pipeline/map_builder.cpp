@@ -74,16 +74,25 @@ bool BuildMapOptions::IsValid(std::string* error) const {
   return true;
 }
 
-std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
-                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
-                                                     const ImageU8* keep) {
+void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
+                             const ImageU8* keep, std::vector<ClassifiedPoint>* points) {
   SSTA_CHECK(stride >= 1, "stride must be at least 1");
+  SSTA_CHECK(points != nullptr, "points must not be null");
   const Image3f& cloud = frame.cloud;
   SSTA_CHECK(keep == nullptr || (keep->width() == cloud.width() && keep->height() == cloud.height()),
              "the keep mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
-  std::vector<ClassifiedPoint> points;
-  points.reserve(cloud.size() / (stride * stride) + 1);
+  // Each segment's (slope, step) once, as the points carry them: a small flat table instead
+  // of a SegmentResult (with its plane and statistics) read per point.
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const auto& segments = frame.analysis.segments;
+  std::vector<std::pair<float, float>> segment_values(segments.size());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const SegmentResult& s = segments[i];
+    segment_values[i] = {s.has_plane ? static_cast<float>(s.slope_deg) : kNaN, static_cast<float>(s.step_m)};
+  }
+  points->clear();
+  points->reserve(cloud.size() / (stride * stride) + 1);
   const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
   for (int v = 0; v < cloud.height(); v += stride) {
     for (int u = 0; u < cloud.width(); u += stride) {
@@ -94,15 +103,21 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
       if (id >= 0) {
-        const SegmentResult& s = frame.analysis.segments[id];
-        out.slope_deg = s.has_plane ? static_cast<float>(s.slope_deg) : std::numeric_limits<float>::quiet_NaN();
-        out.step_m = static_cast<float>(s.step_m);
+        out.slope_deg = segment_values[static_cast<std::size_t>(id)].first;
+        out.step_m = segment_values[static_cast<std::size_t>(id)].second;
       } else {
-        out.slope_deg = out.step_m = std::numeric_limits<float>::quiet_NaN();
+        out.slope_deg = out.step_m = kNaN;
       }
-      points.push_back(out);
+      points->push_back(out);
     }
   }
+}
+
+std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
+                                                     const ImageU8* keep) {
+  std::vector<ClassifiedPoint> points;
+  ClassifiedPointsInWorld(frame, world_T_rectified, stride, keep, &points);
   return points;
 }
 
@@ -111,13 +126,21 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
                      block, min_std);
 }
 
-std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                                              const Config& config, const RectifiedGeometry& geometry) {
+void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points) {
   if (config.map.min_texture <= 0.0) {
-    return ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride);
+    ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, nullptr, points);
+    return;
   }
   const ImageU8 keep = TexturedPixels(frame.left_rectified, geometry, config.stereo.block_size, config.map.min_texture);
-  return ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, &keep);
+  ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, &keep, points);
+}
+
+std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                                              const Config& config, const RectifiedGeometry& geometry) {
+  std::vector<ClassifiedPoint> points;
+  MapPointsOfFrame(frame, world_T_rectified, config, geometry, &points);
+  return points;
 }
 
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
@@ -193,6 +216,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   // use stay on this thread: each job gets its pose by value. Declared after them: its
   // destructor finishes the queued jobs before they go.
   internal::OrderedWorker fusion(options.pipelined ? 1 : 0);
+  // The points of the frame being fused, kept from frame to frame (~5 MB at VGA; the fusion
+  // jobs run one at a time).
+  std::vector<ClassifiedPoint> map_points;
   // A frame that cannot be used: an error in strict mode, else a skip with its reason. On the
   // fusion thread (it touches the summary); `skip` queues it from this one.
   auto record_skip = [&](std::int64_t t, const std::string& reason) {
@@ -216,8 +242,8 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
-        const auto points = MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry());
-        stats = map.InsertFrame(points, world_T_rectified.translation(), t);
+        MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry(), &map_points);
+        stats = map.InsertFrame(map_points, world_T_rectified.translation(), t);
       } catch (const Error& e) {
         record_skip(t, e.what());
         return;

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <cstdint>
 #include <fstream>
+#include <random>
 
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
@@ -79,6 +81,82 @@ TEST(TexturedPixels, KeepsPixelsWhoseWindowStdReachesTheThreshold) {
   const ImageU8 strict = TexturedPixels(image, g, 3, 3.0);
   EXPECT_EQ(strict(1, 8), 0);
   EXPECT_EQ(strict(1, 7), 1);  // the window covers the blank column: a large std
+}
+
+TEST(ClassifiedPointsInWorld, IntoAReusedBufferGivesTheSamePointsAsAFreshVector) {
+  FrameResult f;
+  f.cloud = Image3f(3, 2, Eigen::Vector3f(1, 2, 3));
+  f.cloud(1, 1) = NanVector3f();
+  f.segment_ids = ImageI32(3, 2, -1);
+  f.analysis.labels = ImageU8(3, 2, 2);
+  f.analysis.segments.resize(2);
+  f.analysis.segments[0].has_plane = false;  // slope NaN, step kept
+  f.analysis.segments[0].step_m = 0.25;
+  f.analysis.segments[1].has_plane = true;
+  f.analysis.segments[1].slope_deg = 7.5;
+  f.analysis.segments[1].step_m = -0.125;
+  f.segment_ids(0, 1) = 0;
+  f.segment_ids(1, 2) = 1;
+  // The buffer holds more points of an earlier frame than this one yields.
+  std::vector<ClassifiedPoint> buffer(9);
+  ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1, nullptr, &buffer);
+  ASSERT_EQ(buffer.size(), 5u);
+  EXPECT_TRUE(std::isnan(buffer[0].slope_deg) && std::isnan(buffer[0].step_m));
+  EXPECT_TRUE(std::isnan(buffer[1].slope_deg));
+  EXPECT_EQ(buffer[1].step_m, 0.25f);
+  EXPECT_EQ(buffer[4].slope_deg, 7.5f);
+  EXPECT_EQ(buffer[4].step_m, -0.125f);
+  const auto fresh = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1);
+  ASSERT_EQ(fresh.size(), buffer.size());
+  for (std::size_t i = 0; i < fresh.size(); ++i) {
+    EXPECT_EQ(fresh[i].world_p, buffer[i].world_p);
+    EXPECT_EQ(fresh[i].cls, buffer[i].cls);
+    EXPECT_EQ(std::isnan(fresh[i].slope_deg), std::isnan(buffer[i].slope_deg));
+  }
+}
+
+TEST(TexturedPixels, EqualsTheWindowStdComputedDirectlyCallAfterCall) {
+  // The integral tables are reused between calls (only their first row and column are
+  // cleared): larger, smaller and odd-sized random images in turn must each give exactly the
+  // direct count n * sum(g^2) - sum(g)^2 >= n^2 * min_std^2 over the clipped window.
+  std::mt19937 rng(7);
+  const int sizes[][2] = {{40, 30}, {13, 9}, {41, 31}, {12, 5}, {40, 30}};
+  for (const auto& size : sizes) {
+    const int w = size[0], h = size[1];
+    ImageU8 image(w, h, 0);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) image(v, u) = static_cast<std::uint8_t>(u < w / 2 ? 100 : rng() % 256);  // blank, then noise
+    }
+    RectifiedGeometry g;
+    g.crop_u0 = 2;
+    g.crop_v0 = 1;
+    g.crop_width = w - 3;
+    g.crop_height = h - 2;
+    const int block = 5;
+    const double min_std = 20.0;
+    const ImageU8 keep = TexturedPixels(image, g, block, min_std);
+    ASSERT_EQ(keep.width(), g.crop_width);
+    ASSERT_EQ(keep.height(), g.crop_height);
+    int kept = 0;
+    for (int v = 0; v < g.crop_height; ++v) {
+      for (int u = 0; u < g.crop_width; ++u) {
+        std::int64_t n = 0, s = 0, s2 = 0;
+        for (int y = std::max(0, v + 1 - 2); y <= std::min(h - 1, v + 1 + 2); ++y) {
+          for (int x = std::max(0, u + 2 - 2); x <= std::min(w - 1, u + 2 + 2); ++x) {
+            ++n;
+            s += image(y, x);
+            s2 += static_cast<std::int64_t>(image(y, x)) * image(y, x);
+          }
+        }
+        const bool textured = static_cast<double>(n * s2 - s * s) >=
+                              static_cast<double>(n) * static_cast<double>(n) * min_std * min_std;
+        EXPECT_EQ(keep(v, u), textured ? 1 : 0) << w << "x" << h << " at " << u << "," << v;
+        kept += textured ? 1 : 0;
+      }
+    }
+    EXPECT_GT(kept, 0);
+    EXPECT_LT(kept, g.crop_width * g.crop_height);
+  }
 }
 
 TEST(BuildMap, EurocStaticMapHasATraversableFloor) {

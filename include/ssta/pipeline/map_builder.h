@@ -65,6 +65,9 @@ using BuildProgress = std::function<void(int done, int total)>;
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
                                                      const Eigen::Isometry3d& world_T_rectified, int stride,
                                                      const ImageU8* keep = nullptr);
+/// The same into `*points` (cleared first; its capacity is reused from frame to frame).
+void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
+                             const ImageU8* keep, std::vector<ClassifiedPoint>* points);
 
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
 /// left image) has texture: the grey-level standard deviation of the full image over the
@@ -77,6 +80,9 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
 /// classification is not changed by this: it only keeps noise matches out of the map.
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const Config& config, const RectifiedGeometry& geometry);
+/// The same into `*points` (cleared first; its capacity is reused from frame to frame).
+void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points);
 
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
