@@ -544,7 +544,6 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   const double sin2_min = sin_min * sin_min;
   double sum_jj = 0.0;
   for (int j = -k; j <= k; ++j) sum_jj += static_cast<double>(j) * j;
-  const double inv_n = 1.0 / (2 * k + 1), inv_jj = 1.0 / sum_jj;
   // Per column, slid down the rows: s1 = sum of d over the window, s2 = sum of j * d (j the row
   // offset from the centre), and how many rows of the window are invalid or jump from the row
   // above (a jump into the window's first row does not count). Invalid rows add 0 to the sums.
@@ -553,43 +552,52 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   s1.assign(w, 0.0);
   s2.assign(w, 0.0);
   bad.assign(w, 0);
-  auto value = [&](int v, int u) {
-    const float d = disparity(v, u);
-    return d > 0.0f ? static_cast<double>(d) : 0.0;  // NaN and d <= 0 count as 0
-  };
-  auto invalid = [&](int v, int u) { return !(disparity(v, u) > 0.0f); };
-  // A jump between row r - 1 and row r (r >= 1).
-  auto jump = [&](int r, int u) { return std::abs(disparity(r, u) - disparity(r - 1, u)) > kMaxRowJumpPx; };
-  for (int u = 0; u < w; ++u) {
-    for (int j = -k; j <= k; ++j) {
-      const int r = k + j;
-      s1[u] += value(r, u);
-      s2[u] += j * value(r, u);
-      bad[u] += invalid(r, u) + (j > -k && jump(r, u));
+  // Invalid disparities (NaN, <= 0) count 0 in the sums and 1 in `bad`; a jump from the row
+  // above counts 1 in `bad` unless the row is the window's first.
+  auto add_row = [&](int r, double weight_j, int sign, bool count_jump) {
+    const float* d = disparity.row(r);
+    const float* above = disparity.row(r > 0 ? r - 1 : r);
+    for (int u = 0; u < w; ++u) {
+      const bool ok = d[u] > 0.0f;
+      const double x = ok ? static_cast<double>(d[u]) : 0.0;
+      s1[u] += sign * x;
+      s2[u] += sign * weight_j * x;
+      bad[u] += sign * ((!ok) + (count_jump && std::abs(d[u] - above[u]) > kMaxRowJumpPx));
     }
-  }
+  };
+  for (int j = -k; j <= k; ++j) add_row(k + j, j, +1, j > -k);
+  // Per pixel, with q = (dd/dv) / d from the fit and y = v - cv, the tangent along the column is
+  // t = (-(u - cu) q, 1 - y q, -f q): its rise along up is up_y - q A(u) with
+  // A(u) = (u - cu) up_x + y up_y + f up_z, and |t|^2 = q^2 ((u - cu)^2 + y^2 + f^2) - 2 y q + 1.
+  const double n = 2 * k + 1;
   for (int v = k;; ++v) {
     std::uint8_t* out = labels->row(v);
     const double y = v - cv;
+    const double a0 = -cu * up.x() + y * up.y() + f * up.z(), b0 = y * y + f * f;
     for (int u = 0; u < w; ++u) {
       const std::uint8_t c = out[u];
       if (bad[u] != 0 || (c != 1 && c != 2 && c != 4)) continue;
-      const double d = s1[u] * inv_n;        // fitted disparity at the pixel
-      const double q = s2[u] * inv_jj / d;   // fitted dd/dv over d
-      const Eigen::Vector3d tangent(-(u - cu) * q, 1.0 - y * q, -f * q);
-      const double rise = tangent.dot(up);
-      if (rise * rise > sin2_min * tangent.squaredNorm()) {
-        out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
-      }
+      const double q = s2[u] * n / (sum_jj * s1[u]);
+      const double du = u - cu;
+      const double rise = up.y() - q * (a0 + u * up.x());
+      const double norm2 = q * q * (du * du + b0) - 2.0 * y * q + 1.0;
+      if (rise * rise > sin2_min * norm2) out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
     }
     if (v + k + 1 >= h) break;
-    // Slide the window one row down: row v - k leaves, row v + k + 1 enters.
-    const int leave = v - k, enter = v + k + 1;
+    // Slide the window one row down: row v - k leaves, row v + k + 1 enters; every remaining
+    // row's offset j falls by one, so s2 loses the new s1 once.
+    const float* leave = disparity.row(v - k);
+    const float* leave_next = disparity.row(v - k + 1);
+    const float* enter = disparity.row(v + k + 1);
+    const float* enter_above = disparity.row(v + k);
     for (int u = 0; u < w; ++u) {
-      const double out_d = value(leave, u), in_d = value(enter, u);
+      const bool ok_out = leave[u] > 0.0f, ok_in = enter[u] > 0.0f;
+      const double out_d = ok_out ? static_cast<double>(leave[u]) : 0.0;
+      const double in_d = ok_in ? static_cast<double>(enter[u]) : 0.0;
       s1[u] += in_d - out_d;
       s2[u] += k * out_d + (k + 1) * in_d - s1[u];
-      bad[u] += invalid(enter, u) + jump(enter, u) - invalid(leave, u) - jump(leave + 1, u);
+      bad[u] += (!ok_in) + (std::abs(enter[u] - enter_above[u]) > kMaxRowJumpPx) - (!ok_out) -
+                (std::abs(leave_next[u] - leave[u]) > kMaxRowJumpPx);
     }
   }
 }
