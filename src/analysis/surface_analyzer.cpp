@@ -25,6 +25,13 @@ std::string Format(const char* label, double value, int precision, const char* u
   return s.str();
 }
 
+/// Along the ray r = p / Z a plane n . x + D = 0 lies at inverse depth -(n . r) / D, so the
+/// point's disparity fb / Z differs from the plane's there by fb (n . p + D) / (Z D): its distance
+/// to the plane scaled by fb / (Z D) [px]. `p.z()` and D must be non-zero.
+double DisparityOffPlanePx(const Eigen::Vector4d& plane, const Eigen::Vector3d& p, double fb) {
+  return fb * (plane.head<3>().dot(p) + plane(3)) / (p.z() * plane(3));
+}
+
 std::string ClassReason(const SegmentResult& s) {
   std::ostringstream r;
   r << std::fixed << std::setprecision(1) << "slope " << s.slope_deg << " deg ("
@@ -486,12 +493,9 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
              "RefineByGroundDisparity: cloud, segment ids and labels differ in size");
   SSTA_CHECK(focal_times_baseline > 0, "RefineByGroundDisparity: focal_times_baseline must be positive");
   if (!(options.ground_tolerance_px > 0) || !result->ground.found || !result->quality.passed) return;
-  const Eigen::Vector3d n = result->ground.plane.head<3>();
-  const double plane_d = result->ground.plane[3];  // the camera's height above the plane
-  if (!(plane_d > 0)) return;
-  // Along the ray r = p / Z the plane lies at inverse depth -(n . r) / D, so the point's
-  // disparity fb / Z differs from the plane's there by fb (n . p + D) / (Z D): its distance to
-  // the plane scaled by fb / (Z D). Above the horizon no point is consistent.
+  const Eigen::Vector4d& plane = result->ground.plane;
+  if (!(plane(3) > 0)) return;  // the camera's height above the plane
+  // DisparityOffPlanePx; above the horizon no point is consistent.
   const double fb = focal_times_baseline;
   const int num_segments = static_cast<int>(result->segments.size());
   // Only small segments without a traversable verdict can change: the others' pixels are skipped.
@@ -506,8 +510,7 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
     const Eigen::Vector3d p = cloud[i].cast<double>();
     if (!(p.z() > 0)) continue;  // also NaN
     ++points[id];
-    const double residual_px = fb * (n.dot(p) + plane_d) / (p.z() * plane_d);
-    if (std::abs(residual_px) <= options.ground_tolerance_px) ++consistent[id];
+    if (std::abs(DisparityOffPlanePx(plane, p, fb)) <= options.ground_tolerance_px) ++consistent[id];
   }
   std::vector<bool> to_ground(num_segments, false);
   bool any = false;
@@ -656,8 +659,7 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
     ++points[id];
     for (std::size_t k = 0; k < touches[id].size(); ++k) {
       const Eigen::Vector4d& plane = result->segments[touches[id][k]].plane;
-      const double residual_px = fb * (plane.head<3>().dot(p) + plane(3)) / (p.z() * plane(3));
-      consistent[id][k] += std::abs(residual_px) <= options.fragment_tolerance_px;
+      consistent[id][k] += std::abs(DisparityOffPlanePx(plane, p, fb)) <= options.fragment_tolerance_px;
     }
   }
   std::vector<int> host(num_segments, -1);
