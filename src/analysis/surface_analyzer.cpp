@@ -32,6 +32,16 @@ double DisparityOffPlanePx(const Eigen::Vector4d& plane, const Eigen::Vector3d& 
   return fb * (plane.head<3>().dot(p) + plane(3)) / (p.z() * plane(3));
 }
 
+/// Sets the labels of the pixels of segment s to new_class[s] where that is not 0 (unknown:
+/// keep) and the pixel has depth (label != 0).
+void RelabelSegments(const ImageI32& segment_ids, const std::vector<std::uint8_t>& new_class, ImageU8* labels) {
+  const int num_segments = static_cast<int>(new_class.size());
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    const int id = segment_ids[i];
+    if (id >= 0 && id < num_segments && new_class[id] != 0 && (*labels)[i] != 0) (*labels)[i] = new_class[id];
+  }
+}
+
 std::string ClassReason(const SegmentResult& s) {
   std::ostringstream r;
   r << std::fixed << std::setprecision(1) << "slope " << s.slope_deg << " deg ("
@@ -512,23 +522,19 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
     ++points[id];
     if (std::abs(DisparityOffPlanePx(plane, p, fb)) <= options.ground_tolerance_px) ++consistent[id];
   }
-  std::vector<bool> to_ground(num_segments, false);
+  std::vector<std::uint8_t> new_class(num_segments, 0);
   bool any = false;
   for (SegmentResult& seg : result->segments) {
     const int id = seg.id;
     if (id < 0 || id >= num_segments || !candidate[id]) continue;
     if (points[id] == 0 || consistent[id] < options.ground_consistent_share * points[id]) continue;
-    to_ground[id] = any = true;
+    new_class[id] = static_cast<std::uint8_t>(TravClass::kTraversable);
+    any = true;
     seg.verdict = TravClass::kTraversable;
     seg.reason = Format("small, and on the ground plane within stereo noise:", 100.0 * consistent[id] / points[id],
                         0, "% of its points within ground_tolerance_px of the plane's disparity");
   }
-  if (!any) return;
-  const auto traversable = static_cast<std::uint8_t>(TravClass::kTraversable);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const int id = segment_ids[i];
-    if (id >= 0 && id < num_segments && to_ground[id] && result->labels[i] != 0) result->labels[i] = traversable;
-  }
+  if (any) RelabelSegments(segment_ids, new_class, &result->labels);
 }
 
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
@@ -662,8 +668,10 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
       consistent[id][k] += std::abs(DisparityOffPlanePx(plane, p, fb)) <= options.fragment_tolerance_px;
     }
   }
-  std::vector<int> host(num_segments, -1);
-  bool any = false;
+  // Each fragment's host; a host may itself be a fragment of a larger host (it has more than
+  // twice the points, so the chains end): a fragment takes the verdict at the end of its chain,
+  // whatever the order of the segment ids.
+  std::vector<int> host(num_segments, -1), share_pct(num_segments, 0);
   for (int id = 0; id < num_segments; ++id) {
     int best = -1, best_count = 0;
     for (std::size_t k = 0; k < touches[id].size(); ++k) {
@@ -673,22 +681,23 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
       }
     }
     if (best < 0 || best_count < options.fragment_consistent_share * points[id]) continue;
-    SegmentResult& seg = result->segments[id];
-    const SegmentResult& big = result->segments[best];
     host[id] = best;
+    share_pct[id] = static_cast<int>(std::lround(100.0 * best_count / points[id]));
+  }
+  std::vector<std::uint8_t> new_class(num_segments, 0);
+  bool any = false;
+  for (int id = 0; id < num_segments; ++id) {
+    if (host[id] < 0) continue;
+    int root = host[id];
+    while (host[root] >= 0) root = host[root];
+    SegmentResult& seg = result->segments[id];
+    seg.verdict = result->segments[root].verdict;  // a root is never changed here
+    new_class[id] = static_cast<std::uint8_t>(seg.verdict);
     any = true;
-    seg.verdict = big.verdict;
-    seg.reason = Format("small, on the plane of segment", best, 0, "") +
-                 Format(" within stereo noise:", 100.0 * best_count / points[id], 0, "% of its points") +
-                 " (" + std::string(ClassName(big.verdict)) + ")";
+    seg.reason = "small, on the plane of segment " + std::to_string(host[id]) + " within stereo noise: " +
+                 std::to_string(share_pct[id]) + "% of its points (" + std::string(ClassName(seg.verdict)) + ")";
   }
-  if (!any) return;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const int id = segment_ids[i];
-    if (id >= 0 && id < num_segments && host[id] >= 0 && result->labels[i] != 0) {
-      result->labels[i] = static_cast<std::uint8_t>(result->segments[host[id]].verdict);
-    }
-  }
+  if (any) RelabelSegments(segment_ids, new_class, &result->labels);
 }
 
 void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
@@ -701,11 +710,16 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
   if (!any) return;
   // Integral images of the three decided classes: (w + 1) x (h + 1), row-major, per thread.
   const std::size_t stride = static_cast<std::size_t>(w) + 1;
+  // Every entry is written below except row 0 and column 0, which are cleared: no full reset.
   thread_local std::vector<std::int32_t> integral[3];
-  for (auto& table : integral) table.assign(stride * (h + 1), 0);
+  for (auto& table : integral) {
+    table.resize(stride * (h + 1));
+    std::fill(table.begin(), table.begin() + stride, 0);
+  }
   for (int v = 0; v < h; ++v) {
     const std::uint8_t* row = labels->row(v);
     std::int32_t run[3] = {0, 0, 0};
+    for (auto& table : integral) table[(v + 1) * stride] = 0;
     for (int u = 0; u < w; ++u) {
       const std::uint8_t c = row[u];
       for (int k = 0; k < 3; ++k) {

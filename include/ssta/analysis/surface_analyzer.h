@@ -213,8 +213,9 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
 /// most of its points within fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the
 /// test of RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share
 /// of them. A host is a segment with a plane not through the camera, at least
-/// fragment_host_min_points points and more than twice the fragment's; verdicts are taken as
-/// they were before this step (one pass).
+/// fragment_host_min_points points and more than twice the fragment's. A host that is itself a
+/// fragment of a larger host passes that one's verdict on: a fragment takes the verdict at the
+/// end of its chain of hosts, whatever the order of the segment ids.
 /// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
 /// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
