@@ -190,6 +190,9 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
     return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
   }
+  if (face_columns_px < 1 || face_columns_px % 2 == 0 || face_columns_px > 63) {
+    return Fail(error, "face_columns_px: must be odd and in [1, 63] px (1: each column alone)");
+  }
   if (!(face_min_slope_deg > 0 && face_min_slope_deg < 90)) {
     return Fail(error, "face_min_slope_deg: must be in (0, 90) degrees");
   }
@@ -544,9 +547,12 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
              "RefineByDisparityFaces: disparity and labels differ in size");
   SSTA_CHECK(options.face_window_px >= 3 && options.face_window_px % 2 == 1,
              "RefineByDisparityFaces: face_window_px must be odd and at least 3");
+  SSTA_CHECK(options.face_columns_px >= 1 && options.face_columns_px % 2 == 1,
+             "RefineByDisparityFaces: face_columns_px must be odd and at least 1");
   SSTA_CHECK(f > 0, "RefineByDisparityFaces: focal length must be positive");
   constexpr float kMaxRowJumpPx = 0.5f;  // a larger step between rows is a depth edge, not a face
   const int w = disparity.width(), h = disparity.height(), k = options.face_window_px / 2;
+  const int r = options.face_columns_px / 2;
   if (h < 2 * k + 1) return;
   const Eigen::Vector3d up = up_camera.normalized();
   const double sin_min = std::sin(options.face_min_slope_deg * M_PI / 180.0);
@@ -558,9 +564,19 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   // above (a jump into the window's first row does not count). Invalid rows add 0 to the sums.
   thread_local std::vector<double> s1, s2;
   thread_local std::vector<int> bad;
+  // Per row, prefix sums over the columns of s1 and s2, and the first and last column of each
+  // run of clean columns whose window means step by at most kMaxRowJumpPx from one to the next
+  // (one surface): each pixel pools the fits of up to face_columns_px columns of its run.
+  thread_local std::vector<double> p1, p2;
+  thread_local std::vector<int> run_first, run_last;
   s1.assign(w, 0.0);
   s2.assign(w, 0.0);
   bad.assign(w, 0);
+  p1.assign(w + 1, 0.0);
+  p2.assign(w + 1, 0.0);
+  run_first.assign(w, 0);
+  run_last.assign(w, 0);
+  const double jump_sum = kMaxRowJumpPx * (2 * k + 1);  // the step limit on s1 = n * mean
   // Invalid disparities (NaN, <= 0) count 0 in the sums and 1 in `bad`; a jump from the row
   // above counts 1 in `bad` unless the row is the window's first.
   auto add_row = [&](int r, double weight_j, int sign, bool count_jump) {
@@ -583,10 +599,19 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
     std::uint8_t* out = labels->row(v);
     const double y = v - cv;
     const double a0 = -cu * up.x() + y * up.y() + f * up.z(), b0 = y * y + f * f;
+    auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
+    for (int u = 0; u < w; ++u) {
+      p1[u + 1] = p1[u] + s1[u];
+      p2[u + 1] = p2[u] + s2[u];
+      run_first[u] = u > 0 && joins(u - 1, u) ? run_first[u - 1] : u;
+    }
+    for (int u = w - 1; u >= 0; --u) run_last[u] = u + 1 < w && joins(u, u + 1) ? run_last[u + 1] : u;
     for (int u = 0; u < w; ++u) {
       const std::uint8_t c = out[u];
       if (bad[u] != 0 || (c != 1 && c != 2 && c != 4)) continue;
-      const double q = s2[u] * n / (sum_jj * s1[u]);
+      const int lo = std::max(u - r, run_first[u]), hi = std::min(u + r, run_last[u]) + 1;
+      // The pooled slope over the mean disparity: q = mean(d') / mean(d) of those columns.
+      const double q = (p2[hi] - p2[lo]) * n / (sum_jj * (p1[hi] - p1[lo]));
       const double du = u - cu;
       const double rise = up.y() - q * (a0 + u * up.x());
       const double norm2 = q * q * (du * du + b0) - 2.0 * y * q + 1.0;

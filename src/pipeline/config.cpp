@@ -141,6 +141,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.ground_tolerance_px = 1.0;
   o.pixel_slope_window_px = 31;
   o.face_window_px = 11;
+  o.face_columns_px = 17;
   o.fragment_tolerance_px = 1.5;
   o.undecided_fill_radius_px = 4;
   return o;
@@ -219,6 +220,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("undecided_fill_radius_px", &c.analysis.undecided_fill_radius_px);
     s.Read("undecided_fill_share", &c.analysis.undecided_fill_share);
     s.Read("face_window_px", &c.analysis.face_window_px);
+    s.Read("face_columns_px", &c.analysis.face_columns_px);
     s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
   }
@@ -369,6 +371,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  undecided_fill_radius_px: " << c.analysis.undecided_fill_radius_px << "\n"
     << "  undecided_fill_share: " << c.analysis.undecided_fill_share << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
+    << "  face_columns_px: " << c.analysis.face_columns_px << "\n"
     << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"

@@ -611,6 +611,75 @@ TEST(RefineByDisparityFaces, IgnoresBoundedNoiseOnGroundAndDepthEdges) {
   EXPECT_EQ(labels(400, 420), 3);
 }
 
+TEST(RefineByDisparityFaces, PoolingColumnsFindsALowCurbThatNoiseHidesFromOneColumn) {
+  StepScene scene;  // a 5 cm curb 3 m ahead: its face spans ~7 rows, fewer than the window
+  scene.height_m = 0.05;
+  ImageF d;
+  ImageI32 part;
+  scene.Render(&d, &part);
+  // SGBM's errors on ground are stripes along the rows (its pull of sub-pixel disparities to
+  // whole pixels) that shift from column to column as the camera rolls: here a ripple of
+  // AMP px and a 22-row period along each column, with a random phase per column (fixed
+  // LCG). One column's fit reads the ripple's flanks as flat (face-like) or steep.
+  std::uint32_t state = 777;
+  auto uniform = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return (state >> 8) / 16777216.0;
+  };
+  for (int u = 0; u < 640; ++u) {
+    const double phase = 2 * M_PI * uniform();
+    for (int v = 0; v < 480; ++v) {
+      if (std::isfinite(d(v, u))) d(v, u) += static_cast<float>(0.4 * std::sin(2 * M_PI * v / 22.0 + phase));
+    }
+  }
+  // A near box beside the curb, columns 560..599 from row 200 down at 0.5 m: its front (d' = 0,
+  // d four times the ground's) must not leak into the pooled fits of the ground columns next
+  // to it (pooled with 8 of its columns, the ground would read 44 deg).
+  for (int v = 200; v < 480; ++v) {
+    for (int u = 560; u < 600; ++u) d(v, u) = static_cast<float>(StepScene::kF * StepScene::kB / 0.5);
+  }
+  struct Counts {
+    int face_px = 0, face_hits = 0, far_px = 0, far_hits = 0, beside_px = 0, beside_hits = 0;
+  };
+  auto run = [&](int columns) {
+    AnalysisOptions o = FaceOptions();
+    o.face_min_slope_deg = 35;
+    o.face_columns_px = columns;
+    ImageU8 labels(640, 480, 1);
+    RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), o, &labels);
+    Counts n;
+    for (int v = 8; v < 472; ++v) {
+      for (int u = 0; u < 560; ++u) {
+        bool near_face = false;
+        for (int j = -8; j <= 8 && !near_face; ++j) near_face = part(v + j, u) == 1;
+        const bool flagged = labels(v, u) == 3;
+        if (u >= 20 && u < 520 && part(v, u) == 1) {
+          ++n.face_px;
+          n.face_hits += flagged;
+        } else if (u >= 20 && u < 520 && !near_face && part(v, u) >= 0) {
+          ++n.far_px;
+          n.far_hits += flagged;
+        } else if (u >= 540 && v >= 210 && !near_face && part(v, u) >= 0) {
+          ++n.beside_px;  // the 20 columns left of the box, below its top
+          n.beside_hits += flagged;
+        }
+      }
+    }
+    return n;
+  };
+  const Counts alone = run(1), pooled = run(17);
+  ASSERT_GT(alone.face_px, 640 * 5);
+  ASSERT_GT(alone.far_px, 150000);
+  ASSERT_GT(alone.beside_px, 3000);
+  // One column alone reads the ripple as faces all over the ground; pooled, the ripples' random
+  // phases cancel: no ground pixel is flagged (the box's ground neighbours included), and a
+  // third of the curb's face still is (the 11-row windows straddle its 7 rows; noise-free 39 %).
+  EXPECT_GT(alone.far_hits, alone.far_px / 100);
+  EXPECT_EQ(pooled.far_hits, 0);
+  EXPECT_EQ(pooled.beside_hits, 0);
+  EXPECT_GT(pooled.face_hits, pooled.face_px / 4);
+}
+
 TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
   AnalysisOptions options;
   options.undecided_fill_radius_px = 1;
@@ -672,6 +741,10 @@ TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("face_min_slope_deg"), std::string::npos) << error;
   o.face_min_slope_deg = 40;
+  o.face_columns_px = 16;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("face_columns_px"), std::string::npos) << error;
+  o.face_columns_px = 17;
   EXPECT_TRUE(o.IsValid(&error)) << error;
   o.fragment_tolerance_px = -1;
   EXPECT_FALSE(o.IsValid(&error));

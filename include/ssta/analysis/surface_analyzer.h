@@ -91,8 +91,11 @@ struct AnalysisOptions {
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;
+  /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
+  /// varies from column to column while curbs and steps run across many; 1: each column alone.
+  int face_columns_px = 1;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
-  double face_min_slope_deg = 40.0;
+  double face_min_slope_deg = 35.0;
 
   bool IsValid(std::string* error) const;
 };
@@ -199,7 +202,9 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 /// the plane normal to `up_camera` is the slope tested. On level ground d' is b/h px per row
 /// (h: camera height) at every range; on a face towards the camera d is constant. Faces a few
 /// pixels tall (the front of a curb or a step) vanish in the normals' smoothing windows, which
-/// are 31 px wide; eleven rows of disparity keep them.
+/// are 31 px wide; eleven rows of disparity keep them. Each pixel takes the mean d' over the mean
+/// d of the clean windows (no invalid pixel, no jump) of the face_columns_px columns around it:
+/// pooling columns cuts the noise of d' that hides faces of 5 cm.
 /// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
