@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 #include <unordered_map>
+#include <utility>
 
 #include <Eigen/Eigenvalues>
 
@@ -189,6 +190,9 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (fragment_host_min_points < 3) return Fail(error, "fragment_host_min_points: must be at least 3");
   if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
     return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
+  }
+  if (!(face_grow_tolerance_px >= 0 && face_grow_tolerance_px <= 5)) {
+    return Fail(error, "face_grow_tolerance_px: must be in [0, 5] px (0: off)");
   }
   if (face_columns_px < 1 || face_columns_px % 2 == 0 || face_columns_px > 63) {
     return Fail(error, "face_columns_px: must be odd and in [1, 63] px (1: each column alone)");
@@ -595,6 +599,13 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   // t = (-(u - cu) q, 1 - y q, -f q): its rise along up is up_y - q A(u) with
   // A(u) = (u - cu) up_x + y up_y + f up_z, and |t|^2 = q^2 ((u - cu)^2 + y^2 + f^2) - 2 y q + 1.
   const double n = 2 * k + 1;
+  // Pixels rising steeper than kGrowSeedSlopeDeg are surely on a face: their window's mean
+  // disparity (the face's, constant along the column) is kept to grow the face along the column.
+  constexpr double kGrowSeedSlopeDeg = 70.0;
+  const bool grow = options.face_grow_tolerance_px > 0;
+  const double sin_seed = std::sin(kGrowSeedSlopeDeg * M_PI / 180.0), sin2_seed = sin_seed * sin_seed;
+  thread_local std::vector<std::pair<int, float>> seeds;
+  seeds.clear();
   for (int v = k;; ++v) {
     std::uint8_t* out = labels->row(v);
     const double y = v - cv;
@@ -615,7 +626,10 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
       const double du = u - cu;
       const double rise = up.y() - q * (a0 + u * up.x());
       const double norm2 = q * q * (du * du + b0) - 2.0 * y * q + 1.0;
-      if (rise * rise > sin2_min * norm2) out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+      if (rise * rise > sin2_min * norm2) {
+        out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+        if (grow && rise * rise > sin2_seed * norm2) seeds.push_back({v * w + u, static_cast<float>(s1[u] / n)});
+      }
     }
     if (v + k + 1 >= h) break;
     // Slide the window one row down: row v - k leaves, row v + k + 1 enters; every remaining
@@ -632,6 +646,20 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
       s2[u] += k * out_d + (k + 1) * in_d - s1[u];
       bad[u] += (!ok_in) + (std::abs(enter[u] - enter_above[u]) > kMaxRowJumpPx) - (!ok_out) -
                 (std::abs(leave_next[u] - leave[u]) > kMaxRowJumpPx);
+    }
+  }
+  // A face a few rows tall is flagged only where the window is centred on it (its rows near the
+  // ground and the top straddle them): the rows within the window's reach whose disparity is
+  // the face's, within face_grow_tolerance_px, join it.
+  for (const auto& [index, face_d] : seeds) {
+    const int v = index / w, u = index % w;
+    for (int vv = std::max(0, v - k); vv <= std::min(h - 1, v + k); ++vv) {
+      std::uint8_t& c = (*labels)(vv, u);
+      if (c != 1 && c != 2 && c != 4) continue;
+      const float d = disparity(vv, u);
+      if (d > 0.0f && std::abs(d - face_d) <= options.face_grow_tolerance_px) {
+        c = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+      }
     }
   }
 }

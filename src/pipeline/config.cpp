@@ -142,6 +142,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.pixel_slope_window_px = 31;
   o.face_window_px = 11;
   o.face_columns_px = 17;
+  o.face_grow_tolerance_px = 0.25;
   o.fragment_tolerance_px = 1.5;
   o.undecided_fill_radius_px = 4;
   return o;
@@ -221,6 +222,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("undecided_fill_share", &c.analysis.undecided_fill_share);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_columns_px", &c.analysis.face_columns_px);
+    s.Read("face_grow_tolerance_px", &c.analysis.face_grow_tolerance_px);
     s.Read("face_min_slope_deg", &c.analysis.face_min_slope_deg);
     s.RejectUnknownKeys();
   }
@@ -372,6 +374,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  undecided_fill_share: " << c.analysis.undecided_fill_share << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_columns_px: " << c.analysis.face_columns_px << "\n"
+    << "  face_grow_tolerance_px: " << c.analysis.face_grow_tolerance_px << "\n"
     << "  face_min_slope_deg: " << c.analysis.face_min_slope_deg << "\n";
   y << "gravity:\n"
     << "  source: " << GravitySourceName(c.gravity.source) << "\n"

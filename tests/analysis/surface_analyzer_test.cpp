@@ -680,6 +680,45 @@ TEST(RefineByDisparityFaces, PoolingColumnsFindsALowCurbThatNoiseHidesFromOneCol
   EXPECT_GT(pooled.face_hits, pooled.face_px / 4);
 }
 
+TEST(RefineByDisparityFaces, GrowsAFaceOverAllItsRowsAndNoFurther) {
+  for (const double height : {0.08, 0.12}) {
+    StepScene scene;  // a curb 3 m ahead whose face spans 11 (8 cm) or 16 (12 cm) rows
+    scene.height_m = height;
+    ImageF d;
+    ImageI32 part;
+    scene.Render(&d, &part);
+    auto run = [&](double grow_px, int* face_hits, int* face_px, int* off_hits) {
+      AnalysisOptions o = FaceOptions();
+      o.face_grow_tolerance_px = grow_px;
+      ImageU8 labels(640, 480, 1);
+      RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), o, &labels);
+      *face_hits = *face_px = *off_hits = 0;
+      for (int v = 2; v < 478; ++v) {
+        for (int u = 0; u < 640; ++u) {
+          const bool flagged = labels(v, u) == 3;
+          if (part(v, u) == 1) {
+            ++*face_px;
+            *face_hits += flagged;
+          } else if (part(v - 2, u) != 1 && part(v + 2, u) != 1) {
+            *off_hits += flagged;  // ground or top more than 2 rows from the face
+          }
+        }
+      }
+    };
+    int before_hits, after_hits, face_px, before_off, after_off;
+    run(0.0, &before_hits, &face_px, &before_off);
+    run(0.25, &after_hits, &face_px, &after_off);
+    ASSERT_GT(face_px, 640 * 6) << height;
+    // The line fits over 11 rows flag the rows where the window lies mostly on the face (55 %
+    // and 73 % of them here); grown from the rows steeper than 70 deg, every row of it. The ground at the face's foot and the top at its edge lie at the face's
+    // depth: within 0.25 px of its disparity for 0.25 / (b / h) ~ 2 rows, no further.
+    EXPECT_LT(before_hits, face_px * 4 / 5) << height;
+    EXPECT_GT(after_hits, face_px * 97 / 100) << height;
+    EXPECT_EQ(before_off, 0) << height;
+    EXPECT_EQ(after_off, 0) << height;
+  }
+}
+
 TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
   AnalysisOptions options;
   options.undecided_fill_radius_px = 1;
@@ -741,6 +780,10 @@ TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("face_min_slope_deg"), std::string::npos) << error;
   o.face_min_slope_deg = 40;
+  o.face_grow_tolerance_px = -0.1;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("face_grow_tolerance_px"), std::string::npos) << error;
+  o.face_grow_tolerance_px = 0.25;
   o.face_columns_px = 16;
   EXPECT_FALSE(o.IsValid(&error));
   EXPECT_NE(error.find("face_columns_px"), std::string::npos) << error;

@@ -94,6 +94,9 @@ struct AnalysisOptions {
   /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
   /// varies from column to column while curbs and steps run across many; 1: each column alone.
   int face_columns_px = 1;
+  /// A face is grown along the column from its surest pixels (steeper than 70 deg) over the
+  /// rows within the window whose disparity is the face's within this [px]; 0: off.
+  double face_grow_tolerance_px = 0.0;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
 
@@ -204,7 +207,10 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 /// pixels tall (the front of a curb or a step) vanish in the normals' smoothing windows, which
 /// are 31 px wide; eleven rows of disparity keep them. Each pixel takes the mean d' over the mean
 /// d of the clean windows (no invalid pixel, no jump) of the face_columns_px columns around it:
-/// pooling columns cuts the noise of d' that hides faces of 5 cm.
+/// pooling columns cuts the noise of d' that hides faces of 5 cm. A face shorter than the window
+/// is flagged only where the window is centred on it; from each pixel steeper than 70 deg, the
+/// rows within the window whose disparity equals the face's (within face_grow_tolerance_px,
+/// the window's mean) join it.
 /// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
