@@ -119,7 +119,7 @@ NormalOptions PipelineNormalDefaults() {
 
 SegmenterOptions PipelineSegmenterDefaults() {
   SegmenterOptions o;
-  o.roughness_deg = 8.0;
+  o.roughness_deg = 9.0;
   o.max_segment_angle_deg = 10.0;
   return o;
 }
