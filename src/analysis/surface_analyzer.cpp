@@ -583,9 +583,9 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   const double jump_sum = kMaxRowJumpPx * (2 * k + 1);  // the step limit on s1 = n * mean
   // Invalid disparities (NaN, <= 0) count 0 in the sums and 1 in `bad`; a jump from the row
   // above counts 1 in `bad` unless the row is the window's first.
-  auto add_row = [&](int r, double weight_j, int sign, bool count_jump) {
-    const float* d = disparity.row(r);
-    const float* above = disparity.row(r > 0 ? r - 1 : r);
+  auto add_row = [&](int row, double weight_j, int sign, bool count_jump) {
+    const float* d = disparity.row(row);
+    const float* above = disparity.row(row > 0 ? row - 1 : row);
     for (int u = 0; u < w; ++u) {
       const bool ok = d[u] > 0.0f;
       const double x = ok ? static_cast<double>(d[u]) : 0.0;
@@ -606,11 +606,11 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   const double sin_seed = std::sin(kGrowSeedSlopeDeg * M_PI / 180.0), sin2_seed = sin_seed * sin_seed;
   thread_local std::vector<std::pair<int, float>> seeds;
   seeds.clear();
+  auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
   for (int v = k;; ++v) {
     std::uint8_t* out = labels->row(v);
     const double y = v - cv;
     const double a0 = -cu * up.x() + y * up.y() + f * up.z(), b0 = y * y + f * f;
-    auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
     for (int u = 0; u < w; ++u) {
       p1[u + 1] = p1[u] + s1[u];
       p2[u + 1] = p2[u] + s2[u];
