@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include "ssta/core/error.h"
@@ -19,11 +20,36 @@ namespace fs = std::filesystem;
 namespace ssta {
 namespace {
 
+/// `<path>.tmp<pid>-<random hex>`: the writer's process id lets a later write tell the
+/// leftovers of a killed writer (SIGKILL, power loss) from a live one's file in progress.
 std::string TemporaryName(const std::string& path) {
   static thread_local std::mt19937_64 rng{std::random_device{}()};
   std::ostringstream name;
-  name << path << ".tmp" << std::hex << (rng() & 0xffffffu);
+  name << path << ".tmp" << ::getpid() << '-' << std::hex << (rng() & 0xffffffu);
   return name.str();
+}
+
+/// Removes the temporary files of `path` (named as TemporaryName names them) whose writer
+/// process no longer exists. Best effort: any error leaves the file alone.
+void RemoveStaleTemporaries(const fs::path& target) {
+  const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  const std::string prefix = target.filename().string() + ".tmp";
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    // The rest must be <decimal pid>-<hex>.
+    const std::string rest = name.substr(prefix.size());
+    const std::size_t dash = rest.find('-');
+    if (dash == 0 || dash == std::string::npos || dash + 1 == rest.size()) continue;
+    if (rest.find_first_not_of("0123456789") != dash) continue;
+    if (rest.find_first_not_of("0123456789abcdef", dash + 1) != std::string::npos) continue;
+    const long pid = std::strtol(rest.substr(0, dash).c_str(), nullptr, 10);
+    if (pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive, or unknown
+    std::error_code ignored;
+    fs::remove(it->path(), ignored);
+  }
 }
 
 void SyncFile(const std::string& path, const std::string& tmp) {
@@ -73,6 +99,7 @@ void WriteFileAtomically(const std::string& path,
     fs::remove(tmp, ignored);
     throw;
   }
+  RemoveStaleTemporaries(target);
 }
 
 void WriteTextAtomically(const std::string& path, const std::string& text) {

@@ -3,9 +3,15 @@
 
 #include "ssta/io/file_util.h"
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -107,6 +113,48 @@ TEST(WriteTextAtomically, AMissingFolderIsAClearError) {
     EXPECT_NE(std::string(e.what()).find("does not exist"), std::string::npos) << e.what();
   }
   EXPECT_EQ(EntriesIn(dir.path()), 0);
+}
+
+TEST(WriteFileAtomically, AWriterKilledMidWriteLeavesItsTemporaryForTheNextWriteToRemove) {
+  testing::TempDir dir;
+  const std::string path = dir / "map.ot";
+  WriteTextAtomically(path, "first\n");
+  // A child process starts to replace the file and is killed (SIGKILL) halfway through.
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    WriteFileAtomically(path, [](const std::string& tmp) {
+      std::ofstream(tmp) << "half of a ";
+      ::raise(SIGKILL);
+    });
+    ::_exit(1);  // not reached
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFSIGNALED(status));
+  const std::string leftover = path + ".tmp" + std::to_string(child);
+  std::vector<std::string> leftovers;
+  for (const auto& e : fs::directory_iterator(dir.path())) {
+    if (e.path().string().rfind(leftover + "-", 0) == 0) leftovers.push_back(e.path().string());
+  }
+  ASSERT_EQ(leftovers.size(), 1u);  // the killed writer's file, named with its pid
+  EXPECT_EQ(Slurp(leftovers[0]), "half of a ");
+  EXPECT_EQ(Slurp(path), "first\n");  // the map itself is untouched
+  // Files that must stay: a live process's write in progress (this process's parent stands
+  // in for one), another file's leftovers, and names that only resemble the pattern.
+  const std::vector<std::string> keep = {
+      path + ".tmp" + std::to_string(::getppid()) + "-1a2b",
+      std::string(dir / "other.ot.tmp") + std::to_string(child) + "-1a2b",
+      path + ".tmp" + std::to_string(child) + "-notHex",
+      path + ".tmp" + std::to_string(child),
+      path + ".tmpabc",
+  };
+  for (const std::string& k : keep) std::ofstream(k) << "x";
+  WriteTextAtomically(path, "second\n");
+  EXPECT_EQ(Slurp(path), "second\n");
+  EXPECT_FALSE(fs::exists(leftovers[0])) << leftovers[0] << " should have been removed";
+  for (const std::string& k : keep) EXPECT_TRUE(fs::exists(k)) << k;
+  EXPECT_EQ(EntriesIn(dir.path()), 1 + static_cast<int>(keep.size()));
 }
 
 }  // namespace

@@ -7,7 +7,9 @@ namespace ssta {
 
 /// Writes a file atomically: `write` fills a temporary file beside `path`, which is flushed and
 /// renamed over `path` only when `write` returns normally. On any failure the temporary file is
-/// removed, `path` keeps its previous content, and ssta::Error names the file.
+/// removed, `path` keeps its previous content, and ssta::Error names the file. The temporary
+/// file is `<path>.tmp<pid>-<hex>`; after a successful write, such files of `path` left by a
+/// writer process that no longer exists (killed while writing) are removed.
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write);
 
 /// Writes `text` to `path` atomically.
