@@ -80,8 +80,8 @@ void InjectedWriteFault(const std::string& path, const std::string& tmp) {
 
 }  // namespace
 
-void WriteFileAtomically(const std::string& path,
-                         const std::function<void(const std::string& tmp_path)>& write) {
+void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,
+                         bool remove_stale) {
   const fs::path target(path);
   if (target.has_parent_path() && !fs::is_directory(target.parent_path())) {
     throw Error(path + ": the folder " + target.parent_path().string() + " does not exist");
@@ -99,7 +99,7 @@ void WriteFileAtomically(const std::string& path,
     fs::remove(tmp, ignored);
     throw;
   }
-  RemoveStaleTemporaries(target);
+  if (remove_stale) RemoveStaleTemporaries(target);
 }
 
 void WriteTextAtomically(const std::string& path, const std::string& text) {

@@ -383,7 +383,7 @@ void TraversabilityMap::Save(const std::string& path) const {
     file << trailer;
     file.flush();
     if (!file) throw Error(path + ": write failed (disk full?)");
-  });
+  }, /*remove_stale=*/true);
 }
 
 TraversabilityMap TraversabilityMap::Load(const std::string& path) {

@@ -115,7 +115,7 @@ TEST(WriteTextAtomically, AMissingFolderIsAClearError) {
   EXPECT_EQ(EntriesIn(dir.path()), 0);
 }
 
-TEST(WriteFileAtomically, AWriterKilledMidWriteLeavesItsTemporaryForTheNextWriteToRemove) {
+TEST(WriteFileAtomically, AWriterKilledMidWriteLeavesItsTemporaryForTheNextMapSaveToRemove) {
   testing::TempDir dir;
   const std::string path = dir / "map.ot";
   WriteTextAtomically(path, "first\n");
@@ -150,8 +150,11 @@ TEST(WriteFileAtomically, AWriterKilledMidWriteLeavesItsTemporaryForTheNextWrite
       path + ".tmpabc",
   };
   for (const std::string& k : keep) std::ofstream(k) << "x";
+  // A write without remove_stale leaves them all; one with it removes the killed writer's.
   WriteTextAtomically(path, "second\n");
-  EXPECT_EQ(Slurp(path), "second\n");
+  EXPECT_TRUE(fs::exists(leftovers[0]));
+  WriteFileAtomically(path, [](const std::string& tmp) { std::ofstream(tmp) << "third\n"; }, /*remove_stale=*/true);
+  EXPECT_EQ(Slurp(path), "third\n");
   EXPECT_FALSE(fs::exists(leftovers[0])) << leftovers[0] << " should have been removed";
   for (const std::string& k : keep) EXPECT_TRUE(fs::exists(k)) << k;
   EXPECT_EQ(EntriesIn(dir.path()), 1 + static_cast<int>(keep.size()));

@@ -149,6 +149,8 @@ class BuildMapFaults : public ::testing::Test {
     EXPECT_EQ(done.frames_inserted(), reference_frames) << "no frame lost, none fused twice";
     EXPECT_EQ(done.metadata().sequences.size(), 1u);
     EXPECT_EQ(MapCsv(map_, dir_, "resumed.csv"), reference_csv);
+    // A kill inside a save leaves its temporary file; the finishing run's saves remove it.
+    EXPECT_FALSE(HasTemporaryFile(dir_.path(), "m.ot"));
   }
 
   /// Kill after `ms` milliseconds.
