@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 
@@ -770,44 +771,32 @@ TEST(FillUndecidedByConsensus, LeavesSplitWindowsAndWideGapsUndecided) {
 }
 
 TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
-  AnalysisOptions o;
+  AnalysisOptions valid;
+  valid.face_window_px = 11;
+  valid.face_columns_px = 17;
+  valid.face_grow_tolerance_px = 0.25;
+  valid.fragment_tolerance_px = 1.5;
+  valid.undecided_fill_radius_px = 4;
   std::string error;
-  o.face_window_px = 4;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("face_window_px"), std::string::npos) << error;
-  o.face_window_px = 11;
-  o.face_min_slope_deg = 90;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("face_min_slope_deg"), std::string::npos) << error;
-  o.face_min_slope_deg = 40;
-  o.face_grow_tolerance_px = -0.1;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("face_grow_tolerance_px"), std::string::npos) << error;
-  o.face_grow_tolerance_px = 0.25;
-  o.face_columns_px = 16;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("face_columns_px"), std::string::npos) << error;
-  o.face_columns_px = 17;
-  EXPECT_TRUE(o.IsValid(&error)) << error;
-  o.fragment_tolerance_px = -1;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("fragment_tolerance_px"), std::string::npos) << error;
-  o.fragment_tolerance_px = 1.5;
-  o.fragment_consistent_share = 0;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("fragment_consistent_share"), std::string::npos) << error;
-  o.fragment_consistent_share = 0.9;
-  o.fragment_host_min_points = 2;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("fragment_host_min_points"), std::string::npos) << error;
-  o.fragment_host_min_points = 1000;
-  o.undecided_fill_share = 0.5;  // a tie could pick either class
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("undecided_fill_share"), std::string::npos) << error;
-  o.undecided_fill_share = 0.9;
-  o.undecided_fill_radius_px = -1;
-  EXPECT_FALSE(o.IsValid(&error));
-  EXPECT_NE(error.find("undecided_fill_radius_px"), std::string::npos) << error;
+  ASSERT_TRUE(valid.IsValid(&error)) << error;
+  // One bad value at a time, on top of valid options: rejected, and the message names the key.
+  auto expect_rejected = [&](const std::string& key, const std::function<void(AnalysisOptions*)>& spoil) {
+    AnalysisOptions o = valid;
+    spoil(&o);
+    std::string message;
+    EXPECT_FALSE(o.IsValid(&message)) << key;
+    EXPECT_NE(message.find(key), std::string::npos) << message;
+  };
+  expect_rejected("face_window_px", [](AnalysisOptions* o) { o->face_window_px = 4; });
+  expect_rejected("face_min_slope_deg", [](AnalysisOptions* o) { o->face_min_slope_deg = 90; });
+  expect_rejected("face_grow_tolerance_px", [](AnalysisOptions* o) { o->face_grow_tolerance_px = -0.1; });
+  expect_rejected("face_columns_px", [](AnalysisOptions* o) { o->face_columns_px = 16; });
+  expect_rejected("fragment_tolerance_px", [](AnalysisOptions* o) { o->fragment_tolerance_px = -1; });
+  expect_rejected("fragment_consistent_share", [](AnalysisOptions* o) { o->fragment_consistent_share = 0; });
+  expect_rejected("fragment_host_min_points", [](AnalysisOptions* o) { o->fragment_host_min_points = 2; });
+  // A share of 0.5 could pick either class of a tie.
+  expect_rejected("undecided_fill_share", [](AnalysisOptions* o) { o->undecided_fill_share = 0.5; });
+  expect_rejected("undecided_fill_radius_px", [](AnalysisOptions* o) { o->undecided_fill_radius_px = -1; });
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {
