@@ -753,6 +753,27 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
   if (any) RelabelSegments(segment_ids, new_class, &result->labels);
 }
 
+void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
+                           const AnalysisOptions& options, AnalysisResult* result) {
+  if (!options.undecided_height_fill || !result->quality.passed || !result->ground.found) return;
+  ImageU8& labels = result->labels;
+  SSTA_CHECK(cloud.width() == labels.width() && cloud.height() == labels.height(),
+             "FillUndecidedByHeight: cloud and labels differ in size");
+  SSTA_CHECK(focal_times_baseline > 0, "FillUndecidedByHeight: focal_times_baseline must be positive");
+  const Eigen::Vector4d& plane = result->ground.plane;
+  constexpr std::uint8_t kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (labels[i] != kUndecided || !IsFinite(cloud[i])) continue;
+    const Eigen::Vector3d p = cloud[i].cast<double>();
+    TravClass c = vehicle.ClassifyStep(std::abs(plane.head<3>().dot(p) + plane(3)));
+    if (options.ground_tolerance_px > 0 &&
+        std::abs(DisparityOffPlanePx(plane, p, focal_times_baseline)) <= options.ground_tolerance_px) {
+      c = TravClass::kTraversable;
+    }
+    if (c == TravClass::kTraversable || c == TravClass::kSemiTraversable) labels[i] = static_cast<std::uint8_t>(c);
+  }
+}
+
 void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
   const int r = options.undecided_fill_radius_px;
   if (r <= 0) return;

@@ -145,6 +145,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.face_grow_tolerance_px = 0.25;
   o.fragment_tolerance_px = 1.5;
   o.undecided_fill_radius_px = 4;
+  o.undecided_height_fill = true;
   return o;
 }
 
@@ -220,6 +221,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("fragment_host_min_points", &c.analysis.fragment_host_min_points);
     s.Read("undecided_fill_radius_px", &c.analysis.undecided_fill_radius_px);
     s.Read("undecided_fill_share", &c.analysis.undecided_fill_share);
+    s.Read("undecided_height_fill", &c.analysis.undecided_height_fill);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_columns_px", &c.analysis.face_columns_px);
     s.Read("face_grow_tolerance_px", &c.analysis.face_grow_tolerance_px);
@@ -372,6 +374,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  fragment_host_min_points: " << c.analysis.fragment_host_min_points << "\n"
     << "  undecided_fill_radius_px: " << c.analysis.undecided_fill_radius_px << "\n"
     << "  undecided_fill_share: " << c.analysis.undecided_fill_share << "\n"
+    << "  undecided_height_fill: " << c.analysis.undecided_height_fill << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_columns_px: " << c.analysis.face_columns_px << "\n"
     << "  face_grow_tolerance_px: " << c.analysis.face_grow_tolerance_px << "\n"

@@ -106,6 +106,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   if (out.analysis.quality.passed) {
     RefineByDisparityFaces(out.disparity, g.f, g.cu, g.cv, out.up_rectified, config_.analysis, &out.analysis.labels);
     FillUndecidedByConsensus(config_.analysis, &out.analysis.labels);
+    FillUndecidedByHeight(cloud, g.f * g.baseline_m, config_.vehicle, config_.analysis, &out.analysis);
   }
   out.timings.analyze_ms = clock.LapMs();
 

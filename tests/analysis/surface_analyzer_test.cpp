@@ -770,6 +770,61 @@ TEST(FillUndecidedByConsensus, LeavesSplitWindowsAndWideGapsUndecided) {
   EXPECT_EQ(labels(36, 35), 4);
 }
 
+TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUndecided) {
+  // Floor 1 m below the camera (segment 0); single unsegmented points (undecided) at known
+  // heights above it. A point h above the floor at depth Z lies fb h / (Z D) px off the floor's
+  // disparity on its ray (D = 1 m, fb = 50 px m).
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 100);
+  auto point_at = [&](int v, int u, double height_m, double depth_m) {
+    w.cloud_(v, u) = Eigen::Vector3f(0.0f, static_cast<float>(1.0 - height_m), static_cast<float>(depth_m));
+    w.ids_(v, u) = -1;
+  };
+  point_at(10, 10, 0.05, 3.0);   // 0.83 px off: ground within stereo noise -> traversable
+  point_at(20, 10, 0.15, 2.0);   // 3.75 px off, step 0.15 m -> semi-traversable
+  point_at(30, 10, 0.15, 20.0);  // 0.375 px off: at 20 m stereo cannot tell it from the floor
+  point_at(40, 10, 0.50, 3.0);   // step 0.5 m: not drivable, stays undecided
+  point_at(50, 10, -0.25, 3.0);  // 0.25 m below the floor (a brink's smeared point): stays
+  w.cloud_(60, 10) = NanVector3f();  // no depth: stays unknown
+  w.ids_(60, 10) = -1;
+  AnalysisOptions options;
+  options.ground_tolerance_px = 1.0;
+  options.undecided_height_fill = true;
+  const AnalysisResult analysed = w.Analyze({}, options);
+  ASSERT_TRUE(analysed.quality.passed) << analysed.quality.reason;
+  ASSERT_EQ(analysed.labels(10, 10), static_cast<std::uint8_t>(TravClass::kUndecided));
+  const auto label = [](const AnalysisResult& r, int v, int u) { return static_cast<TravClass>(r.labels(v, u)); };
+
+  AnalysisResult r = analysed;
+  FillUndecidedByHeight(w.cloud_, kFocalTimesBaseline, VehicleOptions{}, options, &r);
+  EXPECT_EQ(label(r, 10, 10), TravClass::kTraversable);
+  EXPECT_EQ(label(r, 20, 10), TravClass::kSemiTraversable);
+  EXPECT_EQ(label(r, 30, 10), TravClass::kTraversable);
+  EXPECT_EQ(label(r, 40, 10), TravClass::kUndecided);
+  EXPECT_EQ(label(r, 50, 10), TravClass::kUndecided);
+  EXPECT_EQ(label(r, 60, 10), TravClass::kUnknown);
+  EXPECT_EQ(label(r, 70, 70), TravClass::kTraversable);  // the floor keeps its verdict
+
+  // Without the disparity tolerance the far point is judged by its height alone.
+  AnalysisOptions no_tolerance = options;
+  no_tolerance.ground_tolerance_px = 0.0;
+  AnalysisResult by_height = analysed;
+  FillUndecidedByHeight(w.cloud_, kFocalTimesBaseline, VehicleOptions{}, no_tolerance, &by_height);
+  EXPECT_EQ(label(by_height, 30, 10), TravClass::kSemiTraversable);
+  EXPECT_EQ(label(by_height, 10, 10), TravClass::kTraversable);  // 0.05 m < semi_step_m
+
+  // Off, or in a frame that failed the quality check: nothing changes.
+  AnalysisOptions off = options;
+  off.undecided_height_fill = false;
+  AnalysisResult unchanged = analysed;
+  FillUndecidedByHeight(w.cloud_, kFocalTimesBaseline, VehicleOptions{}, off, &unchanged);
+  EXPECT_EQ(label(unchanged, 20, 10), TravClass::kUndecided);
+  AnalysisResult failed = analysed;
+  failed.quality.passed = false;
+  FillUndecidedByHeight(w.cloud_, kFocalTimesBaseline, VehicleOptions{}, options, &failed);
+  EXPECT_EQ(label(failed, 20, 10), TravClass::kUndecided);
+}
+
 TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
   AnalysisOptions valid;
   valid.face_window_px = 11;

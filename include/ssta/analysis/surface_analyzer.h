@@ -88,6 +88,10 @@ struct AnalysisOptions {
   int undecided_fill_radius_px = 0;
   /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
   double undecided_fill_share = 0.9;
+  /// Undecided pixels that no consensus fills (FillUndecidedByHeight): true, each takes the step
+  /// class of its own point's height above the dominant ground plane where that is drivable
+  /// (traversable, or semi-traversable); higher points stay undecided.
+  bool undecided_height_fill = false;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;
@@ -195,6 +199,20 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
 /// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
 /// edge against the ground), they stay undecided. One pass on the labels as they were.
 void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
+
+/// Undecided pixels by their own height (AnalysisOptions::undecided_height_fill; needs a frame
+/// that passed the quality check, else does nothing). Pixels without a normal (the smoothing
+/// window broke on a depth edge) and segments of a few points get no verdict, and where an
+/// obstacle's edge meets the ground no consensus fills them: the 3-5 rows on top of a curb, the
+/// strip between a face and the ground. Each undecided pixel (4) with a point p takes
+/// traversable when p lies within ground_tolerance_px of the dominant plane in disparity (the
+/// test of RefineByGroundDisparity), else the step class of its height |n . p + D| when that is
+/// traversable or semi-traversable. Higher points stay undecided: a lone point is not called an
+/// obstacle, since next to a depth edge the matcher smears the farther surface's disparity into
+/// the nearer one (at a drop-off's brink such points lie far below the plane).
+/// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
+void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
+                           const AnalysisOptions& options, AnalysisResult* result);
 
 /// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
 /// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
