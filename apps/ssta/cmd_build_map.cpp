@@ -69,6 +69,8 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_flag("--refine", args->refine,
                 "refine cam0's mount pitch and roll online from the ground (sets refinement.online; "
                 "docs/mount_calibration.md)");
+  cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
+                "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--sequential", args->sequential,
                 "classify and fuse one frame after the other (default: fuse each frame on a second thread while the "

@@ -12,6 +12,7 @@
 #include "pipeline/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
+#include "ssta/pipeline/sequence_classifier.h"
 #include "ssta/refinement/ground_evidence.h"
 #include "ssta/stereo/stereo_matcher.h"
 
@@ -231,8 +232,11 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   // One frame through the pipeline with the mount in use (gravity in the camera).
   auto process = [&](const StereoFrame& frame, const Eigen::Vector3d& up_body) {
     const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+    const Eigen::Vector3d up_camera = (body_T_camera.linear().transpose() * up_body).normalized();
     auto result = std::make_shared<FrameResult>(
-        pipeline.Process(images.left, images.right, (body_T_camera.linear().transpose() * up_body).normalized()));
+        options.oracle_disparity ? pipeline.ProcessWithDisparity(images.left, images.right,
+                                                                 ReadTrueDisparity(sequence, frame.timestamp_ns), up_camera)
+                                 : pipeline.Process(images.left, images.right, up_camera));
     result->timestamp_ns = frame.timestamp_ns;
     return result;
   };

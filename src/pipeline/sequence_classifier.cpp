@@ -32,17 +32,18 @@ void Scale(double k, StageTimings* t) {
   }
 }
 
-ImageF ReadOracleDisparity(const Sequence& sequence, const std::string& name) {
+}  // namespace
+
+ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns) {
   namespace fs = std::filesystem;
-  fs::path gt = fs::path(sequence.root()) / "gt" / "disparity" / (name + ".png");
-  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / "disparity" / (name + ".png");
+  const std::string name = std::to_string(timestamp_ns) + ".png";
+  fs::path gt = fs::path(sequence.root()) / "gt" / "disparity" / name;
+  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / "disparity" / name;
   const ImageU16 raw = ReadImageU16(gt.string());
   ImageF disparity(raw.width(), raw.height());
   for (std::size_t i = 0; i < raw.size(); ++i) disparity[i] = raw[i] / 256.0f;
   return disparity;
 }
-
-}  // namespace
 
 bool ClassifyOptions::IsValid(std::string* error) const {
   auto fail = [&](const char* m) {
@@ -82,7 +83,7 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
       const ImageU8& right = images.right;
       const Eigen::Vector3d up = gravity.UpInCamera(frame.timestamp_ns);
       FrameResult result = options.oracle_disparity
-                               ? pipeline.ProcessWithDisparity(left, right, ReadOracleDisparity(sequence, name), up)
+                               ? pipeline.ProcessWithDisparity(left, right, ReadTrueDisparity(sequence, frame.timestamp_ns), up)
                                : pipeline.Process(left, right, up);
       result.timestamp_ns = frame.timestamp_ns;
       WriteFrameOutputs(result, options.out_dir, name, options.write_disparity);

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <cstdint>
 #include <fstream>
@@ -8,6 +9,7 @@
 
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
+#include "ssta/synth/sequence_synthesizer.h"
 #include "temp_dir.h"
 
 namespace ssta {
@@ -326,6 +328,61 @@ TEST(BuildMap, ResumeRefusesAnotherResolution) {
     FAIL();
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("map.resolution_m"), std::string::npos) << e.what();
+  }
+}
+
+TEST(BuildMap, OracleDisparityPutsARampAtItsTrueHeightAndSkipsAFrameWithoutTruth) {
+  // The `ramp` scene is the plane z = tan(10 deg) x: with the true disparity every observed
+  // column's top surface lies on it within a voxel and is traversable (10 < 15 deg).
+  testing::TempDir dir;
+  synth::SynthOptions o;
+  o.scene = "ramp";
+  o.ramp_slope_deg = 10.0;
+  o.frames = 3;
+  o.rig.width = 320;
+  o.rig.height = 240;
+  o.rig.focal_px = 210.0;
+  const fs::path seq = dir / "seq";
+  synth::WriteSyntheticSequence(o, seq);
+  std::vector<fs::path> truths;
+  for (const auto& e : fs::directory_iterator(seq / "gt" / "disparity")) truths.push_back(e.path());
+  std::sort(truths.begin(), truths.end());
+  ASSERT_EQ(truths.size(), 3u);
+  fs::remove(truths[1]);  // the middle frame loses its truth: the oracle cannot use it
+
+  BuildMapOptions options;
+  options.map_path = dir / "m.ot";
+  options.oracle_disparity = true;
+  const BuildMapSummary summary = BuildMap(Sequence::Open(seq), "ramp", Config{}, options);
+  EXPECT_EQ(summary.frames_used, 2);
+  ASSERT_EQ(summary.skipped.size(), 1u);
+  EXPECT_NE(summary.skipped[0].reason.find(truths[1].filename().string()), std::string::npos)
+      << summary.skipped[0].reason;
+
+  const TraversabilityMap map = TraversabilityMap::Load(options.map_path);
+  const double resolution = map.options().resolution_m;
+  const double gradient = std::tan(10.0 * M_PI / 180.0);
+  int observed = 0, off_plane = 0, not_traversable = 0;
+  for (double x = 1.0; x <= 8.0; x += 0.25) {
+    for (double y = -2.0; y <= 2.0; y += 0.25) {
+      const CellInfo cell = map.TopSurfaceAt(x, y);
+      if (!cell.observed || !std::isfinite(cell.center.z())) continue;
+      ++observed;
+      off_plane += std::abs(cell.center.z() - gradient * cell.center.x()) > resolution;
+      not_traversable += cell.cls != TravClass::kTraversable;
+    }
+  }
+  EXPECT_GT(observed, 200);
+  EXPECT_EQ(off_plane, 0);
+  EXPECT_EQ(not_traversable, 0);
+
+  options.strict = true;  // strict: the frame without truth is an error that names its file
+  options.map_path = dir / "strict.ot";
+  try {
+    BuildMap(Sequence::Open(seq), "ramp", Config{}, options);
+    ADD_FAILURE() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(truths[1].filename().string()), std::string::npos) << e.what();
   }
 }
 

@@ -32,6 +32,10 @@ struct BuildMapOptions {
   /// Fuse frame k into the map on a second thread while frame k+1 is classified (one frame
   /// waits at most). The map and the summary are the same as without; only the time differs.
   bool pipelined = true;
+  /// Use each frame's true disparity (gt/disparity/<ts>.png of a synthetic sequence) instead of
+  /// stereo matching: measures the analysis and the fusion apart from the matcher. A frame
+  /// without one is skipped with a reason (an error with `strict`).
+  bool oracle_disparity = false;
   bool IsValid(std::string* error) const;
 };
 

@@ -45,6 +45,11 @@ struct ClassifySummary {
   std::string Json() const;
 };
 
+/// The true disparity of frame `timestamp_ns` of a synthetic sequence: gt/disparity/<ts>.png
+/// (16 bit, disparity * 256, 0 = none) beside the sequence's cam0/, or in its parent folder
+/// (ASL's mav0/ layout). Throws ssta::Error naming the file when it is missing or unreadable.
+ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns);
+
 /// Called after each frame: (frames done, frames to do).
 using ProgressCallback = std::function<void(int done, int total)>;
 
