@@ -765,7 +765,9 @@ void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, co
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (labels[i] != kUndecided || !IsFinite(cloud[i])) continue;
     const Eigen::Vector3d p = cloud[i].cast<double>();
-    TravClass c = vehicle.ClassifyStep(std::abs(plane.head<3>().dot(p) + plane(3)));
+    const double height = plane.head<3>().dot(p) + plane(3);  // signed: negative below the plane
+    TravClass c = vehicle.ClassifyStep(std::abs(height));
+    if (c == TravClass::kSemiTraversable && height < 0) c = TravClass::kUndecided;
     if (options.ground_tolerance_px > 0 &&
         std::abs(DisparityOffPlanePx(plane, p, focal_times_baseline)) <= options.ground_tolerance_px) {
       c = TravClass::kTraversable;

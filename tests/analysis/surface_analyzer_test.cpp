@@ -785,6 +785,8 @@ TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUnd
   point_at(30, 10, 0.15, 20.0);  // 0.375 px off: at 20 m stereo cannot tell it from the floor
   point_at(40, 10, 0.50, 3.0);   // step 0.5 m: not drivable, stays undecided
   point_at(50, 10, -0.25, 3.0);  // 0.25 m below the floor (a brink's smeared point): stays
+  point_at(55, 10, -0.15, 2.0);  // 0.15 m below: a hole's far wall as likely as its floor: stays
+  point_at(57, 10, -0.05, 3.0);  // 0.05 m below, 0.83 px off: ground within noise -> traversable
   w.cloud_(60, 10) = NanVector3f();  // no depth: stays unknown
   w.ids_(60, 10) = -1;
   AnalysisOptions options;
@@ -802,6 +804,8 @@ TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUnd
   EXPECT_EQ(label(r, 30, 10), TravClass::kTraversable);
   EXPECT_EQ(label(r, 40, 10), TravClass::kUndecided);
   EXPECT_EQ(label(r, 50, 10), TravClass::kUndecided);
+  EXPECT_EQ(label(r, 55, 10), TravClass::kUndecided);
+  EXPECT_EQ(label(r, 57, 10), TravClass::kTraversable);
   EXPECT_EQ(label(r, 60, 10), TravClass::kUnknown);
   EXPECT_EQ(label(r, 70, 70), TravClass::kTraversable);  // the floor keeps its verdict
 

@@ -90,7 +90,7 @@ struct AnalysisOptions {
   double undecided_fill_share = 0.9;
   /// Undecided pixels that no consensus fills (FillUndecidedByHeight): true, each takes the step
   /// class of its own point's height above the dominant ground plane where that is drivable
-  /// (traversable, or semi-traversable); higher points stay undecided.
+  /// (traversable, or semi-traversable above the plane); other points stay undecided.
   bool undecided_height_fill = false;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
@@ -207,9 +207,11 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 /// strip between a face and the ground. Each undecided pixel (4) with a point p takes
 /// traversable when p lies within ground_tolerance_px of the dominant plane in disparity (the
 /// test of RefineByGroundDisparity), else the step class of its height |n . p + D| when that is
-/// traversable or semi-traversable. Higher points stay undecided: a lone point is not called an
-/// obstacle, since next to a depth edge the matcher smears the farther surface's disparity into
-/// the nearer one (at a drop-off's brink such points lie far below the plane).
+/// traversable, or semi-traversable above the plane. Other points stay undecided: a lone point is
+/// not called an obstacle, since next to a depth edge the matcher smears the farther surface's
+/// disparity into the nearer one (at a drop-off's brink such points lie far below the plane);
+/// and below the plane, what the camera sees of a shallow hole is mostly its far wall (a face),
+/// where above it the top of a curb or a step faces the camera as much as its front does.
 /// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
                            const AnalysisOptions& options, AnalysisResult* result);
