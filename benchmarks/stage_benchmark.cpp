@@ -228,6 +228,18 @@ void BM_Analyze(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
+/// The texture test of analysis.label_min_texture (and map.min_texture) on one frame.
+void BM_TextureMask(benchmark::State& state, const Dataset* d) {
+  const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
+  FrameCycle frames(*d);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(TextureMask(frames.Next().rectified.left_full, geometry.crop_u0, geometry.crop_v0,
+                                         geometry.crop_width, geometry.crop_height, d->config.stereo.block_size,
+                                         d->config.analysis.label_min_texture));
+  }
+  CountFrames(state);
+}
+
 /// Normals through classes: the "geometry" budget.
 void BM_Geometry(benchmark::State& state, const Dataset* d) {
   NormalEstimator estimator(d->config.normals);
@@ -627,6 +639,7 @@ void RegisterAll() {
     add("Segment/" + name, [get = get](benchmark::State& s) { BM_Segment(s, get()); });
     add("Analyze/" + name, [get = get](benchmark::State& s) { BM_Analyze(s, get()); });
     add("Geometry/" + name, [get = get](benchmark::State& s) { BM_Geometry(s, get()); });
+    add("TextureMask/" + name, [get = get](benchmark::State& s) { BM_TextureMask(s, get()); });
     add("MapUpdate/" + name, [get = get](benchmark::State& s) { BM_MapUpdate(s, get()); });
     add("OnlineRefinement/" + name, [get = get](benchmark::State& s) { BM_OnlineRefinement(s, get()); });
     add("EndToEnd/" + name, [get = get](benchmark::State& s) { BM_EndToEnd(s, get()); });

@@ -200,6 +200,9 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   if (!(face_min_slope_deg > 0 && face_min_slope_deg < 90)) {
     return Fail(error, "face_min_slope_deg: must be in (0, 90) degrees");
   }
+  if (!(label_min_texture >= 0 && label_min_texture < 128)) {
+    return Fail(error, "label_min_texture: must be in [0, 128) grey levels (0: off)");
+  }
   return true;
 }
 

@@ -146,6 +146,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.fragment_tolerance_px = 1.5;
   o.undecided_fill_radius_px = 4;
   o.undecided_height_fill = true;
+  o.label_min_texture = 2.0;
   return o;
 }
 
@@ -222,6 +223,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("undecided_fill_radius_px", &c.analysis.undecided_fill_radius_px);
     s.Read("undecided_fill_share", &c.analysis.undecided_fill_share);
     s.Read("undecided_height_fill", &c.analysis.undecided_height_fill);
+    s.Read("label_min_texture", &c.analysis.label_min_texture);
     s.Read("face_window_px", &c.analysis.face_window_px);
     s.Read("face_columns_px", &c.analysis.face_columns_px);
     s.Read("face_grow_tolerance_px", &c.analysis.face_grow_tolerance_px);
@@ -375,6 +377,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  undecided_fill_radius_px: " << c.analysis.undecided_fill_radius_px << "\n"
     << "  undecided_fill_share: " << c.analysis.undecided_fill_share << "\n"
     << "  undecided_height_fill: " << c.analysis.undecided_height_fill << "\n"
+    << "  label_min_texture: " << c.analysis.label_min_texture << "\n"
     << "  face_window_px: " << c.analysis.face_window_px << "\n"
     << "  face_columns_px: " << c.analysis.face_columns_px << "\n"
     << "  face_grow_tolerance_px: " << c.analysis.face_grow_tolerance_px << "\n"

@@ -108,6 +108,16 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
     FillUndecidedByConsensus(config_.analysis, &out.analysis.labels);
     FillUndecidedByHeight(cloud, g.f * g.baseline_m, config_.vehicle, config_.analysis, &out.analysis);
   }
+  if (config_.analysis.label_min_texture > 0.0) {
+    // The same test as the map's min_texture, on the full rectified image (the block reaches
+    // past the common area's border as the matcher's does).
+    const ImageU8 textured = TextureMask(pair.left_full, g.crop_u0, g.crop_v0, g.crop_width, g.crop_height,
+                                         config_.stereo.block_size, config_.analysis.label_min_texture);
+    ImageU8& labels = out.analysis.labels;
+    for (std::size_t i = 0; i < labels.size(); ++i) {
+      if (textured[i] == 0) labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
+    }
+  }
   out.timings.analyze_ms = clock.LapMs();
 
   // Labels keep the full rectified size; outside the common area they stay unknown (0).

@@ -98,7 +98,10 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
   for (int v = 0; v < cloud.height(); v += stride) {
     for (int u = 0; u < cloud.width(); u += stride) {
       const Eigen::Vector3f& p = cloud(v, u);
-      if (!IsFinite(p) || (keep != nullptr && (*keep)(v, u) == 0)) continue;
+      if (!IsFinite(p) || labels(v, u) == static_cast<std::uint8_t>(TravClass::kUnknown) ||
+          (keep != nullptr && (*keep)(v, u) == 0)) {
+        continue;
+      }
       ClassifiedPoint out;
       out.world_p = transform * p;
       out.cls = static_cast<TravClass>(labels(v, u));
@@ -129,7 +132,9 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
 
 void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
                       const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points) {
-  if (config.map.min_texture <= 0.0) {
+  // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
+  // never emitted: a map threshold no stricter than that needs no mask of its own.
+  if (config.map.min_texture <= 0.0 || config.analysis.label_min_texture >= config.map.min_texture) {
     ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, nullptr, points);
     return;
   }

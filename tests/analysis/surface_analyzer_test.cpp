@@ -856,6 +856,8 @@ TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
   // A share of 0.5 could pick either class of a tie.
   expect_rejected("undecided_fill_share", [](AnalysisOptions* o) { o->undecided_fill_share = 0.5; });
   expect_rejected("undecided_fill_radius_px", [](AnalysisOptions* o) { o->undecided_fill_radius_px = -1; });
+  expect_rejected("label_min_texture", [](AnalysisOptions* o) { o->label_min_texture = -0.5; });
+  expect_rejected("label_min_texture", [](AnalysisOptions* o) { o->label_min_texture = 128; });
 }
 
 TEST(PlaneAccumulator, FitsATiltedPlaneInClosedForm) {

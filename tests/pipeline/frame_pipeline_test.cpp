@@ -60,6 +60,56 @@ TEST(FramePipeline, LabelsKeepTheRectifiedSizeAndClassTheRampBySlope) {
   EXPECT_EQ(r.labels(scene.height - 20, scene.width / 2), static_cast<std::uint8_t>(TravClass::kUndecided));
 }
 
+TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {
+  // The level plane under a sky of constant grey (rows above the horizon, v < cv - f tan 15 deg
+  // = 40). Fed a disparity everywhere (the plane's, and 3 px in the sky as a matcher's noise),
+  // the sky's pixels have points; with label_min_texture they are labelled unknown.
+  testing::PlaneScene scene;
+  scene.slope_deg = 0.0;
+  const ImageU8 left = testing::RenderPlane(scene, 0.0), right = testing::RenderPlane(scene, scene.baseline_m);
+  Config config;
+  FramePipeline reference(RectifiedRig(scene), config);
+  const RectifiedGeometry& g = reference.geometry();
+  ASSERT_EQ(g.crop_width, scene.width);  // a rectified rig: no crop
+  ASSERT_EQ(g.crop_height, scene.height);
+  ImageF disparity(scene.width, scene.height, 3.0f);
+  const Eigen::Vector3d n = scene.NormalCamera();
+  for (int v = 0; v < scene.height; ++v) {
+    for (int u = 0; u < scene.width; ++u) {
+      const double dot = n.dot(Eigen::Vector3d((u - scene.cu) / scene.f, (v - scene.cv) / scene.f, 1.0));
+      if (dot < -1e-9) disparity(v, u) = static_cast<float>(scene.f * scene.baseline_m * -dot / scene.camera_height_m);
+    }
+  }
+  const int half = config.stereo.block_size / 2;
+  auto count = [&](const FrameResult& r, int v0, int v1, auto&& pred) {
+    int n_pixels = 0;
+    for (int v = v0; v < v1; ++v) {
+      for (int u = 0; u < scene.width; ++u) n_pixels += pred(r.labels(v, u));
+    }
+    return n_pixels;
+  };
+  const auto unknown = [](std::uint8_t c) { return c == 0; };
+  const int sky_rows = 40 - half - 1, ground_v0 = 41 + half, ground_v1 = scene.height;
+  const int sky_pixels = sky_rows * scene.width, ground_pixels = (ground_v1 - ground_v0) * scene.width;
+
+  config.analysis.label_min_texture = 2.0;
+  FramePipeline masked(RectifiedRig(scene), config);
+  const FrameResult on = masked.ProcessWithDisparity(left, right, disparity, scene.UpCamera());
+  ASSERT_TRUE(on.analysis.quality.passed) << on.analysis.quality.reason;
+  EXPECT_EQ(count(on, 0, sky_rows, unknown), sky_pixels);
+  // The analysis is the same and the textured ground keeps its classes: the mask only relabels.
+  // (Ground beyond triangulation.max_range_m, near the horizon, is unknown in both.)
+  config.analysis.label_min_texture = 0.0;
+  FramePipeline unmasked(RectifiedRig(scene), config);
+  const FrameResult off = unmasked.ProcessWithDisparity(left, right, disparity, scene.UpCamera());
+  EXPECT_EQ(count(off, 0, sky_rows, unknown), 0);
+  EXPECT_EQ(off.num_segments, on.num_segments);
+  EXPECT_EQ(count(on, ground_v0, ground_v1, unknown), count(off, ground_v0, ground_v1, unknown));
+  EXPECT_LT(count(off, ground_v0, ground_v1, unknown), ground_pixels / 10);
+  EXPECT_EQ(count(off, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }),
+            count(on, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }));
+}
+
 TEST(FramePipeline, WrongImageSizeIsAnError) {
   testing::PlaneScene scene;
   FramePipeline pipeline(RectifiedRig(scene), Config{});

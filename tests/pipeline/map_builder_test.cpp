@@ -56,6 +56,13 @@ TEST(ClassifiedPointsInWorld, LeavesOutPixelsTheKeepMaskDrops) {
   ImageU8 keep(3, 1, 1);
   keep(0, 1) = 0;
   EXPECT_EQ(ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1, &keep).size(), 2u);
+  // A pixel labelled unknown (untextured, analysis.label_min_texture) is left out though it
+  // has a point.
+  f.analysis.labels(0, 2) = 0;
+  const std::vector<ClassifiedPoint> points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1);
+  ASSERT_EQ(points.size(), 2u);
+  EXPECT_EQ(points[0].cls, TravClass::kTraversable);
+  EXPECT_EQ(points[1].cls, TravClass::kTraversable);
 }
 
 TEST(TexturedPixels, KeepsPixelsWhoseWindowStdReachesTheThreshold) {

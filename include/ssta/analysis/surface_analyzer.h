@@ -92,6 +92,11 @@ struct AnalysisOptions {
   /// class of its own point's height above the dominant ground plane where that is drivable
   /// (traversable, or semi-traversable above the plane); other points stay undecided.
   bool undecided_height_fill = false;
+  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
+  /// levels] are labelled unknown (0) once the analysis is done (FramePipeline): the sky, blank
+  /// walls, where the matcher's disparity is a guess. The analysis still uses their points.
+  /// 0: off.
+  double label_min_texture = 0.0;
   /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
   /// fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 0;

@@ -63,8 +63,9 @@ struct BuildMapSummary {
 using BuildProgress = std::function<void(int done, int total)>;
 
 /// The classified points of one frame in the world frame, every `stride`-th pixel of the
-/// common area with a 3D point: class (0 without depth is never emitted), the slope and step of
-/// its segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
+/// common area with a 3D point and a class: class (a pixel labelled 0, without depth or
+/// untextured under analysis.label_min_texture, is never emitted), the slope and step of its
+/// segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
 /// (the common area's size), pixels where it is 0 are left out.
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
                                                      const Eigen::Isometry3d& world_T_rectified, int stride,
@@ -80,8 +81,9 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
 
 /// The points build-map inserts for a frame: ClassifiedPointsInWorld at map.pixel_stride, without
-/// the untextured pixels (map.min_texture over stereo.block_size windows). The per-frame
-/// classification is not changed by this: it only keeps noise matches out of the map.
+/// the untextured pixels (map.min_texture over stereo.block_size windows; not computed again
+/// when analysis.label_min_texture, the same test on the labels, is at least as strict). It
+/// keeps noise matches out of the map.
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const Config& config, const RectifiedGeometry& geometry);
 /// The same into `*points` (cleared first; its capacity is reused from frame to frame).
