@@ -146,7 +146,6 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.fragment_tolerance_px = 1.5;
   o.undecided_fill_radius_px = 4;
   o.undecided_height_fill = true;
-  o.label_min_texture = 2.0;
   return o;
 }
 
