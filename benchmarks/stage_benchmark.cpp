@@ -233,9 +233,8 @@ void BM_TextureMask(benchmark::State& state, const Dataset* d) {
   const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
   FrameCycle frames(*d);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(TextureMask(frames.Next().rectified.left_full, geometry.crop_u0, geometry.crop_v0,
-                                         geometry.crop_width, geometry.crop_height, d->config.stereo.block_size,
-                                         d->config.analysis.label_min_texture));
+    benchmark::DoNotOptimize(TexturedPixels(frames.Next().rectified.left_full, geometry, d->config.stereo.block_size,
+                                            d->config.analysis.label_min_texture));
   }
   CountFrames(state);
 }

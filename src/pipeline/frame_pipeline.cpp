@@ -111,8 +111,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   if (config_.analysis.label_min_texture > 0.0) {
     // The same test as the map's min_texture, on the full rectified image (the block reaches
     // past the common area's border as the matcher's does).
-    const ImageU8 textured = TextureMask(pair.left_full, g.crop_u0, g.crop_v0, g.crop_width, g.crop_height,
-                                         config_.stereo.block_size, config_.analysis.label_min_texture);
+    const ImageU8 textured =
+        TexturedPixels(pair.left_full, g, config_.stereo.block_size, config_.analysis.label_min_texture);
     ImageU8& labels = out.analysis.labels;
     for (std::size_t i = 0; i < labels.size(); ++i) {
       if (textured[i] == 0) labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
@@ -131,6 +131,11 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.total_ms = t.rectify_ms + t.match_ms + t.triangulate_ms + t.normals_ms + t.segment_ms +
                          t.analyze_ms + clock.LapMs();
   return out;
+}
+
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
+  return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
+                     block, min_std);
 }
 
 }  // namespace ssta

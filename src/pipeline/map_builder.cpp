@@ -14,7 +14,6 @@
 #include "ssta/pipeline/gravity_provider.h"
 #include "ssta/pipeline/sequence_classifier.h"
 #include "ssta/refinement/ground_evidence.h"
-#include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
 namespace {
@@ -123,11 +122,6 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
   std::vector<ClassifiedPoint> points;
   ClassifiedPointsInWorld(frame, world_T_rectified, stride, keep, &points);
   return points;
-}
-
-ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
-  return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
-                     block, min_std);
 }
 
 void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,

@@ -69,4 +69,10 @@ class FramePipeline {
   std::unique_ptr<Stages> stages_;
 };
 
+/// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
+/// left image) has texture: the grey-level standard deviation of the full image over the
+/// `block` x `block` window around the pixel (clipped at the image border) is at least
+/// `min_std`; 0 elsewhere. Sky and other blank areas, where matching finds noise.
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
+
 }  // namespace ssta

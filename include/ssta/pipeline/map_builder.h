@@ -74,12 +74,6 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points);
 
-/// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
-/// left image) has texture: the grey-level standard deviation of the full image over the
-/// `block` x `block` window around the pixel (clipped at the image border) is at least
-/// `min_std`; 0 elsewhere. Sky and other blank areas, where matching finds noise.
-ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
-
 /// The points build-map inserts for a frame: ClassifiedPointsInWorld at map.pixel_stride, without
 /// the untextured pixels (map.min_texture over stereo.block_size windows; not computed again
 /// when analysis.label_min_texture, the same test on the labels, is at least as strict). It
