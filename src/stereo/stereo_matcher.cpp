@@ -362,8 +362,13 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
       break;
   }
   ImageF disparity(left.width(), left.height(), 0.0f);
+  // Only the left and right borders get a margin. Rows are epipolar lines: at the top and
+  // bottom, the matching window runs off both images along the same rows, so both see the same
+  // padding and the match holds (yard, 10 frames: mean IoU 0.750 -> 0.754 without the margin
+  // there). Across a side border the two windows see different columns, and SGBM's horizontal
+  // paths start there with no context.
   const int m = options_.border_margin;
-  for (int v = m; v < disparity.height() - m; ++v) {
+  for (int v = 0; v < disparity.height(); ++v) {
     const float* src = padded.row(v) + pad;
     float* d = disparity.row(v);
     // Partners must lie inside the right image, at least m px off its left border.

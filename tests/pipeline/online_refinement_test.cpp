@@ -115,11 +115,13 @@ TEST(OnlineRefinement, MapMatchesTheErrorFreeRunAndWithoutItIsWorse) {
   EXPECT_LT(without.mean_iou, reference.mean_iou - 0.02);
   EXPECT_NEAR(clean_refined.accuracy, reference.accuracy, 0.01);
 
-  // The mount in use at the end is the truth within 0.2 deg (measured 0.15 deg; 3.35 deg before).
+  // The mount in use at the end is the truth within 0.25 deg, inside the solve's own 1 sigma of
+  // 0.26 deg (measured 0.21 deg, 3.35 deg before; 0.15 deg while the matcher also dropped the
+  // bottom 4 rows, where SGBM's disparity leans by 0.08 px from left to right).
   const OnlineRefinementSummary& r = *refined.summary.refinement;
   ASSERT_TRUE(r.last_applied) << r.BriefReport();
   EXPECT_NEAR(AngleToTruthDeg(dir / "faulty", r.body_T_camera_configured), 3.35, 0.05);
-  EXPECT_LT(AngleToTruthDeg(dir / "faulty", r.body_T_camera), 0.2) << r.BriefReport();
+  EXPECT_LT(AngleToTruthDeg(dir / "faulty", r.body_T_camera), 0.25) << r.BriefReport();
   EXPECT_NEAR(r.last_applied->pitch_correction_deg, -3.0, 0.3);
   EXPECT_NEAR(r.last_applied->roll_correction_deg, -1.5, 0.3);
   EXPECT_LT(r.last_applied->pitch_sigma_deg, 0.5);
@@ -131,7 +133,7 @@ TEST(OnlineRefinement, MapMatchesTheErrorFreeRunAndWithoutItIsWorse) {
   EXPECT_EQ(refined.summary.frames_used, 20);
   // The error-free sequence needs almost no correction.
   ASSERT_TRUE(clean_refined.summary.refinement->last_applied);
-  EXPECT_LT(AngleToTruthDeg(dir / "clean", clean_refined.summary.refinement->body_T_camera), 0.2);
+  EXPECT_LT(AngleToTruthDeg(dir / "clean", clean_refined.summary.refinement->body_T_camera), 0.25);
 }
 
 /// A short faulty yard for the cases that do not score a map.

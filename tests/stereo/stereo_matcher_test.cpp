@@ -253,7 +253,7 @@ TEST(StereoMatcher, HalfSizeMatchingRecoversPlaneAndSquareAtFullResolution) {
   EXPECT_EQ(error.rfind("downscale:", 0), 0u) << error;
 }
 
-TEST(StereoMatcher, BorderMarginLeavesTheBordersWithoutDisparity) {
+TEST(StereoMatcher, BorderMarginLeavesTheSideBordersWithoutDisparity) {
   const SyntheticPair pair = MakePair(320, 240, 20, 36, 150, 70, 90, 8, 72);
   StereoMatcherOptions o = OptionsFor(MatcherType::kSemiGlobal);
   const ImageF full = StereoMatcher(o).Compute(pair.left, pair.right);
@@ -262,7 +262,7 @@ TEST(StereoMatcher, BorderMarginLeavesTheBordersWithoutDisparity) {
   int inner_same = 0, inner = 0;
   for (int v = 0; v < cut.height(); ++v) {
     for (int u = 0; u < cut.width(); ++u) {
-      const bool border = v < 5 || v >= 235 || u < 5 || u >= 315;
+      const bool border = u < 5 || u >= 315;  // rows are epipolar lines: no margin at top and bottom
       // Background disparity 20: partners closer than 5 px to the right image's edge are u < 25.
       const bool near_partner_edge = full(v, u) > 0 && u - full(v, u) < 5;
       if (border || near_partner_edge) {
@@ -277,6 +277,11 @@ TEST(StereoMatcher, BorderMarginLeavesTheBordersWithoutDisparity) {
   int valid_left = 0;  // ... and the first columns whose partners lie inside still match
   for (int v = 100; v < 140; ++v) valid_left += cut(v, 26) > 0;
   EXPECT_GT(valid_left, 30);
+  int top_bottom = 0;  // ... and the top and bottom rows keep the disparity they had
+  for (int u = 40; u < 300; ++u) {
+    for (int v : {0, 1, 2, 237, 238, 239}) top_bottom += full(v, u) > 0 && cut(v, u) == full(v, u);
+  }
+  EXPECT_GT(top_bottom, 6 * 200);
 }
 
 /// Mean and 90th percentile of |disparity - truth| over evaluated pixels within 1 px of it.

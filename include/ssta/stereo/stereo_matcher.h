@@ -53,9 +53,11 @@ struct StereoMatcherOptions {
   /// [grey levels] pixels whose left-image standard deviation over the block window is below
   /// this get no disparity: sensor noise on a textureless sky or wall matches anywhere. 0: off.
   double min_texture = 0.0;
-  /// [px] pixels this close to an image border, or whose partner lies this close to the right
-  /// image's left border, get no disparity: their matching window (and SGBM's paths) run off the
-  /// image there and the disparities are biased. 0: off.
+  /// [px] pixels this close to the left or right image border, or whose partner lies this close
+  /// to the right image's left border, get no disparity: the two matching windows run off their
+  /// images at different columns there (and SGBM's horizontal paths start there), so the
+  /// disparities are biased. The top and bottom rows keep theirs: rows are epipolar lines, both
+  /// windows see the same padding. 0: off.
   int border_margin = 0;
   /// [px, odd] sub-pixel refinement window (0: off). Matchers interpolate a parabola through
   /// three costs, which pulls disparities towards whole pixels ("pixel locking"): far ground
