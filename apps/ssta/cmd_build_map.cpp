@@ -71,6 +71,9 @@ void RegisterBuildMap(CLI::App& app) {
                 "docs/mount_calibration.md)");
   cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
+  cmd->add_flag("--oracle-labels", args->options.oracle_labels,
+                "fuse the sequence's gt/labels where they have a verdict instead of the frame's classes "
+                "(synthetic sequences; with --oracle-disparity: the fusion alone)");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--sequential", args->sequential,
                 "classify and fuse one frame after the other (default: fuse each frame on a second thread while the "

@@ -237,6 +237,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
                                                                  ReadTrueDisparity(sequence, frame.timestamp_ns), up_camera)
                                  : pipeline.Process(images.left, images.right, up_camera));
     result->timestamp_ns = frame.timestamp_ns;
+    if (options.oracle_labels) {
+      ApplyTrueLabels(sequence, frame.timestamp_ns, pipeline.geometry(), &result->analysis.labels);
+    }
     return result;
   };
   auto fuse = [&](std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body) {

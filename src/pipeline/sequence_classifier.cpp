@@ -34,12 +34,41 @@ void Scale(double k, StageTimings* t) {
 
 }  // namespace
 
-ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns) {
+namespace {
+
+/// gt/<kind>/<ts>.png beside the sequence's cam0/, or in its parent folder (ASL's mav0/ layout).
+std::string TruthPath(const Sequence& sequence, const char* kind, std::int64_t timestamp_ns) {
   namespace fs = std::filesystem;
   const std::string name = std::to_string(timestamp_ns) + ".png";
-  fs::path gt = fs::path(sequence.root()) / "gt" / "disparity" / name;
-  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / "disparity" / name;
-  const ImageU16 raw = ReadImageU16(gt.string());
+  fs::path gt = fs::path(sequence.root()) / "gt" / kind / name;
+  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / kind / name;
+  return gt.string();
+}
+
+}  // namespace
+
+void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const RectifiedGeometry& geometry,
+                     ImageU8* labels) {
+  const std::string path = TruthPath(sequence, "labels", timestamp_ns);
+  const ImageU8 truth = ReadLabelImage(path);
+  if (truth.width() != geometry.full_width || truth.height() != geometry.full_height) {
+    throw Error(path + ": the true labels are " + std::to_string(truth.width()) + "x" +
+                std::to_string(truth.height()) + ", the frames are " + std::to_string(geometry.full_width) + "x" +
+                std::to_string(geometry.full_height));
+  }
+  SSTA_CHECK(labels->width() == geometry.crop_width && labels->height() == geometry.crop_height,
+             "ApplyTrueLabels: the labels are not of the common area's size");
+  for (int v = 0; v < labels->height(); ++v) {
+    const std::uint8_t* t = truth.row(v + geometry.crop_v0) + geometry.crop_u0;
+    std::uint8_t* out = labels->row(v);
+    for (int u = 0; u < labels->width(); ++u) {
+      if (t[u] >= 1 && t[u] <= 3) out[u] = t[u];
+    }
+  }
+}
+
+ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns) {
+  const ImageU16 raw = ReadImageU16(TruthPath(sequence, "disparity", timestamp_ns));
   ImageF disparity(raw.width(), raw.height());
   for (std::size_t i = 0; i < raw.size(); ++i) disparity[i] = raw[i] / 256.0f;
   return disparity;

@@ -36,6 +36,10 @@ struct BuildMapOptions {
   /// stereo matching: measures the analysis and the fusion apart from the matcher. A frame
   /// without one is skipped with a reason (an error with `strict`).
   bool oracle_disparity = false;
+  /// Fuse each frame's true labels (gt/labels/<ts>.png) where the truth has a verdict, the
+  /// frame's own elsewhere. With oracle_disparity it measures the fusion alone; with the
+  /// matcher, what the matcher's geometry costs the map. A frame without them is skipped.
+  bool oracle_labels = false;
   bool IsValid(std::string* error) const;
 };
 

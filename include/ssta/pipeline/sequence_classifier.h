@@ -50,6 +50,14 @@ struct ClassifySummary {
 /// (ASL's mav0/ layout). Throws ssta::Error naming the file when it is missing or unreadable.
 ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns);
 
+/// Overwrites a frame's labels (`labels`: the rectified common area, `geometry`'s crop) with the
+/// verdicts of its true labels, gt/labels/<ts>.png of a synthetic sequence (ids 1-3 at the full
+/// rectified size, found as ReadTrueDisparity finds its file); where the truth has none (255:
+/// sky, occlusions, the band on class boundaries) the frame keeps its own. Throws ssta::Error
+/// naming the file when it is missing, unreadable or not of the rectified image's size.
+void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const RectifiedGeometry& geometry,
+                     ImageU8* labels);
+
 /// Called after each frame: (frames done, frames to do).
 using ProgressCallback = std::function<void(int done, int total)>;
 
