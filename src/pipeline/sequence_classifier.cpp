@@ -32,10 +32,6 @@ void Scale(double k, StageTimings* t) {
   }
 }
 
-}  // namespace
-
-namespace {
-
 /// gt/<kind>/<ts>.png beside the sequence's cam0/, or in its parent folder (ASL's mav0/ layout).
 std::string TruthPath(const Sequence& sequence, const char* kind, std::int64_t timestamp_ns) {
   namespace fs = std::filesystem;
