@@ -123,70 +123,112 @@ void DropTexturelessPixels(const ImageU8& left, int block, double min_std, Image
   }
 }
 
-/// Sub-pixel refinement (StereoMatcherOptions::subpixel_window_px): two Gauss-Newton steps on
-/// the grey-level residual L(u) - R(u - d), aggregated over a window with box filters.
-void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, ImageF* disparity) {
-  const int width = disparity->width(), height = disparity->height();
-  cv::Mat l, r, grad;
-  WrapConst(left).convertTo(l, CV_32F);
-  WrapConst(right).convertTo(r, CV_32F);
-  cv::Sobel(r, grad, CV_32F, 1, 0, 1, 0.5);  // central difference along u
-  cv::Mat d(height, width, CV_32F, disparity->data());  // refined in place
-  const cv::Mat original = d.clone();
-  // Only windows whose disparities agree within 1 px (and hold no hole) are refined.
-  cv::Mat lo, hi;
+/// Sub-pixel refinement (StereoMatcherOptions::subpixel_window_px): Gauss-Newton steps on the
+/// grey-level residual L(u) - R(u - d), aggregated over a window with box sums. Its buffers are
+/// kept per thread (no frame-sized allocation per call).
+void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int iterations, ImageF* disparity,
+                    const ImageI32* surface_ids = nullptr) {
+  const int w = disparity->width(), h = disparity->height();
+  const std::size_t plane = static_cast<std::size_t>(w) * h;
+  thread_local std::vector<float> original, lo, hi, grad, terms, sums;
+  original.assign(disparity->data(), disparity->data() + plane);
+  lo.resize(plane);
+  hi.resize(plane);
+  grad.resize(plane);
+  terms.resize(3 * plane);
+  sums.resize(3 * plane);
+  auto mat = [&](std::vector<float>& buffer, std::size_t k = 0) {  // plane k of a buffer, no copy
+    return cv::Mat(h, w, CV_32F, buffer.data() + plane * k);
+  };
+  // Only windows whose disparities agree within 1 px (and hold no hole) are refined. (erode and
+  // dilate leave pixels outside the image out of the window.)
   const cv::Mat kernel = cv::Mat::ones(window, window, CV_8U);
-  cv::erode(original, lo, kernel);
-  cv::dilate(original, hi, kernel);
-  cv::Mat weighted(height, width, CV_32F), correction(height, width, CV_32F), weight(height, width, CV_32F);
-  const cv::Size box(window, window);
-  for (int iteration = 0; iteration < 2; ++iteration) {
-    for (int v = 0; v < height; ++v) {
-      const float* lv = l.ptr<float>(v);
-      const float* rv = r.ptr<float>(v);
-      const float* gv = grad.ptr<float>(v);
-      const float* dv = d.ptr<float>(v);
-      float* pw = weighted.ptr<float>(v);
-      float* pc = correction.ptr<float>(v);
-      float* pg = weight.ptr<float>(v);
-      for (int u = 0; u < width; ++u) {
+  cv::Mat lo_mat = mat(lo), hi_mat = mat(hi);
+  cv::erode(mat(original), lo_mat, kernel);
+  cv::dilate(mat(original), hi_mat, kernel);
+  // With surface ids, also only windows of one id >= 0 (ids as floats: exact below 2^24).
+  thread_local std::vector<float> ids, id_lo, id_hi;
+  if (surface_ids != nullptr) {
+    ids.resize(plane);
+    id_lo.resize(plane);
+    id_hi.resize(plane);
+    for (std::size_t i = 0; i < plane; ++i) ids[i] = static_cast<float>(std::max((*surface_ids)[i], -1));
+    cv::Mat lo_ids = mat(id_lo), hi_ids = mat(id_hi);
+    cv::erode(mat(ids), lo_ids, kernel);
+    cv::dilate(mat(ids), hi_ids, kernel);
+    for (std::size_t i = 0; i < plane; ++i) {
+      if (!(id_lo[i] >= 0.0f && id_lo[i] == id_hi[i])) lo[i] = 0.0f;  // not refined
+    }
+  }
+  // Central difference of the right image along u (0 at the first and last column).
+  for (int v = 0; v < h; ++v) {
+    const std::uint8_t* line = right.row(v);
+    float* g = grad.data() + static_cast<std::size_t>(v) * w;
+    g[0] = 0.0f;
+    g[w - 1] = 0.0f;
+    for (int u = 1; u < w - 1; ++u) g[u] = 0.5f * (static_cast<float>(line[u + 1]) - static_cast<float>(line[u - 1]));
+  }
+  float* mean_d = terms.data();        // the window's disparities (their mean after the sums)
+  float* correction = mean_d + plane;  // -(L - R_warped) * gradient
+  float* weight = correction + plane;  // gradient^2
+  const float area = static_cast<float>(window * window);
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    for (int v = 0; v < h; ++v) {
+      const std::uint8_t* lv = left.row(v);
+      const std::uint8_t* rv = right.row(v);
+      const float* gv = grad.data() + static_cast<std::size_t>(v) * w;
+      const float* dv = disparity->row(v);
+      const std::size_t o = static_cast<std::size_t>(v) * w;
+      for (int u = 0; u < w; ++u) {
         const float x = static_cast<float>(u) - dv[u];
-        if (!(dv[u] > 0.0f) || x < 1.0f || x > static_cast<float>(width - 2)) {
-          pw[u] = pc[u] = pg[u] = 0.0f;
+        if (!(dv[u] > 0.0f) || x < 1.0f || x > static_cast<float>(w - 2)) {
+          mean_d[o + u] = correction[o + u] = weight[o + u] = 0.0f;
           continue;
         }
         const int i = static_cast<int>(x);
         const float a = x - static_cast<float>(i);
-        const float rw = rv[i] + a * (rv[i + 1] - rv[i]);
+        const float rw = rv[i] + a * (static_cast<float>(rv[i + 1]) - rv[i]);
         const float gw = gv[i] + a * (gv[i + 1] - gv[i]);
-        const float g2 = gw * gw;
         // R(u - d - delta) ~ rw - delta * gw = L(u)  =>  delta = -(L - rw) * gw / gw^2.
-        pw[u] = dv[u];
-        pc[u] = -(lv[u] - rw) * gw;
-        pg[u] = g2;
+        mean_d[o + u] = dv[u];
+        correction[o + u] = -(static_cast<float>(lv[u]) - rw) * gw;
+        weight[o + u] = gw * gw;
       }
     }
-    cv::boxFilter(weighted, weighted, CV_32F, box, cv::Point(-1, -1), true);
-    cv::boxFilter(correction, correction, CV_32F, box, cv::Point(-1, -1), false);
-    cv::boxFilter(weight, weight, CV_32F, box, cv::Point(-1, -1), false);
-    for (int v = 0; v < height; ++v) {
-      const float* o = original.ptr<float>(v);
-      const float* lov = lo.ptr<float>(v);
-      const float* hiv = hi.ptr<float>(v);
-      const float* pw = weighted.ptr<float>(v);
-      const float* pc = correction.ptr<float>(v);
-      const float* pg = weight.ptr<float>(v);
-      float* dv = d.ptr<float>(v);
-      for (int u = 0; u < width; ++u) {
-        if (!(o[u] > 0.0f) || !(lov[u] > 0.0f) || hiv[u] - lov[u] > 1.0f || !(pg[u] > 1e-3f)) continue;
-        const float refined = pw[u] + pc[u] / pg[u];
-        dv[u] = std::abs(refined - o[u]) <= 1.0f ? refined : o[u];
-      }
+    // Window sums, the image mirrored at its borders (BORDER_REFLECT_101).
+    for (std::size_t k = 0; k < 3; ++k) {
+      cv::Mat out = mat(sums, k);
+      cv::boxFilter(mat(terms, k), out, CV_32F, cv::Size(window, window), cv::Point(-1, -1), false,
+                    cv::BORDER_REFLECT_101);
+    }
+    const float* sum_d = sums.data();
+    const float* sum_c = sum_d + plane;
+    const float* sum_g = sum_c + plane;
+    float* d = disparity->data();
+    for (std::size_t i = 0; i < plane; ++i) {
+      if (!(original[i] > 0.0f) || !(lo[i] > 0.0f) || hi[i] - lo[i] > 1.0f || !(sum_g[i] > 1e-3f)) continue;
+      const float refined = sum_d[i] / area + sum_c[i] / sum_g[i];
+      d[i] = std::abs(refined - original[i]) <= 1.0f ? refined : original[i];
     }
   }
 }
 
 }  // namespace
+
+void RefineDisparitySubpixel(const ImageU8& left, const ImageU8& right, int window, int iterations,
+                             ImageF* disparity, const ImageI32* surface_ids) {
+  SSTA_CHECK(disparity != nullptr, "RefineDisparitySubpixel: disparity must not be null");
+  SSTA_CHECK(window >= 1 && window % 2 == 1, "RefineDisparitySubpixel: window must be odd and positive");
+  SSTA_CHECK(iterations >= 1, "RefineDisparitySubpixel: iterations must be at least 1");
+  SSTA_CHECK(surface_ids == nullptr ||
+                 (surface_ids->width() == disparity->width() && surface_ids->height() == disparity->height()),
+             "RefineDisparitySubpixel: the surface ids and the disparity differ in size");
+  SSTA_CHECK(left.width() == right.width() && left.height() == right.height() &&
+                 left.width() == disparity->width() && left.height() == disparity->height(),
+             "RefineDisparitySubpixel: the images and the disparity differ in size");
+  if (disparity->empty()) return;
+  RefineSubpixel(left, right, window, iterations, disparity, surface_ids);
+}
 
 ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std) {
   SSTA_CHECK(block >= 1, "block must be at least 1");
@@ -374,7 +416,7 @@ ImageF StereoMatcher::Compute(const ImageU8& left, const ImageU8& right) const {
     // Partners must lie inside the right image, at least m px off its left border.
     for (int u = m; u < disparity.width() - m; ++u) d[u] = src[u] > static_cast<float>(u - m) ? 0.0f : src[u];
   }
-  if (options_.subpixel_window_px > 0) RefineSubpixel(left, right, options_.subpixel_window_px, &disparity);
+  if (options_.subpixel_window_px > 0) RefineSubpixel(left, right, options_.subpixel_window_px, 2, &disparity);
   FilterSpeckles(options_.speckle_window_size, options_.speckle_range, &disparity);
   if (options_.min_texture > 0) DropTexturelessPixels(left, options_.block_size, options_.min_texture, &disparity);
   return disparity;

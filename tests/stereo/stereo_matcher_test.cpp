@@ -347,6 +347,46 @@ TEST(StereoMatcher, SubPixelRefinementKeepsDepthEdges) {
   EXPECT_GT(static_cast<double>(moved) / inside, 0.9);
 }
 
+TEST(StereoMatcher, SubPixelRefinementOnItsOwnStaysInsideEachSurface) {
+  // RefineDisparitySubpixel on the matcher's output, as the map runs it (one step): with the
+  // floor split into two surface ids along a column, pixels whose window reaches across the
+  // split (or into an id of -1) keep the matcher's value; the others move, and one step already
+  // removes most of the pixel locking.
+  const SyntheticPair floor = testing::MakeFloor(320, 240, 12.0, 40.0, 8, 72);
+  const ImageF plain = StereoMatcher(OptionsFor(MatcherType::kSemiGlobal)).Compute(floor.left, floor.right);
+  ImageF unrestricted = plain;
+  RefineDisparitySubpixel(floor.left, floor.right, 7, 1, &unrestricted);
+  ImageI32 ids(320, 240, 0);
+  for (int v = 0; v < 240; ++v) {
+    for (int u = 160; u < 320; ++u) ids(v, u) = 1;
+    ids(v, 20) = -1;  // a column without a surface
+  }
+  ImageF refined = plain;
+  RefineDisparitySubpixel(floor.left, floor.right, 7, 1, &refined, &ids);
+  long near_split = 0, kept = 0, away = 0, same = 0;
+  for (int v = 0; v < 240; ++v) {
+    for (int u = 0; u < 320; ++u) {
+      if (plain(v, u) <= 0.0f) continue;
+      if ((u >= 160 - 3 && u <= 159 + 3) || std::abs(u - 20) <= 3) {  // the window holds two ids
+        ++near_split;
+        kept += refined(v, u) == plain(v, u);
+      } else {
+        ++away;
+        same += refined(v, u) == unrestricted(v, u);
+      }
+    }
+  }
+  ASSERT_GT(near_split, 1500);
+  EXPECT_EQ(kept, near_split);
+  EXPECT_EQ(same, away);  // elsewhere exactly the unrestricted refinement
+  const auto [plain_mean, plain_p90] = SubPixelError(plain, floor);
+  const auto [mean, p90] = SubPixelError(refined, floor);
+  EXPECT_LT(mean, 0.7 * plain_mean) << "SGBM " << plain_mean << " px, one step " << mean << " px";
+  ImageI32 wrong_size(10, 10, 0);
+  EXPECT_THROW(RefineDisparitySubpixel(floor.left, floor.right, 7, 1, &refined, &wrong_size), InternalError);
+  EXPECT_THROW(RefineDisparitySubpixel(floor.left, floor.right, 6, 1, &refined), InternalError);
+}
+
 TEST(StereoMatcher, InvalidOptionsNameTheKey) {
   const auto error_of = [](const StereoMatcherOptions& o) {
     std::string error;

@@ -37,6 +37,17 @@ std::string MatcherTypeName(MatcherType type);
 /// images). The mask of `stereo.min_texture` and of `map.min_texture`.
 ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std);
 
+/// Refines `disparity` (of `left` against `right`, all three the same size; 0 = none) to
+/// sub-pixel precision in place: the refinement of StereoMatcherOptions::subpixel_window_px
+/// with a `window` x `window` window (odd, >= 1) and `iterations` Gauss-Newton steps (the
+/// matcher takes 2). Used by the matcher with that option, and on its own for the map's points
+/// (map.subpixel_window_px, 1 step: a second moved no map figure, docs/accuracy.md). With
+/// `surface_ids` (same size; e.g. segment ids, -1 none), only pixels whose whole window lies in
+/// one id >= 0 are refined: the refinement assumes one smooth surface per window. Sizes that
+/// differ or a bad window are broken preconditions (ssta::InternalError).
+void RefineDisparitySubpixel(const ImageU8& left, const ImageU8& right, int window, int iterations,
+                             ImageF* disparity, const ImageI32* surface_ids = nullptr);
+
 /// YAML section `stereo`.
 struct StereoMatcherOptions {
   MatcherType algorithm = MatcherType::kSemiGlobal;
