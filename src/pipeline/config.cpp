@@ -160,6 +160,9 @@ bool MappingOptions::IsValid(std::string* error) const {
   if (!fusion.IsValid(error)) return false;
   if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
   if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
+  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
+    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
+  }
   if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
   return true;
 }
@@ -259,6 +262,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("free_space_ray_cell", &f.free_space_ray_cell);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("min_texture", &c.map.min_texture);
+    s.Read("subpixel_window_px", &c.map.subpixel_window_px);
     s.Read("checkpoint_every_frames", &c.map.checkpoint_every_frames);
     s.RejectUnknownKeys();
   }
@@ -410,6 +414,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  free_space_ray_cell: " << f.free_space_ray_cell << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  min_texture: " << c.map.min_texture << "\n"
+    << "  subpixel_window_px: " << c.map.subpixel_window_px << "\n"
     << "  checkpoint_every_frames: " << c.map.checkpoint_every_frames << "\n";
   const RefinementOptions& r = c.refinement;
   y << "refinement:\n"

@@ -127,6 +127,11 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
     std::copy(src, src + g.crop_width, out.labels.row(v + g.crop_v0) + g.crop_u0);
   }
   out.left_rectified = std::move(pair.left_full);
+  // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
+  // per-frame path; the classification keeps the matcher's disparity.
+  if (disparity == nullptr && config_.map.subpixel_window_px > 0 && config_.stereo.subpixel_window_px == 0) {
+    out.right_matched = std::move(pair.right);
+  }
   const StageTimings& t = out.timings;
   out.timings.total_ms = t.rectify_ms + t.match_ms + t.triangulate_ms + t.normals_ms + t.segment_ms +
                          t.analyze_ms + clock.LapMs();

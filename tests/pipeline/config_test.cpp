@@ -74,6 +74,8 @@ TEST(Config, ErrorsNameTheKey) {
   EXPECT_NE(ErrorOf("segmentation:\n  roughness_deg: -1\n").find("segmentation.roughness_deg"), std::string::npos);
   EXPECT_NE(ErrorOf("analysis:\n  inliers_min_ratio: 2\n").find("analysis.inliers_min_ratio"), std::string::npos);
   EXPECT_NE(ErrorOf("gravity:\n  source: moon\n").find("gravity.source"), std::string::npos);
+  EXPECT_NE(ErrorOf("map:\n  subpixel_window_px: 4\n").find("map.subpixel_window_px: must be 0 (off) or odd"),
+            std::string::npos);
   EXPECT_NE(ErrorOf("attitude:\n  max_rest_gravity_error_mps2: 0\n").find("attitude.max_rest_gravity_error_mps2"),
             std::string::npos);
   EXPECT_NE(ErrorOf("? [a, b]\n: 1\n").find("keys must be plain names"), std::string::npos);

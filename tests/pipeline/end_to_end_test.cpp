@@ -59,8 +59,10 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
   testing::TempDir dir;
   synth::SynthOptions clean = Yard(20);
   synth::SynthOptions drift = clean;
-  drift.faults.pose_drift_roll_deg_per_s = 1.5;
-  drift.faults.pose_drift_pitch_deg_per_s = 1.5;
+  // 3 deg/s: with the map's points at sub-pixel disparity, 1.5 deg/s cost the uncorrected map
+  // only 0.9 points (0.852 against 0.860; docs/accuracy.md).
+  drift.faults.pose_drift_roll_deg_per_s = 3.0;
+  drift.faults.pose_drift_pitch_deg_per_s = 3.0;
   synth::WriteSyntheticSequence(clean, dir / "clean");
   synth::WriteSyntheticSequence(drift, dir / "drift");
 
@@ -76,8 +78,8 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
   RecordProperty("uncorrected", std::to_string(without));
   EXPECT_NEAR(with_imu, reference, 0.02);
   EXPECT_LT(without, with_imu - 0.015) << "uncorrected " << without << " vs corrected " << with_imu;
-  // Grid accuracy measured 0.843 on these 20 frames (docs/accuracy.md); the target is 0.90.
-  EXPECT_GT(reference, 0.82);
+  // Grid accuracy measured 0.860 on these 20 frames (docs/accuracy.md); the target is 0.90.
+  EXPECT_GT(reference, 0.845);
 }
 
 }  // namespace

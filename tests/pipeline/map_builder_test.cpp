@@ -67,6 +67,34 @@ TEST(ClassifiedPointsInWorld, LeavesOutPixelsTheKeepMaskDrops) {
   EXPECT_EQ(points[1].cls, TravClass::kTraversable);
 }
 
+TEST(ClassifiedPointsInWorld, PutsEachPointAtThePointDisparityAlongItsRay) {
+  // Z' = f b / d' = Z d / d': half the disparity, twice the range, the same direction; where
+  // either disparity is 0 the point keeps its own.
+  FrameResult f;
+  f.cloud = Image3f(3, 1, NanVector3f());
+  f.disparity = ImageF(3, 1, 0.0f);
+  f.segment_ids = ImageI32(3, 1, -1);
+  f.analysis.labels = ImageU8(3, 1, 1);
+  f.cloud(0, 0) = Eigen::Vector3f(1, 2, 4);
+  f.disparity(0, 0) = 8.0f;
+  f.cloud(0, 1) = Eigen::Vector3f(-1, 0.5f, 2);
+  f.disparity(0, 1) = 16.0f;
+  f.cloud(0, 2) = Eigen::Vector3f(0, 1, 5);
+  f.disparity(0, 2) = 6.4f;
+  ImageF refined(3, 1, 0.0f);
+  refined(0, 0) = 4.0f;
+  refined(0, 1) = 20.0f;
+  Eigen::Isometry3d world_T_rect = Eigen::Isometry3d::Identity();
+  world_T_rect.translate(Eigen::Vector3d(10, 0, 0));
+  const auto points = ClassifiedPointsInWorld(f, world_T_rect, 1, nullptr, &refined);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_TRUE(points[0].world_p.isApprox(Eigen::Vector3f(12, 4, 8), 1e-6f)) << points[0].world_p.transpose();
+  EXPECT_TRUE(points[1].world_p.isApprox(Eigen::Vector3f(10 - 0.8f, 0.4f, 1.6f), 1e-6f)) << points[1].world_p.transpose();
+  EXPECT_TRUE(points[2].world_p.isApprox(Eigen::Vector3f(10, 1, 5), 1e-6f)) << points[2].world_p.transpose();
+  ImageF wrong_size(2, 1, 1.0f);
+  EXPECT_THROW(ClassifiedPointsInWorld(f, world_T_rect, 1, nullptr, &wrong_size), InternalError);
+}
+
 TEST(TexturedPixels, KeepsPixelsWhoseWindowStdReachesTheThreshold) {
   // A 12x8 image, blank (grey 100) except a 0/6 checker in columns 8..11: a window's std is
   // 3 where it lies on the checker only, less where it also covers the blank part.

@@ -47,6 +47,12 @@ struct MappingOptions {
   /// are not inserted (sky and blank areas: matching noise); 0: off. Unlike stereo.min_texture
   /// it leaves the per-frame classification as it is. In [0, 128).
   double min_texture = 2.0;
+  /// [px, odd] the map's points sit at the matcher's disparity refined to sub-pixel precision
+  /// over this window (RefineDisparitySubpixel; 0: off). SGBM's disparities lean ~0.12 px short
+  /// and lock to whole pixels: at 12 m that is ~0.35 m of range bias. The per-frame classes keep
+  /// the matcher's disparity, on which they were measured; without effect when
+  /// stereo.subpixel_window_px already refines it, or with a given (oracle) disparity.
+  int subpixel_window_px = 7;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   bool IsValid(std::string* error) const;
 };

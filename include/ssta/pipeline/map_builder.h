@@ -70,18 +70,24 @@ using BuildProgress = std::function<void(int done, int total)>;
 /// common area with a 3D point and a class: class (a pixel labelled 0, without depth or
 /// untextured under analysis.label_min_texture, is never emitted), the slope and step of its
 /// segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
-/// (the common area's size), pixels where it is 0 are left out.
+/// (the common area's size), pixels where it is 0 are left out. With `point_disparity` (the
+/// common area's size), each point moves along its ray to that disparity where both it and the
+/// frame's are positive (a refined disparity: MapPointsOfFrame).
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
                                                      const Eigen::Isometry3d& world_T_rectified, int stride,
-                                                     const ImageU8* keep = nullptr);
+                                                     const ImageU8* keep = nullptr,
+                                                     const ImageF* point_disparity = nullptr);
 /// The same into `*points` (cleared first; its capacity is reused from frame to frame).
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
-                             const ImageU8* keep, std::vector<ClassifiedPoint>* points);
+                             const ImageU8* keep, std::vector<ClassifiedPoint>* points,
+                             const ImageF* point_disparity = nullptr);
 
 /// The points build-map inserts for a frame: ClassifiedPointsInWorld at map.pixel_stride, without
 /// the untextured pixels (map.min_texture over stereo.block_size windows; not computed again
 /// when analysis.label_min_texture, the same test on the labels, is at least as strict). It
-/// keeps noise matches out of the map.
+/// keeps noise matches out of the map. With map.subpixel_window_px, and a frame that kept the
+/// matcher's right image (FrameResult::right_matched), the points sit at the disparity refined to
+/// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's.
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const Config& config, const RectifiedGeometry& geometry);
 /// The same into `*points` (cleared first; its capacity is reused from frame to frame).
