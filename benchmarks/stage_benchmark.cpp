@@ -254,6 +254,34 @@ void BM_Geometry(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
+/// The map's sub-pixel refinement of one frame's disparity (map.subpixel_window_px, one step,
+/// within segments), as MapPointsOfFrame runs it.
+void BM_MapSubpixel(benchmark::State& state, const Dataset* d) {
+  FrameCycle frames(*d);
+  ImageF refined;
+  for (auto _ : state) {
+    const BenchFrame& f = frames.Next();
+    refined = f.result.disparity;
+    RefineDisparitySubpixel(f.rectified.left, f.rectified.right, d->config.map.subpixel_window_px, 1, &refined,
+                            &f.result.segment_ids);
+    benchmark::DoNotOptimize(refined.data());
+  }
+  CountFrames(state);
+}
+
+/// MapPointsOfFrame alone: the points a frame inserts (texture mask, sub-pixel refinement).
+void BM_MapPoints(benchmark::State& state, const Dataset* d) {
+  const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
+  FrameCycle frames(*d);
+  std::vector<ClassifiedPoint> points;
+  for (auto _ : state) {
+    const BenchFrame& f = frames.Next();
+    MapPointsOfFrame(f.result, f.world_T_rectified, d->config, geometry, &points);
+    benchmark::DoNotOptimize(points.data());
+  }
+  CountFrames(state);
+}
+
 /// MapPointsOfFrame + InsertFrame into one map that keeps growing over the iterations
 /// (the frames cycle, so after the first round it revisits the same voxels).
 void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
@@ -639,6 +667,8 @@ void RegisterAll() {
     add("Analyze/" + name, [get = get](benchmark::State& s) { BM_Analyze(s, get()); });
     add("Geometry/" + name, [get = get](benchmark::State& s) { BM_Geometry(s, get()); });
     add("TextureMask/" + name, [get = get](benchmark::State& s) { BM_TextureMask(s, get()); });
+    add("MapSubpixel/" + name, [get = get](benchmark::State& s) { BM_MapSubpixel(s, get()); });
+    add("MapPoints/" + name, [get = get](benchmark::State& s) { BM_MapPoints(s, get()); });
     add("MapUpdate/" + name, [get = get](benchmark::State& s) { BM_MapUpdate(s, get()); });
     add("OnlineRefinement/" + name, [get = get](benchmark::State& s) { BM_OnlineRefinement(s, get()); });
     add("EndToEnd/" + name, [get = get](benchmark::State& s) { BM_EndToEnd(s, get()); });
