@@ -130,35 +130,38 @@ void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int i
                     const ImageI32* surface_ids = nullptr) {
   const int w = disparity->width(), h = disparity->height();
   const std::size_t plane = static_cast<std::size_t>(w) * h;
-  thread_local std::vector<float> original, lo, hi, grad, terms, sums;
+  thread_local std::vector<float> original, grad, terms, sums;
+  thread_local std::vector<std::uint8_t> refinable;
   original.assign(disparity->data(), disparity->data() + plane);
-  lo.resize(plane);
-  hi.resize(plane);
   grad.resize(plane);
   terms.resize(3 * plane);
   sums.resize(3 * plane);
+  refinable.resize(plane);
   auto mat = [&](std::vector<float>& buffer, std::size_t k = 0) {  // plane k of a buffer, no copy
     return cv::Mat(h, w, CV_32F, buffer.data() + plane * k);
   };
-  // Only windows whose disparities agree within 1 px (and hold no hole) are refined. (erode and
-  // dilate leave pixels outside the image out of the window.)
+  // Only windows whose disparities agree within 1 px (and hold no hole) are refined; with
+  // surface ids, also only windows of one id >= 0 (ids as floats: exact below 2^24). erode and
+  // dilate leave pixels outside the image out of the window. The planes of `sums` and `terms`
+  // serve as scratch until the steps fill them.
   const cv::Mat kernel = cv::Mat::ones(window, window, CV_8U);
-  cv::Mat lo_mat = mat(lo), hi_mat = mat(hi);
-  cv::erode(mat(original), lo_mat, kernel);
-  cv::dilate(mat(original), hi_mat, kernel);
-  // With surface ids, also only windows of one id >= 0 (ids as floats: exact below 2^24).
-  thread_local std::vector<float> ids, id_lo, id_hi;
+  {
+    cv::Mat lo = mat(sums, 0), hi = mat(sums, 1);
+    cv::erode(mat(original), lo, kernel);
+    cv::dilate(mat(original), hi, kernel);
+    const float* lo_d = sums.data();
+    const float* hi_d = lo_d + plane;
+    for (std::size_t i = 0; i < plane; ++i) refinable[i] = original[i] > 0.0f && lo_d[i] > 0.0f && hi_d[i] - lo_d[i] <= 1.0f;
+  }
   if (surface_ids != nullptr) {
-    ids.resize(plane);
-    id_lo.resize(plane);
-    id_hi.resize(plane);
+    float* ids = terms.data();
     for (std::size_t i = 0; i < plane; ++i) ids[i] = static_cast<float>(std::max((*surface_ids)[i], -1));
-    cv::Mat lo_ids = mat(id_lo), hi_ids = mat(id_hi);
-    cv::erode(mat(ids), lo_ids, kernel);
-    cv::dilate(mat(ids), hi_ids, kernel);
-    for (std::size_t i = 0; i < plane; ++i) {
-      if (!(id_lo[i] >= 0.0f && id_lo[i] == id_hi[i])) lo[i] = 0.0f;  // not refined
-    }
+    cv::Mat lo = mat(terms, 1), hi = mat(terms, 2);
+    cv::erode(mat(terms, 0), lo, kernel);
+    cv::dilate(mat(terms, 0), hi, kernel);
+    const float* id_lo = ids + plane;
+    const float* id_hi = id_lo + plane;
+    for (std::size_t i = 0; i < plane; ++i) refinable[i] &= id_lo[i] >= 0.0f && id_lo[i] == id_hi[i];
   }
   // Central difference of the right image along u (0 at the first and last column).
   for (int v = 0; v < h; ++v) {
@@ -206,7 +209,7 @@ void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int i
     const float* sum_g = sum_c + plane;
     float* d = disparity->data();
     for (std::size_t i = 0; i < plane; ++i) {
-      if (!(original[i] > 0.0f) || !(lo[i] > 0.0f) || hi[i] - lo[i] > 1.0f || !(sum_g[i] > 1e-3f)) continue;
+      if (!refinable[i] || !(sum_g[i] > 1e-3f)) continue;
       const float refined = sum_d[i] / area + sum_c[i] / sum_g[i];
       d[i] = std::abs(refined - original[i]) <= 1.0f ? refined : original[i];
     }
