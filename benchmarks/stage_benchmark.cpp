@@ -207,23 +207,15 @@ void BM_Segment(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
-/// AnalyzeSurfaces + RefineByPixelSlope, as FramePipeline runs them.
-AnalysisResult Analyze(const Config& config, const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
-                       const Image3f& normals, const Eigen::Vector3d& up_rectified) {
-  AnalysisResult a =
-      AnalyzeSurfaces(cloud, segment_ids, num_segments, up_rectified, config.vehicle, config.analysis);
-  if (config.analysis.pixel_slopes && a.quality.passed) {
-    RefineByPixelSlope(normals, up_rectified, config.vehicle, &a.labels);
-  }
-  return a;
-}
-
+/// The whole analysis after segmentation, as FramePipeline runs it (AnalyzeFrame: planes, classes
+/// and every label refinement of the config).
 void BM_Analyze(benchmark::State& state, const Dataset* d) {
+  const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    benchmark::DoNotOptimize(Analyze(d->config, f.result.cloud, f.result.segment_ids, f.result.num_segments,
-                                     f.normals, f.result.up_rectified));
+    benchmark::DoNotOptimize(AnalyzeFrame(d->config, geometry, f.result.disparity, f.result.cloud, f.normals,
+                                          f.result.segment_ids, f.result.num_segments, f.result.up_rectified));
   }
   CountFrames(state);
 }
@@ -241,6 +233,7 @@ void BM_TextureMask(benchmark::State& state, const Dataset* d) {
 
 /// Normals through classes: the "geometry" budget.
 void BM_Geometry(benchmark::State& state, const Dataset* d) {
+  const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
   NormalEstimator estimator(d->config.normals);
   Segmenter segmenter(d->config.segmentation);
   FrameCycle frames(*d);
@@ -248,8 +241,8 @@ void BM_Geometry(benchmark::State& state, const Dataset* d) {
     const BenchFrame& f = frames.Next();
     const Image3f& normals = estimator.Compute(f.result.cloud);
     const Segmentation& s = segmenter.Compute(normals, &f.result.disparity);
-    benchmark::DoNotOptimize(
-        Analyze(d->config, f.result.cloud, s.labels, s.num_segments(), normals, f.result.up_rectified));
+    benchmark::DoNotOptimize(AnalyzeFrame(d->config, geometry, f.result.disparity, f.result.cloud, normals, s.labels,
+                                          s.num_segments(), f.result.up_rectified));
   }
   CountFrames(state);
 }

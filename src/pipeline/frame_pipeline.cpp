@@ -95,19 +95,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
-  out.analysis = AnalyzeSurfaces(cloud, segmentation.labels, out.num_segments, out.up_rectified,
-                                 config_.vehicle, config_.analysis);
-  if (config_.analysis.pixel_slopes && out.analysis.quality.passed) {
-    RefineByPixelSlope(normals, out.up_rectified, config_.vehicle, &out.analysis.labels, &segmentation.labels,
-                       config_.analysis.pixel_slope_window_px);
-  }
-  RefineByGroundDisparity(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
-  RefineByFragmentPlanes(cloud, segmentation.labels, g.f * g.baseline_m, config_.analysis, &out.analysis);
-  if (out.analysis.quality.passed) {
-    RefineByDisparityFaces(out.disparity, g.f, g.cu, g.cv, out.up_rectified, config_.analysis, &out.analysis.labels);
-    FillUndecidedByConsensus(config_.analysis, &out.analysis.labels);
-    FillUndecidedByHeight(cloud, g.f * g.baseline_m, config_.vehicle, config_.analysis, &out.analysis);
-  }
+  out.analysis = AnalyzeFrame(config_, g, out.disparity, cloud, normals, segmentation.labels, out.num_segments,
+                              out.up_rectified);
   if (config_.analysis.label_min_texture > 0.0) {
     // The same test as the map's min_texture, on the full rectified image (the block reaches
     // past the common area's border as the matcher's does).
@@ -136,6 +125,25 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.total_ms = t.rectify_ms + t.match_ms + t.triangulate_ms + t.normals_ms + t.segment_ms +
                          t.analyze_ms + clock.LapMs();
   return out;
+}
+
+AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, const ImageF& disparity,
+                            const Image3f& cloud, const Image3f& normals, const ImageI32& segment_ids,
+                            int num_segments, const Eigen::Vector3d& up_rectified) {
+  const double focal_times_baseline = g.f * g.baseline_m;
+  AnalysisResult a = AnalyzeSurfaces(cloud, segment_ids, num_segments, up_rectified, config.vehicle, config.analysis);
+  if (config.analysis.pixel_slopes && a.quality.passed) {
+    RefineByPixelSlope(normals, up_rectified, config.vehicle, &a.labels, &segment_ids,
+                       config.analysis.pixel_slope_window_px);
+  }
+  RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, config.analysis, &a);
+  RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, config.analysis, &a);
+  if (a.quality.passed) {
+    RefineByDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, config.analysis, &a.labels);
+    FillUndecidedByConsensus(config.analysis, &a.labels);
+    FillUndecidedByHeight(cloud, focal_times_baseline, config.vehicle, config.analysis, &a);
+  }
+  return a;
 }
 
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {

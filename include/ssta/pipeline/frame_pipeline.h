@@ -73,6 +73,16 @@ class FramePipeline {
   std::unique_ptr<Stages> stages_;
 };
 
+/// The analysis of one frame after segmentation, as FramePipeline runs it (paper III-E and the
+/// label refinements the config's analysis section turns on): AnalyzeSurfaces, per-pixel slopes,
+/// ground consistency, fragment planes, and where the quality check passed the disparity face
+/// test and the two fills of undecided pixels. All images are the common area's (`geometry`);
+/// `up_rectified` is up in the rectified cam0 frame. (The texture mask of
+/// analysis.label_min_texture needs the full image and is applied by the pipeline after it.)
+AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& geometry, const ImageF& disparity,
+                            const Image3f& cloud, const Image3f& normals, const ImageI32& segment_ids,
+                            int num_segments, const Eigen::Vector3d& up_rectified);
+
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
 /// left image) has texture: the grey-level standard deviation of the full image over the
 /// `block` x `block` window around the pixel (clipped at the image border) is at least
