@@ -382,6 +382,14 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 
 namespace {
 
+// The column step takes __restrict pointers so that the compiler vectorises it; GCC drops
+// __restrict when such a function is inlined, so it stays out of line.
+#if defined(__GNUC__)
+#define SSTA_ANALYSIS_NOINLINE __attribute__((noinline))
+#else
+#define SSTA_ANALYSIS_NOINLINE
+#endif
+
 /// Sliding-window sum along one line of `n` samples, restricted to runs of equal segment id:
 /// out[i] = sum of in[j] with |i - j| <= r and ids[j] == ids[i] within the run holding i.
 /// `in` holds x, y, z and a weight (1 for a finite normal, 0 otherwise) per sample.
@@ -402,6 +410,24 @@ void RunSum(const Eigen::Vector4f* in, const std::int32_t* ids, int n, int r, Ei
   }
 }
 
+/// Steady-state column update of one row (see SegmentBoxSums): per column, add the row entering
+/// the window when it lies in the pixel's run, subtract the row leaving it when that did. The
+/// masks multiply by 1 or 0, which adds exactly what the branchy update added (or exactly 0),
+/// so the sums stay the same to the bit; branch-free, the loop vectorises.
+SSTA_ANALYSIS_NOINLINE void ColumnStep(int n, int v, int r, const std::int32_t* __restrict run_end,
+                                       const std::int32_t* __restrict run_start, const float* __restrict add,
+                                       const float* __restrict sub, float* __restrict sum, float* __restrict out) {
+  for (int u = 0; u < n; ++u) {
+    const float in = v + r < run_end[u] ? 1.0f : 0.0f;
+    const float gone = v - r - 1 >= run_start[u] ? 1.0f : 0.0f;
+    for (int k = 0; k < 4; ++k) {
+      const int i = 4 * u + k;
+      sum[i] = (sum[i] + in * add[i]) - gone * sub[i];
+      out[i] = sum[i];
+    }
+  }
+}
+
 /// Sums of the finite unit normals (x, y, z and their count) in a window x window box around
 /// each pixel, counting only pixels of the same segment along each row and then each column
 /// (separable, so O(1) per pixel). Staying inside a segment keeps a ramp's edge from blurring
@@ -411,33 +437,42 @@ void RunSum(const Eigen::Vector4f* in, const std::int32_t* ids, int n, int r, Ei
 /// needs, and the column pass runs down all columns at once, streaming rows: per column the
 /// same additions and subtractions in the same order as RunSum over that column, so the same
 /// sums to the bit as summing whole transposed images, with cache-resident buffers instead of
-/// several frame-sized ones. The buffers are kept per thread (no allocation per frame).
+/// several frame-sized ones. Where a vertical run starts its window is summed afresh; elsewhere
+/// one branch-free step (ColumnStep) adds the row entering and subtracts the row leaving, from
+/// each pixel's run end found beforehand. The buffers are kept per thread (no allocation per
+/// frame).
 template <typename OnRow>
 void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnRow&& on_row) {
   const int w = normals.width(), h = normals.height(), r = window / 2;
   const std::size_t stride = static_cast<std::size_t>(w);
   const int slots = std::min(h, 2 * r + 2);
-  thread_local std::vector<Eigen::Vector4f> row_in, ring, column_sum, out;
-  thread_local std::vector<std::int32_t> cursors;
+  thread_local std::vector<Eigen::Vector4f> row_in, ring, column_sum, out, zeros;
+  thread_local std::vector<std::int32_t> run_start, run_end;
   thread_local std::vector<Eigen::Vector4f*> row_slot;  // row j's slot in the ring
-  thread_local std::vector<const std::int32_t*> id_row;  // row j of the ids
   row_in.resize(stride);
   ring.resize(stride * slots);
   column_sum.resize(stride);
   out.resize(stride);
-  cursors.resize(3 * stride);
-  std::int32_t* start = cursors.data();  // per column: first row of the current run
-  std::int32_t* lo = start + stride;     // column_sum holds rows [lo, hi) of the column
-  std::int32_t* hi = lo + stride;
-  Eigen::Vector4f* sum = column_sum.data();
-  row_slot.resize(static_cast<std::size_t>(h));
-  id_row.resize(static_cast<std::size_t>(h));
-  for (int j = 0; j < h; ++j) {
-    row_slot[j] = ring.data() + stride * static_cast<std::size_t>(j % slots);
-    id_row[j] = ids.row(j);
+  zeros.assign(stride, Eigen::Vector4f::Zero());
+  run_start.resize(stride);
+  run_end.resize(stride * static_cast<std::size_t>(h));
+  // run_end(v, u): the first row below v where column u's id changes (h at the bottom).
+  for (int v = h - 1; v >= 0; --v) {
+    std::int32_t* end = run_end.data() + stride * v;
+    if (v == h - 1) {
+      std::fill(end, end + w, h);
+      continue;
+    }
+    const std::int32_t* id = ids.row(v);
+    const std::int32_t* below = ids.row(v + 1);
+    const std::int32_t* end_below = end + stride;
+    for (int u = 0; u < w; ++u) end[u] = id[u] == below[u] ? end_below[u] : v + 1;
   }
+  row_slot.resize(static_cast<std::size_t>(h));
+  for (int j = 0; j < h; ++j) row_slot[j] = ring.data() + stride * static_cast<std::size_t>(j % slots);
   auto row_sums = [&](int j) { return row_slot[j]; };
   int next_row = 0;  // the next row whose row sums are not made yet
+  float* sum = column_sum.data()->data();
   for (int v = 0; v < h; ++v) {
     for (const int need = std::min(h - 1, v + r); next_row <= need; ++next_row) {
       const Eigen::Vector3f* n = normals.row(next_row);
@@ -449,16 +484,19 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnR
       RunSum(row_in.data(), id, w, r, row_sums(next_row));
     }
     const std::int32_t* id = ids.row(v);
+    const std::int32_t* end = run_end.data() + stride * v;
+    const Eigen::Vector4f* add = v + r < h ? row_sums(v + r) : zeros.data();
+    const Eigen::Vector4f* sub = v - r - 1 >= 0 ? row_sums(v - r - 1) : zeros.data();
+    ColumnStep(w, v, r, end, run_start.data(), add->data(), sub->data(), sum, out.data()->data());
+    const std::int32_t* above = v > 0 ? ids.row(v - 1) : nullptr;
     for (int u = 0; u < w; ++u) {
-      if (v == 0 || id[u] != id[u - stride]) {  // a run starts
-        sum[u].setZero();
-        start[u] = lo[u] = hi[u] = v;
-      }
-      // The run goes on while the ids below equal this one (its end, for RunSum).
-      const int want_lo = std::max(start[u], v - r), limit = std::min(h, v + r + 1);
-      while (hi[u] < limit && id_row[hi[u]][u] == id[u]) sum[u] += row_sums(hi[u]++)[u];
-      while (lo[u] < want_lo) sum[u] -= row_sums(lo[u]++)[u];
-      out[u] = sum[u];
+      if (v > 0 && id[u] == above[u]) continue;
+      // A run starts: its window is rows [v, min(end, v + r + 1)), added in order.
+      run_start[u] = v;
+      Eigen::Vector4f acc = Eigen::Vector4f::Zero();
+      for (int j = v; j < std::min(end[u], v + r + 1); ++j) acc += row_sums(j)[u];
+      column_sum[u] = acc;
+      out[u] = acc;
     }
     on_row(v, out.data());
   }
