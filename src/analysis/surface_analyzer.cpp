@@ -206,12 +206,6 @@ bool AnalysisOptions::IsValid(std::string* error) const {
   return true;
 }
 
-void PlaneAccumulator::Add(const Eigen::Vector3d& p) {
-  ++count_;
-  sum_ += p;
-  sum_sq_.noalias() += p * p.transpose();
-}
-
 Eigen::Vector3d PlaneAccumulator::Mean() const {
   SSTA_CHECK(count_ >= 1, "the mean of no points");
   return sum_ / count_;
@@ -222,7 +216,9 @@ PlaneFit PlaneAccumulator::Fit() const {
   PlaneFit fit;
   fit.count = count_;
   fit.centroid = sum_ / count_;
-  Eigen::Matrix3d cov = sum_sq_ / count_ - fit.centroid * fit.centroid.transpose();
+  Eigen::Matrix3d sum_sq;
+  sum_sq << xx_, xy_, xz_, xy_, yy_, yz_, xz_, yz_, zz_;
+  Eigen::Matrix3d cov = sum_sq / count_ - fit.centroid * fit.centroid.transpose();
   cov = 0.5 * (cov + cov.transpose());
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
   fit.normal = solver.eigenvectors().col(0).normalized();  // eigenvalues ascending
