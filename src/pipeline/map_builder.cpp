@@ -11,10 +11,10 @@
 #include "core/json_escape.h"
 #include "pipeline/ordered_worker.h"
 #include "ssta/io/image_io.h"
-#include "ssta/stereo/stereo_matcher.h"
 #include "ssta/pipeline/gravity_provider.h"
 #include "ssta/pipeline/sequence_classifier.h"
 #include "ssta/refinement/ground_evidence.h"
+#include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
 namespace {
@@ -34,7 +34,6 @@ ImageU8 CropToCommonArea(const ImageU8& full, const RectifiedGeometry& g) {
   }
   return out;
 }
-
 
 std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeometry& g) {
   std::ostringstream s;
