@@ -126,7 +126,7 @@ SegmenterOptions PipelineSegmenterDefaults() {
 
 MapOptions PipelineMapDefaults() {
   MapOptions o;
-  o.max_range_m = 13.0;
+  o.max_range_m = 14.0;
   o.occupied_threshold_prob = 0.8;
   o.occupancy_miss_prob = 0.45;
   o.class_free_decay_log_odds = 0.1;
