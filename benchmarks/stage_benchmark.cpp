@@ -255,8 +255,8 @@ void BM_MapSubpixel(benchmark::State& state, const Dataset* d) {
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
     refined = f.result.disparity;
-    RefineDisparitySubpixel(f.rectified.left, f.rectified.right, d->config.map.subpixel_window_px, 1, &refined,
-                            &f.result.segment_ids);
+    RefineDisparitySubpixel(f.rectified.left, f.rectified.right, d->config.map.subpixel_window_px, kMapSubpixelSteps,
+                            &refined, &f.result.segment_ids);
     benchmark::DoNotOptimize(refined.data());
   }
   CountFrames(state);

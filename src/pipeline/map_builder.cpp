@@ -19,10 +19,6 @@
 namespace ssta {
 namespace {
 
-// Gauss-Newton steps of the map's sub-pixel refinement: one moved the yard, drop-off and forest
-// maps as two did (0.866 / 0.971 / 0.895 against 0.865 / 0.971 / 0.896) at half the cost.
-constexpr int kMapSubpixelSteps = 1;
-
 /// The common area of a full rectified image.
 ImageU8 CropToCommonArea(const ImageU8& full, const RectifiedGeometry& g) {
   SSTA_CHECK(full.width() == g.full_width && full.height() == g.full_height,
