@@ -119,6 +119,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
   // per-frame path; the classification keeps the matcher's disparity.
   if (disparity == nullptr && config_.map.subpixel_window_px > 0 && config_.stereo.subpixel_window_px == 0) {
+    out.left_matched = std::move(pair.left);
     out.right_matched = std::move(pair.right);
   }
   const StageTimings& t = out.timings;

@@ -19,18 +19,6 @@
 namespace ssta {
 namespace {
 
-/// The common area of a full rectified image.
-ImageU8 CropToCommonArea(const ImageU8& full, const RectifiedGeometry& g) {
-  SSTA_CHECK(full.width() == g.full_width && full.height() == g.full_height,
-             "the rectified image must have the rectified size");
-  ImageU8 out(g.crop_width, g.crop_height);
-  for (int v = 0; v < g.crop_height; ++v) {
-    const std::uint8_t* src = full.row(v + g.crop_v0) + g.crop_u0;
-    std::copy(src, src + g.crop_width, out.row(v));
-  }
-  return out;
-}
-
 std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeometry& g) {
   std::ostringstream s;
   s << std::setprecision(10) << "cam0 " << c.left.width << "x" << c.left.height << " fu " << c.left.fu
@@ -150,15 +138,14 @@ std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
 void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
                       const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points) {
   // Sub-pixel disparity for the points (map.subpixel_window_px), when the frame kept the
-  // matcher's right image for it.
+  // matcher's images for it.
   thread_local ImageF refined;
   const ImageF* point_disparity = nullptr;
   if (config.map.subpixel_window_px > 0 && !frame.right_matched.empty()) {
-    const ImageU8 left = CropToCommonArea(frame.left_rectified, geometry);
     refined = frame.disparity;
     // Only inside one segment: a window across an obstacle's outline would blend its depth with
     // the ground's behind it where the two lie less than 1 px of disparity apart.
-    RefineDisparitySubpixel(left, frame.right_matched, config.map.subpixel_window_px, kMapSubpixelSteps, &refined,
+    RefineDisparitySubpixel(frame.left_matched, frame.right_matched, config.map.subpixel_window_px, kMapSubpixelSteps, &refined,
                             &frame.segment_ids);
     point_disparity = &refined;
   }

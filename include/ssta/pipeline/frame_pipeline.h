@@ -30,10 +30,10 @@ struct FrameResult {
   AnalysisResult analysis;  ///< on the cropped area
   /// Class ids at the full rectified size; 0 (unknown) outside the common area.
   ImageU8 labels;
-  /// The matcher's right input (rectified, cropped to the common area), kept for the map's
-  /// sub-pixel refinement (map.subpixel_window_px > 0, stereo.subpixel_window_px 0, matched
-  /// frames only); empty otherwise.
-  ImageU8 right_matched;
+  /// The matcher's inputs (rectified, cropped to the common area), kept for the map's sub-pixel
+  /// refinement (map.subpixel_window_px > 0, stereo.subpixel_window_px 0, matched frames only);
+  /// empty otherwise.
+  ImageU8 left_matched, right_matched;
   Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< up in the rectified cam0 frame
   StageTimings timings;
 };

@@ -91,7 +91,7 @@ inline constexpr int kMapSubpixelSteps = 1;
 /// the untextured pixels (map.min_texture over stereo.block_size windows; not computed again
 /// when analysis.label_min_texture, the same test on the labels, is at least as strict). It
 /// keeps noise matches out of the map. With map.subpixel_window_px, and a frame that kept the
-/// matcher's right image (FrameResult::right_matched), the points sit at the disparity refined to
+/// matcher's images (FrameResult::left_matched, right_matched), the points sit at the disparity refined to
 /// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's.
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const Config& config, const RectifiedGeometry& geometry);
