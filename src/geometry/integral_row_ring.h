@@ -21,14 +21,21 @@ namespace internal {
 template <typename T, int C>
 class IntegralRowRing {
  public:
-  void Reset(int width, int height, int max_radius) {
+  ///
+  /// `first_row` lets a sweep over a band of output rows start part-way down the image: integral
+  /// row `first_row` is taken as all zeros, i.e. every row holds its true sums minus those of
+  /// integral row `first_row`. Box sums between rows >= first_row are differences, so they are
+  /// exactly the same as from a ring started at row 0 (the offset cancels modulo 2^bits). A band
+  /// of output rows [v0, v1) with radii <= R starts at first_row = max(0, v0 - R).
+  void Reset(int width, int height, int max_radius, int first_row = 0) {
     width_ = width;
     height_ = height;
     plane_ = static_cast<std::size_t>(width) + 1;
     stride_ = plane_ * C;
     slots_ = std::min(2 * max_radius + 2, height + 1);
     data_.resize(stride_ * slots_);
-    next_row_ = 0;
+    first_row_ = std::clamp(first_row, 0, height);
+    next_row_ = first_row_;
   }
 
   /// Builds integral rows up to `row` (clamped to height). `add(v, u, acc)` adds pixel (v, u)'s
@@ -38,7 +45,7 @@ class IntegralRowRing {
     row = std::min(row, height_);
     for (; next_row_ <= row; ++next_row_) {
       T* cur = Slot(next_row_);
-      if (next_row_ == 0) {
+      if (next_row_ == first_row_) {
         std::fill(cur, cur + stride_, T{0});
         continue;
       }
@@ -60,7 +67,8 @@ class IntegralRowRing {
   /// Values per integral row (all channels).
   std::size_t row_size() const { return stride_; }
 
-  /// Integral row j; it must have been built and not yet overwritten (j > last built - slots).
+  /// Integral row j; it must have been built and not yet overwritten (j > last built - slots),
+  /// and j >= first_row.
   const T* Row(int j) const {
     return data_.data() + stride_ * static_cast<std::size_t>(j % slots_);
   }
@@ -73,6 +81,7 @@ class IntegralRowRing {
   std::size_t plane_ = 0;
   std::size_t stride_ = 0;
   int slots_ = 1;
+  int first_row_ = 0;
   int next_row_ = 0;
   std::vector<T> data_;
 };

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <Eigen/Geometry>
+#include <opencv2/core/utility.hpp>
 
 #include "geometry/integral_row_ring.h"
 #include "geometry/smallest_eigenvector.h"
@@ -20,6 +21,7 @@ constexpr int kMaxSmoothingSizePx = 201;  // radius 100, x2 with depth-dependent
 constexpr int kMinRadiusPx = 1;           // 3 x 3 is the smallest window that yields a normal
 // A window (or each half-window of the gradient methods) needs this fraction of valid points.
 constexpr double kMinValidFraction = 0.25;
+constexpr int kMinBandRows = 32;  // rows per band at least, when the sweep runs on several threads
 // Depth-dependent smoothing: side = smoothing_size_px * sqrt(Z / kReferenceDepthM), clamped.
 constexpr double kReferenceDepthM = 5.0;
 constexpr double kMinDepthScale = 0.5;
@@ -224,8 +226,20 @@ bool NormalOptions::IsValid(std::string* error) const {
   if (!(max_depth_change_factor > 0.0 && max_depth_change_factor <= 100.0)) {
     return Fail(error, "max_depth_change_factor: must be in (0, 100] 1/m (inverse-depth jump)");
   }
+  if (threads < 0 || threads > 256) return Fail(error, "threads: must be in [0, 256] (0 = OpenCV's thread count)");
   return true;
 }
+
+// What one sweep over a band of output rows needs for itself: its integral rows start at the
+// band (IntegralRowRing's first_row), so bands run on separate threads and give exactly the
+// normals of one sweep over the whole image.
+struct NormalEstimator::Band {
+  internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
+  internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
+  std::vector<float> row_soa;             // per-row structure of arrays
+  std::vector<std::uint64_t> strip_u64;   // full-radius strip sums of the current row
+  std::vector<std::uint64_t> strips_u64;  // full, top-half and bottom-half strips
+};
 
 struct NormalEstimator::Buffers {
   Image3f normals;
@@ -237,11 +251,9 @@ struct NormalEstimator::Buffers {
   std::vector<float> last_inverse_depth;     // per column, 1/Z at last_valid_row [1/m]
   std::vector<float> edge_threshold;         // inverse-depth jump per gap length [1/m]
   std::vector<float> radius_threshold;       // depth-dependent radius: see ComputeWindowRadii
-  internal::IntegralRowRing<std::uint64_t, 10> covariance_rows;
-  internal::IntegralRowRing<std::uint64_t, 4> first_order_rows;
-  std::vector<float> row_soa;             // covariance: per-row structure of arrays
-  std::vector<std::uint64_t> strip_u64;   // full-radius strip sums of the current row
-  std::vector<std::uint64_t> strips_u64;  // full, top-half and bottom-half strips
+  std::vector<Band> bands;                   // one per band of output rows (NumBands)
+  std::vector<int> row_points;               // valid points per row (PrepareFrame)
+  std::vector<int> band_rows;                // band k is rows [band_rows[k], band_rows[k + 1])
   double max_abs_coordinate_m = 0.0;      // of this frame's valid points
   double max_inverse_depth = 0.0;         // [1/m]
   int max_radius_px = 0;                  // largest radius any pixel may use
@@ -282,23 +294,84 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
   }
 
   PrepareFrame(cloud);
-  ComputeWindowRadii(cloud);
+  const int num_bands = NumBands(height);
+  b.bands.resize(static_cast<std::size_t>(num_bands));
+  SplitIntoBands(num_bands);
+  ComputeWindowRadii(cloud, num_bands);
   if (b.max_abs_coordinate_m <= 0.0) {  // no valid point at all
     b.normals.Fill(NanVector3f());
     return b.normals;
   }
-  switch (options_.method) {
-    case NormalMethod::kCovarianceMatrix:
-      ComputeCovariance(cloud);
-      break;
-    case NormalMethod::kAverage3dGradient:
-      ComputeAverage3dGradient(cloud);
-      break;
-    case NormalMethod::kAverageDepthChange:
-      ComputeAverageDepthChange(cloud);
-      break;
+  if (options_.method == NormalMethod::kAverageDepthChange && !(b.fx_px > 0.0 && b.fy_px > 0.0)) {
+    b.radius.Fill(0);  // the pinhole scale could not be recovered from the cloud
+    b.normals.Fill(NanVector3f());
+    return b.normals;
   }
+  ForEachBand(num_bands, [&](int band, int v_begin, int v_end) {
+    Band& state = b.bands[static_cast<std::size_t>(band)];
+    switch (options_.method) {
+      case NormalMethod::kCovarianceMatrix:
+        ComputeCovariance(cloud, v_begin, v_end, &state);
+        break;
+      case NormalMethod::kAverage3dGradient:
+        ComputeAverage3dGradient(cloud, v_begin, v_end, &state);
+        break;
+      case NormalMethod::kAverageDepthChange:
+        ComputeAverageDepthChange(cloud, v_begin, v_end, &state);
+        break;
+    }
+  });
   return b.normals;
+}
+
+// Bands of at least kMinBandRows rows, one per thread: each band builds 2 R extra integral rows
+// above it, so thin bands would cost more than they save.
+int NormalEstimator::NumBands(int height) const {
+  const int threads = options_.threads > 0 ? options_.threads : std::max(1, cv::getNumThreads());
+  return std::clamp(height / kMinBandRows, 1, threads);
+}
+
+// Band boundaries with about equal work in each band: a row costs its valid points (the window
+// sums and the eigen solve) plus a share of its width (building its integral row), so the sky
+// at the top of a frame does not leave one thread idle. Any boundaries give the same normals.
+void NormalEstimator::SplitIntoBands(int num_bands) {
+  Buffers& b = *buffers_;
+  const int height = static_cast<int>(b.row_points.size());
+  const int width = b.normals.width();
+  std::int64_t total = 0;
+  for (const int n : b.row_points) total += n + width / 4;
+  b.band_rows.assign(static_cast<std::size_t>(num_bands) + 1, height);
+  b.band_rows[0] = 0;
+  std::int64_t acc = 0;
+  int band = 1;
+  for (int v = 0; v < height && band < num_bands; ++v) {
+    acc += b.row_points[static_cast<std::size_t>(v)] + width / 4;
+    // Close band `band - 1` after row v once it holds its share, keeping kMinBandRows rows.
+    if (acc * num_bands >= total * band && v + 1 - b.band_rows[band - 1] >= kMinBandRows) {
+      b.band_rows[band++] = v + 1;
+    }
+  }
+  for (int k = 1; k <= num_bands; ++k) b.band_rows[k] = std::max(b.band_rows[k], b.band_rows[k - 1]);
+}
+
+template <typename Body>
+void NormalEstimator::ForEachBand(int num_bands, const Body& body) {
+  const std::vector<int>& rows = buffers_->band_rows;
+  auto run = [&](int band) {
+    const int v_begin = rows[static_cast<std::size_t>(band)];
+    const int v_end = rows[static_cast<std::size_t>(band) + 1];
+    if (v_end > v_begin) body(band, v_begin, v_end);
+  };
+  if (num_bands == 1) {
+    run(0);
+    return;
+  }
+  cv::parallel_for_(
+      cv::Range(0, num_bands),
+      [&](const cv::Range& range) {
+        for (int band = range.start; band < range.end; ++band) run(band);
+      },
+      num_bands);
 }
 
 // The estimator runs on the (even row, even column) points with half the smoothing size, so
@@ -366,6 +439,7 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
   }
 
   b.edge.Fill(0);
+  b.row_points.assign(static_cast<std::size_t>(height), 0);
   b.last_valid_row.assign(width, -1);
   b.last_inverse_depth.assign(width, 0.0f);
   float max_abs = 0.0f, max_rho = 0.0f;
@@ -380,12 +454,14 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
     std::uint8_t* edge = b.edge.row(v);
     int last_u = -1;
     float last_rho = 0.0f;
+    int row_valid = 0;
     for (int u = 0; u < width; ++u) {
       const Eigen::Vector3f& p = points[u];
       if (!IsValidPoint(p)) {
         rho_row[u] = 0.0f;
         continue;
       }
+      ++row_valid;
       const float rho = 1.0f / p.z();
       rho_row[u] = rho;
       max_abs = std::max(max_abs, std::max(std::max(std::abs(p.x()), std::abs(p.y())), p.z()));
@@ -421,6 +497,7 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
       last_u = u;
       last_rho = rho;
     }
+    b.row_points[static_cast<std::size_t>(v)] = row_valid;
     if (last_u > u_max) {
       u_max = last_u;
       xhat_at_u_max = points[last_u].x() / points[last_u].z();
@@ -439,7 +516,7 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
 // Radius per pixel: the smoothing radius (depth-dependent if asked), cut by the image border and
 // shrunk until the square window holds no depth-edge pixel (edge counts from a summed-area
 // table). Edge pixels themselves get no normal: their window would reach across the edge.
-void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
+void NormalEstimator::ComputeWindowRadii(const Image3f& cloud, int num_bands) {
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -494,37 +571,40 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
       std::memcpy(&at_most[k], &lo, sizeof lo);
     }
   }
-  for (int v = 0; v < height; ++v) {
-    const float* rho = b.inverse_depth.row(v);
-    std::uint8_t* r_out = b.radius.row(v);
-    const int border_v = std::min(v, height - 1 - v);
-    int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
-    int depth_r = far_radius;
-    for (int u = 0; u < width; ++u) {
-      if (!(rho[u] > 0.0f)) {
-        r_out[u] = 0;
-        edge_bound = std::numeric_limits<int>::max();
-        continue;
+  // Rows are independent once the edge table is built: the bands run in parallel.
+  ForEachBand(num_bands, [&](int, int v_begin, int v_end) {
+    for (int v = v_begin; v < v_end; ++v) {
+      const float* rho = b.inverse_depth.row(v);
+      std::uint8_t* r_out = b.radius.row(v);
+      const int border_v = std::min(v, height - 1 - v);
+      int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
+      int depth_r = far_radius;
+      for (int u = 0; u < width; ++u) {
+        if (!(rho[u] > 0.0f)) {
+          r_out[u] = 0;
+          edge_bound = std::numeric_limits<int>::max();
+          continue;
+        }
+        int r = base_radius;
+        if (options_.depth_dependent_smoothing) {
+          const float p = std::max(rho[u], std::numeric_limits<float>::min());
+          while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
+          while (p < at_most[depth_r]) ++depth_r;
+          r = depth_r;
+        }
+        const int uncut = std::min({r, border_v, u, width - 1 - u});
+        r = std::min(uncut, edge_bound);
+        while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
+        edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
+        r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
       }
-      int r = base_radius;
-      if (options_.depth_dependent_smoothing) {
-        const float p = std::max(rho[u], std::numeric_limits<float>::min());
-        while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
-        while (p < at_most[depth_r]) ++depth_r;
-        r = depth_r;
-      }
-      const int uncut = std::min({r, border_v, u, width - 1 - u});
-      r = std::min(uncut, edge_bound);
-      while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
-      edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
-      r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
     }
-  }
+  });
 }
 
 // Sums over the window of 1, x, y, z and the six products, as integers in units of a per-frame
 // quantum q (and q^2): exact box sums whatever the magnitude of the frame's other sums.
-void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
+void NormalEstimator::ComputeCovariance(const Image3f& cloud, int v_begin, int v_end, Band* band) {
   constexpr int kC = 10;  // n, x, y, z, xx, xy, xz, yy, yz, zz
   Buffers& b = *buffers_;
   const int width = cloud.width();
@@ -533,8 +613,8 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   const double max_area = std::pow(2.0 * max_r + 1.0, 2);
   const float inv_q =
       static_cast<float>(std::sqrt(kMaxWindowSumOfSquares / max_area) / b.max_abs_coordinate_m);
-  auto& rows = b.covariance_rows;
-  rows.Reset(width, height, max_r);
+  auto& rows = band->covariance_rows;
+  rows.Reset(width, height, max_r, v_begin - max_r);
   auto add = [&](int v, int u, std::uint64_t* acc) {
     if (!(b.inverse_depth(v, u) > 0.0f)) return;
     const Eigen::Vector3f& p = cloud(v, u);
@@ -555,12 +635,12 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
 
   const std::size_t row_size = rows.row_size();
   const std::size_t plane = rows.plane();
-  b.strip_u64.resize(row_size);
-  std::uint64_t* strip = b.strip_u64.data();
+  band->strip_u64.resize(row_size);
+  std::uint64_t* strip = band->strip_u64.data();
   // Per-row structure-of-arrays: the trace-1 covariance entries, then the eigenvectors, so that
   // the eigen solve runs as one branch-free loop the compiler vectorises.
-  b.row_soa.resize(static_cast<std::size_t>(width) * 9);
-  float* cxx = b.row_soa.data();
+  band->row_soa.resize(static_cast<std::size_t>(width) * 9);
+  float* cxx = band->row_soa.data();
   float* cxy = cxx + width;
   float* cxz = cxy + width;
   float* cyy = cxz + width;
@@ -570,7 +650,7 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud) {
   float* ny = nx + width;
   float* nz = ny + width;
   const MinCounts min_counts(max_r);
-  for (int v = 0; v < height; ++v) {
+  for (int v = v_begin; v < v_end; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
     std::uint8_t* radius = b.radius.row(v);
     const bool full_rows = v >= max_r && v + max_r + 1 <= height;
@@ -792,7 +872,8 @@ SSTA_NOINLINE void DepthChangeRow(int begin, int end, int v, int r, float min_co
 // lies on the plane, so the tangents are exact even when invalid pixels unbalance the halves.
 // Sums in 64-bit fixed point, means back in metres. Pixels with the
 // full radius go through a vectorised row kernel, the others through the same maths one by one.
-void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
+void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud, int v_begin, int v_end,
+                                               Band* band) {
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -800,8 +881,8 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
   const double max_area = std::pow(2.0 * max_r + 1.0, 2);
   const float inv_q = static_cast<float>(kMaxWindowSum64 / (max_area * b.max_abs_coordinate_m));
   const float quantum = 1.0f / inv_q;
-  auto& rows = b.first_order_rows;
-  rows.Reset(width, height, max_r);
+  auto& rows = band->first_order_rows;
+  rows.Reset(width, height, max_r, v_begin - max_r);
   auto add = [&](int v, int u, std::uint64_t* acc) {
     if (!(b.inverse_depth(v, u) > 0.0f)) return;
     const Eigen::Vector3f& p = cloud(v, u);
@@ -811,20 +892,20 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
     acc[3] += static_cast<std::uint64_t>(static_cast<std::int64_t>(p.z() * inv_q));
   };
 
-  b.strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
-  b.row_soa.resize(3 * static_cast<std::size_t>(width));
-  float* nx = b.row_soa.data();
+  band->strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
+  band->row_soa.resize(3 * static_cast<std::size_t>(width));
+  float* nx = band->row_soa.data();
   float* ny = nx + width;
   float* nz = ny + width;
   const MinCounts min_counts(max_r);
-  for (int v = 0; v < height; ++v) {
+  for (int v = v_begin; v < v_end; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
     std::uint8_t* radius = b.radius.row(v);
     const bool full_rows = v >= max_r && v + max_r + 1 <= height;
     if (full_rows && width > 2 * max_r) {
       const PlanarStrips strips =
           MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
-                           rows.Row(v + max_r + 1), rows.plane(), b.strips_u64.data());
+                           rows.Row(v + max_r + 1), rows.plane(), band->strips_u64.data());
       GradientRow(max_r, width - max_r, max_r, static_cast<float>(min_counts.half[max_r]), quantum,
                   strips, nx, ny, nz);
     }
@@ -852,21 +933,17 @@ void NormalEstimator::ComputeAverage3dGradient(const Image3f& cloud) {
 // invalid pixels or a range cut that unbalance the halves do not bias the gradient (a 2 x 2
 // solve). One integral image of inverse depth plus the count and the valid u, v sums.
 // fx, fy are recovered from the cloud itself (see PrepareFrame).
-void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
+void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud, int v_begin, int v_end,
+                                                Band* band) {
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
-  if (!(b.fx_px > 0.0) || !(b.fy_px > 0.0)) {
-    b.radius.Fill(0);
-    b.normals.Fill(NanVector3f());
-    return;
-  }
   const int max_r = b.max_radius_px;
   const double max_area = std::pow(2.0 * max_r + 1.0, 2);
   const float inv_q = static_cast<float>(kMaxWindowSum64 / (max_area * b.max_inverse_depth));
   const float quantum = 1.0f / inv_q;  // [1/m]
-  auto& rows = b.first_order_rows;
-  rows.Reset(width, height, max_r);
+  auto& rows = band->first_order_rows;
+  rows.Reset(width, height, max_r, v_begin - max_r);
   auto add = [&](int v, int u, std::uint64_t* acc) {
     const float rho = b.inverse_depth(v, u);
     if (!(rho > 0.0f)) return;
@@ -876,22 +953,22 @@ void NormalEstimator::ComputeAverageDepthChange(const Image3f& cloud) {
     acc[3] += static_cast<std::uint64_t>(v);
   };
 
-  b.strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
-  b.row_soa.resize(4 * static_cast<std::size_t>(width));
-  float* ga = b.row_soa.data();
+  band->strips_u64.resize(12 * (static_cast<std::size_t>(width) + 1));
+  band->row_soa.resize(4 * static_cast<std::size_t>(width));
+  float* ga = band->row_soa.data();
   float* gc = ga + width;
   float* rho_centre = gc + width;
   float* ok = rho_centre + width;
   const MinCounts min_counts(max_r);
   const float fx = static_cast<float>(b.fx_px), fy = static_cast<float>(b.fy_px);
-  for (int v = 0; v < height; ++v) {
+  for (int v = v_begin; v < v_end; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
     std::uint8_t* radius = b.radius.row(v);
     const bool full_rows = v >= max_r && v + max_r + 1 <= height;
     if (full_rows && width > 2 * max_r) {
       const PlanarStrips strips =
           MakePlanarStrips(rows.Row(v - max_r), rows.Row(v), rows.Row(v + 1),
-                           rows.Row(v + max_r + 1), rows.plane(), b.strips_u64.data());
+                           rows.Row(v + max_r + 1), rows.plane(), band->strips_u64.data());
       DepthChangeRow(max_r, width - max_r, v, max_r, static_cast<float>(min_counts.half[max_r]),
                      strips, ga, gc, rho_centre, ok);
     }

@@ -89,6 +89,7 @@ void ReadNormals(YamlSection s, NormalOptions* o) {
   s.Read("max_depth_change_factor", &o->max_depth_change_factor);
   s.Read("depth_dependent_smoothing", &o->depth_dependent_smoothing);
   s.Read("subsample", &o->subsample);
+  s.Read("threads", &o->threads);
   s.RejectUnknownKeys();
 }
 
@@ -358,7 +359,8 @@ std::string ConfigToYaml(const Config& c) {
     << "  smoothing_size_px: " << c.normals.smoothing_size_px << "\n"
     << "  max_depth_change_factor: " << c.normals.max_depth_change_factor << "\n"
     << "  depth_dependent_smoothing: " << c.normals.depth_dependent_smoothing << "\n"
-    << "  subsample: " << c.normals.subsample << "\n";
+    << "  subsample: " << c.normals.subsample << "\n"
+    << "  threads: " << c.normals.threads << "\n";
   y << "segmentation:\n"
     << "  roughness_deg: " << c.segmentation.roughness_deg << "\n"
     << "  max_disparity_jump_px: " << c.segmentation.max_disparity_jump_px << "\n"

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <functional>
 #include <random>
 
@@ -388,6 +389,44 @@ TEST(NormalEstimator, DepthDependentRadiusFollowsTheFormulaExactly) {
   EXPECT_LT(min_r, max_r);  // the depths span several radii
 }
 
+// The sweep runs in bands of rows on several threads; each band starts its integral rows at
+// the band, so the normals and radii must be those of one sweep, bit for bit, for every method,
+// with depth edges, holes, noise and depth-dependent windows crossing the band boundaries.
+TEST(NormalEstimator, BandsOnSeveralThreadsGiveExactlyTheSingleSweep) {
+  const PinholeCamera camera;
+  Scene scene = test::GroundScene(1.0);
+  scene.AddBox({-0.6, -0.2, 3.0}, {0.4, 1.0, 3.6});  // a box standing on the ground
+  Image3f cloud = scene.Render(camera, nullptr, 25.0);
+  test::AddDepthNoise(0.15 / (camera.f_px * camera.baseline_m), 7, &cloud);
+  std::mt19937 rng(11);
+  std::uniform_int_distribution<int> row(0, camera.height - 1), col(0, camera.width - 1);
+  for (int i = 0; i < 3000; ++i) cloud(row(rng), col(rng)) = NanVector3f();  // holes
+  auto same_bits = [](const auto& a, const auto& b) {
+    return a.width() == b.width() && a.height() == b.height() &&
+           std::memcmp(a.data(), b.data(), a.size() * sizeof(*a.data())) == 0;
+  };
+  for (const NormalMethod method : kAllMethods) {
+    for (const bool adaptive : {false, true}) {
+      SCOPED_TRACE(std::string(NormalMethodName(method)) + (adaptive ? " adaptive" : ""));
+      NormalOptions options = OptionsFor(method);
+      options.depth_dependent_smoothing = adaptive;
+      options.threads = 1;
+      NormalEstimator single(options);
+      const Image3f& reference = single.Compute(cloud);
+      int valid = 0;
+      for (std::size_t i = 0; i < reference.size(); ++i) valid += IsFinite(reference[i]) ? 1 : 0;
+      EXPECT_GT(valid, camera.width * camera.height / 3);  // not a vacuous comparison
+      for (const int threads : {2, 3, 7}) {
+        options.threads = threads;
+        NormalEstimator banded(options);
+        const Image3f& normals = banded.Compute(cloud);
+        EXPECT_TRUE(same_bits(normals, reference)) << threads << " threads";
+        EXPECT_TRUE(same_bits(banded.window_radius_px(), single.window_radius_px())) << threads << " threads";
+      }
+    }
+  }
+}
+
 TEST(NormalOptions, ValidationNamesTheKey) {
   std::string error;
   EXPECT_TRUE(NormalOptions{}.IsValid(&error));
@@ -417,6 +456,10 @@ TEST(NormalOptions, ValidationNamesTheKey) {
   EXPECT_EQ(error.rfind("smoothing_size_px:", 0), 0u) << error;
   options.smoothing_size_px = 6;
   EXPECT_TRUE(options.IsValid(&error)) << error;
+  options = NormalOptions{};
+  options.threads = -1;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("threads:", 0), 0u) << error;
 }
 
 TEST(NormalMethod, NamesRoundTripAndUnknownNamesAreErrors) {
