@@ -586,6 +586,20 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   if (options.face_window_px == 0) return;
   SSTA_CHECK(disparity.width() == labels->width() && disparity.height() == labels->height(),
              "RefineByDisparityFaces: disparity and labels differ in size");
+  thread_local DisparityFaces faces;
+  FindDisparityFaces(disparity, f, cu, cv, up_camera, options, &faces);
+  ApplyDisparityFaces(faces, disparity, options, labels);
+}
+
+void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                        const AnalysisOptions& options, DisparityFaces* faces) {
+  faces->seeds.clear();
+  if (faces->marks.width() != disparity.width() || faces->marks.height() != disparity.height()) {
+    faces->marks = ImageU8(disparity.width(), disparity.height(), 0);
+  } else {
+    faces->marks.Fill(0);
+  }
+  if (options.face_window_px == 0) return;
   SSTA_CHECK(options.face_window_px >= 3 && options.face_window_px % 2 == 1,
              "RefineByDisparityFaces: face_window_px must be odd and at least 3");
   SSTA_CHECK(options.face_columns_px >= 1 && options.face_columns_px % 2 == 1,
@@ -641,11 +655,10 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
   constexpr double kGrowSeedSlopeDeg = 70.0;
   const bool grow = options.face_grow_tolerance_px > 0;
   const double sin_seed = std::sin(kGrowSeedSlopeDeg * M_PI / 180.0), sin2_seed = sin_seed * sin_seed;
-  thread_local std::vector<std::pair<int, float>> seeds;
-  seeds.clear();
+  std::vector<std::pair<int, float>>& seeds = faces->seeds;
   auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
   for (int v = k;; ++v) {
-    std::uint8_t* out = labels->row(v);
+    std::uint8_t* out = faces->marks.row(v);
     const double y = v - cv;
     const double a0 = -cu * up.x() + y * up.y() + f * up.z(), b0 = y * y + f * f;
     for (int u = 0; u < w; ++u) {
@@ -655,8 +668,7 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
     }
     for (int u = w - 1; u >= 0; --u) run_last[u] = u + 1 < w && joins(u, u + 1) ? run_last[u + 1] : u;
     for (int u = 0; u < w; ++u) {
-      const std::uint8_t c = out[u];
-      if (bad[u] != 0 || (c != 1 && c != 2 && c != 4)) continue;
+      if (bad[u] != 0) continue;
       const int lo = std::max(u - r, run_first[u]), hi = std::min(u + r, run_last[u]) + 1;
       // The pooled slope over the mean disparity: q = mean(d') / mean(d) of those columns.
       const double q = (p2[hi] - p2[lo]) * n / (sum_jj * (p1[hi] - p1[lo]));
@@ -664,8 +676,11 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
       const double rise = up.y() - q * (a0 + u * up.x());
       const double norm2 = q * q * (du * du + b0) - 2.0 * y * q + 1.0;
       if (rise * rise > sin2_min * norm2) {
-        out[u] = static_cast<std::uint8_t>(TravClass::kNonTraversable);
-        if (grow && rise * rise > sin2_seed * norm2) seeds.push_back({v * w + u, static_cast<float>(s1[u] / n)});
+        out[u] = 1;
+        if (grow && rise * rise > sin2_seed * norm2) {
+          out[u] = 2;
+          seeds.push_back({v * w + u, static_cast<float>(s1[u] / n)});
+        }
       }
     }
     if (v + k + 1 >= h) break;
@@ -683,6 +698,31 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
       s2[u] += k * out_d + (k + 1) * in_d - s1[u];
       bad[u] += (!ok_in) + (std::abs(enter[u] - enter_above[u]) > kMaxRowJumpPx) - (!ok_out) -
                 (std::abs(leave_next[u] - leave[u]) > kMaxRowJumpPx);
+    }
+  }
+}
+
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+                         ImageU8* labels) {
+  if (options.face_window_px == 0) return;
+  SSTA_CHECK(faces.marks.width() == labels->width() && faces.marks.height() == labels->height() &&
+                 disparity.width() == labels->width() && disparity.height() == labels->height(),
+             "ApplyDisparityFaces: faces, disparity and labels differ in size");
+  const int w = labels->width(), h = labels->height(), k = options.face_window_px / 2;
+  // Traversable, semi-traversable and undecided pixels on a face become non-traversable; those
+  // steep enough seed the growth, in raster order (the order of faces.seeds).
+  thread_local std::vector<std::pair<int, float>> seeds;
+  seeds.clear();
+  std::size_t next_seed = 0;
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    const std::uint8_t mark = faces.marks[i];
+    if (mark == 0) continue;
+    std::uint8_t& c = (*labels)[i];
+    const bool drivable = c == 1 || c == 2 || c == 4;
+    if (drivable) c = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+    if (mark == 2) {
+      if (drivable) seeds.push_back(faces.seeds[next_seed]);
+      ++next_seed;
     }
   }
   // A face a few rows tall is flagged only where the window is centred on it (its rows near the

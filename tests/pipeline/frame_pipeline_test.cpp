@@ -3,8 +3,15 @@
 #include <cmath>
 
 #include "plane_stereo_renderer.h"
+#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/geometry/normal_estimator.h"
 #include "ssta/pipeline/frame_pipeline.h"
 #include "ssta/pipeline/map_builder.h"
+#include "ssta/stereo/rectifier.h"
+#include "ssta/synth/scene.h"
+#include "ssta/synth/sequence_synthesizer.h"
+#include "ssta/synth/stereo_renderer.h"
+#include "ssta/synth/vehicle_trajectory.h"
 
 namespace ssta {
 namespace {
@@ -153,6 +160,58 @@ TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {
   EXPECT_LT(count(off, ground_v0, ground_v1, unknown), ground_pixels / 10);
   EXPECT_EQ(count(off, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }),
             count(on, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }));
+}
+
+// AnalyzeFrame runs the face test's search beside the plane, slope, ground and fragment steps
+// and applies it after them: its labels must be those of the steps run one after the other in
+// that order, on a rendered yard frame where the face test changes labels.
+TEST(AnalyzeFrame, ConcurrentFaceSearchGivesTheLabelsOfTheStepsInOrder) {
+  synth::SynthOptions o;
+  const Config config;
+  o.vehicle = config.vehicle;
+  const synth::Scene scene = synth::MakeScene("yard", o.seed, o.ramp_slope_deg);
+  const synth::VehicleTrajectory trajectory(scene, o.motion);
+  const synth::StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
+  const Eigen::Isometry3d body_T_cam0 = synth::TrueBodyTCam0(o.rig, o.motion);
+  StereoCalibration rig{renderer.Intrinsics(), renderer.Intrinsics()};
+  rig.left.body_T_camera = body_T_cam0;
+  rig.right.body_T_camera = body_T_cam0 * Eigen::Translation3d(o.rig.baseline_m, 0, 0);
+  const Eigen::Isometry3d world_T_body = trajectory.WorldTBody(1.5);
+  const synth::StereoFrame pair = renderer.Render(world_T_body * body_T_cam0, 0);
+  const Eigen::Vector3d up_camera =
+      (body_T_cam0.linear().transpose() * world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
+  FramePipeline pipeline(rig, config);
+  const FrameResult r = pipeline.Process(pair.left, pair.right, up_camera);
+  const RectifiedGeometry& g = pipeline.geometry();
+  const Image3f normals = EstimateNormals(r.cloud, config.normals);
+  ASSERT_GT(config.analysis.face_window_px, 0);
+
+  const AnalysisResult concurrent = AnalyzeFrame(config, g, r.disparity, r.cloud, normals, r.segment_ids,
+                                                 r.num_segments, r.up_rectified);
+
+  const double fb = g.f * g.baseline_m;
+  AnalysisResult a = AnalyzeSurfaces(r.cloud, r.segment_ids, r.num_segments, r.up_rectified, config.vehicle,
+                                     config.analysis);
+  ASSERT_TRUE(a.quality.passed);
+  if (config.analysis.pixel_slopes) {
+    RefineByPixelSlope(normals, r.up_rectified, config.vehicle, &a.labels, &r.segment_ids,
+                       config.analysis.pixel_slope_window_px);
+  }
+  RefineByGroundDisparity(r.cloud, r.segment_ids, fb, config.analysis, &a);
+  RefineByFragmentPlanes(r.cloud, r.segment_ids, fb, config.analysis, &a);
+  const ImageU8 before_faces = a.labels;
+  RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
+  int face_changes = 0;
+  for (std::size_t i = 0; i < a.labels.size(); ++i) face_changes += a.labels[i] != before_faces[i];
+  EXPECT_GT(face_changes, 100);  // the face test matters on this frame
+  FillUndecidedByConsensus(config.analysis, &a.labels);
+  FillUndecidedByHeight(r.cloud, fb, config.vehicle, config.analysis, &a);
+
+  ASSERT_EQ(concurrent.labels.size(), a.labels.size());
+  int differ = 0;
+  for (std::size_t i = 0; i < a.labels.size(); ++i) differ += concurrent.labels[i] != a.labels[i];
+  EXPECT_EQ(differ, 0);
+  ASSERT_EQ(concurrent.segments.size(), a.segments.size());
 }
 
 TEST(FramePipeline, WrongImageSizeIsAnError) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -240,6 +241,20 @@ void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, co
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
                             const AnalysisOptions& options, ImageU8* labels);
+
+/// RefineByDisparityFaces in two steps, so that the costly one can run beside the label steps
+/// before it: FindDisparityFaces reads the disparity only and marks, per pixel, what the test
+/// would make of a traversable, semi-traversable or undecided pixel there; ApplyDisparityFaces
+/// then changes the labels as RefineByDisparityFaces does. Find then Apply on the same labels
+/// gives exactly RefineByDisparityFaces' result.
+struct DisparityFaces {
+  ImageU8 marks;  ///< 0: no face; 1: on a face; 2: on a face and steep enough to grow it
+  std::vector<std::pair<int, float>> seeds;  ///< pixels marked 2 (raster order): index, face disparity
+};
+void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                        const AnalysisOptions& options, DisparityFaces* faces);
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+                         ImageU8* labels);
 
 /// Fragments (AnalysisOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
 /// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
