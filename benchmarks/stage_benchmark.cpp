@@ -6,6 +6,7 @@
 // and read medians (docs/performance.md). PCL and OctoMap headers stay in this file.
 
 #include <benchmark/benchmark.h>
+#include <opencv2/core/utility.hpp>
 
 #include <cstdio>
 #include <functional>
@@ -186,9 +187,11 @@ void BM_Triangulate(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
-void BM_Normals(benchmark::State& state, const Dataset* d, NormalMethod method) {
+/// threads: NormalOptions::threads (0 = the config's own value).
+void BM_Normals(benchmark::State& state, const Dataset* d, NormalMethod method, int threads = 0) {
   NormalOptions options = d->config.normals;
   options.method = method;
+  if (threads > 0) options.threads = threads;
   NormalEstimator estimator(options);
   FrameCycle frames(*d);
   for (auto _ : state) {
@@ -231,10 +234,12 @@ void BM_TextureMask(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
-/// Normals through classes: the "geometry" budget.
-void BM_Geometry(benchmark::State& state, const Dataset* d) {
+/// Normals through classes: the "geometry" budget. threads as BM_Normals.
+void BM_Geometry(benchmark::State& state, const Dataset* d, int threads = 0) {
   const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
-  NormalEstimator estimator(d->config.normals);
+  NormalOptions normal_options = d->config.normals;
+  if (threads > 0) normal_options.threads = threads;
+  NormalEstimator estimator(normal_options);
   Segmenter segmenter(d->config.segmentation);
   FrameCycle frames(*d);
   for (auto _ : state) {
@@ -575,6 +580,7 @@ class RatioReporter : public benchmark::ConsoleReporter {
     std::printf("\nStock chain / SSTA, wall time per frame (medians when repeated):\n");
     for (const char* d : {"vga", "kitti"}) {
       Ratio(d, "labels (stock normals..refine vs SSTA normals..classes)", "StockLabels/", "Geometry/");
+      Ratio(d, "labels, SSTA on one thread as the stock chain", "StockLabels/", "GeometryOneThread/");
       Ratio(d, "map update (stock 5 cm + insertPointCloud vs SSTA InsertFrame)", "StockMap/", "MapUpdate/");
       Ratio(d, "end to end with map", "StockEndToEnd/", "EndToEndWithMap/");
     }
@@ -634,6 +640,19 @@ void PrintAccuracy() {
   }
 }
 
+/// OpenCV's parallel loops (the normals' bands, the analysis's concurrent face search) on the
+/// calling thread only, for the life of the object.
+class OneOpenCvThread {
+ public:
+  OneOpenCvThread() : saved_(cv::getNumThreads()) { cv::setNumThreads(1); }
+  ~OneOpenCvThread() { cv::setNumThreads(saved_); }
+  OneOpenCvThread(const OneOpenCvThread&) = delete;
+  OneOpenCvThread& operator=(const OneOpenCvThread&) = delete;
+
+ private:
+  int saved_;
+};
+
 void RegisterAll() {
   using Fn = std::function<void(benchmark::State&)>;
   auto add = [](const std::string& name, Fn fn) {
@@ -659,6 +678,16 @@ void RegisterAll() {
     add("Segment/" + name, [get = get](benchmark::State& s) { BM_Segment(s, get()); });
     add("Analyze/" + name, [get = get](benchmark::State& s) { BM_Analyze(s, get()); });
     add("Geometry/" + name, [get = get](benchmark::State& s) { BM_Geometry(s, get()); });
+    // The same on the calling thread only: what the bands of rows buy, and the like-for-like
+    // figure against the stock chain, whose normals run on one thread.
+    add("NormalsOneThread/" + name + "/covariance", [get = get](benchmark::State& s) {
+      const OneOpenCvThread one;
+      BM_Normals(s, get(), NormalMethod::kCovarianceMatrix, 1);
+    });
+    add("GeometryOneThread/" + name, [get = get](benchmark::State& s) {
+      const OneOpenCvThread one;
+      BM_Geometry(s, get(), 1);
+    });
     add("TextureMask/" + name, [get = get](benchmark::State& s) { BM_TextureMask(s, get()); });
     add("MapSubpixel/" + name, [get = get](benchmark::State& s) { BM_MapSubpixel(s, get()); });
     add("MapPoints/" + name, [get = get](benchmark::State& s) { BM_MapPoints(s, get()); });
