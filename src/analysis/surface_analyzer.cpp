@@ -504,22 +504,29 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
                         ImageU8* labels, const ImageI32* segment_ids, int window_px) {
   SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
              "normals and labels differ in size");
+  thread_local ImageU8 slope_classes;
+  PixelSlopeClasses(normals, up_camera, vehicle, segment_ids, window_px, &slope_classes);
+  ApplyPixelSlopeClasses(slope_classes, labels);
+}
+
+void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                       const ImageI32* segment_ids, int window_px, ImageU8* slope_classes) {
   SSTA_CHECK(window_px >= 1 && window_px % 2 == 1, "RefineByPixelSlope: window_px must be odd and positive");
+  if (slope_classes->width() != normals.width() || slope_classes->height() != normals.height()) {
+    *slope_classes = ImageU8(normals.width(), normals.height(), 0);
+  }
   const Eigen::Vector3f up = up_camera.cast<float>();
   const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
   const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
-  // c: |cos| of the slope at the pixel; NaN compares false: the label is left as is.
-  auto refine = [&](std::uint8_t& label, float c) {
-    if (c < cos_max) {
-      label = static_cast<std::uint8_t>(TravClass::kNonTraversable);
-    } else if (c < cos_semi) {
-      label = std::max<std::uint8_t>(label, static_cast<std::uint8_t>(TravClass::kSemiTraversable));
-    }
+  // c: |cos| of the slope at the pixel; NaN compares false: no class is forced.
+  auto slope_class = [&](float c) -> std::uint8_t {
+    if (c < cos_max) return static_cast<std::uint8_t>(TravClass::kNonTraversable);
+    if (c < cos_semi) return static_cast<std::uint8_t>(TravClass::kSemiTraversable);
+    return 0;
   };
   if (window_px == 1) {
-    for (std::size_t i = 0; i < labels->size(); ++i) {
-      std::uint8_t& label = (*labels)[i];
-      if (label == 1 || label == 2) refine(label, std::abs(normals[i].dot(up)));
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+      (*slope_classes)[i] = slope_class(std::abs(normals[i].dot(up)));
     }
     return;
   }
@@ -527,17 +534,25 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
                  segment_ids->height() == normals.height(),
              "RefineByPixelSlope: averaging needs segment ids of the normals' size");
   SegmentBoxSums(normals, *segment_ids, window_px, [&](int v, const Eigen::Vector4f* sums) {
-    std::uint8_t* row = labels->row(v);
-    for (int u = 0; u < labels->width(); ++u) {
-      std::uint8_t& label = row[u];
-      if (label != 1 && label != 2) continue;
+    std::uint8_t* row = slope_classes->row(v);
+    for (int u = 0; u < normals.width(); ++u) {
       float c = std::numeric_limits<float>::quiet_NaN();
       const Eigen::Vector3f sum = sums[u].head<3>();
       const float norm = sum.norm();
       if (sums[u][3] >= 0.5f && norm > 1e-6f) c = std::abs(sum.dot(up)) / norm;
-      refine(label, c);
+      row[u] = slope_class(c);
     }
   });
+}
+
+// A traversable or semi-traversable pixel takes the worse of its label and its slope's class.
+void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels) {
+  SSTA_CHECK(slope_classes.width() == labels->width() && slope_classes.height() == labels->height(),
+             "ApplyPixelSlopeClasses: slope classes and labels differ in size");
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    std::uint8_t& label = (*labels)[i];
+    if (label == 1 || label == 2) label = std::max(label, slope_classes[i]);
+  }
 }
 
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,

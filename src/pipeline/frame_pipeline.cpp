@@ -157,31 +157,39 @@ AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, co
                             const Image3f& cloud, const Image3f& normals, const ImageI32& segment_ids,
                             int num_segments, const Eigen::Vector3d& up_rectified) {
   const double focal_times_baseline = g.f * g.baseline_m;
-  AnalysisResult a;
-  auto planes_and_classes = [&] {
-    a = AnalyzeSurfaces(cloud, segment_ids, num_segments, up_rectified, config.vehicle, config.analysis);
-    if (config.analysis.pixel_slopes && a.quality.passed) {
-      RefineByPixelSlope(normals, up_rectified, config.vehicle, &a.labels, &segment_ids,
-                         config.analysis.pixel_slope_window_px);
-    }
-    RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, config.analysis, &a);
-    RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, config.analysis, &a);
-  };
-  // The face test reads the disparity only: it runs beside the steps above and changes the
-  // labels after them, as RefineByDisparityFaces would (the same labels, ~1/4 of the analysis
-  // off the frame's critical path on two cores).
-  thread_local DisparityFaces faces_of_thread;  // kept between frames; the worker writes this one
+  const AnalysisOptions& options = config.analysis;
+  // Two of the label steps do their costly part on inputs the others do not change: the pixel
+  // slopes on the normals, the face test on the disparity. Each part runs beside the steps before
+  // it, and its result is applied at its place in the chain, so the labels are those of the
+  // steps one after the other:
+  //   AnalyzeSurfaces                              | pixel slope classes
+  //   apply slopes, ground consistency, fragments  | face search
+  //   apply faces, consensus fill, height fill
+  thread_local ImageU8 slope_classes_of_thread;  // kept between frames; workers write these
+  thread_local DisparityFaces faces_of_thread;
+  ImageU8& slope_classes = slope_classes_of_thread;
   DisparityFaces& faces = faces_of_thread;
-  if (config.analysis.face_window_px > 0) {
-    RunBoth(planes_and_classes,
-            [&] { FindDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, config.analysis, &faces); });
-  } else {
-    planes_and_classes();
-  }
+  AnalysisResult a;
+  RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, num_segments, up_rectified, config.vehicle, options); },
+          [&] {
+            if (options.pixel_slopes) {
+              PixelSlopeClasses(normals, up_rectified, config.vehicle, &segment_ids, options.pixel_slope_window_px,
+                                &slope_classes);
+            }
+          });
+  RunBoth(
+      [&] {
+        if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes, &a.labels);
+        RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
+        RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
+      },
+      [&] {
+        if (options.face_window_px > 0) FindDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, options, &faces);
+      });
   if (a.quality.passed) {
-    if (config.analysis.face_window_px > 0) ApplyDisparityFaces(faces, disparity, config.analysis, &a.labels);
-    FillUndecidedByConsensus(config.analysis, &a.labels);
-    FillUndecidedByHeight(cloud, focal_times_baseline, config.vehicle, config.analysis, &a);
+    if (options.face_window_px > 0) ApplyDisparityFaces(faces, disparity, options, &a.labels);
+    FillUndecidedByConsensus(options, &a.labels);
+    FillUndecidedByHeight(cloud, focal_times_baseline, config.vehicle, options, &a);
   }
   return a;
 }

@@ -162,13 +162,14 @@ TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {
             count(on, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }));
 }
 
-// AnalyzeFrame runs the face test's search beside the plane, slope, ground and fragment steps
-// and applies it after them: its labels must be those of the steps run one after the other in
-// that order, on a rendered yard frame where the face test changes labels.
-TEST(AnalyzeFrame, ConcurrentFaceSearchGivesTheLabelsOfTheStepsInOrder) {
+// AnalyzeFrame runs the costly parts of the pixel-slope and face steps beside the plane, ground
+// and fragment steps and applies them at their places: its labels must be those of the steps run
+// one after the other, on a rendered yard frame where both steps change labels, with the
+// shipped options and with unwindowed slopes and no face test.
+TEST(AnalyzeFrame, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
   synth::SynthOptions o;
-  const Config config;
-  o.vehicle = config.vehicle;
+  const Config shipped;
+  o.vehicle = shipped.vehicle;
   const synth::Scene scene = synth::MakeScene("yard", o.seed, o.ramp_slope_deg);
   const synth::VehicleTrajectory trajectory(scene, o.motion);
   const synth::StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
@@ -180,38 +181,51 @@ TEST(AnalyzeFrame, ConcurrentFaceSearchGivesTheLabelsOfTheStepsInOrder) {
   const synth::StereoFrame pair = renderer.Render(world_T_body * body_T_cam0, 0);
   const Eigen::Vector3d up_camera =
       (body_T_cam0.linear().transpose() * world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
-  FramePipeline pipeline(rig, config);
+  FramePipeline pipeline(rig, shipped);
   const FrameResult r = pipeline.Process(pair.left, pair.right, up_camera);
   const RectifiedGeometry& g = pipeline.geometry();
-  const Image3f normals = EstimateNormals(r.cloud, config.normals);
-  ASSERT_GT(config.analysis.face_window_px, 0);
-
-  const AnalysisResult concurrent = AnalyzeFrame(config, g, r.disparity, r.cloud, normals, r.segment_ids,
-                                                 r.num_segments, r.up_rectified);
-
+  const Image3f normals = EstimateNormals(r.cloud, shipped.normals);
   const double fb = g.f * g.baseline_m;
-  AnalysisResult a = AnalyzeSurfaces(r.cloud, r.segment_ids, r.num_segments, r.up_rectified, config.vehicle,
-                                     config.analysis);
-  ASSERT_TRUE(a.quality.passed);
-  if (config.analysis.pixel_slopes) {
+  ASSERT_GT(shipped.analysis.face_window_px, 0);
+  ASSERT_TRUE(shipped.analysis.pixel_slopes);
+  ASSERT_GT(shipped.analysis.pixel_slope_window_px, 1);
+
+  Config plain = shipped;
+  plain.analysis.pixel_slope_window_px = 1;
+  plain.analysis.face_window_px = 0;
+  for (const Config& config : {shipped, plain}) {
+    SCOPED_TRACE(config.analysis.face_window_px > 0 ? "shipped" : "unwindowed slopes, no face test");
+    const AnalysisResult concurrent = AnalyzeFrame(config, g, r.disparity, r.cloud, normals, r.segment_ids,
+                                                   r.num_segments, r.up_rectified);
+
+    AnalysisResult a = AnalyzeSurfaces(r.cloud, r.segment_ids, r.num_segments, r.up_rectified, config.vehicle,
+                                       config.analysis);
+    ASSERT_TRUE(a.quality.passed);
+    const ImageU8 before_slopes = a.labels;
     RefineByPixelSlope(normals, r.up_rectified, config.vehicle, &a.labels, &r.segment_ids,
                        config.analysis.pixel_slope_window_px);
-  }
-  RefineByGroundDisparity(r.cloud, r.segment_ids, fb, config.analysis, &a);
-  RefineByFragmentPlanes(r.cloud, r.segment_ids, fb, config.analysis, &a);
-  const ImageU8 before_faces = a.labels;
-  RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
-  int face_changes = 0;
-  for (std::size_t i = 0; i < a.labels.size(); ++i) face_changes += a.labels[i] != before_faces[i];
-  EXPECT_GT(face_changes, 100);  // the face test matters on this frame
-  FillUndecidedByConsensus(config.analysis, &a.labels);
-  FillUndecidedByHeight(r.cloud, fb, config.vehicle, config.analysis, &a);
+    int slope_changes = 0;
+    for (std::size_t i = 0; i < a.labels.size(); ++i) slope_changes += a.labels[i] != before_slopes[i];
+    EXPECT_GT(slope_changes, 100);  // the slope step matters on this frame
+    RefineByGroundDisparity(r.cloud, r.segment_ids, fb, config.analysis, &a);
+    RefineByFragmentPlanes(r.cloud, r.segment_ids, fb, config.analysis, &a);
+    const ImageU8 before_faces = a.labels;
+    RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
+    int face_changes = 0;
+    for (std::size_t i = 0; i < a.labels.size(); ++i) face_changes += a.labels[i] != before_faces[i];
+    if (config.analysis.face_window_px > 0) EXPECT_GT(face_changes, 100);  // the face test matters too
+    FillUndecidedByConsensus(config.analysis, &a.labels);
+    FillUndecidedByHeight(r.cloud, fb, config.vehicle, config.analysis, &a);
 
-  ASSERT_EQ(concurrent.labels.size(), a.labels.size());
-  int differ = 0;
-  for (std::size_t i = 0; i < a.labels.size(); ++i) differ += concurrent.labels[i] != a.labels[i];
-  EXPECT_EQ(differ, 0);
-  ASSERT_EQ(concurrent.segments.size(), a.segments.size());
+    ASSERT_EQ(concurrent.labels.size(), a.labels.size());
+    int differ = 0;
+    for (std::size_t i = 0; i < a.labels.size(); ++i) differ += concurrent.labels[i] != a.labels[i];
+    EXPECT_EQ(differ, 0);
+    ASSERT_EQ(concurrent.segments.size(), a.segments.size());
+    for (std::size_t k = 0; k < a.segments.size(); ++k) {
+      EXPECT_EQ(concurrent.segments[k].verdict, a.segments[k].verdict) << "segment " << k;
+    }
+  }
 }
 
 TEST(FramePipeline, WrongImageSizeIsAnError) {

@@ -185,6 +185,15 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                         ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
 
+/// RefineByPixelSlope in two steps, so that the costly one can run beside AnalyzeSurfaces:
+/// PixelSlopeClasses reads the normals and segment ids only and writes, per pixel, the class its
+/// (window-averaged) slope would force on a traversable or semi-traversable label (0: none,
+/// 2: semi-traversable, 3: non-traversable); ApplyPixelSlopeClasses then changes the labels.
+/// The two in turn give exactly RefineByPixelSlope's labels.
+void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                       const ImageI32* segment_ids, int window_px, ImageU8* slope_classes);
+void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels);
+
 /// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
 /// dominant ground plane that passed the quality check, else does nothing). A point is
 /// ground-consistent when |d - d_ground| <= ground_tolerance_px, with d = focal_times_baseline / Z
