@@ -684,6 +684,10 @@ void RegisterAll() {
       const OneOpenCvThread one;
       BM_Normals(s, get(), NormalMethod::kCovarianceMatrix, 1);
     });
+    add("AnalyzeOneThread/" + name, [get = get](benchmark::State& s) {
+      const OneOpenCvThread one;
+      BM_Analyze(s, get());
+    });
     add("GeometryOneThread/" + name, [get = get](benchmark::State& s) {
       const OneOpenCvThread one;
       BM_Geometry(s, get(), 1);
