@@ -5,6 +5,8 @@
 #include <exception>
 #include <iostream>
 
+#include <opencv2/core/utility.hpp>
+
 #include "commands.h"
 #include "ssta/core/error.h"
 
@@ -12,6 +14,15 @@ int main(int argc, char** argv) {
   CLI::App app{"ssta: stereo superpixel surface traversability analysis (SSTA) and maps"};
   app.set_version_flag("--version", std::string("ssta ") + SSTA_VERSION);
   app.require_subcommand(1);
+  // Every parallel loop (the matcher, the normals' bands, the analysis's concurrent steps) runs
+  // on OpenCV's threads, so one setting caps them all; it applies before the command runs.
+  app.fallthrough();  // accepted after the command's name too
+  app.add_option("--threads", "threads for matching and the per-frame geometry (0: all cores)")
+      ->check(CLI::Range(0, 256))
+      ->each([](const std::string& value) {
+        const int threads = std::stoi(value);
+        cv::setNumThreads(threads > 0 ? threads : -1);  // -1: OpenCV's default, all cores
+      });
   ssta::cli::RegisterClassify(app);
   ssta::cli::RegisterSynth(app);
   ssta::cli::RegisterBuildMap(app);

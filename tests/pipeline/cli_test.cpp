@@ -123,6 +123,37 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "overlay"));
 }
 
+TEST(Cli, ThreadsCapTheWorkButNeverChangeTheLabels) {
+  // --threads (before or after the command's name) caps OpenCV's pool, which runs the matcher,
+  // the normals' bands and the analysis's concurrent steps; every label must be the same.
+  testing::TempDir dir;
+  const std::string seq = (dir / "seq");
+  auto r = RunSsta("synth --scene yard --frames 2 --width 320 --height 240 --focal 210 --out " + seq);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta("--threads 1 classify --sequence " + seq + " -q --out " + (dir / "one"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta("classify --sequence " + seq + " -q --threads 0 --out " + (dir / "all"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::size_t files = 0, decided = 0;
+  for (const auto& e : fs::directory_iterator(dir.path() / "one" / "labels")) {
+    const ImageU8 one = ReadLabelImage(e.path().string());
+    const ImageU8 all = ReadLabelImage((dir.path() / "all" / "labels" / e.path().filename()).string());
+    ASSERT_EQ(one.size(), all.size());
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < one.size(); ++i) {
+      differ += one[i] != all[i];
+      decided += one[i] >= 1 && one[i] <= 3;
+    }
+    EXPECT_EQ(differ, 0u) << e.path().filename();
+    ++files;
+  }
+  EXPECT_EQ(files, 2u);
+  EXPECT_GT(decided, 320u * 240u / 2);  // a comparison of real labels, not of empty images
+  r = RunSsta("--threads 300 classify --sequence " + seq + " -q --out " + (dir / "bad"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--threads"), std::string::npos) << r.output;
+}
+
 TEST(Cli, ClassifyWritesDisparitiesInTheGroundTruthConvention) {
   // With the true disparity as input, disparity/ must give back gt/disparity value for value:
   // 16 bit, disparity * 256, 0 where there is none.
