@@ -165,6 +165,8 @@ AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, co
   //   AnalyzeSurfaces                              | pixel slope classes
   //   apply slopes, ground consistency, fragments  | face search
   //   apply faces, consensus fill, height fill
+  // The slope classes are computed before the quality check is known: on a frame that fails it
+  // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
   thread_local ImageU8 slope_classes_of_thread;  // kept between frames; workers write these
   thread_local DisparityFaces faces_of_thread;
   ImageU8& slope_classes = slope_classes_of_thread;
@@ -184,7 +186,11 @@ AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, co
         RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
       },
       [&] {
-        if (options.face_window_px > 0) FindDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, options, &faces);
+        // Only for a frame that passed the quality check (known from here on): on the others
+        // the faces are not applied, and the search would keep the chain waiting.
+        if (options.face_window_px > 0 && a.quality.passed) {
+          FindDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, options, &faces);
+        }
       });
   if (a.quality.passed) {
     if (options.face_window_px > 0) ApplyDisparityFaces(faces, disparity, options, &a.labels);
