@@ -1,10 +1,8 @@
 #include "ssta/pipeline/frame_pipeline.h"
 
 #include <chrono>
-#include <exception>
 
-#include <opencv2/core/utility.hpp>
-
+#include "core/run_both.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/stereo/rectifier.h"
@@ -13,6 +11,8 @@
 
 namespace ssta {
 namespace {
+
+using internal::RunBoth;
 
 class Stopwatch {
  public:
@@ -26,28 +26,6 @@ class Stopwatch {
  private:
   std::chrono::steady_clock::time_point last_ = std::chrono::steady_clock::now();
 };
-
-// Runs a() and b() at the same time on OpenCV's threads (one after the other when it has one);
-// the first exception either throws reaches the caller once both are done.
-template <typename A, typename B>
-void RunBoth(const A& a, const B& b) {
-  std::exception_ptr errors[2];
-  cv::parallel_for_(
-      cv::Range(0, 2),
-      [&](const cv::Range& range) {
-        for (int i = range.start; i < range.end; ++i) {
-          try {
-            if (i == 0) a(); else b();
-          } catch (...) {
-            errors[i] = std::current_exception();
-          }
-        }
-      },
-      2);
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-}
 
 Config Validated(const Config& config) {
   std::string error;
