@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/json_escape.h"
+#include "core/run_both.h"
 #include "pipeline/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/gravity_provider.h"
@@ -139,24 +140,28 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
                       const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points) {
   // Sub-pixel disparity for the points (map.subpixel_window_px), when the frame kept the
   // matcher's images for it.
-  thread_local ImageF refined;
-  const ImageF* point_disparity = nullptr;
-  if (config.map.subpixel_window_px > 0 && !frame.right_matched.empty()) {
-    refined = frame.disparity;
-    // Only inside one segment: a window across an obstacle's outline would blend its depth with
-    // the ground's behind it where the two lie less than 1 px of disparity apart.
-    RefineDisparitySubpixel(frame.left_matched, frame.right_matched, config.map.subpixel_window_px, kMapSubpixelSteps, &refined,
-                            &frame.segment_ids);
-    point_disparity = &refined;
-  }
+  thread_local ImageF refined_of_thread;  // kept between frames; a worker may write it
+  ImageF& refined = refined_of_thread;
+  const bool refine = config.map.subpixel_window_px > 0 && !frame.right_matched.empty();
   // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
   // never emitted: a map threshold no stricter than that needs no mask of its own.
-  if (config.map.min_texture <= 0.0 || config.analysis.label_min_texture >= config.map.min_texture) {
-    ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, nullptr, points, point_disparity);
-    return;
-  }
-  const ImageU8 keep = TexturedPixels(frame.left_rectified, geometry, config.stereo.block_size, config.map.min_texture);
-  ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, &keep, points, point_disparity);
+  const bool mask = config.map.min_texture > 0.0 && config.analysis.label_min_texture < config.map.min_texture;
+  ImageU8 keep;
+  // The refinement and the texture mask are independent: they run side by side.
+  internal::RunBoth(
+      [&] {
+        if (!refine) return;
+        refined = frame.disparity;
+        // Only inside one segment: a window across an obstacle's outline would blend its depth
+        // with the ground's behind it where the two lie less than 1 px of disparity apart.
+        RefineDisparitySubpixel(frame.left_matched, frame.right_matched, config.map.subpixel_window_px,
+                                kMapSubpixelSteps, &refined, &frame.segment_ids);
+      },
+      [&] {
+        if (mask) keep = TexturedPixels(frame.left_rectified, geometry, config.stereo.block_size, config.map.min_texture);
+      });
+  ClassifiedPointsInWorld(frame, world_T_rectified, config.map.pixel_stride, mask ? &keep : nullptr, points,
+                          refine ? &refined : nullptr);
 }
 
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
