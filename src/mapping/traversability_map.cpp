@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/run_both.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
 
@@ -214,6 +215,13 @@ class FreeBitmap {
   }
   /// Zeroes every bit (after an exception left some set).
   void ClearAll() { std::fill(words_.begin(), words_.end(), 0); }
+  /// Sets the bits set in `other`, whose box must be this one's, and zeroes `other`'s.
+  void TakeBitsOf(FreeBitmap* other) {
+    for (std::size_t w = 0; w < used_words_; ++w) {
+      words_[w] |= other->words_[w];
+      other->words_[w] = 0;
+    }
+  }
 
  private:
   bool Index(const int* k, std::uint32_t* index) const {
@@ -410,9 +418,11 @@ struct InsertScratch {
   std::vector<octomap::OcTreeKey> ray_end_keys;
   VoxelIndex ray_cells;  ///< free_space_ray_cell > 1: cell -> group
   std::vector<std::pair<Eigen::Vector3d, std::uint32_t>> ray_groups;  ///< sum of ends, count
-  FreeBitmap free_bitmap;
+  // The rays are walked in two halves side by side, each into its own bitmap and overflow set,
+  // then merged: a set of voxels, so the same for any split.
+  FreeBitmap free_bitmap, free_bitmap_2;
   bool free_bitmap_clean = true;  ///< false while bits may be set (an exception could leave some)
-  CodeSet free_overflow;          ///< free voxels outside the bitmap's box
+  CodeSet free_overflow, free_overflow_2;  ///< free voxels outside the bitmap's box
   std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>> voxels, voxels_sort;
   std::vector<std::uint64_t> codes;
 };
@@ -625,8 +635,12 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   const bool origin_ok = tree.coordToKeyChecked(origin, key_origin);  // the float origin's key
   CodeSet& overflow = scratch.free_overflow;
   overflow.Clear();
+  scratch.free_overflow_2.Clear();
   FreeBitmap& bitmap = scratch.free_bitmap;
-  if (!scratch.free_bitmap_clean) bitmap.ClearAll();
+  if (!scratch.free_bitmap_clean) {
+    bitmap.ClearAll();
+    scratch.free_bitmap_2.ClearAll();
+  }
   scratch.free_bitmap_clean = false;
   bool use_bitmap = false;
   if (origin_ok) {
@@ -644,21 +658,29 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
       hi[i] = std::min(hi[i] + 1, 0xFFFF);
     }
     use_bitmap = bitmap.Reset(lo, hi);
-    for (std::size_t r = 0; r < ray_ends.size(); ++r) {
-      if (use_bitmap) {
-        WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
-          if (!bitmap.Set(k)) overflow.Insert(TravOcTree::MortonCode(octomap::OcTreeKey(
-                                  static_cast<octomap::key_type>(k[0]), static_cast<octomap::key_type>(k[1]),
-                                  static_cast<octomap::key_type>(k[2]))));
-        });
-      } else {
-        WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
-          overflow.Insert(TravOcTree::MortonCode(octomap::OcTreeKey(static_cast<octomap::key_type>(k[0]),
-                                                                   static_cast<octomap::key_type>(k[1]),
-                                                                   static_cast<octomap::key_type>(k[2]))));
-        });
+    if (use_bitmap) scratch.free_bitmap_2.Reset(lo, hi);
+    auto walk = [&](std::size_t first, std::size_t end, FreeBitmap* marks, CodeSet* outside) {
+      for (std::size_t r = first; r < end; ++r) {
+        if (use_bitmap) {
+          WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
+            if (!marks->Set(k)) outside->Insert(TravOcTree::MortonCode(octomap::OcTreeKey(
+                                    static_cast<octomap::key_type>(k[0]), static_cast<octomap::key_type>(k[1]),
+                                    static_cast<octomap::key_type>(k[2]))));
+          });
+        } else {
+          WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
+            outside->Insert(TravOcTree::MortonCode(octomap::OcTreeKey(static_cast<octomap::key_type>(k[0]),
+                                                                     static_cast<octomap::key_type>(k[1]),
+                                                                     static_cast<octomap::key_type>(k[2]))));
+          });
+        }
       }
-    }
+    };
+    const std::size_t half = ray_ends.size() / 2;
+    internal::RunBoth([&] { walk(0, half, &bitmap, &overflow); },
+                      [&] { walk(half, ray_ends.size(), &scratch.free_bitmap_2, &scratch.free_overflow_2); });
+    if (use_bitmap) bitmap.TakeBitsOf(&scratch.free_bitmap_2);
+    scratch.free_overflow_2.ForEach([&](std::uint64_t code) { overflow.Insert(code); });
   }
 
   // 3. Updates: every voxel of the frame (free or hit, disjoint) once, in one pass over the
