@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "core/run_both.h"
+
 namespace ssta::internal {
 
 OrderedWorker::OrderedWorker(int max_waiting) : max_waiting_(max_waiting < 0 ? 0 : max_waiting) {
@@ -58,6 +60,8 @@ void OrderedWorker::RethrowError() {
 }
 
 void OrderedWorker::Loop() {
+  // The jobs run beside the caller's own parallel work: they keep to this thread.
+  SerialOnThisThread() = true;
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     changed_.wait(lock, [&] { return closing_ || !jobs_.empty(); });
