@@ -187,6 +187,28 @@ inline void FinishNormal(const Eigen::Vector3f& n, const Eigen::Vector3f& p, Eig
   *out = n * (sign / std::sqrt(squared_norm));
 }
 
+// Runs body(band, v_begin, v_end) for each band of rows [rows[k], rows[k + 1]), the bands on
+// OpenCV's threads.
+template <typename Body>
+void ForEachBand(const std::vector<int>& rows, const Body& body) {
+  const int num_bands = static_cast<int>(rows.size()) - 1;
+  auto run = [&](int band) {
+    const int v_begin = rows[static_cast<std::size_t>(band)];
+    const int v_end = rows[static_cast<std::size_t>(band) + 1];
+    if (v_end > v_begin) body(band, v_begin, v_end);
+  };
+  if (num_bands == 1) {
+    run(0);
+    return;
+  }
+  cv::parallel_for_(
+      cv::Range(0, num_bands),
+      [&](const cv::Range& range) {
+        for (int band = range.start; band < range.end; ++band) run(band);
+      },
+      num_bands);
+}
+
 }  // namespace
 
 NormalMethod ParseNormalMethod(const std::string& name) {
@@ -297,7 +319,7 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
   const int num_bands = NumBands(height);
   b.bands.resize(static_cast<std::size_t>(num_bands));
   SplitIntoBands(num_bands);
-  ComputeWindowRadii(cloud, num_bands);
+  ComputeWindowRadii(cloud);
   if (b.max_abs_coordinate_m <= 0.0) {  // no valid point at all
     b.normals.Fill(NanVector3f());
     return b.normals;
@@ -307,7 +329,7 @@ const Image3f& NormalEstimator::Compute(const Image3f& cloud) {
     b.normals.Fill(NanVector3f());
     return b.normals;
   }
-  ForEachBand(num_bands, [&](int band, int v_begin, int v_end) {
+  ForEachBand(b.band_rows, [&](int band, int v_begin, int v_end) {
     Band& state = b.bands[static_cast<std::size_t>(band)];
     switch (options_.method) {
       case NormalMethod::kCovarianceMatrix:
@@ -354,25 +376,6 @@ void NormalEstimator::SplitIntoBands(int num_bands) {
   for (int k = 1; k <= num_bands; ++k) b.band_rows[k] = std::max(b.band_rows[k], b.band_rows[k - 1]);
 }
 
-template <typename Body>
-void NormalEstimator::ForEachBand(int num_bands, const Body& body) {
-  const std::vector<int>& rows = buffers_->band_rows;
-  auto run = [&](int band) {
-    const int v_begin = rows[static_cast<std::size_t>(band)];
-    const int v_end = rows[static_cast<std::size_t>(band) + 1];
-    if (v_end > v_begin) body(band, v_begin, v_end);
-  };
-  if (num_bands == 1) {
-    run(0);
-    return;
-  }
-  cv::parallel_for_(
-      cv::Range(0, num_bands),
-      [&](const cv::Range& range) {
-        for (int band = range.start; band < range.end; ++band) run(band);
-      },
-      num_bands);
-}
 
 // The estimator runs on the (even row, even column) points with half the smoothing size, so
 // its windows cover the same metric area; each pixel with a valid point then takes its 2 x 2
@@ -516,7 +519,7 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
 // Radius per pixel: the smoothing radius (depth-dependent if asked), cut by the image border and
 // shrunk until the square window holds no depth-edge pixel (edge counts from a summed-area
 // table). Edge pixels themselves get no normal: their window would reach across the edge.
-void NormalEstimator::ComputeWindowRadii(const Image3f& cloud, int num_bands) {
+void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -572,7 +575,7 @@ void NormalEstimator::ComputeWindowRadii(const Image3f& cloud, int num_bands) {
     }
   }
   // Rows are independent once the edge table is built: the bands run in parallel.
-  ForEachBand(num_bands, [&](int, int v_begin, int v_end) {
+  ForEachBand(b.band_rows, [&](int, int v_begin, int v_end) {
     for (int v = v_begin; v < v_end; ++v) {
       const float* rho = b.inverse_depth.row(v);
       std::uint8_t* r_out = b.radius.row(v);

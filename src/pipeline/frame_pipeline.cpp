@@ -171,7 +171,7 @@ AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, co
         }
       });
   if (a.quality.passed) {
-    if (options.face_window_px > 0) ApplyDisparityFaces(faces, disparity, options, &a.labels);
+    ApplyDisparityFaces(faces, disparity, options, &a.labels);  // nothing when the test is off
     FillUndecidedByConsensus(options, &a.labels);
     FillUndecidedByHeight(cloud, focal_times_baseline, config.vehicle, options, &a);
   }

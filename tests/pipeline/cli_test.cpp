@@ -22,6 +22,15 @@ namespace fs = std::filesystem;
 const std::string kEuroc = std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini";
 const std::string kEurocConfig = std::string(SSTA_CONFIG_DIR) + "/sensors/euroc.yaml";
 
+// A rendered yard sequence of `frames` frames in dir/seq; returns its folder.
+std::string SynthYard(const testing::TempDir& dir, int frames, const std::string& size_and_focal) {
+  const std::string seq = (dir / "seq");
+  const auto r = RunSsta("synth --scene yard --frames " + std::to_string(frames) + " " + size_and_focal +
+                         " --out " + seq);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return seq;
+}
+
 std::vector<std::string> Lines(const std::string& text) {
   std::vector<std::string> out;
   std::stringstream s(text);
@@ -127,10 +136,9 @@ TEST(Cli, ThreadsCapTheWorkButNeverChangeTheLabels) {
   // --threads (before or after the command's name) caps OpenCV's pool, which runs the matcher,
   // the normals' bands and the analysis's concurrent steps; every label must be the same.
   testing::TempDir dir;
-  const std::string seq = (dir / "seq");
-  auto r = RunSsta("synth --scene yard --frames 2 --width 320 --height 240 --focal 210 --out " + seq);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = RunSsta("--threads 1 classify --sequence " + seq + " -q --out " + (dir / "one"));
+  const std::string seq = SynthYard(dir, 2, "--width 320 --height 240 --focal 210");
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  auto r = RunSsta("--threads 1 classify --sequence " + seq + " -q --out " + (dir / "one"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = RunSsta("classify --sequence " + seq + " -q --threads 0 --out " + (dir / "all"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -158,10 +166,9 @@ TEST(Cli, ClassifyWritesDisparitiesInTheGroundTruthConvention) {
   // With the true disparity as input, disparity/ must give back gt/disparity value for value:
   // 16 bit, disparity * 256, 0 where there is none.
   testing::TempDir dir;
-  const std::string seq = (dir / "seq");
-  auto r = RunSsta("synth --scene yard --frames 1 --width 160 --height 120 --focal 105 --out " + seq);
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = RunSsta("classify --sequence " + seq + " --oracle-disparity --disparity -q --out " + (dir / "o"));
+  const std::string seq = SynthYard(dir, 1, "--width 160 --height 120 --focal 105");
+  ASSERT_FALSE(::testing::Test::HasFailure());
+  auto r = RunSsta("classify --sequence " + seq + " --oracle-disparity --disparity -q --out " + (dir / "o"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::size_t files = 0;
   for (const auto& e : fs::directory_iterator(fs::path(seq) / "gt" / "disparity")) {

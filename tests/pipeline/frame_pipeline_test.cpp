@@ -213,7 +213,9 @@ TEST(AnalyzeFrame, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
     RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
     int face_changes = 0;
     for (std::size_t i = 0; i < a.labels.size(); ++i) face_changes += a.labels[i] != before_faces[i];
-    if (config.analysis.face_window_px > 0) EXPECT_GT(face_changes, 100);  // the face test matters too
+    if (config.analysis.face_window_px > 0) {
+      EXPECT_GT(face_changes, 100);  // the face test matters too
+    }
     FillUndecidedByConsensus(config.analysis, &a.labels);
     FillUndecidedByHeight(r.cloud, fb, config.vehicle, config.analysis, &a);
 

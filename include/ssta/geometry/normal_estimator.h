@@ -131,10 +131,8 @@ class NormalEstimator {
 
   int NumBands(int height) const;
   void SplitIntoBands(int num_bands);
-  template <typename Body>
-  void ForEachBand(int num_bands, const Body& body);
   void PrepareFrame(const Image3f& cloud);
-  void ComputeWindowRadii(const Image3f& cloud, int num_bands);
+  void ComputeWindowRadii(const Image3f& cloud);
   void ComputeCovariance(const Image3f& cloud, int v_begin, int v_end, Band* band);
   void ComputeAverage3dGradient(const Image3f& cloud, int v_begin, int v_end, Band* band);
   void ComputeAverageDepthChange(const Image3f& cloud, int v_begin, int v_end, Band* band);
