@@ -21,6 +21,7 @@
 #include "ssta/io/image_io.h"
 #include "ssta/io/sequence.h"
 #include "ssta/stereo/rectifier.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {

@@ -13,6 +13,7 @@
 #include "cli_runner.h"
 #include "ssta/core/image.h"
 #include "ssta/io/image_io.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {

@@ -11,6 +11,7 @@
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {

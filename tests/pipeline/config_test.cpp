@@ -4,6 +4,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/pipeline/config.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {

@@ -26,6 +26,7 @@
 #include "cli_runner.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 extern char** environ;

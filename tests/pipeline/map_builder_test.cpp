@@ -12,6 +12,7 @@
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/synth/sequence_synthesizer.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {

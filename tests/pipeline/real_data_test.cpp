@@ -11,6 +11,7 @@
 #include "ssta/pipeline/frame_pipeline.h"
 #include "ssta/pipeline/gravity_provider.h"
 #include "ssta/pipeline/sequence_classifier.h"
+#include "ssta_test_paths.h"
 
 namespace ssta {
 namespace {

@@ -12,6 +12,7 @@
 #include "ssta/io/camera_calibration.h"
 #include "ssta/io/image_io.h"
 #include "ssta/stereo/rectifier.h"
+#include "ssta_test_paths.h"
 #include "stereo/synthetic_pair.h"
 
 namespace ssta {

@@ -21,6 +21,7 @@
 #include "ssta/synth/scene.h"
 #include "ssta/synth/sequence_synthesizer.h"
 #include "ssta/synth/vehicle_trajectory.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta::synth {
