@@ -134,11 +134,20 @@ std::vector<TravClass> ReachableStepClasses(const Image3f& cloud, const ImageI32
 StepReference ParseStepReference(const std::string& name) {
   if (name == "dominant_plane") return StepReference::kDominantPlane;
   if (name == "reachable") return StepReference::kReachable;
-  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable)");
+  if (name == "reachable_large") return StepReference::kReachableLarge;
+  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable, reachable_large)");
 }
 
 std::string StepReferenceName(StepReference reference) {
-  return reference == StepReference::kReachable ? "reachable" : "dominant_plane";
+  switch (reference) {
+    case StepReference::kReachable:
+      return "reachable";
+    case StepReference::kReachableLarge:
+      return "reachable_large";
+    case StepReference::kDominantPlane:
+      break;
+  }
+  return "dominant_plane";
 }
 
 SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name) {
@@ -315,7 +324,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
 
   std::vector<TravClass> reach;
   std::vector<double> reach_jump_m;
-  if (quality.passed && options.step_reference == StepReference::kReachable) {
+  if (quality.passed && options.step_reference != StepReference::kDominantPlane) {
     reach = ReachableStepClasses(cloud, segment_ids, result.segments, ground.segment_id, up_camera, vehicle,
                                  &reach_jump_m);
   }
@@ -331,7 +340,10 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     s.ground = s.id == ground.segment_id;
     s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
     s.step_class = vehicle.ClassifyStep(s.step_m);
-    if (!reach.empty()) {
+    const bool by_reach =
+        !reach.empty() && (options.step_reference == StepReference::kReachable ||
+                           (!s.small && s.step_class == TravClass::kNonTraversable));
+    if (by_reach) {
       s.step_class = reach[s.id];
       // Reached: the jump of the crossing that reached it; unreached: eq. 5's distance.
       if (std::isfinite(reach_jump_m[s.id])) s.step_m = reach_jump_m[s.id];

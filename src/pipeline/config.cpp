@@ -141,6 +141,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   o.pixel_slopes = true;
   o.ground_tolerance_px = 1.0;
   o.pixel_slope_window_px = 31;
+  o.step_reference = StepReference::kReachableLarge;
   o.face_window_px = 11;
   o.face_columns_px = 17;
   o.face_grow_tolerance_px = 0.25;

@@ -420,6 +420,60 @@ TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {
   EXPECT_NEAR(reach.segments[2].step_m, 0.3, 0.02);
 }
 
+// The floor of the test above, and from column 60 a ramp rising away at `slope_deg` (6 cm per
+// column along it) whose last 4 columns in rows 0..19 are a segment of their own (80 points).
+AnalyticWorld FloorAndRamp(double slope_deg) {
+  AnalyticWorld w(100, 100);
+  PaintFloor(w, 0, 0, 100, 0, 60);
+  const double s = slope_deg * M_PI / 180.0;
+  for (int v = 0; v < 100; ++v) {
+    for (int u = 60; u < 100; ++u) {
+      const double along = (u - 60) * 0.06;
+      w.cloud_(v, u) = Eigen::Vector3f(static_cast<float>(0.2 + along * std::cos(s)),
+                                       static_cast<float>(1.0 - along * std::sin(s)), static_cast<float>(2.0 + 0.02 * v));
+      w.ids_(v, u) = (u >= 96 && v < 20) ? 2 : 1;
+    }
+  }
+  w.num_segments_ = 3;
+  return w;
+}
+
+TEST(SurfaceAnalyzer, ReachableLargeLiftsOnlyLargeSegmentsThatEq5CallsAStep) {
+  AnalysisOptions options;
+  options.inliers_min_ratio = 0.01;  // inliers_min = 100: the ramp is large, its 80-point end small
+  options.small_segments = SmallSegmentPolicy::kAll;
+
+  // 12 deg: the ramp's centroid stands 1.17 sin(12 deg) = 0.24 m over the floor, a step by eq. 5,
+  // and its end 2.25 sin(12 deg) = 0.47 m. Both are reached without a jump.
+  const AnalyticWorld steep = FloorAndRamp(12.0);
+  options.step_reference = StepReference::kReachable;
+  const AnalysisResult reach = steep.Analyze({}, options);
+  ASSERT_TRUE(reach.quality.passed);
+  ASSERT_FALSE(reach.segments[1].small);
+  ASSERT_TRUE(reach.segments[2].small);
+  EXPECT_EQ(reach.segments[1].verdict, TravClass::kTraversable);
+  EXPECT_EQ(reach.segments[2].verdict, TravClass::kTraversable);
+  EXPECT_LT(reach.segments[2].step_m, 0.05);
+
+  options.step_reference = StepReference::kReachableLarge;
+  const AnalysisResult large = steep.Analyze({}, options);
+  EXPECT_EQ(large.segments[1].step_class, TravClass::kTraversable);  // large: reached
+  EXPECT_EQ(large.segments[1].verdict, TravClass::kTraversable);
+  EXPECT_EQ(large.segments[2].step_class, TravClass::kNonTraversable);  // small: eq. 5
+  EXPECT_EQ(large.segments[2].verdict, TravClass::kNonTraversable);
+  EXPECT_NEAR(large.segments[2].step_m, 2.25 * std::sin(12.0 * M_PI / 180.0), 0.02);
+
+  // 6 deg: the ramp's centroid stands 1.17 sin(6 deg) = 0.12 m over the floor, semi-traversable by
+  // eq. 5. "reachable" makes it traversable; "reachable_large" keeps eq. 5's semi-traversable.
+  const AnalyticWorld gentle = FloorAndRamp(6.0);
+  options.step_reference = StepReference::kReachable;
+  EXPECT_EQ(gentle.Analyze({}, options).segments[1].verdict, TravClass::kTraversable);
+  options.step_reference = StepReference::kReachableLarge;
+  const AnalysisResult kept = gentle.Analyze({}, options);
+  EXPECT_NEAR(kept.segments[1].step_m, 1.17 * std::sin(6.0 * M_PI / 180.0), 0.01);
+  EXPECT_EQ(kept.segments[1].verdict, TravClass::kSemiTraversable);
+}
+
 // Disparity of a camera 0.8 m above level ground, pitched 15 deg down (f 420 px, b 0.12 m,
 // 640 x 480): ground up to `face_m` ahead, then a vertical face `height_m` tall towards the
 // camera and the level top of the step behind it; or, with `ramp_deg` > 0, a ramp rising away at

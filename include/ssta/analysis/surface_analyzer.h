@@ -40,6 +40,13 @@ enum class StepReference {
   /// must be drivable by slope. Smooth ramps and hills are reached without a step; a box top,
   /// a curb or stereo noise floating in the air is not.
   kReachable,
+  /// "reachable_large": eq. 5, except that a large segment (inliers_min points or more) that
+  /// eq. 5 calls non-traversable takes its reachable class. A hillside or the ground beyond a
+  /// rise is a large surface whose boundary jumps are measured on many pixel pairs; a small
+  /// segment at range (a far box top merged with its front face, a fragment) meets its
+  /// neighbours on a few noisy pairs that can read as no jump, and a step in the semi band
+  /// (0.1-0.2 m by default) is within the noise of those jumps.
+  kReachableLarge,
 };
 StepReference ParseStepReference(const std::string& name);
 std::string StepReferenceName(StepReference reference);
@@ -124,7 +131,8 @@ struct SegmentResult {
   double rms_m = 0.0;       ///< RMS point-to-plane distance [m]
   double slope_deg = 0.0;   ///< angle between the normal and up [deg]
   /// Step [m]: |distance| of the centroid to the ground plane (eq. 5); with step_reference
-  /// "reachable", the mean height jump of the crossing that reached it (eq. 5 if unreached).
+  /// "reachable" (or "reachable_large", where it applies), the mean height jump of the
+  /// crossing that reached it (eq. 5 if unreached).
   /// NaN without a ground plane.
   double step_m = 0.0;
   bool has_plane = false;   ///< at least 3 points: centroid, PCA plane and slope are set
