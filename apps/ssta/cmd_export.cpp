@@ -13,6 +13,7 @@ struct ExportArgs {
   std::string map, format, out;
   double resolution_m = 0.0;
   std::vector<double> region;
+  int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
 };
 
 }  // namespace
@@ -31,6 +32,12 @@ void RegisterExport(CLI::App& app) {
   cmd->add_option("--region", args->region, "grid: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')
       ->expected(4);
+  cmd->add_option("--fill-holes", args->fill_min_neighbours,
+                  "grid: an unknown cell with at least N of its 8 neighbours classified takes their most frequent "
+                  "class (ties: the worse); fills the cells far rows of pixels skip, not the edge of the observed "
+                  "area. 0: off")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
   cmd->callback([args] {
     const TraversabilityMap map = TraversabilityMap::Load(args->map);
     const std::string& f = args->format;
@@ -38,6 +45,7 @@ void RegisterExport(CLI::App& app) {
     if (f == "grid") {
       GridExportOptions options;
       options.resolution_m = args->resolution_m;
+      options.fill_min_neighbours = args->fill_min_neighbours;
       if (!args->region.empty()) {
         const auto& r = args->region;
         if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");

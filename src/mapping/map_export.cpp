@@ -1,5 +1,6 @@
 #include "ssta/mapping/map_export.h"
 
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -67,6 +68,37 @@ Eigen::AlignedBox2d SnapOutwards(const Eigen::AlignedBox2d& box, double res) {
 
 }  // namespace
 
+int FillHoles(ImageU8* classes, int min_neighbours) {
+  if (min_neighbours < 1 || min_neighbours > 8) {
+    throw Error("fill_min_neighbours: must be in 1..8 (0: no filling), got " + std::to_string(min_neighbours));
+  }
+  const ImageU8 in = *classes;
+  const int w = in.width(), h = in.height();
+  int filled = 0;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      if (in(v, u) != static_cast<std::uint8_t>(TravClass::kUnknown)) continue;
+      std::array<int, 4> count{};  // by class id 1..3
+      for (int dv = -1; dv <= 1; ++dv) {
+        for (int du = -1; du <= 1; ++du) {
+          const int nv = v + dv, nu = u + du;
+          if ((dv == 0 && du == 0) || !in.Contains(nv, nu)) continue;
+          const int c = in(nv, nu);
+          if (c >= 1 && c <= 3) ++count[c];
+        }
+      }
+      if (count[1] + count[2] + count[3] < min_neighbours) continue;
+      int best = 3;  // ties go to the worse class
+      for (int c = 2; c >= 1; --c) {
+        if (count[c] > count[best]) best = c;
+      }
+      (*classes)(v, u) = static_cast<std::uint8_t>(best);
+      ++filled;
+    }
+  }
+  return filled;
+}
+
 std::string QueryCsvRow(const CellInfo& cell) {
   std::string row;
   row += Format("%.4f", cell.center.x()) + ',' + Format("%.4f", cell.center.y()) + ',' +
@@ -89,7 +121,11 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
     }
     region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
   }
-  const GridProjection grid = map.Project(SnapOutwards(region, res), res);
+  if (options.fill_min_neighbours < 0 || options.fill_min_neighbours > 8) {
+    throw Error(prefix + ": fill_min_neighbours must be in 0..8, got " + std::to_string(options.fill_min_neighbours));
+  }
+  GridProjection grid = map.Project(SnapOutwards(region, res), res);
+  if (options.fill_min_neighbours > 0) FillHoles(&grid.classes, options.fill_min_neighbours);
 
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);

@@ -53,7 +53,9 @@ TEST(MapExport, GridRowZeroIsTheLargestYAndTheOriginIsTheLowerLeftCorner) {
   const TempDir dir;
   const TraversabilityMap map = AsymmetricMap();
   const std::string prefix = dir / "grid";
-  const GridProjection grid = ExportGrid(map, prefix);
+  GridExportOptions raw;
+  raw.fill_min_neighbours = 0;  // keep the unobserved cell unknown
+  const GridProjection grid = ExportGrid(map, prefix, raw);
   ASSERT_EQ(grid.width(), 5);
   ASSERT_EQ(grid.height(), 3);
 
@@ -96,6 +98,59 @@ TEST(MapExport, GridRowZeroIsTheLargestYAndTheOriginIsTheLowerLeftCorner) {
   EXPECT_LT((255 - 254) / 255.0, 0.196);
   const double unknown = (255 - 205) / 255.0;
   EXPECT_TRUE(unknown >= 0.196 && unknown <= 0.65);
+}
+
+ImageU8 ClassGrid(const std::vector<std::vector<int>>& rows) {
+  ImageU8 image(static_cast<int>(rows[0].size()), static_cast<int>(rows.size()), 0);
+  for (int v = 0; v < image.height(); ++v) {
+    for (int u = 0; u < image.width(); ++u) image(v, u) = static_cast<std::uint8_t>(rows[v][u]);
+  }
+  return image;
+}
+
+TEST(MapExport, FillHolesTakesTheNeighboursMajorityOnlyInsideTheObservedArea) {
+  // 0 unknown, 1 traversable, 2 semi, 3 non-traversable, 4 undecided.
+  const ImageU8 classes = ClassGrid({{1, 1, 1, 0, 0, 0},    // (0,3): 1 1 3 3 known
+                                     {1, 0, 1, 3, 3, 0},    // (1,1): 8 known, 7 traversable
+                                     {1, 1, 3, 0, 3, 0},    // (2,3): 8 known, 5 non, 3 trav
+                                     {2, 2, 1, 1, 3, 0},    // (2,5), (1,5): the edge, 3 / 2 known
+                                     {4, 0, 2, 1, 0, 0}});  // (4,1): 2 2 1 2 and an undecided
+  ImageU8 five = classes;
+  EXPECT_EQ(FillHoles(&five, 5), 2);
+  EXPECT_EQ(five(1, 1), 1);
+  EXPECT_EQ(five(2, 3), 3);
+  EXPECT_EQ(five(0, 3), 0);
+  EXPECT_EQ(five(4, 1), 0);  // the undecided neighbour does not count: 4 known
+  EXPECT_EQ(five(4, 0), 4);  // an undecided cell is no hole
+  for (int v = 0; v < 5; ++v) EXPECT_EQ(five(v, 5), 0) << v;  // the edge of the observed area
+
+  ImageU8 four = classes;
+  EXPECT_EQ(FillHoles(&four, 4), 4);
+  EXPECT_EQ(four(0, 3), 3);  // 2 traversable against 2 non-traversable: the worse
+  EXPECT_EQ(four(4, 1), 2);  // 3 semi against 1 traversable
+  EXPECT_EQ(four(2, 5), 0);  // 3 known
+
+  // A hole two cells wide: each has 7 classified neighbours in the input, so with 8 neither is
+  // filled, although after filling one the other would have 8.
+  const ImageU8 wide = ClassGrid({{1, 1, 1, 1}, {1, 0, 0, 1}, {1, 1, 1, 1}});
+  ImageU8 eight = wide;
+  EXPECT_EQ(FillHoles(&eight, 8), 0);
+  ImageU8 seven = wide;
+  EXPECT_EQ(FillHoles(&seven, 7), 2);
+
+  ImageU8 bad = classes;
+  EXPECT_THROW(FillHoles(&bad, 0), Error);
+  EXPECT_THROW(FillHoles(&bad, 9), Error);
+}
+
+TEST(MapExport, GridExportFillsTheHoleOfTheMapByDefault) {
+  const TempDir dir;
+  const GridProjection filled = ExportGrid(AsymmetricMap(), dir / "grid");
+  EXPECT_EQ(filled.classes(1, 2), 1);  // the unobserved cell amid traversable ones
+  EXPECT_EQ(ReadLabelImage(dir / "grid_classes.png")(1, 2), 1);
+  GridExportOptions bad;
+  bad.fill_min_neighbours = 9;
+  EXPECT_THROW(ExportGrid(AsymmetricMap(), dir / "bad", bad), Error);
 }
 
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {

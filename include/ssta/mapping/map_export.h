@@ -26,15 +26,28 @@ struct GridExportOptions {
   /// The region is widened outwards to multiples of the resolution, so with the map's
   /// resolution every pixel is exactly one map column.
   Eigen::AlignedBox2d region;
+  /// Holes: an unknown pixel with at least this many of its 8 neighbours classified takes their
+  /// class (FillHoles). 5 (the default) fills the pixels that the rows of far pixels skip (at
+  /// 10 m a pixel row spans ~0.3 m of ground), never the straight edge of the observed area
+  /// (3 neighbours). 0: off; at most 8.
+  int fill_min_neighbours = 5;
 };
+
+/// One pass over `classes` (ids of INTERFACES section 3): each unknown pixel (0) of which at
+/// least `min_neighbours` (1..8) of the 8 neighbours hold a class 1..3 in the input takes the
+/// most frequent of those classes, a tie going to the worse. Filled pixels do not count for
+/// their neighbours, so a fill never grows from another; undecided pixels (4) stay and do not
+/// count. Returns the number of pixels filled. Throws ssta::Error unless 1 <= min_neighbours <= 8.
+int FillHoles(ImageU8* classes, int min_neighbours);
 
 /// The `grid` export (INTERFACES section 5): PREFIX.png (class colours, undecided grey),
 /// PREFIX_classes.png (8-bit class ids), PREFIX.pgm (non-traversable 0, traversable and semi
 /// 254, unknown and undecided 205) and PREFIX.yaml (map_server: image, resolution, origin
 /// [x, y, 0.0] of the lower-left pixel's lower-left corner, negate 0, occupied_thresh 0.65,
-/// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Returns the
-/// projection that was written. Throws ssta::Error when the map has no surface and no region
-/// is given.
+/// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Holes are filled
+/// as options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers
+/// unfilled. Returns the projection that was written (its classes filled). Throws ssta::Error when the map has no
+/// surface and no region is given, or when fill_min_neighbours is not in 0..8.
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{});
 
