@@ -121,11 +121,8 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
     }
     region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
   }
-  if (options.fill_min_neighbours < 0 || options.fill_min_neighbours > 8) {
-    throw Error(prefix + ": fill_min_neighbours must be in 0..8, got " + std::to_string(options.fill_min_neighbours));
-  }
   GridProjection grid = map.Project(SnapOutwards(region, res), res);
-  if (options.fill_min_neighbours > 0) FillHoles(&grid.classes, options.fill_min_neighbours);
+  if (options.fill_min_neighbours != 0) FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
 
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);

@@ -32,8 +32,8 @@ ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& 
   options.out_dir = out_dir;
   options.every = every;
   ClassifySequence(seq, config, options);
-  LabelEvalOptions eval;
-  eval.missing_prediction = MissingPrediction::kSkip;
+  LabelEvalOptions eval;  // the frames not classified are left out; with every frame, none is
+  if (every > 1) eval.missing_prediction = MissingPrediction::kSkip;
   return EvaluateLabelFolders(out_dir, seq_dir, eval).total;
 }
 

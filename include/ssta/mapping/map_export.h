@@ -46,8 +46,9 @@ int FillHoles(ImageU8* classes, int min_neighbours);
 /// [x, y, 0.0] of the lower-left pixel's lower-left corner, negate 0, occupied_thresh 0.65,
 /// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Holes are filled
 /// as options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers
-/// unfilled. Returns the projection that was written (its classes filled). Throws ssta::Error when the map has no
-/// surface and no region is given, or when fill_min_neighbours is not in 0..8.
+/// unfilled. Returns the projection that was written (its classes filled). Throws ssta::Error
+/// when the map has no surface and no region is given, or when fill_min_neighbours is not in
+/// 0..8 (before any file is written).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{});
 
