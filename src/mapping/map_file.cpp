@@ -127,6 +127,11 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "free_space_clearance_m" << YAML::Value << num(o.free_space_clearance_m);
   // Only when not the exact 1, so files of exact-ray maps stay as they were (absent reads as 1).
   if (o.free_space_ray_cell != 1) out << YAML::Key << "free_space_ray_cell" << YAML::Value << o.free_space_ray_cell;
+  // Only when on, so files of maps made before it stay as they were (absent reads as off).
+  if (o.free_space_obstacle_shortening_per_m2 >= 0.0) {
+    out << YAML::Key << "free_space_obstacle_shortening_per_m2" << YAML::Value
+        << num(o.free_space_obstacle_shortening_per_m2);
+  }
   out << YAML::EndMap;
   const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
@@ -320,6 +325,8 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
   options->free_space_clearance_m = o.Require<double>("free_space_clearance_m");
   options->free_space_ray_cell = 1;  // files of exact-ray maps do not name it
   o.Read("free_space_ray_cell", &options->free_space_ray_cell);
+  options->free_space_obstacle_shortening_per_m2 = -1.0;  // off: maps made before it do not name it
+  o.Read("free_space_obstacle_shortening_per_m2", &options->free_space_obstacle_shortening_per_m2);
   std::string error;
   if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
 

@@ -49,6 +49,9 @@ bool MapOptions::IsValid(std::string* error) const {
   if (!(free_space_clearance_m >= 0.0 && free_space_clearance_m <= 5.0)) {
     return Fail(error, "free_space_clearance_m: must be in [0, 5] m");
   }
+  if (!(std::isfinite(free_space_obstacle_shortening_per_m2) && free_space_obstacle_shortening_per_m2 <= 1.0)) {
+    return Fail(error, "free_space_obstacle_shortening_per_m2: must be at most 1 per m (negative: off)");
+  }
   if (!(free_space_ray_cell == 1 || free_space_ray_cell == 2 || free_space_ray_cell == 4 ||
         free_space_ray_cell == 8)) {
     return Fail(error, "free_space_ray_cell: must be 1, 2, 4 or 8 voxels");

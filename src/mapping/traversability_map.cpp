@@ -36,7 +36,21 @@ struct VoxelAccumulator {
   double step_sum = 0.0;
   std::uint32_t step_count = 0;
   double max_abs_step = -1.0;  // < 0: none
+  double height_sum = 0.0;
+  std::uint32_t height_count = 0;
 };
+
+/// Whether the ray to a hit voxel ends on an obstacle (free_space_obstacle_shortening_per_m2):
+/// most of its points are non-traversable and they do not lie below the frame's ground plane
+/// (by more than half a voxel; an unknown height counts as not below). Such a ray's last metres
+/// pass above the ground in front of the obstacle rather than along it, so they need no
+/// clearance; rays into a pit (its walls and floor lie below the ground) graze its near edge.
+bool EndsOnAnObstacle(const VoxelAccumulator& acc, const MapOptions& opt) {
+  if (opt.free_space_obstacle_shortening_per_m2 < 0.0) return false;
+  if (acc.votes[2] <= acc.votes[0] + acc.votes[1]) return false;
+  if (acc.height_count == 0) return true;
+  return acc.height_sum / acc.height_count >= -0.5 * opt.resolution_m;
+}
 
 /// Accumulator of one frame's points beyond range (ray direction only).
 struct FarAccumulator {
@@ -556,6 +570,10 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     acc.sum_p += p;
     ++acc.points;
     ++stats.points_hit;
+    if (std::isfinite(point.height_m)) {
+      acc.height_sum += point.height_m;
+      ++acc.height_count;
+    }
     const int c = static_cast<int>(point.cls);
     if (c < 1 || c > 3) continue;  // unknown, undecided, don't-care: occupancy only
     ++acc.votes[c - 1];
@@ -588,15 +606,18 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     ray_ends.push_back(e);
     ray_end_keys.push_back(key_end);
   };
-  // Rays to surface points stop short where they graze the surface (free_space_clearance_m).
+  // Rays to surface points stop short where they graze the surface (free_space_clearance_m);
+  // rays to obstacles stop only a depth-noise band short (free_space_obstacle_shortening_per_m2).
   constexpr double kMaxShortening_m = 2.0;
   for (const VoxelAccumulator& acc : hits) {
     const Eigen::Vector3d end = acc.sum_p / acc.points;
     const Eigen::Vector3d d = end - sensor_origin_world;
     const double length = d.norm();
+    const bool obstacle = EndsOnAnObstacle(acc, opt);
     if (opt.free_space_clearance_m > 0.0 && length > 1e-9) {
       const double sin_elevation = std::max(std::abs(d.z()) / length, 1e-3);
-      const double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
+      double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
+      if (obstacle) shorten = std::min(shorten, opt.free_space_obstacle_shortening_per_m2 * length * length);
       if (shorten < length) add_ray(sensor_origin_world + d * ((length - shorten) / length));
     } else {
       add_ray(end);

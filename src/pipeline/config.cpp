@@ -132,6 +132,7 @@ MapOptions PipelineMapDefaults() {
   o.occupancy_miss_prob = 0.45;
   o.class_free_decay_log_odds = 0.1;
   o.free_space_clearance_m = 0.1;
+  o.free_space_obstacle_shortening_per_m2 = 0.008;
   return o;
 }
 
@@ -262,6 +263,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("class_clamp_max", &f.class_clamp_max);
     s.Read("free_space_clearance_m", &f.free_space_clearance_m);
     s.Read("free_space_ray_cell", &f.free_space_ray_cell);
+    s.Read("free_space_obstacle_shortening_per_m2", &f.free_space_obstacle_shortening_per_m2);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("min_texture", &c.map.min_texture);
     s.Read("subpixel_window_px", &c.map.subpixel_window_px);
@@ -415,6 +417,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  class_clamp_max: " << f.class_clamp_max << "\n"
     << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
     << "  free_space_ray_cell: " << f.free_space_ray_cell << "\n"
+    << "  free_space_obstacle_shortening_per_m2: " << f.free_space_obstacle_shortening_per_m2 << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  min_texture: " << c.map.min_texture << "\n"
     << "  subpixel_window_px: " << c.map.subpixel_window_px << "\n"

@@ -97,6 +97,8 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
     const SegmentResult& s = segments[i];
     segment_values[i] = {s.has_plane ? static_cast<float>(s.slope_deg) : kNaN, static_cast<float>(s.step_m)};
   }
+  const bool has_ground = frame.analysis.ground.found && frame.analysis.quality.passed;
+  const Eigen::Vector4f ground = frame.analysis.ground.plane.cast<float>();
   points->clear();
   points->reserve(cloud.size() / (stride * stride) + 1);
   const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
@@ -111,9 +113,12 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
       if (point_disparity != nullptr) {
         // The same ray at the other disparity: Z' = f b / d' = Z d / d'.
         const float d = frame.disparity(v, u), refined = (*point_disparity)(v, u);
-        out.world_p = transform * (refined > 0.0f && d > 0.0f ? Eigen::Vector3f(p * (d / refined)) : p);
+        const Eigen::Vector3f q = refined > 0.0f && d > 0.0f ? Eigen::Vector3f(p * (d / refined)) : p;
+        out.world_p = transform * q;
+        if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
       } else {
         out.world_p = transform * p;
+        if (has_ground) out.height_m = ground.head<3>().dot(p) + ground.w();
       }
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);

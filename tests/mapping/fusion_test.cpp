@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <unordered_set>
 #include <vector>
@@ -109,6 +110,57 @@ TEST(Fusion, GrazingRaysKeepTheGroundTheyPassOverWithClearance) {
     // Free space well above the ground is carved either way.
     EXPECT_TRUE(map.CellAt({5.05, 0.05, 0.45}).observed) << clearance;
   }
+}
+
+TEST(Fusion, RaysToObstaclesClearTheSmearInFrontOfThemUnlessTheyEndBelowTheGround) {
+  // A camera 0.85 m up sees a point 0.45 m up at 10 m, once 1 m nearer (the smear of stereo's
+  // depth noise, voxel S) and then four times where it is (E). The ray to E runs through S
+  // (0.49 m up at x = 9.05) within 2 m of its end, where the 0.1 m clearance stops it
+  // (0.1 / sin(elevation) = 2.5 m, capped at 2). With the obstacle shortening k r^2 (r = 10.01 m)
+  // instead, the ray runs on to 0.80 m short of E for k = 0.008 and S is free after three misses
+  // (0.85 - 3 x 0.41 < 0); k = 0.012 stops it 1.20 m short, before S. Only when E's points are
+  // non-traversable and not below the ground: traversable points, and points below the ground
+  // (a pit's wall), keep the clearance, as does the option off.
+  const Eigen::Vector3d camera(0.05, 0.05, 0.85);
+  const Eigen::Vector3d smear(9.05, 0.05, 0.45), end(10.05, 0.05, 0.45);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  struct Case {
+    double k;
+    TravClass cls;
+    float height_m;
+    bool cleared;
+  };
+  for (const Case& c : {Case{-1.0, TravClass::kNonTraversable, 0.45f, false},
+                        Case{0.008, TravClass::kNonTraversable, 0.45f, true},
+                        Case{0.0, TravClass::kNonTraversable, 0.45f, true},
+                        Case{0.012, TravClass::kNonTraversable, 0.45f, false},
+                        Case{0.008, TravClass::kNonTraversable, nan, true},
+                        Case{0.008, TravClass::kNonTraversable, -0.04f, true},
+                        Case{0.008, TravClass::kNonTraversable, -0.5f, false},
+                        Case{0.008, TravClass::kSemiTraversable, 0.45f, false},
+                        Case{0.008, TravClass::kTraversable, 0.45f, false}}) {
+    SCOPED_TRACE(::testing::Message() << "k " << c.k << ", class " << static_cast<int>(c.cls) << ", height "
+                                      << c.height_m);
+    MapOptions options;
+    options.free_space_clearance_m = 0.1;
+    options.free_space_obstacle_shortening_per_m2 = c.k;
+    TraversabilityMap map(options);
+    map.InsertFrame(At(smear, TravClass::kNonTraversable), camera, 1);
+    ASSERT_TRUE(map.CellAt(smear).occupied);
+    for (int n = 0; n < 4; ++n) {
+      std::vector<ClassifiedPoint> points = At(end, c.cls);
+      points[0].height_m = c.height_m;
+      map.InsertFrame(points, camera, 2 + n);
+    }
+    EXPECT_EQ(map.CellAt(smear).occupied, !c.cleared);
+    EXPECT_TRUE(map.CellAt(end).occupied);
+    EXPECT_EQ(map.CellAt(end).cls, c.cls);
+  }
+  MapOptions bad;
+  bad.free_space_obstacle_shortening_per_m2 = std::nan("");
+  std::string error;
+  EXPECT_FALSE(bad.IsValid(&error));
+  EXPECT_EQ(error.rfind("free_space_obstacle_shortening_per_m2:", 0), 0u) << error;
 }
 
 TEST(Fusion, ThreeNonTraversableViewsOutvoteOneTraversable) {

@@ -136,6 +136,8 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(loaded.software_version(), map.software_version());
   EXPECT_EQ(loaded.options().free_space_ray_cell, 1);  // exact rays: not named in the file
   EXPECT_EQ(ReadBytes(path).find("free_space_ray_cell"), std::string::npos);
+  EXPECT_LT(loaded.options().free_space_obstacle_shortening_per_m2, 0.0);  // off: not named either
+  EXPECT_EQ(ReadBytes(path).find("free_space_obstacle_shortening_per_m2"), std::string::npos);
   // Saving the loaded map again gives the same bytes.
   loaded.Save(dir / "again.ot");
   EXPECT_EQ(ReadBytes(dir / "again.ot"), ReadBytes(path));
@@ -347,6 +349,18 @@ TEST(MapFile, CoarseRaysTravelWithTheMapFile) {
   map.Save(dir / "coarse.ot");
   const TraversabilityMap loaded = TraversabilityMap::Load(dir / "coarse.ot");
   EXPECT_EQ(loaded.options().free_space_ray_cell, 4);
+  ExpectSameTrees(Tree(map), Tree(loaded));
+}
+
+TEST(MapFile, TheObstacleRaysShorteningTravelsWithTheMapFile) {
+  const TempDir dir;
+  MapOptions options;
+  options.free_space_obstacle_shortening_per_m2 = 0.008;
+  TraversabilityMap map(options);
+  map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), 1);
+  map.Save(dir / "obstacles.ot");
+  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "obstacles.ot");
+  EXPECT_EQ(loaded.options().free_space_obstacle_shortening_per_m2, 0.008);
   ExpectSameTrees(Tree(map), Tree(loaded));
 }
 

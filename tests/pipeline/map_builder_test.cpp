@@ -96,6 +96,39 @@ TEST(ClassifiedPointsInWorld, PutsEachPointAtThePointDisparityAlongItsRay) {
   EXPECT_THROW(ClassifiedPointsInWorld(f, world_T_rect, 1, nullptr, &wrong_size), InternalError);
 }
 
+TEST(ClassifiedPointsInWorld, GivesEachPointItsHeightAboveTheFramesGroundPlaneAtItsOwnRange) {
+  // Camera frame, y down: the ground plane y = 1.5 (1.5 m below the camera) is n = (0, -1, 0),
+  // D = 1.5. A point at y = 1.0 stands 0.5 m above it; at the point disparity twice the
+  // matcher's, the same ray at half the range, y = 0.5, stands 1.0 m above it.
+  FrameResult f;
+  f.cloud = Image3f(3, 1, NanVector3f());
+  f.disparity = ImageF(3, 1, 10.0f);
+  f.segment_ids = ImageI32(3, 1, -1);
+  f.analysis.labels = ImageU8(3, 1, 3);
+  f.cloud(0, 0) = Eigen::Vector3f(0, 1.0f, 6);
+  f.cloud(0, 1) = Eigen::Vector3f(1, 2.0f, 8);  // 0.5 m below the ground (a pit)
+  f.cloud(0, 2) = Eigen::Vector3f(0, 1.0f, 6);
+  f.analysis.ground.found = true;
+  f.analysis.ground.plane = Eigen::Vector4d(0, -1, 0, 1.5);
+  f.analysis.quality.passed = true;
+  ImageF refined(3, 1, 10.0f);
+  refined(0, 2) = 20.0f;
+  std::vector<ClassifiedPoint> points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1, nullptr, &refined);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_NEAR(points[0].height_m, 0.5f, 1e-6f);
+  EXPECT_NEAR(points[1].height_m, -0.5f, 1e-6f);
+  EXPECT_NEAR(points[2].height_m, 1.0f, 1e-6f);
+  // No height from a plane that failed the quality check, or without a plane.
+  f.analysis.quality.passed = false;
+  points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1);
+  ASSERT_EQ(points.size(), 3u);
+  for (const ClassifiedPoint& p : points) EXPECT_TRUE(std::isnan(p.height_m));
+  f.analysis.quality.passed = true;
+  f.analysis.ground.found = false;
+  points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1);
+  for (const ClassifiedPoint& p : points) EXPECT_TRUE(std::isnan(p.height_m));
+}
+
 TEST(TexturedPixels, KeepsPixelsWhoseWindowStdReachesTheThreshold) {
   // A 12x8 image, blank (grey 100) except a 0/6 checker in columns 8..11: a window's std is
   // 3 where it lies on the checker only, less where it also covers the blank part.

@@ -23,6 +23,9 @@ struct ClassifiedPoint {
   TravClass cls = TravClass::kUnknown;  ///< verdict; only 1..3 add class evidence
   float slope_deg = 0.0f;  ///< surface slope at the point [deg]; non-finite: not averaged
   float step_m = 0.0f;     ///< step to the dominant ground plane [m]; non-finite: not averaged
+  /// Signed height above the frame's dominant ground plane [m] (negative below); NaN when the
+  /// frame has no ground plane that passed the quality check.
+  float height_m = std::numeric_limits<float>::quiet_NaN();
 };
 
 /// What one InsertFrame call did.
