@@ -14,6 +14,7 @@ struct ExportArgs {
   double resolution_m = 0.0;
   std::vector<double> region;
   int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
+  double local_ground_radius_m = GridExportOptions{}.local_ground_radius_m;
 };
 
 }  // namespace
@@ -38,6 +39,12 @@ void RegisterExport(CLI::App& app) {
                   "area. 0: off")
       ->check(CLI::Range(0, 8))
       ->capture_default_str();
+  cmd->add_option("--local-ground", args->local_ground_radius_m,
+                  "grid: a level cell (slope below the vehicle's semi_slope_deg) called non-traversable for its step "
+                  "over a frame's ground plane is traversable when it lies within one cell of the height of the "
+                  "traversable ground within this radius [m]. 0: off")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
   cmd->callback([args] {
     const TraversabilityMap map = TraversabilityMap::Load(args->map);
     const std::string& f = args->format;
@@ -46,6 +53,7 @@ void RegisterExport(CLI::App& app) {
       GridExportOptions options;
       options.resolution_m = args->resolution_m;
       options.fill_min_neighbours = args->fill_min_neighbours;
+      options.local_ground_radius_m = args->local_ground_radius_m;
       if (!args->region.empty()) {
         const auto& r = args->region;
         if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");

@@ -1,5 +1,6 @@
 #include "ssta/mapping/map_export.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -8,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <octomap/ColorOcTree.h>
 
@@ -99,6 +101,50 @@ int FillHoles(ImageU8* classes, int min_neighbours) {
   return filled;
 }
 
+int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolerance_m, double level_slope_deg) {
+  if (!(radius_m > 0.0 && std::isfinite(radius_m))) {
+    throw Error("local_ground_radius_m: must be positive and finite (0: off), got " + std::to_string(radius_m));
+  }
+  if (!(tolerance_m >= 0.0 && std::isfinite(tolerance_m))) {
+    throw Error("local ground tolerance: must be zero or positive, got " + std::to_string(tolerance_m));
+  }
+  constexpr int kMinSupport = 5;
+  constexpr auto kTrav = static_cast<std::uint8_t>(TravClass::kTraversable);
+  constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+  const ImageU8 in = grid->classes;
+  const int w = in.width(), h = in.height();
+  const double reach = radius_m / grid->resolution_m;  // in pixels
+  const int r = static_cast<int>(std::floor(reach + 1e-9));
+  const double r2 = reach * reach + 1e-9;
+  std::vector<float> heights;
+  int changed = 0;
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      if (in(v, u) != kNon) continue;
+      const float z = grid->height_m(v, u), slope = grid->slope_deg(v, u);
+      if (!std::isfinite(z) || !(slope < level_slope_deg)) continue;
+      heights.clear();
+      for (int dv = -r; dv <= r; ++dv) {
+        for (int du = -r; du <= r; ++du) {
+          const int nv = v + dv, nu = u + du;
+          if (du * du + dv * dv > r2 || !in.Contains(nv, nu) || in(nv, nu) != kTrav) continue;
+          const float nz = grid->height_m(nv, nu);
+          if (std::isfinite(nz)) heights.push_back(nz);
+        }
+      }
+      if (static_cast<int>(heights.size()) < kMinSupport) continue;
+      // The median (the upper one of an even count: heights are voxel centres, so either is one).
+      const auto mid = heights.begin() + static_cast<std::ptrdiff_t>(heights.size() / 2);
+      std::nth_element(heights.begin(), mid, heights.end());
+      if (std::abs(z - *mid) > tolerance_m + 1e-6) continue;
+      grid->classes(v, u) = kTrav;
+      grid->cost(v, u) = 0.0f;
+      ++changed;
+    }
+  }
+  return changed;
+}
+
 std::string QueryCsvRow(const CellInfo& cell) {
   std::string row;
   row += Format("%.4f", cell.center.x()) + ',' + Format("%.4f", cell.center.y()) + ',' +
@@ -121,7 +167,14 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
     }
     region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
   }
+  if (!(options.local_ground_radius_m >= 0.0 && std::isfinite(options.local_ground_radius_m))) {
+    throw Error("local_ground_radius_m: must be zero (off) or positive, got " +
+                std::to_string(options.local_ground_radius_m));
+  }
   GridProjection grid = map.Project(SnapOutwards(region, res), res);
+  if (options.local_ground_radius_m > 0.0) {
+    JudgeStepsByLocalGround(&grid, options.local_ground_radius_m, res, map.metadata().vehicle.semi_slope_deg);
+  }
   if (options.fill_min_neighbours != 0) FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
 
   ImageU8 nav(grid.width(), grid.height());

@@ -153,6 +153,115 @@ TEST(MapExport, GridExportFillsTheHoleOfTheMapByDefault) {
   EXPECT_THROW(ExportGrid(AsymmetricMap(), dir / "bad", bad), Error);
 }
 
+/// A 12 x 12 projection at 0.1 m: traversable ground at height 0 and slope 3 deg everywhere.
+GridProjection LevelGround() {
+  GridProjection g;
+  g.resolution_m = 0.1;
+  g.classes = ImageU8(12, 12, 1);
+  g.cost = ImageF(12, 12, 0.0f);
+  g.height_m = ImageF(12, 12, 0.0f);
+  g.slope_deg = ImageF(12, 12, 3.0f);
+  g.step_m = ImageF(12, 12, 0.4f);
+  return g;
+}
+
+TEST(MapExport, LevelCellsAtTheHeightOfTheGroundAroundThemAreNotSteps) {
+  GridProjection g = LevelGround();
+  auto non = [&](int v, int u, float z, float slope) {
+    g.classes(v, u) = 3;
+    g.cost(v, u) = 1.0f;
+    g.height_m(v, u) = z;
+    g.slope_deg(v, u) = slope;
+  };
+  non(1, 1, 0.0f, 3.0f);   // level, at the ground's height: a step only by a frame's plane
+  non(1, 4, 0.1f, 3.0f);   // one cell (the tolerance) above the ground: still ground
+  non(1, 7, 0.2f, 3.0f);   // two cells up: an obstacle's top, kept
+  non(9, 1, 0.0f, 20.0f);  // steep (>= the 15 deg level limit): kept
+  non(9, 4, 0.0f, 14.9f);  // level, just
+  for (int v = 5; v <= 7; ++v) {  // a 3 x 3 block
+    for (int u = 5; u <= 7; ++u) non(v, u, 0.0f, 3.0f);
+  }
+  g.classes(10, 9) = 0;  // unobserved: no height, not a candidate
+  g.height_m(10, 9) = std::nanf("");
+  const GridProjection input = g;
+  // Radius 1.5 pixels, the 8 neighbours: the block's corners see 5 ground pixels, its edges 3
+  // and its centre none (the input is read, so changed pixels do not count).
+  auto changed = [](int v, int u) {
+    return (v == 1 && (u == 1 || u == 4)) || (v == 9 && u == 4) || ((v == 5 || v == 7) && (u == 5 || u == 7));
+  };
+  EXPECT_EQ(JudgeStepsByLocalGround(&g, 0.15, 0.1, 15.0), 7);
+  for (int v = 0; v < 12; ++v) {
+    for (int u = 0; u < 12; ++u) {
+      EXPECT_EQ(g.classes(v, u), changed(v, u) ? 1 : input.classes(v, u)) << v << "," << u;
+      EXPECT_EQ(g.cost(v, u), changed(v, u) ? 0.0f : input.cost(v, u)) << v << "," << u;
+      if (std::isfinite(input.height_m(v, u))) {
+        EXPECT_EQ(g.height_m(v, u), input.height_m(v, u));
+      }
+      EXPECT_EQ(g.step_m(v, u), input.step_m(v, u));  // as observed
+    }
+  }
+  // 2.5 pixels reach the ground beyond the block from each of its pixels.
+  g = input;
+  EXPECT_EQ(JudgeStepsByLocalGround(&g, 0.25, 0.1, 15.0), 12);
+  EXPECT_EQ(g.classes(6, 6), 1);
+  EXPECT_EQ(g.classes(1, 7), 3);
+  EXPECT_EQ(g.classes(9, 1), 3);
+  // Fewer than 5 traversable pixels within the radius: no verdict of the ground.
+  GridProjection sparse = input;
+  sparse.classes = ImageU8(12, 12, 0);
+  sparse.classes(1, 1) = 3;
+  for (int u = 0; u < 4; ++u) sparse.classes(0, u) = 1;
+  EXPECT_EQ(JudgeStepsByLocalGround(&sparse, 0.3, 0.1, 15.0), 0);
+  sparse.classes(2, 1) = 1;
+  EXPECT_EQ(JudgeStepsByLocalGround(&sparse, 0.3, 0.1, 15.0), 1);
+  EXPECT_THROW(JudgeStepsByLocalGround(&g, 0.0, 0.1, 15.0), Error);
+  EXPECT_THROW(JudgeStepsByLocalGround(&g, 1.0, -0.1, 15.0), Error);
+}
+
+TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
+  // A traversable floor at z in [0, 0.1) with a patch that a frame called a step (non-
+  // traversable at slope 2 deg: eq. 5 against a plane that does not pass there) at the floor's
+  // height, and a box 0.3 m high. The export calls the patch traversable, not the box top.
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 30; ++ix) {
+    for (int iy = 0; iy < 30; ++iy) {
+      const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
+      const bool box = ix >= 20 && ix < 23 && iy >= 20 && iy < 23;
+      const double z = box ? testing::C(3) : testing::C(0);
+      points.push_back(Pt(testing::C(ix), testing::C(iy), z,
+                          patch || box ? TravClass::kNonTraversable : TravClass::kTraversable, 2.0f, 0.3f));
+    }
+  }
+  TraversabilityMap map;
+  map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
+  const TempDir dir;
+  const GridProjection judged = ExportGrid(map, dir / "judged");
+  GridExportOptions off;
+  off.local_ground_radius_m = 0.0;
+  const GridProjection as_observed = ExportGrid(map, dir / "observed", off);
+  ASSERT_EQ(judged.width(), 30);
+  ASSERT_EQ(judged.height(), 30);
+  int patch_judged = 0, patch_observed = 0, box_judged = 0;
+  for (int v = 0; v < 30; ++v) {
+    for (int u = 0; u < 30; ++u) {
+      const int ix = u, iy = 29 - v;
+      if (ix >= 5 && ix < 8 && iy >= 5 && iy < 8) {
+        patch_judged += judged.classes(v, u) == 1;
+        patch_observed += as_observed.classes(v, u) == 3;
+      }
+      if (ix >= 20 && ix < 23 && iy >= 20 && iy < 23) box_judged += judged.classes(v, u) == 3;
+    }
+  }
+  EXPECT_EQ(patch_judged, 9);
+  EXPECT_EQ(patch_observed, 9);
+  EXPECT_EQ(box_judged, 9);
+  EXPECT_EQ(ReadLabelImage(dir / "judged_classes.png")(29 - 6, 6), 1);
+  EXPECT_EQ(map.TopSurfaceAt(testing::C(6), testing::C(6)).cls, TravClass::kNonTraversable);  // queries as observed
+  GridExportOptions bad;
+  bad.local_ground_radius_m = -1.0;
+  EXPECT_THROW(ExportGrid(map, dir / "bad", bad), Error);
+}
+
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {
   const TempDir dir;
   const TraversabilityMap empty;

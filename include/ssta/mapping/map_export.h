@@ -31,7 +31,23 @@ struct GridExportOptions {
   /// 10 m a pixel row spans ~0.3 m of ground), never the straight edge of the observed area
   /// (3 neighbours). 0: off; at most 8.
   int fill_min_neighbours = 5;
+  /// Steps against the local ground: a level non-traversable pixel at the height of the
+  /// traversable ground within this radius [m] is traversable (JudgeStepsByLocalGround; the
+  /// level limit is the map's vehicle semi_slope_deg, the height tolerance one pixel edge).
+  /// 0: off.
+  double local_ground_radius_m = 1.0;
 };
+
+/// One pass over a projection: each non-traversable pixel (3) whose mean slope is below
+/// `level_slope_deg` and whose height lies within `tolerance_m` of the median height of the
+/// traversable pixels (1) within `radius_m` of it (at least 5 of them, read from the input, so a
+/// changed pixel never counts for another) becomes traversable, with cost 0; its height, slope
+/// and step stay as observed. Why: a frame calls a surface a step by its height over that
+/// frame's dominant ground plane (the paper's eq. 5), which does not pass through ground beyond
+/// a rise, a hollow or a ditch; the map knows the ground around each cell. Obstacles and
+/// steep cells are kept: an obstacle's top stands above the ground around it. Returns the
+/// number of pixels changed. Throws ssta::Error unless radius_m > 0 and tolerance_m >= 0.
+int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolerance_m, double level_slope_deg);
 
 /// One pass over `classes` (ids of INTERFACES section 3): each unknown pixel (0) of which at
 /// least `min_neighbours` (1..8) of the 8 neighbours hold a class 1..3 in the input takes the
@@ -44,11 +60,12 @@ int FillHoles(ImageU8* classes, int min_neighbours);
 /// PREFIX_classes.png (8-bit class ids), PREFIX.pgm (non-traversable 0, traversable and semi
 /// 254, unknown and undecided 205) and PREFIX.yaml (map_server: image, resolution, origin
 /// [x, y, 0.0] of the lower-left pixel's lower-left corner, negate 0, occupied_thresh 0.65,
-/// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Holes are filled
-/// as options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers
-/// unfilled. Returns the projection that was written (its classes filled). Throws ssta::Error
-/// when the map has no surface and no region is given, or when fill_min_neighbours is not in
-/// 0..8 (before any file is written).
+/// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Steps are judged
+/// against the local ground as options.local_ground_radius_m says, then holes are filled as
+/// options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers as
+/// observed, without either. Returns the projection that was written. Throws ssta::Error
+/// when the map has no surface and no region is given, when fill_min_neighbours is not in
+/// 0..8 or local_ground_radius_m is negative or not finite (before any file is written).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{});
 
