@@ -340,26 +340,18 @@ TEST(MapFile, SaveIntoAMissingFolderNamesTheFile) {
 }
 
 
-TEST(MapFile, CoarseRaysTravelWithTheMapFile) {
+TEST(MapFile, OptionsOnlyNamedWhenSetTravelWithTheMapFile) {
+  // free_space_ray_cell and free_space_obstacle_shortening_per_m2 are written only when they
+  // are not their defaults (test above); set, they must come back.
   const TempDir dir;
   MapOptions options;
   options.free_space_ray_cell = 4;
-  TraversabilityMap map(options);
-  map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), 1);
-  map.Save(dir / "coarse.ot");
-  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "coarse.ot");
-  EXPECT_EQ(loaded.options().free_space_ray_cell, 4);
-  ExpectSameTrees(Tree(map), Tree(loaded));
-}
-
-TEST(MapFile, TheObstacleRaysShorteningTravelsWithTheMapFile) {
-  const TempDir dir;
-  MapOptions options;
   options.free_space_obstacle_shortening_per_m2 = 0.008;
   TraversabilityMap map(options);
   map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), 1);
-  map.Save(dir / "obstacles.ot");
-  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "obstacles.ot");
+  map.Save(dir / "set.ot");
+  const TraversabilityMap loaded = TraversabilityMap::Load(dir / "set.ot");
+  EXPECT_EQ(loaded.options().free_space_ray_cell, 4);
   EXPECT_EQ(loaded.options().free_space_obstacle_shortening_per_m2, 0.008);
   ExpectSameTrees(Tree(map), Tree(loaded));
 }
