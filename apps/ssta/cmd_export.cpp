@@ -59,9 +59,12 @@ void RegisterExport(CLI::App& app) {
         if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
         options.region = Eigen::AlignedBox2d(Eigen::Vector2d(r[0], r[1]), Eigen::Vector2d(r[2], r[3]));
       }
-      const GridProjection grid = ExportGrid(map, args->out, options);
+      GridExportChanges changes;
+      const GridProjection grid = ExportGrid(map, args->out, options, &changes);
       written = args->out + ".{png,_classes.png,pgm,yaml} (" + std::to_string(grid.width()) + "x" +
-                std::to_string(grid.height()) + " cells)";
+                std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
+                " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
+                " holes filled)";
     } else if (f == "octovis") {
       ExportOctovis(map, args->out + ".ot");
       written = args->out + ".ot";

@@ -157,7 +157,7 @@ std::string QueryCsvRow(const CellInfo& cell) {
 }
 
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
-                          const GridExportOptions& options) {
+                          const GridExportOptions& options, GridExportChanges* changes) {
   const double res = options.resolution_m > 0.0 ? options.resolution_m : map.options().resolution_m;
   Eigen::AlignedBox2d region = options.region;
   if (region.isEmpty()) {
@@ -172,10 +172,15 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
                 std::to_string(options.local_ground_radius_m));
   }
   GridProjection grid = map.Project(SnapOutwards(region, res), res);
+  GridExportChanges counts;
   if (options.local_ground_radius_m > 0.0) {
-    JudgeStepsByLocalGround(&grid, options.local_ground_radius_m, res, map.metadata().vehicle.semi_slope_deg);
+    counts.judged_by_local_ground = JudgeStepsByLocalGround(&grid, options.local_ground_radius_m, res,
+                                                            map.metadata().vehicle.semi_slope_deg);
   }
-  if (options.fill_min_neighbours != 0) FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
+  if (options.fill_min_neighbours != 0) {
+    counts.holes_filled = FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
+  }
+  if (changes != nullptr) *changes = counts;
 
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);

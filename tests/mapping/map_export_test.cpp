@@ -145,8 +145,10 @@ TEST(MapExport, FillHolesTakesTheNeighboursMajorityOnlyInsideTheObservedArea) {
 
 TEST(MapExport, GridExportFillsTheHoleOfTheMapByDefault) {
   const TempDir dir;
-  const GridProjection filled = ExportGrid(AsymmetricMap(), dir / "grid");
+  GridExportChanges changes;
+  const GridProjection filled = ExportGrid(AsymmetricMap(), dir / "grid", GridExportOptions{}, &changes);
   EXPECT_EQ(filled.classes(1, 2), 1);  // the unobserved cell amid traversable ones
+  EXPECT_EQ(changes.holes_filled, 1);
   EXPECT_EQ(ReadLabelImage(dir / "grid_classes.png")(1, 2), 1);
   GridExportOptions bad;
   bad.fill_min_neighbours = 9;
@@ -235,7 +237,9 @@ TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
   TraversabilityMap map;
   map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
   const TempDir dir;
-  const GridProjection judged = ExportGrid(map, dir / "judged");
+  GridExportChanges changes;
+  const GridProjection judged = ExportGrid(map, dir / "judged", GridExportOptions{}, &changes);
+  EXPECT_EQ(changes.judged_by_local_ground, 9);  // the patch
   GridExportOptions off;
   off.local_ground_radius_m = 0.0;
   const GridProjection as_observed = ExportGrid(map, dir / "observed", off);

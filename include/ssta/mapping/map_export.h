@@ -63,11 +63,19 @@ int FillHoles(ImageU8* classes, int min_neighbours);
 /// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Steps are judged
 /// against the local ground as options.local_ground_radius_m says, then holes are filled as
 /// options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers as
-/// observed, without either. Returns the projection that was written. Throws ssta::Error
+/// observed, without either. Returns the projection that was written; `changes`, when not
+/// null, gets how many pixels each step changed. Throws ssta::Error
 /// when the map has no surface and no region is given, when fill_min_neighbours is not in
 /// 0..8 or local_ground_radius_m is negative or not finite (before any file is written).
+/// What the grid export changed in the projection (ExportGrid's `changes`).
+struct GridExportChanges {
+  int judged_by_local_ground = 0;  ///< non-traversable pixels made traversable (JudgeStepsByLocalGround)
+  int holes_filled = 0;            ///< unknown pixels filled (FillHoles)
+};
+
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
-                          const GridExportOptions& options = GridExportOptions{});
+                          const GridExportOptions& options = GridExportOptions{},
+                          GridExportChanges* changes = nullptr);
 
 /// The `octovis` export: an OctoMap ColorOcTree file `path` (.ot) of the occupied voxels with
 /// their occupancy, coloured by class (undecided grey 128), which octovis opens.
