@@ -167,13 +167,9 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
     }
     region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
   }
-  if (!(options.local_ground_radius_m >= 0.0 && std::isfinite(options.local_ground_radius_m))) {
-    throw Error("local_ground_radius_m: must be zero (off) or positive, got " +
-                std::to_string(options.local_ground_radius_m));
-  }
   GridProjection grid = map.Project(SnapOutwards(region, res), res);
   GridExportChanges counts;
-  if (options.local_ground_radius_m > 0.0) {
+  if (options.local_ground_radius_m != 0.0) {  // checks > 0
     counts.judged_by_local_ground = JudgeStepsByLocalGround(&grid, options.local_ground_radius_m, res,
                                                             map.metadata().vehicle.semi_slope_deg);
   }

@@ -613,11 +613,10 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     const Eigen::Vector3d end = acc.sum_p / acc.points;
     const Eigen::Vector3d d = end - sensor_origin_world;
     const double length = d.norm();
-    const bool obstacle = EndsOnAnObstacle(acc, opt);
     if (opt.free_space_clearance_m > 0.0 && length > 1e-9) {
       const double sin_elevation = std::max(std::abs(d.z()) / length, 1e-3);
       double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
-      if (obstacle) shorten = std::min(shorten, opt.free_space_obstacle_shortening_per_m2 * length * length);
+      if (EndsOnAnObstacle(acc, opt)) shorten = std::min(shorten, opt.free_space_obstacle_shortening_per_m2 * length * length);
       if (shorten < length) add_ray(sensor_origin_world + d * ((length - shorten) / length));
     } else {
       add_ray(end);

@@ -110,16 +110,14 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
         continue;
       }
       ClassifiedPoint out;
+      Eigen::Vector3f q = p;
       if (point_disparity != nullptr) {
         // The same ray at the other disparity: Z' = f b / d' = Z d / d'.
         const float d = frame.disparity(v, u), refined = (*point_disparity)(v, u);
-        const Eigen::Vector3f q = refined > 0.0f && d > 0.0f ? Eigen::Vector3f(p * (d / refined)) : p;
-        out.world_p = transform * q;
-        if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
-      } else {
-        out.world_p = transform * p;
-        if (has_ground) out.height_m = ground.head<3>().dot(p) + ground.w();
+        if (refined > 0.0f && d > 0.0f) q = p * (d / refined);
       }
+      out.world_p = transform * q;
+      if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
       if (id >= 0) {

@@ -56,6 +56,12 @@ int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolera
 /// count. Returns the number of pixels filled. Throws ssta::Error unless 1 <= min_neighbours <= 8.
 int FillHoles(ImageU8* classes, int min_neighbours);
 
+/// What the grid export changed in the projection (ExportGrid's `changes`).
+struct GridExportChanges {
+  int judged_by_local_ground = 0;  ///< non-traversable pixels made traversable (JudgeStepsByLocalGround)
+  int holes_filled = 0;            ///< unknown pixels filled (FillHoles)
+};
+
 /// The `grid` export (INTERFACES section 5): PREFIX.png (class colours, undecided grey),
 /// PREFIX_classes.png (8-bit class ids), PREFIX.pgm (non-traversable 0, traversable and semi
 /// 254, unknown and undecided 205) and PREFIX.yaml (map_server: image, resolution, origin
@@ -64,15 +70,9 @@ int FillHoles(ImageU8* classes, int min_neighbours);
 /// against the local ground as options.local_ground_radius_m says, then holes are filled as
 /// options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers as
 /// observed, without either. Returns the projection that was written; `changes`, when not
-/// null, gets how many pixels each step changed. Throws ssta::Error
-/// when the map has no surface and no region is given, when fill_min_neighbours is not in
-/// 0..8 or local_ground_radius_m is negative or not finite (before any file is written).
-/// What the grid export changed in the projection (ExportGrid's `changes`).
-struct GridExportChanges {
-  int judged_by_local_ground = 0;  ///< non-traversable pixels made traversable (JudgeStepsByLocalGround)
-  int holes_filled = 0;            ///< unknown pixels filled (FillHoles)
-};
-
+/// null, gets how many pixels each step changed. Throws ssta::Error when the map has no
+/// surface and no region is given, when fill_min_neighbours is not in 0..8 or
+/// local_ground_radius_m is negative or not finite (before any file is written).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{},
                           GridExportChanges* changes = nullptr);
