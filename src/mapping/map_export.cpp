@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <vector>
 
@@ -66,6 +67,20 @@ Eigen::AlignedBox2d SnapOutwards(const Eigen::AlignedBox2d& box, double res) {
     if (snapped.max()[i] - snapped.min()[i] < 0.5 * res) snapped.max()[i] = snapped.min()[i] + res;
   }
   return snapped;
+}
+
+double ExportResolution(const TraversabilityMap& map, const GridExportOptions& options) {
+  return options.resolution_m > 0.0 ? options.resolution_m : map.options().resolution_m;
+}
+
+/// options.region, or the occupied voxels' bounding box when it is empty; `what` names the map
+/// in the error when it has no surface.
+Eigen::AlignedBox2d RegionToProject(const TraversabilityMap& map, const GridExportOptions& options,
+                                    const std::string& what) {
+  if (!options.region.isEmpty()) return options.region;
+  const Eigen::AlignedBox3d bounds = map.SurfaceBounds();
+  if (bounds.isEmpty()) throw Error(what + " has no observed surface to export (give a region)");
+  return Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
 }
 
 }  // namespace
@@ -156,17 +171,10 @@ std::string QueryCsvRow(const CellInfo& cell) {
   return row;
 }
 
-GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
-                          const GridExportOptions& options, GridExportChanges* changes) {
-  const double res = options.resolution_m > 0.0 ? options.resolution_m : map.options().resolution_m;
-  Eigen::AlignedBox2d region = options.region;
-  if (region.isEmpty()) {
-    const Eigen::AlignedBox3d bounds = map.SurfaceBounds();
-    if (bounds.isEmpty()) {
-      throw Error(prefix + ".pgm: the map has no observed surface to export (give a region)");
-    }
-    region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
-  }
+GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportOptions& options,
+                                 GridExportChanges* changes) {
+  const double res = ExportResolution(map, options);
+  const Eigen::AlignedBox2d region = RegionToProject(map, options, "the map");
   GridProjection grid = map.Project(SnapOutwards(region, res), res);
   GridExportChanges counts;
   if (options.local_ground_radius_m != 0.0) {  // checks > 0
@@ -177,6 +185,38 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
     counts.holes_filled = FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
   }
   if (changes != nullptr) *changes = counts;
+  return grid;
+}
+
+CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y, const GridExportOptions& options) {
+  if (!std::isfinite(x) || !std::isfinite(y)) throw Error("TopSurfaceAsExported: x and y must be finite");
+  const double res = ExportResolution(map, options);
+  // The pixel's judgement reads the pixels within the radius, its fill the 8 neighbours'
+  // judgements: radius + 2 pixels around it make the answer the whole export's.
+  const double margin =
+      (std::floor(std::max(options.local_ground_radius_m, 0.0) / res + 1e-9) + 2.0) * res;
+  const Eigen::Vector2d p(x, y);
+  GridExportOptions local = options;
+  local.region = Eigen::AlignedBox2d(p - Eigen::Vector2d::Constant(margin), p + Eigen::Vector2d::Constant(margin));
+  const GridProjection grid = ProjectAsExported(map, local);
+  CellInfo cell = map.TopSurfaceAt(x, y);
+  // At the map's resolution a pixel is one map column: read the pixel of the column's centre,
+  // which no rounding moves across a pixel edge.
+  const Eigen::Vector2d at = res == map.options().resolution_m ? Eigen::Vector2d(cell.center.head<2>()) : p;
+  const int u = static_cast<int>(std::floor((at.x() - grid.origin.x()) / res));
+  const int v = grid.height() - 1 - static_cast<int>(std::floor((at.y() - grid.origin.y()) / res));
+  if (!grid.classes.Contains(v, u)) return cell;  // not reached: the region has the margin around p
+  cell.cls = static_cast<TravClass>(grid.classes(v, u));
+  cell.cost = grid.cost(v, u);
+  if (!cell.observed) cell.probability = std::numeric_limits<double>::quiet_NaN();
+  return cell;
+}
+
+GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
+                          const GridExportOptions& options, GridExportChanges* changes) {
+  GridExportOptions resolved = options;
+  resolved.region = RegionToProject(map, options, prefix + ".pgm: the map");
+  const GridProjection grid = ProjectAsExported(map, resolved, changes);
 
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);

@@ -220,22 +220,32 @@ TEST(MapExport, LevelCellsAtTheHeightOfTheGroundAroundThemAreNotSteps) {
   EXPECT_THROW(JudgeStepsByLocalGround(&g, 1.0, -0.1, 15.0), Error);
 }
 
-TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
-  // A traversable floor at z in [0, 0.1) with a patch that a frame called a step (non-
-  // traversable at slope 2 deg: eq. 5 against a plane that does not pass there) at the floor's
-  // height, and a box 0.3 m high. The export calls the patch traversable, not the box top.
+bool InPatch(int ix, int iy) { return ix >= 5 && ix < 8 && iy >= 5 && iy < 8; }
+bool InBox(int ix, int iy) { return ix >= 20 && ix < 23 && iy >= 20 && iy < 23; }
+
+// A 30 x 30 cell traversable floor at z in [0, 0.1) with a patch (cells 5..7) that a frame
+// called a step (non-traversable at slope 2 deg: eq. 5 against a plane that does not pass
+// there) at the floor's height, and a box (cells 20..22) 0.3 m high; `hole`: cell (12, 12) of
+// the floor is never observed.
+TraversabilityMap FloorWithPatchAndBox(bool hole) {
   std::vector<ClassifiedPoint> points;
   for (int ix = 0; ix < 30; ++ix) {
     for (int iy = 0; iy < 30; ++iy) {
-      const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
-      const bool box = ix >= 20 && ix < 23 && iy >= 20 && iy < 23;
-      const double z = box ? testing::C(3) : testing::C(0);
+      if (hole && ix == 12 && iy == 12) continue;
+      const bool non = InPatch(ix, iy) || InBox(ix, iy);
+      const double z = InBox(ix, iy) ? testing::C(3) : testing::C(0);
       points.push_back(Pt(testing::C(ix), testing::C(iy), z,
-                          patch || box ? TravClass::kNonTraversable : TravClass::kTraversable, 2.0f, 0.3f));
+                          non ? TravClass::kNonTraversable : TravClass::kTraversable, 2.0f, 0.3f));
     }
   }
   TraversabilityMap map;
   map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
+  return map;
+}
+
+TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
+  // The export calls the patch traversable, not the box top.
+  const TraversabilityMap map = FloorWithPatchAndBox(false);
   const TempDir dir;
   GridExportChanges changes;
   const GridProjection judged = ExportGrid(map, dir / "judged", GridExportOptions{}, &changes);
@@ -249,11 +259,11 @@ TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
   for (int v = 0; v < 30; ++v) {
     for (int u = 0; u < 30; ++u) {
       const int ix = u, iy = 29 - v;
-      if (ix >= 5 && ix < 8 && iy >= 5 && iy < 8) {
+      if (InPatch(ix, iy)) {
         patch_judged += judged.classes(v, u) == 1;
         patch_observed += as_observed.classes(v, u) == 3;
       }
-      if (ix >= 20 && ix < 23 && iy >= 20 && iy < 23) box_judged += judged.classes(v, u) == 3;
+      if (InBox(ix, iy)) box_judged += judged.classes(v, u) == 3;
     }
   }
   EXPECT_EQ(patch_judged, 9);
@@ -264,6 +274,59 @@ TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
   GridExportOptions bad;
   bad.local_ground_radius_m = -1.0;
   EXPECT_THROW(ExportGrid(map, dir / "bad", bad), Error);
+}
+
+bool SameCost(double a, double b) { return (std::isnan(a) && std::isnan(b)) || a == b; }
+
+TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
+  // The patch is judged traversable and the hole filled in the export; TopSurfaceAsExported
+  // answers each cell with the export's class and cost, from a projection of the cell and its
+  // surroundings only (here the whole floor is within reach of some cells, not of others).
+  const TraversabilityMap map = FloorWithPatchAndBox(true);
+  const TempDir dir;
+  for (const double resolution : {0.0, 0.2}) {  // the map's (one column per pixel), and coarser
+    GridExportOptions options;
+    options.resolution_m = resolution;
+    GridExportChanges changes;
+    const GridProjection grid = ExportGrid(map, dir / "grid", options, &changes);
+    EXPECT_GT(changes.judged_by_local_ground, 0);
+    int mismatches = 0, judged = 0, filled = 0;
+    for (int v = 0; v < grid.height(); ++v) {
+      for (int u = 0; u < grid.width(); ++u) {
+        const Eigen::Vector2d c = grid.PixelCenter(v, u);
+        const CellInfo exported = TopSurfaceAsExported(map, c.x(), c.y(), options);
+        const CellInfo observed = map.TopSurfaceAt(c.x(), c.y());
+        mismatches += exported.cls != static_cast<TravClass>(grid.classes(v, u)) ||
+                      !SameCost(exported.cost, grid.cost(v, u));
+        judged += observed.cls == TravClass::kNonTraversable && exported.cls == TravClass::kTraversable;
+        filled += !observed.observed && exported.cls != TravClass::kUnknown;
+      }
+    }
+    EXPECT_EQ(mismatches, 0) << "resolution " << resolution;
+    EXPECT_EQ(judged, changes.judged_by_local_ground) << "resolution " << resolution;
+    if (resolution == 0.0) {  // the hole; at 0.2 m its pixel holds floor as well
+      EXPECT_EQ(changes.holes_filled, 1);
+      EXPECT_EQ(filled, 1);
+    }
+  }
+  const CellInfo patch = TopSurfaceAsExported(map, testing::C(6), testing::C(6));
+  EXPECT_TRUE(patch.observed);
+  EXPECT_EQ(patch.cls, TravClass::kTraversable);
+  EXPECT_EQ(patch.cost, 0.0);
+  EXPECT_NEAR(patch.center.z(), testing::C(0), 1e-9);
+  EXPECT_EQ(map.TopSurfaceAt(testing::C(6), testing::C(6)).cls, TravClass::kNonTraversable);
+  const CellInfo hole = TopSurfaceAsExported(map, testing::C(12), testing::C(12));
+  EXPECT_FALSE(hole.observed);
+  EXPECT_EQ(hole.cls, TravClass::kTraversable);
+  EXPECT_TRUE(std::isnan(hole.cost));
+  EXPECT_TRUE(std::isnan(hole.center.z()));
+  EXPECT_EQ(TopSurfaceAsExported(map, testing::C(21), testing::C(21)).cls, TravClass::kNonTraversable);  // box
+  GridExportOptions off;  // without the two steps: the map as observed
+  off.local_ground_radius_m = 0.0;
+  off.fill_min_neighbours = 0;
+  EXPECT_EQ(TopSurfaceAsExported(map, testing::C(6), testing::C(6), off).cls, TravClass::kNonTraversable);
+  EXPECT_EQ(TopSurfaceAsExported(map, testing::C(12), testing::C(12), off).cls, TravClass::kUnknown);
+  EXPECT_THROW(TopSurfaceAsExported(map, std::nan(""), 1.0), Error);
 }
 
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {

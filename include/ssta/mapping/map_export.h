@@ -62,14 +62,33 @@ struct GridExportChanges {
   int holes_filled = 0;            ///< unknown pixels filled (FillHoles)
 };
 
+/// The grid that ExportGrid writes, without writing it: the map's projection of
+/// options.region (the occupied voxels' bounding box when empty), widened outwards to multiples
+/// of the resolution, with steps judged by the local ground and then holes filled as the options
+/// say. Pixels lie on one lattice (multiples of the resolution) for any region, so a pixel
+/// holds the same class and cost in the projection of any region that contains it with
+/// local_ground_radius_m + 2 pixels around it. `changes`, when not null, gets how many pixels
+/// each step changed. Throws ssta::Error as ExportGrid.
+GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportOptions& options = GridExportOptions{},
+                                 GridExportChanges* changes = nullptr);
+
+/// The top surface of the column at (x, y) [m] as the exported grid shows it: TopSurfaceAt,
+/// with the class and cost of (x, y)'s pixel in ProjectAsExported (options.region is ignored:
+/// the pixel and enough pixels around it are projected). A step judged by the local ground is
+/// traversable with cost 0; a filled hole has its filled class, observed false, no height and
+/// cost NaN (the export fills classes, not measurements). For planners that must agree with the
+/// exported grid; TopSurfaceAt answers as observed.
+CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
+                              const GridExportOptions& options = GridExportOptions{});
+
 /// The `grid` export (INTERFACES section 5): PREFIX.png (class colours, undecided grey),
 /// PREFIX_classes.png (8-bit class ids), PREFIX.pgm (non-traversable 0, traversable and semi
 /// 254, unknown and undecided 205) and PREFIX.yaml (map_server: image, resolution, origin
 /// [x, y, 0.0] of the lower-left pixel's lower-left corner, negate 0, occupied_thresh 0.65,
 /// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Steps are judged
 /// against the local ground as options.local_ground_radius_m says, then holes are filled as
-/// options.fill_min_neighbours says; the query API (TraversabilityMap::Project) answers as
-/// observed, without either. Returns the projection that was written; `changes`, when not
+/// options.fill_min_neighbours says (ProjectAsExported); the query API (TraversabilityMap::Project,
+/// TopSurfaceAt) answers as observed, without either, and TopSurfaceAsExported with both. Returns the projection that was written; `changes`, when not
 /// null, gets how many pixels each step changed. Throws ssta::Error when the map has no
 /// surface and no region is given, when fill_min_neighbours is not in 0..8 or
 /// local_ground_radius_m is negative or not finite (before any file is written).
