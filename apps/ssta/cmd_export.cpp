@@ -19,6 +19,22 @@ struct ExportArgs {
 
 }  // namespace
 
+void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
+                        double* local_ground_radius_m) {
+  cmd->add_option("--fill-holes", *fill_min_neighbours,
+                  scope + "an unknown cell with at least N of its 8 neighbours classified takes their most frequent "
+                          "class (ties: the worse); fills the cells far rows of pixels skip, not the edge of the "
+                          "observed area. 0: off")
+      ->check(CLI::Range(0, 8))
+      ->capture_default_str();
+  cmd->add_option("--local-ground", *local_ground_radius_m,
+                  scope + "a level cell (slope below the vehicle's semi_slope_deg) called non-traversable for its "
+                          "step over a frame's ground plane is traversable when it lies within one cell of the "
+                          "height of the traversable ground within this radius [m]. 0: off")
+      ->check(CLI::Range(0.0, 100.0))
+      ->capture_default_str();
+}
+
 void RegisterExport(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* cmd = app.add_subcommand("export", "Export a map: a navigation grid, an octovis tree, point clouds or CSV");
@@ -33,18 +49,7 @@ void RegisterExport(CLI::App& app) {
   cmd->add_option("--region", args->region, "grid: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')
       ->expected(4);
-  cmd->add_option("--fill-holes", args->fill_min_neighbours,
-                  "grid: an unknown cell with at least N of its 8 neighbours classified takes their most frequent "
-                  "class (ties: the worse); fills the cells far rows of pixels skip, not the edge of the observed "
-                  "area. 0: off")
-      ->check(CLI::Range(0, 8))
-      ->capture_default_str();
-  cmd->add_option("--local-ground", args->local_ground_radius_m,
-                  "grid: a level cell (slope below the vehicle's semi_slope_deg) called non-traversable for its step "
-                  "over a frame's ground plane is traversable when it lies within one cell of the height of the "
-                  "traversable ground within this radius [m]. 0: off")
-      ->check(CLI::Range(0.0, 100.0))
-      ->capture_default_str();
+  AddGridExportSteps(cmd, "grid: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
   cmd->callback([args] {
     const TraversabilityMap map = TraversabilityMap::Load(args->map);
     const std::string& f = args->format;

@@ -17,4 +17,9 @@ void RegisterCalibrateStereo(CLI::App& app);
 void RegisterBench(CLI::App& app);
 void RegisterCalibrateMount(CLI::App& app);
 
+/// The grid export's two steps as options (`--fill-holes N`, `--local-ground R`), shared by
+/// `export` and `query --as-exported`; `scope` starts each help text ("grid: ").
+void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
+                        double* local_ground_radius_m);
+
 }  // namespace ssta::cli

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <algorithm>
+#include <cstdio>
 #include <sstream>
 
 #include "cli_runner.h"
@@ -74,6 +75,41 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
     r = RunSsta("export --map " + map + " --format " + format + " --out " + (dir / "x"));
     EXPECT_EQ(r.exit_code, 0) << format << ": " << r.output;
   }
+
+  // query --as-exported answers every cell of the grid with the grid's class.
+  double res = 0, x0 = 0, y0 = 0;
+  ASSERT_EQ(std::sscanf(yaml.substr(yaml.find("resolution:")).c_str(), "resolution: %lf", &res), 1);
+  ASSERT_EQ(std::sscanf(yaml.substr(yaml.find("origin:")).c_str(), "origin: [%lf, %lf", &x0, &y0), 2);
+  const ImageU8 classes = ReadLabelImage(dir / "g_classes.png");
+  {
+    std::ofstream cells(dir / "cells.csv");
+    for (int v = 0; v < classes.height(); ++v) {
+      for (int u = 0; u < classes.width(); ++u) {
+        cells << x0 + (u + 0.5) * res << ',' << y0 + (classes.height() - 1 - v + 0.5) * res << '\n';
+      }
+    }
+  }
+  r = RunSsta("query --map " + map + " --as-exported --points " + (dir / "cells.csv"), false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  lines = Lines(r.output);
+  ASSERT_EQ(lines.size(), classes.size() + 1);
+  int mismatches = 0, classified = 0;
+  for (std::size_t i = 0; i < classes.size(); ++i) {
+    std::stringstream row(lines[i + 1]);
+    std::string field;
+    for (int k = 0; k < 4; ++k) std::getline(row, field, ',');  // x, y, z, class
+    mismatches += std::stoi(field) != classes[i];
+    classified += classes[i] >= 1 && classes[i] <= 3;
+  }
+  EXPECT_EQ(mismatches, 0);
+  EXPECT_GT(classified, 100);
+  r = RunSsta("query --map " + map + " --as-exported --at 1,0,-0.9");  // the grid is 2D
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
+  EXPECT_NE(r.output.find("--as-exported answers X,Y points"), std::string::npos) << r.output;
+  r = RunSsta("query --map " + map + " --at 1,0 --local-ground 2");  // only with --as-exported
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--local-ground requires --as-exported"), std::string::npos) << r.output;
 }
 
 TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
