@@ -88,8 +88,9 @@ CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
 /// free_thresh 0.196, mode trinary). Row 0 of every image is the largest y. Steps are judged
 /// against the local ground as options.local_ground_radius_m says, then holes are filled as
 /// options.fill_min_neighbours says (ProjectAsExported); the query API (TraversabilityMap::Project,
-/// TopSurfaceAt) answers as observed, without either, and TopSurfaceAsExported with both. Returns the projection that was written; `changes`, when not
-/// null, gets how many pixels each step changed. Throws ssta::Error when the map has no
+/// TopSurfaceAt) answers as observed, without either, and TopSurfaceAsExported with both.
+/// Returns the projection that was written; `changes`, when not null, gets how many pixels each
+/// step changed. Throws ssta::Error when the map has no
 /// surface and no region is given, when fill_min_neighbours is not in 0..8 or
 /// local_ground_radius_m is negative or not finite (before any file is written).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
