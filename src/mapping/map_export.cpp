@@ -188,28 +188,56 @@ GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportO
   return grid;
 }
 
-CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y, const GridExportOptions& options) {
-  if (!std::isfinite(x) || !std::isfinite(y)) throw Error("TopSurfaceAsExported: x and y must be finite");
-  const double res = ExportResolution(map, options);
-  // The pixel's judgement reads the pixels within the radius, its fill the 8 neighbours'
-  // judgements: radius + 2 pixels around it make the answer the whole export's.
-  const double margin =
-      (std::floor(std::max(options.local_ground_radius_m, 0.0) / res + 1e-9) + 2.0) * res;
-  const Eigen::Vector2d p(x, y);
+namespace {
+
+// A pixel's judgement reads the pixels within the local-ground radius, its fill the judgements
+// of its 8 neighbours: this many pixels around it make its class the whole export's.
+int ReachPx(const GridExportOptions& options, double res) {
+  return static_cast<int>(std::floor(std::max(options.local_ground_radius_m, 0.0) / res + 1e-9)) + 2;
+}
+
+}  // namespace
+
+ExportedSurface::ExportedSurface(const TraversabilityMap& map, const Eigen::AlignedBox2d& region,
+                                 const GridExportOptions& options)
+    : map_(&map), options_(options), resolution_m_(ExportResolution(map, options)) {
+  if (region.isEmpty() || !region.min().allFinite() || !region.max().allFinite()) {
+    throw Error("ExportedSurface: the region must be finite and not empty");
+  }
+  border_px_ = ReachPx(options, resolution_m_);
+  // Two pixels more than needed, so that rounding never leaves a pixel of `region` in the border.
+  const Eigen::Vector2d margin = Eigen::Vector2d::Constant((border_px_ + 2) * resolution_m_);
   GridExportOptions local = options;
-  local.region = Eigen::AlignedBox2d(p - Eigen::Vector2d::Constant(margin), p + Eigen::Vector2d::Constant(margin));
-  const GridProjection grid = ProjectAsExported(map, local);
-  CellInfo cell = map.TopSurfaceAt(x, y);
+  local.region = Eigen::AlignedBox2d(region.min() - margin, region.max() + margin);
+  grid_ = ProjectAsExported(map, local);
+}
+
+CellInfo ExportedSurface::operator()(double x, double y) const { return Answer(x, y, true); }
+
+CellInfo ExportedSurface::Answer(double x, double y, bool reproject_outside) const {
+  if (!std::isfinite(x) || !std::isfinite(y)) throw Error("exported surface query: x and y must be finite");
+  CellInfo cell = map_->TopSurfaceAt(x, y);
   // At the map's resolution a pixel is one map column: read the pixel of the column's centre,
   // which no rounding moves across a pixel edge.
-  const Eigen::Vector2d at = res == map.options().resolution_m ? Eigen::Vector2d(cell.center.head<2>()) : p;
-  const int u = static_cast<int>(std::floor((at.x() - grid.origin.x()) / res));
-  const int v = grid.height() - 1 - static_cast<int>(std::floor((at.y() - grid.origin.y()) / res));
-  if (!grid.classes.Contains(v, u)) return cell;  // not reached: the region has the margin around p
-  cell.cls = static_cast<TravClass>(grid.classes(v, u));
-  cell.cost = grid.cost(v, u);
+  const Eigen::Vector2d at =
+      resolution_m_ == map_->options().resolution_m ? Eigen::Vector2d(cell.center.head<2>()) : Eigen::Vector2d(x, y);
+  const int u = static_cast<int>(std::floor((at.x() - grid_.origin.x()) / resolution_m_));
+  const int v = grid_.height() - 1 - static_cast<int>(std::floor((at.y() - grid_.origin.y()) / resolution_m_));
+  if (reproject_outside &&
+      (u < border_px_ || v < border_px_ || u >= grid_.width() - border_px_ || v >= grid_.height() - border_px_)) {
+    const Eigen::Vector2d p(x, y);
+    return ExportedSurface(*map_, Eigen::AlignedBox2d(p, p), options_).Answer(x, y, false);
+  }
+  if (!grid_.classes.Contains(v, u)) return cell;  // not reached: the column lies in its own projection
+  cell.cls = static_cast<TravClass>(grid_.classes(v, u));
+  cell.cost = grid_.cost(v, u);
   if (!cell.observed) cell.probability = std::numeric_limits<double>::quiet_NaN();
   return cell;
+}
+
+CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y, const GridExportOptions& options) {
+  if (!std::isfinite(x) || !std::isfinite(y)) throw Error("TopSurfaceAsExported: x and y must be finite");
+  return ExportedSurface(map, Eigen::AlignedBox2d(Eigen::Vector2d(x, y), Eigen::Vector2d(x, y)), options)(x, y);
 }
 
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,

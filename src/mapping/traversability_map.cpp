@@ -804,7 +804,7 @@ CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
   return internal::DescribeCell(*this, tree, node, key);
 }
 
-FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q) const {
+FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const SurfaceSource& surface) const {
   if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.yaw) && q.length_m >= 0.0 &&
         q.width_m >= 0.0 && std::isfinite(q.length_m) && std::isfinite(q.width_m))) {
     throw Error("footprint query: x, y, yaw must be finite and length_m, width_m >= 0");
@@ -835,7 +835,7 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q) const
   double cost_sum = 0.0;
   int cost_count = 0;
   for (const Eigen::Vector2d& col : columns) {
-    const CellInfo cell = TopSurfaceAt(col.x(), col.y());
+    const CellInfo cell = surface ? surface(col.x(), col.y()) : TopSurfaceAt(col.x(), col.y());
     ++result.cells;
     if (!cell.observed) continue;
     ++result.observed_cells;
@@ -851,8 +851,8 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q) const
   return result;
 }
 
-PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& polyline_world,
-                                        double width_m) const {
+PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m,
+                                        const SurfaceSource& surface) const {
   if (polyline_world.empty()) throw Error("path query: the polyline has no vertices");
   if (!(width_m >= 0.0 && std::isfinite(width_m))) throw Error("path query: width_m must be >= 0");
   for (const auto& v : polyline_world) {
@@ -899,7 +899,7 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
     for (int j = 0; j < lateral; ++j) {
       const double offset = lateral == 1 ? 0.0 : -0.5 * width_m + j * width_m / (lateral - 1);
       const Eigen::Vector2d q = st.p + offset * normal;
-      const CellInfo cell = TopSurfaceAt(q.x(), q.y());
+      const CellInfo cell = surface ? surface(q.x(), q.y()) : TopSurfaceAt(q.x(), q.y());
       if (j == lateral / 2 && !have_cell) sample.cell = cell;
       if (!cell.observed) continue;
       ++observed;

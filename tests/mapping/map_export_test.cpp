@@ -329,6 +329,37 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
   EXPECT_THROW(TopSurfaceAsExported(map, std::nan(""), 1.0), Error);
 }
 
+TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
+  const TraversabilityMap map = FloorWithPatchAndBox(true);
+  // A 0.3 x 0.3 m footprint on the patch: a step as observed, floor as exported.
+  const FootprintQuery on_patch{testing::C(6), testing::C(6), 0.0, 0.3, 0.3};
+  const Eigen::AlignedBox2d patch_box(Eigen::Vector2d(0.45, 0.45), Eigen::Vector2d(0.75, 0.75));
+  const FootprintResult observed = map.QueryFootprint(on_patch);
+  const FootprintResult exported = map.QueryFootprint(on_patch, ExportedSurface(map, patch_box));
+  EXPECT_EQ(observed.worst, TravClass::kNonTraversable);
+  EXPECT_EQ(observed.cells, 9);
+  EXPECT_EQ(exported.worst, TravClass::kTraversable);
+  EXPECT_EQ(exported.cells, 9);
+  EXPECT_EQ(exported.mean_cost, 0.0);
+  // A path along the patch's middle row is blocked as observed, clear as exported; one through
+  // the box is blocked either way, at the box's edge.
+  const std::vector<Eigen::Vector2d> across_patch{{testing::C(0), testing::C(6)}, {testing::C(15), testing::C(6)}};
+  const Eigen::AlignedBox2d path_box(Eigen::Vector2d(0.0, 0.6), Eigen::Vector2d(1.6, 0.7));
+  EXPECT_TRUE(map.QueryPath(across_patch, 0.0).blocked);
+  EXPECT_FALSE(map.QueryPath(across_patch, 0.0, ExportedSurface(map, path_box)).blocked);
+  const std::vector<Eigen::Vector2d> across_box{{testing::C(15), testing::C(21)}, {testing::C(29), testing::C(21)}};
+  const PathResult to_box = map.QueryPath(across_box, 0.0, ExportedSurface(map, path_box));  // box outside
+  EXPECT_TRUE(to_box.blocked);
+  EXPECT_NEAR(to_box.first_non_traversable_distance_m, 2.0 - testing::C(15), 0.051);  // x = 2.0
+  // Columns outside the projected region answer as the whole export, projected on their own.
+  const ExportedSurface corner(map, Eigen::AlignedBox2d(Eigen::Vector2d(2.5, 2.5), Eigen::Vector2d(2.9, 2.9)));
+  EXPECT_EQ(corner(testing::C(6), testing::C(6)).cls, TravClass::kTraversable);
+  EXPECT_EQ(corner(testing::C(12), testing::C(12)).cls, TravClass::kTraversable);  // the filled hole
+  EXPECT_EQ(corner(testing::C(21), testing::C(21)).cls, TravClass::kNonTraversable);
+  EXPECT_THROW(corner(std::nan(""), 0.0), Error);
+  EXPECT_THROW(ExportedSurface(map, Eigen::AlignedBox2d()), Error);  // empty region
+}
+
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {
   const TempDir dir;
   const TraversabilityMap empty;

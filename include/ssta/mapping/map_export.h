@@ -72,12 +72,33 @@ struct GridExportChanges {
 GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportOptions& options = GridExportOptions{},
                                  GridExportChanges* changes = nullptr);
 
-/// The top surface of the column at (x, y) [m] as the exported grid shows it: TopSurfaceAt,
-/// with the class and cost of (x, y)'s pixel in ProjectAsExported (options.region is ignored:
-/// the pixel and enough pixels around it are projected). A step judged by the local ground is
-/// traversable with cost 0; a filled hole has its filled class, observed false, no height and
-/// cost NaN (the export fills classes, not measurements). For planners that must agree with the
-/// exported grid; TopSurfaceAt answers as observed.
+/// Top surfaces as the exported grid shows them: TopSurfaceAt, with the class and cost of the
+/// column's pixel in ProjectAsExported. A step judged by the local ground is traversable with
+/// cost 0; a filled hole has its filled class, observed false, no height and cost NaN (the
+/// export fills classes, not measurements). For planners that must agree with the exported
+/// grid; TopSurfaceAt answers as observed. `region` (x, y in W [m]) is projected once, widened
+/// by local_ground_radius_m + 2 pixels, which makes each of its pixels the whole export's
+/// (pixels lie on one lattice of the resolution); a column outside it is projected on its own
+/// when asked. options.region is ignored. Pass it as the surface of QueryFootprint and
+/// QueryPath over the footprint's or path's bounding box. The map must outlive it.
+class ExportedSurface {
+ public:
+  ExportedSurface(const TraversabilityMap& map, const Eigen::AlignedBox2d& region,
+                  const GridExportOptions& options = GridExportOptions{});
+  /// Throws ssta::Error unless x and y are finite.
+  CellInfo operator()(double x, double y) const;
+
+ private:
+  CellInfo Answer(double x, double y, bool reproject_outside) const;
+
+  const TraversabilityMap* map_;
+  GridExportOptions options_;
+  double resolution_m_ = 0.0;
+  int border_px_ = 0;  // pixels at the grid's edges whose neighbourhood was cut
+  GridProjection grid_;
+};
+
+/// One column as exported: ExportedSurface over the point (x, y) alone.
 CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
                               const GridExportOptions& options = GridExportOptions{});
 

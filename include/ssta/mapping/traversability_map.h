@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -81,14 +82,22 @@ class TraversabilityMap {
   /// no occupied voxel: observed false, class kUnknown, cost NaN, center (column x, y, NaN).
   CellInfo TopSurfaceAt(double x, double y) const;
 
-  /// The top surfaces under a vehicle footprint (see FootprintResult).
-  FootprintResult QueryFootprint(const FootprintQuery& query) const;
+  /// Where the footprint and path queries read each column's top surface: TopSurfaceAt by
+  /// default, or another view of it such as ExportedSurface (ssta/mapping/map_export.h: the
+  /// exported grid's classes and costs).
+  using SurfaceSource = std::function<CellInfo(double x, double y)>;
+
+  /// The top surfaces under a vehicle footprint (see FootprintResult), read from `surface`
+  /// (empty: TopSurfaceAt).
+  FootprintResult QueryFootprint(const FootprintQuery& query, const SurfaceSource& surface = {}) const;
 
   /// Checks a path: samples every resolution/2 along `polyline_world` (x, y in W [m]); at each
   /// sample the top surfaces across `width_m` (perpendicular to the segment, one every
-  /// resolution, at least the centre) give the sample's worst class and max cost.
+  /// resolution, at least the centre), read from `surface` (empty: TopSurfaceAt), give the
+  /// sample's worst class and max cost.
   /// Precondition: at least one vertex, width_m >= 0 (else ssta::Error).
-  PathResult QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m) const;
+  PathResult QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m,
+                       const SurfaceSource& surface = {}) const;
 
   /// The top surface over `region` (x, y in W [m]) on a grid of `resolution_m` pixels, one
   /// TopSurfaceAt per pixel centre; the grid starts at region.min() and covers the region
