@@ -1,5 +1,7 @@
 // ssta query: answers from a map for planners, as CSV on stdout (INTERFACES section 5).
 
+#include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -12,11 +14,68 @@ namespace ssta::cli {
 namespace {
 
 struct QueryArgs {
-  std::string map, points;
-  std::vector<double> at;
+  std::string map, points, path;
+  std::vector<double> at, footprint;
+  double path_width_m = 0.0;
   bool as_exported = false;
   GridExportOptions exported;  // the export's steps, for --as-exported
 };
+
+std::string Number(double v, const char* format) {
+  if (!std::isfinite(v)) return "nan";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, v);
+  return buffer;
+}
+
+// --footprint X,Y,YAW_DEG,LENGTH,WIDTH: one row under its own header.
+void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
+  const auto& f = args.footprint;
+  for (double v : f) {
+    if (!std::isfinite(v)) throw Error("--footprint: NaN or infinite value");
+  }
+  if (f[3] < 0 || f[4] < 0) throw Error("--footprint: LENGTH and WIDTH must be >= 0");
+  const FootprintQuery q{f[0], f[1], f[2] * M_PI / 180.0, f[3], f[4]};
+  const double r = 0.5 * std::hypot(q.length_m, q.width_m);  // the rectangle lies within r of (x, y)
+  const Eigen::AlignedBox2d box(Eigen::Vector2d(q.x - r, q.y - r), Eigen::Vector2d(q.x + r, q.y + r));
+  const FootprintResult result =
+      args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
+  std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n"
+            << static_cast<int>(result.worst) << ',' << Number(result.mean_cost, "%.4f") << ','
+            << Number(result.max_cost, "%.4f") << ',' << Number(result.fraction_observed, "%.4f") << ','
+            << result.cells << ',' << result.observed_cells << "\n";
+}
+
+// --path FILE.csv [--width W]: one row per sample; the verdict on stderr.
+void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<double>>& vertices, const QueryArgs& args) {
+  if (!(args.path_width_m >= 0.0 && std::isfinite(args.path_width_m))) throw Error("--width: must be >= 0");
+  std::vector<Eigen::Vector2d> polyline;
+  Eigen::AlignedBox2d box;
+  for (const auto& v : vertices) {
+    if (v.size() != 2) throw Error(args.path + ": a path vertex is x,y, got " + std::to_string(v.size()) + " values");
+    polyline.emplace_back(v[0], v[1]);
+    box.extend(polyline.back());
+  }
+  if (polyline.empty()) throw Error(args.path + ": no vertices");
+  const Eigen::Vector2d half_width = Eigen::Vector2d::Constant(0.5 * args.path_width_m);
+  const PathResult result =
+      args.as_exported
+          ? map.QueryPath(polyline, args.path_width_m,
+                          ExportedSurface(map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width),
+                                          args.exported))
+          : map.QueryPath(polyline, args.path_width_m);
+  std::cout << "distance_m,x,y,class,cost,fraction_observed\n";
+  for (const PathSample& sample : result.samples) {
+    std::cout << Number(sample.distance_m, "%.4f") << ',' << Number(sample.point.x(), "%.4f") << ','
+              << Number(sample.point.y(), "%.4f") << ',' << static_cast<int>(sample.cls) << ','
+              << Number(sample.cost, "%.4f") << ',' << Number(sample.fraction_observed, "%.4f") << "\n";
+  }
+  std::cerr << "path " << Number(result.length_m, "%.2f") << " m, " << result.samples.size()
+            << " samples, worst class " << static_cast<int>(result.worst) << ", "
+            << (result.blocked ? "blocked at " + Number(result.first_non_traversable_distance_m, "%.2f") + " m"
+                               : std::string("not blocked"))
+            << ", " << Number(100.0 * result.fraction_observed, "%.0f") << " % observed\n";
+}
 
 // x,y[,z] per line; a header line and blank lines are skipped.
 std::vector<std::vector<double>> ReadPoints(const std::string& path) {
@@ -78,21 +137,45 @@ void RegisterQuery(CLI::App& app) {
       "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
       "an unobserved cell is class 0 with cost nan: the planner decides. --as-exported gives X,Y the class\n"
       "and cost of `export --format grid` (steps judged by the local ground: class 1, cost 0; a filled\n"
-      "hole: its class, z and cost nan); without it, answers are the map as observed.");
+      "hole: its class, z and cost nan); without it, answers are the map as observed.\n"
+      "--footprint and --path print their own headers (see their help) and take --as-exported too.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")->delimiter(',')->expected(2, 3);
   auto* points = cmd->add_option("--points", args->points, "CSV file of points, one x,y or x,y,z per line");
+  auto* footprint = cmd->add_option("--footprint", args->footprint,
+                                    "the ground under a vehicle: X,Y [m], YAW_DEG [deg from +x towards +y], LENGTH "
+                                    "(along the heading), WIDTH [m]; prints worst class, mean and max cost, "
+                                    "observed share and cells")
+                        ->delimiter(',')
+                        ->expected(5);
+  auto* path = cmd->add_option("--path", args->path,
+                               "CSV of path vertices x,y: one row per sample every half resolution (distance, "
+                               "point, worst class and max cost across --width, observed share); the verdict "
+                               "(blocked where) on stderr");
+  cmd->add_option("--width", args->path_width_m, "with --path: corridor width [m], sampled every resolution")
+      ->capture_default_str()
+      ->needs(path);
   at->excludes(points);
+  for (CLI::Option* a : {at, points}) {
+    footprint->excludes(a);
+    path->excludes(a);
+  }
+  footprint->excludes(path);
   CLI::Option* as_exported = cmd->add_flag(
       "--as-exported", args->as_exported,
-      "X,Y: answer as the exported grid shows the cell (its local-ground and hole-filling steps)");
+      "X,Y, footprints and paths: read the cells as the exported grid shows them (its local-ground and "
+      "hole-filling steps)");
   AddGridExportSteps(cmd, "with --as-exported: ", &args->exported.fill_min_neighbours,
                      &args->exported.local_ground_radius_m);
   cmd->get_option("--fill-holes")->needs(as_exported);
   cmd->get_option("--local-ground")->needs(as_exported);
   cmd->callback([args] {
-    if (args->at.empty() && args->points.empty()) throw Error("query needs --at X,Y[,Z] or --points FILE.csv");
+    if (args->at.empty() && args->points.empty() && args->footprint.empty() && args->path.empty()) {
+      throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
+    }
     const TraversabilityMap map = TraversabilityMap::Load(args->map);
+    if (!args->footprint.empty()) return AnswerFootprint(map, *args);
+    if (!args->path.empty()) return AnswerPath(map, ReadPoints(args->path), *args);
     std::vector<std::vector<double>> points;
     if (!args->at.empty()) {
       for (double v : args->at) {

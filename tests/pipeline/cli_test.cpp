@@ -12,6 +12,7 @@
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/traversability_map.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
 
@@ -110,6 +111,60 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
   r = RunSsta("query --map " + map + " --at 1,0 --local-ground 2");  // only with --as-exported
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--local-ground requires --as-exported"), std::string::npos) << r.output;
+}
+
+TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
+  // A 3 x 3 m traversable floor with a level 0.3 x 0.3 m patch at x, y in [0.5, 0.8) that the
+  // frames called non-traversable (a step against their plane): the export judges it floor.
+  testing::TempDir dir;
+  {
+    std::vector<ClassifiedPoint> points;
+    for (int ix = 0; ix < 30; ++ix) {
+      for (int iy = 0; iy < 30; ++iy) {
+        ClassifiedPoint p;
+        p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, 0.05f);
+        const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
+        p.cls = patch ? TravClass::kNonTraversable : TravClass::kTraversable;
+        p.slope_deg = 2.0f;
+        p.step_m = patch ? 0.3f : 0.0f;
+        points.push_back(p);
+      }
+    }
+    TraversabilityMap map;
+    map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
+    map.Save(dir / "m.ot");
+  }
+  const std::string query = "query --map " + (dir / "m.ot");
+  auto r = RunSsta(query + " --footprint 0.65,0.65,0,0.3,0.3", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n3,1.0000,1.0000,1.0000,9,9\n");
+  r = RunSsta(query + " --footprint 0.65,0.65,90,0.3,0.3 --as-exported", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9");
+
+  std::ofstream(dir / "path.csv") << "x,y\n0.05,0.65\n1.55,0.65\n";
+  r = RunSsta(query + " --path " + (dir / "path.csv"));  // with the verdict from stderr
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto lines = Lines(r.output);
+  EXPECT_EQ(lines.size(), 1u + 31u + 1u) << r.output;  // header, a sample every 0.05 m, verdict
+  EXPECT_EQ(lines[0], "distance_m,x,y,class,cost,fraction_observed");
+  EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0000,1.0000");
+  EXPECT_NE(r.output.find("blocked at 0.50 m"), std::string::npos) << r.output;  // x = 0.55 (0.5 rounds below)
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 0.4 --as-exported");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("path 1.50 m, 31 samples, worst class 1, not blocked, 100 % observed"), std::string::npos)
+      << r.output;
+
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--width: must be >= 0"), std::string::npos) << r.output;
+  r = RunSsta(query + " --footprint 0.65,0.65,0,-1,0.3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--footprint: LENGTH and WIDTH must be >= 0"), std::string::npos) << r.output;
+  std::ofstream(dir / "xyz.csv") << "1,2,3\n";
+  r = RunSsta(query + " --path " + (dir / "xyz.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("xyz.csv: a path vertex is x,y"), std::string::npos) << r.output;
 }
 
 TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
