@@ -411,6 +411,13 @@ int Severity(TravClass c) {
 
 double Clamp01(double v) { return std::min(1.0, std::max(0.0, v)); }
 
+/// A cell the footprint and path queries count: an observed surface, or (from a surface source
+/// such as ExportedSurface) an unobserved cell that was given a class, as a filled hole.
+bool Known(const CellInfo& cell) {
+  return cell.observed || cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable ||
+         cell.cls == TravClass::kNonTraversable;
+}
+
 /// How far `value` lies into the band (semi, max]: 0 at or below semi, 1 at or above max.
 double BandFraction(double value, double semi, double max) {
   if (!std::isfinite(value)) return 0.0;
@@ -837,7 +844,7 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
   for (const Eigen::Vector2d& col : columns) {
     const CellInfo cell = surface ? surface(col.x(), col.y()) : TopSurfaceAt(col.x(), col.y());
     ++result.cells;
-    if (!cell.observed) continue;
+    if (!Known(cell)) continue;
     ++result.observed_cells;
     if (Severity(cell.cls) > Severity(result.worst)) result.worst = cell.cls;
     if (std::isfinite(cell.cost)) {
@@ -901,7 +908,7 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
       const Eigen::Vector2d q = st.p + offset * normal;
       const CellInfo cell = surface ? surface(q.x(), q.y()) : TopSurfaceAt(q.x(), q.y());
       if (j == lateral / 2 && !have_cell) sample.cell = cell;
-      if (!cell.observed) continue;
+      if (!Known(cell)) continue;
       ++observed;
       if (Severity(cell.cls) > Severity(sample.cls)) {
         sample.cls = cell.cls;

@@ -341,6 +341,13 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
   EXPECT_EQ(exported.worst, TravClass::kTraversable);
   EXPECT_EQ(exported.cells, 9);
   EXPECT_EQ(exported.mean_cost, 0.0);
+  // The hole is unobserved as observed; as exported it holds its filled class and counts.
+  const FootprintQuery on_hole{testing::C(12), testing::C(12), 0.0, 0.05, 0.05};
+  const Eigen::AlignedBox2d hole_box(Eigen::Vector2d(1.2, 1.2), Eigen::Vector2d(1.3, 1.3));
+  EXPECT_EQ(map.QueryFootprint(on_hole).observed_cells, 0);
+  EXPECT_EQ(map.QueryFootprint(on_hole).worst, TravClass::kUnknown);
+  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box)).observed_cells, 1);
+  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box)).worst, TravClass::kTraversable);
   // A path along the patch's middle row is blocked as observed, clear as exported; one through
   // the box is blocked either way, at the box's edge.
   const std::vector<Eigen::Vector2d> across_patch{{testing::C(0), testing::C(6)}, {testing::C(15), testing::C(6)}};

@@ -84,7 +84,9 @@ struct FootprintResult {
   double max_cost = std::numeric_limits<double>::quiet_NaN();  ///< NaN when no cell has a cost
   double fraction_observed = 0.0;  ///< observed columns / columns, in [0, 1]
   int cells = 0;                   ///< columns under the footprint
-  int observed_cells = 0;          ///< of those, columns with an observed surface
+  /// Of those, columns with an observed surface (or, read from a surface source such as
+  /// ExportedSurface, with a class: a filled hole counts).
+  int observed_cells = 0;
 };
 
 /// One sample along a path: the worst top-surface cell across the path's width there.
@@ -93,7 +95,7 @@ struct PathSample {
   double distance_m = 0.0;                          ///< arc length from the first vertex [m]
   TravClass cls = TravClass::kUnknown;  ///< worst 1..3 verdict across the width; else kUnknown
   double cost = std::numeric_limits<double>::quiet_NaN();  ///< max cost across the width
-  double fraction_observed = 0.0;  ///< observed lateral cells / lateral cells
+  double fraction_observed = 0.0;  ///< observed lateral cells (as FootprintResult) / lateral cells
   CellInfo cell;                   ///< the cell that set `cls` (the centre cell if none did)
 };
 
