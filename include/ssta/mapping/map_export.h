@@ -111,9 +111,9 @@ CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
 /// options.fill_min_neighbours says (ProjectAsExported); the query API (TraversabilityMap::Project,
 /// TopSurfaceAt) answers as observed, without either, and TopSurfaceAsExported with both.
 /// Returns the projection that was written; `changes`, when not null, gets how many pixels each
-/// step changed. Throws ssta::Error when the map has no
-/// surface and no region is given, when fill_min_neighbours is not in 0..8 or
-/// local_ground_radius_m is negative or not finite (before any file is written).
+/// step changed. Throws ssta::Error when the map has no surface and no region is given, when
+/// fill_min_neighbours is not in 0..8 or local_ground_radius_m is negative or not finite (before
+/// any file is written).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{},
                           GridExportChanges* changes = nullptr);
