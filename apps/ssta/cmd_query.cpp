@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 
 #include "commands.h"
@@ -115,10 +116,11 @@ std::vector<std::vector<double>> ReadPoints(const std::string& path) {
   return out;
 }
 
-std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, const QueryArgs& args) {
-  const CellInfo cell = p.size() == 3     ? map.CellAt({p[0], p[1], p[2]})
-                        : args.as_exported ? TopSurfaceAsExported(map, p[0], p[1], args.exported)
-                                           : map.TopSurfaceAt(p[0], p[1]);
+// `exported`: the surface as exported (X,Y points only), or null for the map as observed.
+std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, const ExportedSurface* exported) {
+  const CellInfo cell = p.size() == 3       ? map.CellAt({p[0], p[1], p[2]})
+                        : exported != nullptr ? (*exported)(p[0], p[1])
+                                              : map.TopSurfaceAt(p[0], p[1]);
   if (cell.observed) return QueryCsvRow(cell);
   // Unobserved: class 0 at the asked point (INTERFACES section 5); with --as-exported, the
   // class of a filled hole.
@@ -191,8 +193,20 @@ void RegisterQuery(CLI::App& app) {
                     "--as-exported answers X,Y points (the exported grid is 2D), got X,Y,Z");
       }
     }
+    // As exported: one projection of the points' bounding box when it is not too large (each
+    // answer is the same from any projection that holds it; ExportedSurface projects a point
+    // outside on its own), else one per point.
+    std::unique_ptr<ExportedSurface> exported;
+    if (args->as_exported) {
+      Eigen::AlignedBox2d box;
+      for (const auto& p : points) box.extend(Eigen::Vector2d(p[0], p[1]));
+      const double res = map.options().resolution_m;
+      const bool one_projection = box.sizes().x() / res * (box.sizes().y() / res) <= 4e6;
+      if (!one_projection) box = Eigen::AlignedBox2d(box.min(), box.min());
+      exported = std::make_unique<ExportedSurface>(map, box, args->exported);
+    }
     std::cout << kQueryCsvHeader << "\n";
-    for (const auto& p : points) std::cout << Answer(map, p, *args) << "\n";
+    for (const auto& p : points) std::cout << Answer(map, p, exported.get()) << "\n";
   });
 }
 
