@@ -83,6 +83,12 @@ Eigen::AlignedBox2d RegionToProject(const TraversabilityMap& map, const GridExpo
   return Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
 }
 
+// A pixel's judgement reads the pixels within the local-ground radius, its fill the judgements
+// of its 8 neighbours: this many pixels around it make its class the whole export's.
+int ReachPx(const GridExportOptions& options, double res) {
+  return static_cast<int>(std::floor(std::max(options.local_ground_radius_m, 0.0) / res + 1e-9)) + 2;
+}
+
 }  // namespace
 
 int FillHoles(ImageU8* classes, int min_neighbours) {
@@ -187,16 +193,6 @@ GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportO
   if (changes != nullptr) *changes = counts;
   return grid;
 }
-
-namespace {
-
-// A pixel's judgement reads the pixels within the local-ground radius, its fill the judgements
-// of its 8 neighbours: this many pixels around it make its class the whole export's.
-int ReachPx(const GridExportOptions& options, double res) {
-  return static_cast<int>(std::floor(std::max(options.local_ground_radius_m, 0.0) / res + 1e-9)) + 2;
-}
-
-}  // namespace
 
 ExportedSurface::ExportedSurface(const TraversabilityMap& map, const Eigen::AlignedBox2d& region,
                                  const GridExportOptions& options)

@@ -414,8 +414,8 @@ double Clamp01(double v) { return std::min(1.0, std::max(0.0, v)); }
 /// A cell the footprint and path queries count: an observed surface, or (from a surface source
 /// such as ExportedSurface) an unobserved cell that was given a class, as a filled hole.
 bool Known(const CellInfo& cell) {
-  return cell.observed || cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable ||
-         cell.cls == TravClass::kNonTraversable;
+  const int c = static_cast<int>(cell.cls);
+  return cell.observed || (c >= 1 && c <= 3);
 }
 
 /// How far `value` lies into the band (semi, max]: 0 at or below semi, 1 at or above max.

@@ -24,6 +24,12 @@ synth::SynthOptions Yard(int frames) {
   return o;
 }
 
+synth::SynthOptions Hills(int frames) {
+  synth::SynthOptions o = Yard(frames);
+  o.scene = "hills";
+  return o;
+}
+
 // Classifies every `every`-th frame and scores those frames.
 ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& out_dir,
                                  const Config& config = Config{}, int every = 1) {
@@ -67,9 +73,7 @@ TEST(EndToEnd, HillsGroundBeyondARiseIsNotAStep) {
   // (docs/accuracy.md): traversable pixels called non-traversable 56.7 k -> 33.3 k, accuracy
   // 0.752 -> 0.763.
   testing::TempDir dir;
-  synth::SynthOptions hills = Yard(30);
-  hills.scene = "hills";
-  synth::WriteSyntheticSequence(hills, dir / "seq");
+  synth::WriteSyntheticSequence(Hills(30), dir / "seq");
   Config eq5;
   eq5.analysis.step_reference = StepReference::kDominantPlane;
   const ConfusionMatrix before = ClassifyAndScore(dir / "seq", dir / "eq5", eq5, 2);
@@ -87,9 +91,7 @@ TEST(EndToEnd, HillsMapJudgesStepsByTheGroundAroundEachCell) {
   // traversable (local_ground_radius_m). Measured on these 20 frames (docs/accuracy.md): grid
   // accuracy 0.355 -> 0.467.
   testing::TempDir dir;
-  synth::SynthOptions hills = Yard(20);
-  hills.scene = "hills";
-  synth::WriteSyntheticSequence(hills, dir / "seq");
+  synth::WriteSyntheticSequence(Hills(20), dir / "seq");
   BuildMapOptions options;
   options.map_path = dir / "m.ot";
   BuildMap(Sequence::Open(dir / "seq"), "hills", Config{}, options);
