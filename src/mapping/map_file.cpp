@@ -132,6 +132,10 @@ std::string MetadataYaml(const TraversabilityMap& map) {
     out << YAML::Key << "free_space_obstacle_shortening_per_m2" << YAML::Value
         << num(o.free_space_obstacle_shortening_per_m2);
   }
+  // Only when on, so files of maps made before it stay as they were (absent reads as off).
+  if (o.free_space_keeps_traversable) {
+    out << YAML::Key << "free_space_keeps_traversable" << YAML::Value << true;
+  }
   out << YAML::EndMap;
   const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
@@ -327,6 +331,8 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
   o.Read("free_space_ray_cell", &options->free_space_ray_cell);
   options->free_space_obstacle_shortening_per_m2 = -1.0;  // off: maps made before it do not name it
   o.Read("free_space_obstacle_shortening_per_m2", &options->free_space_obstacle_shortening_per_m2);
+  options->free_space_keeps_traversable = false;  // maps made before it do not name it
+  o.Read("free_space_keeps_traversable", &options->free_space_keeps_traversable);
   std::string error;
   if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
 

@@ -400,6 +400,12 @@ const TravNode* FindTopOccupied(const TravOcTree& tree, const TravNode* node, un
   return nullptr;
 }
 
+/// The voxel's verdict is traversable (as DescribeCell gives it: ties go to the worse class).
+bool HeldAsTraversable(const TravNode& node) {
+  const auto& l = node.class_log_odds;
+  return l[0] > 0.0f && l[0] > l[1] && l[0] > l[2];
+}
+
 int Severity(TravClass c) {
   switch (c) {
     case TravClass::kTraversable: return 1;
@@ -735,10 +741,12 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   for (std::size_t i = 0; i < voxels.size(); ++i) codes[i] = voxels[i].first;
 
   const double decay = opt.class_free_decay_log_odds;
+  const bool keep_traversable = opt.free_space_keeps_traversable;
   const float clamp_min_log = tree.getClampingThresMinLog();
   auto update = [&](TravNode& node, std::size_t i) {
     const VoxelAccumulator* acc = voxels[i].second;
     if (acc == nullptr) {
+      if (keep_traversable && HeldAsTraversable(node)) return;
       tree.integrateMiss(&node);
       for (float& l : node.class_log_odds) l = DecayTowardsZero(l, decay);
       return;

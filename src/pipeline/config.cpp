@@ -133,6 +133,7 @@ MapOptions PipelineMapDefaults() {
   o.class_free_decay_log_odds = 0.1;
   o.free_space_clearance_m = 0.1;
   o.free_space_obstacle_shortening_per_m2 = 0.008;
+  o.free_space_keeps_traversable = true;
   return o;
 }
 
@@ -264,6 +265,7 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
     s.Read("free_space_clearance_m", &f.free_space_clearance_m);
     s.Read("free_space_ray_cell", &f.free_space_ray_cell);
     s.Read("free_space_obstacle_shortening_per_m2", &f.free_space_obstacle_shortening_per_m2);
+    s.Read("free_space_keeps_traversable", &f.free_space_keeps_traversable);
     s.Read("pixel_stride", &c.map.pixel_stride);
     s.Read("min_texture", &c.map.min_texture);
     s.Read("subpixel_window_px", &c.map.subpixel_window_px);
@@ -418,6 +420,7 @@ std::string ConfigToYaml(const Config& c) {
     << "  free_space_clearance_m: " << f.free_space_clearance_m << "\n"
     << "  free_space_ray_cell: " << f.free_space_ray_cell << "\n"
     << "  free_space_obstacle_shortening_per_m2: " << f.free_space_obstacle_shortening_per_m2 << "\n"
+    << "  free_space_keeps_traversable: " << f.free_space_keeps_traversable << "\n"
     << "  pixel_stride: " << c.map.pixel_stride << "\n"
     << "  min_texture: " << c.map.min_texture << "\n"
     << "  subpixel_window_px: " << c.map.subpixel_window_px << "\n"

@@ -92,6 +92,47 @@ TEST(Fusion, AVoxelSeenThroughLosesOccupancyAndItsClass) {
   EXPECT_FALSE(map.TopSurfaceAt(kA.x(), kA.y()).observed);
 }
 
+TEST(Fusion, RaysLeaveVoxelsHeldAsTraversableAsTheyAreWhenAskedTo) {
+  // A is seen one to three times, then eight frames see B through it. With
+  // free_space_keeps_traversable only a voxel whose verdict is traversable keeps its occupancy
+  // and class evidence bit for bit; obstacles, slopes, voxels outvoted and undecided voxels are
+  // cleared as without it.
+  struct Case {
+    std::vector<TravClass> views;
+    bool kept;
+  };
+  const std::vector<Case> cases = {
+      {{TravClass::kTraversable}, true},
+      {{TravClass::kTraversable, TravClass::kTraversable}, true},
+      {{TravClass::kNonTraversable}, false},
+      {{TravClass::kSemiTraversable}, false},
+      {{TravClass::kTraversable, TravClass::kNonTraversable, TravClass::kNonTraversable}, false},
+      {{TravClass::kUndecided}, false},
+  };
+  for (const bool keep : {false, true}) {
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      MapOptions options;
+      options.free_space_keeps_traversable = keep;
+      TraversabilityMap map(options);
+      std::int64_t t = 0;
+      for (const TravClass c : cases[i].views) map.InsertFrame(At(kA, c), kOrigin, ++t);
+      ASSERT_TRUE(map.CellAt(kA).occupied) << i;
+      const float occupancy_before = NodeAt(map, kA)->getLogOdds();
+      const std::array<float, 3> classes_before = NodeAt(map, kA)->class_log_odds;
+      for (int n = 0; n < 8; ++n) map.InsertFrame(At(kB, TravClass::kTraversable), kOrigin, ++t);
+      const bool kept = keep && cases[i].kept;
+      EXPECT_EQ(map.CellAt(kA).occupied, kept) << keep << " case " << i;
+      if (kept) {
+        EXPECT_EQ(NodeAt(map, kA)->getLogOdds(), occupancy_before) << i;
+        EXPECT_EQ(NodeAt(map, kA)->class_log_odds, classes_before) << i;
+        EXPECT_EQ(map.CellAt(kA).cls, TravClass::kTraversable) << i;
+      }
+      // The free space in front of A is carved either way.
+      EXPECT_LT(map.CellAt({1.05, 0.05, 0.05}).occupancy, 0.5) << keep << " case " << i;
+    }
+  }
+}
+
 TEST(Fusion, GrazingRaysKeepTheGroundTheyPassOverWithClearance) {
   // A camera 0.8 m above flat ground at z = 0 sees a ground voxel at 9.5 m, then one at 10 m: the
   // ray to the far point runs within one voxel (0.1 m) of the ground over its last 1.25 m, so it

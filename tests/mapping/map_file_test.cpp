@@ -138,6 +138,8 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(ReadBytes(path).find("free_space_ray_cell"), std::string::npos);
   EXPECT_LT(loaded.options().free_space_obstacle_shortening_per_m2, 0.0);  // off: not named either
   EXPECT_EQ(ReadBytes(path).find("free_space_obstacle_shortening_per_m2"), std::string::npos);
+  EXPECT_FALSE(loaded.options().free_space_keeps_traversable);
+  EXPECT_EQ(ReadBytes(path).find("free_space_keeps_traversable"), std::string::npos);
   // Saving the loaded map again gives the same bytes.
   loaded.Save(dir / "again.ot");
   EXPECT_EQ(ReadBytes(dir / "again.ot"), ReadBytes(path));
@@ -341,18 +343,20 @@ TEST(MapFile, SaveIntoAMissingFolderNamesTheFile) {
 
 
 TEST(MapFile, OptionsOnlyNamedWhenSetTravelWithTheMapFile) {
-  // free_space_ray_cell and free_space_obstacle_shortening_per_m2 are written only when they
-  // are not their defaults (test above); set, they must come back.
+  // free_space_ray_cell, free_space_obstacle_shortening_per_m2 and free_space_keeps_traversable
+  // are written only when they are not their defaults (test above); set, they must come back.
   const TempDir dir;
   MapOptions options;
   options.free_space_ray_cell = 4;
   options.free_space_obstacle_shortening_per_m2 = 0.008;
+  options.free_space_keeps_traversable = true;
   TraversabilityMap map(options);
   map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), 1);
   map.Save(dir / "set.ot");
   const TraversabilityMap loaded = TraversabilityMap::Load(dir / "set.ot");
   EXPECT_EQ(loaded.options().free_space_ray_cell, 4);
   EXPECT_EQ(loaded.options().free_space_obstacle_shortening_per_m2, 0.008);
+  EXPECT_TRUE(loaded.options().free_space_keeps_traversable);
   ExpectSameTrees(Tree(map), Tree(loaded));
 }
 

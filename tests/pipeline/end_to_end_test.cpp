@@ -43,12 +43,12 @@ ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& 
   return EvaluateLabelFolders(out_dir, seq_dir, eval).total;
 }
 
-double MapGridAccuracy(const std::string& seq_dir, const Config& config, const testing::TempDir& dir) {
+ConfusionMatrix MapGridScore(const std::string& seq_dir, const Config& config, const testing::TempDir& dir) {
   BuildMapOptions options;
   options.map_path = dir / "m.ot";
   BuildMap(Sequence::Open(seq_dir), "yard", config, options);
   ExportGrid(TraversabilityMap::Load(options.map_path), dir / "grid");
-  return EvaluateExportedGrid(dir / "grid", seq_dir).matrix.Accuracy();
+  return EvaluateExportedGrid(dir / "grid", seq_dir).matrix;
 }
 
 TEST(EndToEnd, YardClassifiedWithSgbm) {
@@ -131,16 +131,23 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
   Config uncorrected;
   uncorrected.gravity.source = GravitySource::kPose;
   testing::TempDir a, b, c;
-  const double reference = MapGridAccuracy(dir / "clean", corrected, a);
-  const double with_imu = MapGridAccuracy(dir / "drift", corrected, b);
-  const double without = MapGridAccuracy(dir / "drift", uncorrected, c);
-  RecordProperty("drift_free", std::to_string(reference));
-  RecordProperty("imu_corrected", std::to_string(with_imu));
-  RecordProperty("uncorrected", std::to_string(without));
-  EXPECT_NEAR(with_imu, reference, 0.02);
-  EXPECT_LT(without, with_imu - 0.015) << "uncorrected " << without << " vs corrected " << with_imu;
-  // Grid accuracy measured 0.869 on these 20 frames (docs/accuracy.md); the target is 0.90.
-  EXPECT_GT(reference, 0.845);
+  const ConfusionMatrix reference = MapGridScore(dir / "clean", corrected, a);
+  const ConfusionMatrix with_imu = MapGridScore(dir / "drift", corrected, b);
+  const ConfusionMatrix without = MapGridScore(dir / "drift", uncorrected, c);
+  RecordProperty("drift_free", std::to_string(reference.Accuracy()));
+  RecordProperty("imu_corrected", std::to_string(with_imu.Accuracy()));
+  RecordProperty("uncorrected", std::to_string(without.Accuracy()));
+  EXPECT_NEAR(with_imu.Accuracy(), reference.Accuracy(), 0.02);
+  EXPECT_NEAR(with_imu.MeanIou(), reference.MeanIou(), 0.02);
+  // Measured (docs/accuracy.md): accuracy 0.873 / 0.873 / 0.858, mean IoU 0.613 / 0.613 / 0.568.
+  // Ground kept from grazing rays holds the uncorrected map's accuracy up (mostly traversable
+  // cells); the tilt shows in its obstacles and slopes, which the mean IoU weighs.
+  EXPECT_LT(without.Accuracy(), with_imu.Accuracy() - 0.01)
+      << "uncorrected " << without.Accuracy() << " vs corrected " << with_imu.Accuracy();
+  EXPECT_LT(without.MeanIou(), with_imu.MeanIou() - 0.03)
+      << "uncorrected " << without.MeanIou() << " vs corrected " << with_imu.MeanIou();
+  // Grid accuracy measured 0.873 on these 20 frames (docs/accuracy.md); the target is 0.90.
+  EXPECT_GT(reference.Accuracy(), 0.845);
 }
 
 }  // namespace

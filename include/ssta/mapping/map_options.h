@@ -60,6 +60,14 @@ struct MapOptions {
   /// or 8. Each voxel a cell's ray frees lies within `free_space_ray_cell` voxels of a voxel
   /// one of the exact rays frees or hits.
   int free_space_ray_cell = 1;
+  /// A ray's pass leaves a voxel the map holds as traversable ground (its traversable class
+  /// log-odds positive and above the other two) as it is: no occupancy miss, no class decay.
+  /// Why: rays to ground seen at a grazing angle (beyond a crest, with stereo's depth noise at
+  /// range) run through the voxels of nearer ground and erode it frame by frame; on the hills
+  /// scene that left a fifth of the seen ground without a class. Obstacles, undecided voxels
+  /// and free space are still cleared; a traversable surface that goes away (a flat top moved)
+  /// stays until frames vote it otherwise. false: every voxel a ray passes takes the miss.
+  bool free_space_keeps_traversable = false;
 
   /// True when every field is in range; otherwise `*error` (when not null) gets a message that
   /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
