@@ -380,6 +380,11 @@ void NormalEstimator::SplitIntoBands(int num_bands) {
 // The estimator runs on the (even row, even column) points with half the smoothing size, so
 // its windows cover the same metric area; each pixel with a valid point then takes its 2 x 2
 // block's normal, turned towards its own point (NaN when the block's even pixel has none).
+// Its neighbours are two pixels apart, a gap of one (g invalid even points between: 2 g + 1),
+// so its depth-edge threshold is the full image's at that gap, sqrt(2) times as large:
+// factor * sqrt(2 + 2 g) = sqrt(2) factor * sqrt(1 + g). With the one-pixel threshold, noisy
+// far ground at a grazing angle became edge pixels without normals, which cut the hills
+// scene's ground beyond its rises off from the ground below (docs/performance.md).
 void NormalEstimator::ComputeSubsampled(const Image3f& cloud) {
   Buffers& b = *buffers_;
   const int width = cloud.width();
@@ -389,6 +394,7 @@ void NormalEstimator::ComputeSubsampled(const Image3f& cloud) {
     NormalOptions half_options = options_;
     half_options.subsample = 1;
     half_options.smoothing_size_px = options_.smoothing_size_px / 2;
+    half_options.max_depth_change_factor = options_.max_depth_change_factor * std::sqrt(2.0);
     b.half = std::make_unique<NormalEstimator>(half_options);
   }
   if (b.half_cloud.width() != half_width || b.half_cloud.height() != half_height) {

@@ -357,6 +357,54 @@ TEST(NormalEstimator, SubsampledNormalsEqualFullOnesOnPlanes) {
   }
 }
 
+// subsample 2 compares points two pixels apart, so its depth-edge threshold is the full image's
+// at a gap of one pixel. A plane whose inverse depth changes by 0.012 / m per column is no edge
+// at full resolution (0.012 < 0.02) and none at half resolution either (0.024 < 0.02 sqrt(2));
+// with the one-pixel threshold every even point of it was an edge pixel and got no normal.
+TEST(NormalEstimator, SubsampledDepthEdgesAreTheFullImagesAtTwoPixels) {
+  const int width = 200, height = 120;
+  const float f = 300.0f, cu = 100.0f, cv = 60.0f;
+  for (const float slope : {0.012f, 0.016f}) {  // [1/m per column]; 0.016: an edge either way
+    SCOPED_TRACE(slope);
+    // 1/Z = 0.3 + slope u is the plane 1 = slope f X + (slope cu + 0.3) Z.
+    Image3f cloud(width, height, NanVector3f());
+    for (int v = 0; v < height; ++v) {
+      for (int u = 0; u < width; ++u) {
+        const float z = 1.0f / (0.3f + slope * u);
+        cloud(v, u) = Eigen::Vector3f((u - cu) * z / f, (v - cv) * z / f, z);
+      }
+    }
+    const Eigen::Vector3f truth = Eigen::Vector3f(slope * f, 0.0f, slope * cu + 0.3f).normalized();
+    NormalOptions options;
+    options.smoothing_size_px = 15;
+    const bool edge_at_two_pixels = 2.0 * slope > options.max_depth_change_factor * std::sqrt(2.0);
+    for (const int subsample : {1, 2}) {
+      SCOPED_TRACE(subsample);
+      options.subsample = subsample;
+      NormalEstimator estimator(options);
+      const Image3f& normals = estimator.Compute(cloud);
+      int with_normal = 0, inside = 0;  // inside: 2 px or more from the border (whose windows
+      double max_deg = 0.0;             // the border cuts to nothing)
+      for (int v = 0; v < height; ++v) {
+        for (int u = 0; u < width; ++u) {
+          const bool is_inside = v >= 2 && u >= 2 && v < height - 2 && u < width - 2;
+          inside += is_inside;
+          if (!IsFinite(normals(v, u))) continue;
+          with_normal += is_inside;
+          max_deg = std::max(max_deg, AngleDeg(normals(v, u), normals(v, u).dot(truth) > 0 ? truth : -truth));
+        }
+      }
+      const bool edges = subsample == 1 ? slope > options.max_depth_change_factor : edge_at_two_pixels;
+      if (edges) {
+        EXPECT_EQ(with_normal, 0);
+      } else {
+        EXPECT_EQ(with_normal, inside);
+        EXPECT_LT(max_deg, 0.01);
+      }
+    }
+  }
+}
+
 // Without depth edges the depth-dependent radius is min(side(Z) / 2, distance to the border)
 // with side(Z) = floor(smoothing_size_px * clamp(sqrt(Z / 5 m), 0.5, 2)): every pixel of a
 // tilted plane (depths of several metres, so radii from 5 to 13 px) gets exactly that.
