@@ -1,20 +1,25 @@
-// `ssta eval`: scores classifications, exported grids and query answers against the ground
-// truth of a synthetic sequence (INTERFACES section 6). Prints a report; --json writes the
-// machine-readable summary.
+// `ssta eval`: scores classifications, exported grids, query answers and a map's footprint
+// verdicts against the ground truth of a synthetic sequence (INTERFACES section 6). Prints a
+// report; --json writes the machine-readable summary.
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include <unistd.h>
 
 #include "commands.h"
+#include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/eval/query_evaluator.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/map_export.h"
+#include "ssta/mapping/traversability_map.h"
 
 namespace ssta::cli {
 namespace {
@@ -43,6 +48,43 @@ void ShowProgress(int done, int total) {
   std::fprintf(stderr, "\rscoring frame %d / %d", done, total);
   if (done == total) std::fprintf(stderr, "\r%*s\r", 40, "");
   std::fflush(stderr);
+}
+
+struct FootprintArguments {
+  EvalArguments eval;
+  FootprintEvalOptions footprint;
+  bool as_exported = false;
+  GridExportOptions exported;  // the export's steps, for --as-exported
+};
+
+// A map's footprint verdicts over the truth grid: QueryFootprint, reading the surface as the
+// grid export shows it with --as-exported (one projection of the truth grid's area).
+FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
+  std::string error;
+  if (!args.footprint.IsValid(&error)) {  // named by the option that set the key
+    for (const auto& [key, flag] : {std::pair<std::string, std::string>{"length_m", "--length"},
+                                    {"width_m", "--width"}, {"step_m", "--step"}, {"yaws_deg", "--yaws"}}) {
+      if (error.rfind(key, 0) == 0) error = flag + error.substr(key.size());
+    }
+    throw Error(error);
+  }
+  const ClassGrid truth = ReadGroundTruthGrid(args.eval.sequence);
+  const TraversabilityMap map = TraversabilityMap::Load(args.eval.prediction);
+  std::unique_ptr<ExportedSurface> exported;
+  if (args.as_exported) {
+    const double reach = 0.5 * std::hypot(args.footprint.length_m, args.footprint.width_m);
+    const Eigen::Vector2d size(truth.classes.width() * truth.resolution_m, truth.classes.height() * truth.resolution_m);
+    const Eigen::Vector2d margin = Eigen::Vector2d::Constant(reach);
+    exported = std::make_unique<ExportedSurface>(
+        map, Eigen::AlignedBox2d(truth.origin_m - margin, truth.origin_m + size + margin), args.exported);
+  }
+  FootprintEvalSummary summary = ScoreFootprints(truth, args.footprint, [&](const FootprintPose& pose) {
+    const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, args.footprint.length_m, args.footprint.width_m};
+    const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
+    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
+  });
+  summary.prediction = args.eval.prediction + (args.as_exported ? " (as exported)" : " (as observed)");
+  return summary;
 }
 
 template <typename Summary>
@@ -113,6 +155,40 @@ void RegisterEval(CLI::App& app) {
   query->callback([query_args] {
     Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);
   });
+
+  auto fp_args = std::make_shared<FootprintArguments>();
+  CLI::App* footprints = eval->add_subcommand(
+      "footprints",
+      "Score a map's footprint verdicts (query --footprint) against the ground-truth grid: worst class "
+      "under a robot rectangle at poses over the seen area");
+  footprints->add_option("--map", fp_args->eval.prediction, "map file (.ot) written by build-map")->required();
+  footprints->add_option("--gt", fp_args->eval.sequence, "synthetic sequence folder holding gt/ (or mav0/gt/)")
+      ->required();
+  footprints->add_option("--length", fp_args->footprint.length_m, "footprint length along the heading [m]")
+      ->capture_default_str();
+  footprints->add_option("--width", fp_args->footprint.width_m, "footprint width [m]")->capture_default_str();
+  footprints->add_option("--step", fp_args->footprint.step_m,
+                         "footprint centres every this far in x and y [m], on the truth grid's cell centres "
+                         "(rounded to whole cells)")
+      ->capture_default_str();
+  footprints->add_option("--yaws", fp_args->footprint.yaws_deg, "headings [deg], comma-separated")
+      ->delimiter(',')
+      ->capture_default_str();
+  CLI::Option* as_exported = footprints->add_flag(
+      "--as-exported", fp_args->as_exported,
+      "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "
+      "--as-exported does");
+  AddGridExportSteps(footprints, "with --as-exported: ", &fp_args->exported.fill_min_neighbours,
+                     &fp_args->exported.local_ground_radius_m);
+  footprints->get_option("--fill-holes")->needs(as_exported);
+  footprints->get_option("--local-ground")->needs(as_exported);
+  footprints->add_option("--json", fp_args->eval.json_path, "also write the summary as JSON to this file");
+  footprints->footer(
+      "A pose is scored when every truth cell under it is 1..3 (seen); its truth is their worst class, "
+      "the map's answer the worst class of the cells it knows (0 when none). unsafe: truly "
+      "non-traversable footprints answered traversable or semi-traversable; falsely blocked: truly "
+      "traversable ones answered non-traversable.");
+  footprints->callback([fp_args] { Report(EvaluateMapFootprints(*fp_args), fp_args->eval); });
 }
 
 }  // namespace ssta::cli

@@ -6,4 +6,5 @@ ssta_add_test(eval_test
   ${CMAKE_CURRENT_LIST_DIR}/label_evaluator_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/grid_evaluator_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/query_evaluator_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/footprint_evaluator_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/eval_cli_test.cpp)

@@ -167,6 +167,65 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   EXPECT_NE(r.output.find("xyz.csv: a path vertex is x,y"), std::string::npos) << r.output;
 }
 
+TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
+  // The map: a 3 x 3 m traversable floor with a level patch at cells 5..7 (x, y in [0.5, 0.8))
+  // that the frames called non-traversable. The truth: all traversable except a non-traversable
+  // block at cells 20..22 that the map calls floor.
+  testing::TempDir dir;
+  {
+    std::vector<ClassifiedPoint> points;
+    for (int ix = 0; ix < 30; ++ix) {
+      for (int iy = 0; iy < 30; ++iy) {
+        ClassifiedPoint p;
+        p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, 0.05f);
+        const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
+        p.cls = patch ? TravClass::kNonTraversable : TravClass::kTraversable;
+        p.slope_deg = 2.0f;
+        p.step_m = patch ? 0.3f : 0.0f;
+        points.push_back(p);
+      }
+    }
+    TraversabilityMap map;
+    map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
+    map.Save(dir / "m.ot");
+    ImageU8 truth(30, 30, 1);
+    for (int c = 20; c <= 22; ++c) {
+      for (int b = 20; b <= 22; ++b) truth(29 - b, c) = 3;
+    }
+    fs::create_directories(dir / "seq/gt");
+    WriteImage(truth, dir / "seq/gt/grid_classes.png");
+    std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\n";
+  }
+  // 0.3 m squares on every cell: 900 poses, the 116 on the border reach outside the truth.
+  // Unsafe: the 5 x 5 centres whose square touches the block; falsely blocked as observed: the
+  // 5 x 5 around the patch, which the export judges floor.
+  const std::string eval = "eval footprints --map " + (dir / "m.ot") + " --gt " + (dir / "seq") +
+                           " --width 0.3 --step 0.1";
+  auto r = RunSsta(eval + " --length 0.3 --yaws 0 --json " + (dir / "f.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("poses: 900, partly unseen in the truth (unscored): 116"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered traversable or semi): 25 (0.0319)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered non-traversable): 25 (0.0319)"), std::string::npos) << r.output;
+  const std::string json = ReadTextFile(dir / "f.json");
+  EXPECT_NE(json.find("\"unsafe\": 25"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"accuracy\": " + std::to_string(734.0 / 784.0).substr(0, 6)), std::string::npos) << json;
+  r = RunSsta(eval + " --length 0.3 --yaws 0,90 --as-exported");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("poses: 1800, partly unseen in the truth (unscored): 232"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered traversable or semi): 50 (0.0319)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered non-traversable): 0 (0.0000)"), std::string::npos) << r.output;
+
+  r = RunSsta(eval + " --length 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--length: must be a positive number"), std::string::npos) << r.output;
+  r = RunSsta(eval + " --yaws 0,nan");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--yaws: headings must be finite"), std::string::npos) << r.output;
+  r = RunSsta(eval + " --local-ground 2");  // only with --as-exported
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--local-ground requires --as-exported"), std::string::npos) << r.output;
+}
+
 TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
   testing::TempDir dir;
   auto r = RunSsta("query --map " + (dir / "missing.ot") + " --at 1,2");

@@ -1,0 +1,85 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ssta/eval/class_grid.h"
+#include "ssta/eval/confusion_matrix.h"
+
+namespace ssta {
+
+/// Where and how large the footprints are that ScoreFootprints asks about.
+struct FootprintEvalOptions {
+  double length_m = 1.0;  ///< along the heading [m], > 0
+  double width_m = 0.6;   ///< across it [m], > 0
+  /// Footprint centres sit on every k-th truth cell centre in x and in y, k = max(1,
+  /// round(step_m / resolution)): the lattice is the truth grid's own.
+  double step_m = 0.5;
+  /// Headings [deg from +x towards +y]; a rectangle is the same at yaw and yaw + 180.
+  std::vector<double> yaws_deg = {0.0, 45.0, 90.0, 135.0};
+
+  /// True when every field is finite and in range; otherwise `*error` (when not null) gets a
+  /// message that starts with the key ("length_m: must be positive").
+  bool IsValid(std::string* error) const;
+};
+
+/// A footprint: centre (x, y) [m] in the world frame and heading [rad from +x towards +y].
+struct FootprintPose {
+  double x_m = 0.0;
+  double y_m = 0.0;
+  double yaw_rad = 0.0;
+};
+
+/// What the scored method (a map's footprint query) says about a footprint: the worst class
+/// 1..3 among the cells it knows, 0 when it knows none of them, and the share of the cells it
+/// knows.
+struct FootprintAnswer {
+  std::uint8_t worst = 0;
+  double fraction_known = 0.0;
+};
+
+using FootprintOracle = std::function<FootprintAnswer(const FootprintPose&)>;
+
+/// Result of ScoreFootprints.
+struct FootprintEvalSummary {
+  std::string prediction;          ///< what answered (the map file)
+  std::string truth;               ///< the truth class image
+  FootprintEvalOptions options;
+  std::int64_t poses = 0;          ///< lattice poses whose centre cell has truth 1..3
+  /// Of those, poses with a truth cell under them that is not 1..3 (seen by no frame, or
+  /// outside the truth grid): not scored.
+  std::int64_t partly_unseen = 0;
+  /// Scored poses (every truth cell under them 1..3): truth = the worst of those cells,
+  /// predicted = FootprintAnswer::worst. Every scored pose is a sample of the matrix.
+  ConfusionMatrix matrix;
+  /// Scored poses the method called traversable or semi-traversable whose truth is
+  /// non-traversable: the footprint would be driven into an obstacle or off a step.
+  std::int64_t unsafe = 0;
+  /// Scored poses the method called non-traversable whose truth is traversable.
+  std::int64_t falsely_blocked = 0;
+  /// Scored poses the method did not know in full (fraction_known < 1), and the mean
+  /// fraction_known over scored poses (NaN with none).
+  std::int64_t partly_known = 0;
+  double mean_fraction_known = 0.0;
+
+  std::string BriefReport() const;
+  /// {"kind": "footprints", "unit": "footprints", "prediction", "truth", "footprint":
+  ///  {"length_m", "width_m", "step_m", "yaws_deg"}, "poses", "partly_unseen", "unsafe",
+  ///  "falsely_blocked", "partly_known", "mean_fraction_known", "metrics": {...}} with
+  /// "metrics" as described at ConfusionMatrix.
+  std::string ToJson() const;
+};
+
+/// Asks `oracle` about every footprint of the lattice (FootprintEvalOptions) whose centre cell
+/// has truth 1..3, each heading in turn, and scores its worst class against the truth's: the
+/// worst of the truth cells whose centres lie inside the rectangle (edges included; the cell
+/// under the centre when none does, as TraversabilityMap::QueryFootprint picks map columns).
+/// Throws ssta::Error on invalid options (naming the key) or a truth value other than 0..4 or
+/// 255 (naming truth.source), and ssta::InternalError when the oracle answers a class above 3
+/// or a fraction outside [0, 1].
+FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEvalOptions& options,
+                                     const FootprintOracle& oracle);
+
+}  // namespace ssta

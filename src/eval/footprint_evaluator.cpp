@@ -1,0 +1,189 @@
+#include "ssta/eval/footprint_evaluator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "core/json_writer.h"
+#include "eval/class_ids.h"
+#include "eval/metrics_json.h"
+#include "ssta/core/classes.h"
+#include "ssta/core/error.h"
+
+namespace ssta {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool Fail(std::string* error, const std::string& message) {
+  if (error != nullptr) *error = message;
+  return false;
+}
+
+bool IsVerdict(std::uint8_t c) { return c >= 1 && c <= 3; }
+
+/// The worst truth class under the footprint, or 0 when a cell under it is not 1..3.
+std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, double half_l, double half_w) {
+  const double c = std::cos(pose.yaw_rad), s = std::sin(pose.yaw_rad);
+  const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
+  const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
+  const double res = truth.resolution_m;
+  // Cell indices (column, row from the bottom) whose centres may lie in the rectangle.
+  const long col_lo = static_cast<long>(std::ceil((pose.x_m - extent_x - truth.origin_m.x()) / res - 0.5 - 1e-9));
+  const long col_hi = static_cast<long>(std::floor((pose.x_m + extent_x - truth.origin_m.x()) / res - 0.5 + 1e-9));
+  const long bot_lo = static_cast<long>(std::ceil((pose.y_m - extent_y - truth.origin_m.y()) / res - 0.5 - 1e-9));
+  const long bot_hi = static_cast<long>(std::floor((pose.y_m + extent_y - truth.origin_m.y()) / res - 0.5 + 1e-9));
+  std::uint8_t worst = 0;
+  bool any = false;
+  for (long col = col_lo; col <= col_hi; ++col) {
+    for (long bot = bot_lo; bot <= bot_hi; ++bot) {
+      const double cx = truth.origin_m.x() + (col + 0.5) * res, cy = truth.origin_m.y() + (bot + 0.5) * res;
+      const double dx = cx - pose.x_m, dy = cy - pose.y_m;
+      const double along = c * dx + s * dy, across = -s * dx + c * dy;
+      // The same test as QueryFootprint's, with a rounding allowance for centres on an edge.
+      if (std::abs(along) > half_l + 1e-9 || std::abs(across) > half_w + 1e-9) continue;
+      any = true;
+      if (col < 0 || col >= truth.classes.width() || bot < 0 || bot >= truth.classes.height()) return 0;
+      const std::uint8_t t = truth.classes(truth.classes.height() - 1 - static_cast<int>(bot), static_cast<int>(col));
+      if (!IsVerdict(t)) return 0;
+      worst = std::max(worst, t);
+    }
+  }
+  if (!any) {
+    const std::uint8_t t = truth.ClassAt({pose.x_m, pose.y_m});
+    return IsVerdict(t) ? t : 0;
+  }
+  return worst;
+}
+
+std::string Fixed(double value, int digits) {
+  if (!std::isfinite(value)) return "nan";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
+}  // namespace
+
+bool FootprintEvalOptions::IsValid(std::string* error) const {
+  if (!(std::isfinite(length_m) && length_m > 0.0)) return Fail(error, "length_m: must be a positive number of metres");
+  if (!(std::isfinite(width_m) && width_m > 0.0)) return Fail(error, "width_m: must be a positive number of metres");
+  if (!(std::isfinite(step_m) && step_m > 0.0)) return Fail(error, "step_m: must be a positive number of metres");
+  if (yaws_deg.empty()) return Fail(error, "yaws_deg: needs at least one heading");
+  for (const double yaw : yaws_deg) {
+    if (!std::isfinite(yaw)) return Fail(error, "yaws_deg: headings must be finite numbers of degrees");
+  }
+  return true;
+}
+
+FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEvalOptions& options,
+                                     const FootprintOracle& oracle) {
+  std::string error;
+  if (!options.IsValid(&error)) throw Error("footprint evaluation: " + error);
+  SSTA_CHECK(oracle != nullptr, "ScoreFootprints: no oracle");
+  SSTA_CHECK(truth.resolution_m > 0.0, "ScoreFootprints: truth grid without a resolution");
+  internal::CheckTruthIds(truth.classes, truth.source);
+  FootprintEvalSummary summary;
+  summary.truth = truth.source;
+  summary.options = options;
+  const int k = std::max(1, static_cast<int>(std::lround(options.step_m / truth.resolution_m)));
+  const double half_l = 0.5 * options.length_m, half_w = 0.5 * options.width_m;
+  double known_sum = 0.0;
+  const int height = truth.classes.height();
+  for (int bot = k / 2; bot < height; bot += k) {
+    for (int col = k / 2; col < truth.classes.width(); col += k) {
+      const GridCell cell{height - 1 - bot, col};
+      if (!IsVerdict(truth.classes(cell.row, cell.col))) continue;
+      const Eigen::Vector2d centre = truth.CellCentre(cell);
+      for (const double yaw_deg : options.yaws_deg) {
+        const FootprintPose pose{centre.x(), centre.y(), yaw_deg * kPi / 180.0};
+        ++summary.poses;
+        const std::uint8_t t = TruthUnder(truth, pose, half_l, half_w);
+        if (t == 0) {
+          ++summary.partly_unseen;
+          continue;
+        }
+        const FootprintAnswer answer = oracle(pose);
+        SSTA_CHECK(answer.worst <= 3, "ScoreFootprints: the oracle answered a class above 3");
+        SSTA_CHECK(answer.fraction_known >= 0.0 && answer.fraction_known <= 1.0,
+                   "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
+        summary.matrix.Add(t, answer.worst);
+        const auto non = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+        const auto trav = static_cast<std::uint8_t>(TravClass::kTraversable);
+        if (t == non && IsVerdict(answer.worst) && answer.worst != non) ++summary.unsafe;
+        if (t == trav && answer.worst == non) ++summary.falsely_blocked;
+        if (answer.fraction_known < 1.0) ++summary.partly_known;
+        known_sum += answer.fraction_known;
+      }
+    }
+  }
+  const std::int64_t scored = summary.matrix.Scored();
+  summary.mean_fraction_known = scored > 0 ? known_sum / static_cast<double>(scored)
+                                           : std::numeric_limits<double>::quiet_NaN();
+  return summary;
+}
+
+std::string FootprintEvalSummary::BriefReport() const {
+  std::string out = "eval footprints: " + prediction + " against " + truth + "\n";
+  std::string yaws;
+  for (const double yaw : options.yaws_deg) yaws += (yaws.empty() ? "" : ", ") + Fixed(yaw, 1);
+  out += "footprint " + Fixed(options.length_m, 2) + " x " + Fixed(options.width_m, 2) + " m, every " +
+         Fixed(options.step_m, 2) + " m, headings " + yaws + " deg\n";
+  out += "poses: " + std::to_string(poses) + ", partly unseen in the truth (unscored): " +
+         std::to_string(partly_unseen) + "\n";
+  const std::int64_t scored = matrix.Scored();
+  auto share = [&](std::int64_t n) { return scored > 0 ? Fixed(static_cast<double>(n) / scored, 4) : "nan"; };
+  out += "unsafe (truly non-traversable, answered traversable or semi): " + std::to_string(unsafe) + " (" +
+         share(unsafe) + ")\n";
+  out += "falsely blocked (truly traversable, answered non-traversable): " + std::to_string(falsely_blocked) +
+         " (" + share(falsely_blocked) + ")\n";
+  out += "partly known to the map: " + std::to_string(partly_known) + " (" + share(partly_known) +
+         "), mean known share " + Fixed(mean_fraction_known, 3) + "\n";
+  out += matrix.BriefReport("footprints");
+  return out;
+}
+
+std::string FootprintEvalSummary::ToJson() const {
+  internal::JsonWriter json;
+  json.BeginObject();
+  json.Key("kind");
+  json.String("footprints");
+  json.Key("unit");
+  json.String("footprints");
+  json.Key("prediction");
+  json.String(prediction);
+  json.Key("truth");
+  json.String(truth);
+  json.Key("footprint");
+  json.BeginObject();
+  json.Key("length_m");
+  json.Number(options.length_m);
+  json.Key("width_m");
+  json.Number(options.width_m);
+  json.Key("step_m");
+  json.Number(options.step_m);
+  json.Key("yaws_deg");
+  json.BeginInlineArray();
+  for (const double yaw : options.yaws_deg) json.Number(yaw);
+  json.EndArray();
+  json.EndObject();
+  json.Key("poses");
+  json.Integer(poses);
+  json.Key("partly_unseen");
+  json.Integer(partly_unseen);
+  json.Key("unsafe");
+  json.Integer(unsafe);
+  json.Key("falsely_blocked");
+  json.Integer(falsely_blocked);
+  json.Key("partly_known");
+  json.Integer(partly_known);
+  json.Key("mean_fraction_known");
+  json.Number(mean_fraction_known);
+  json.Key("metrics");
+  internal::WriteMetricsJson(matrix, &json);
+  json.EndObject();
+  return json.Take();
+}
+
+}  // namespace ssta

@@ -1,0 +1,142 @@
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "ssta/core/error.h"
+#include "ssta/eval/footprint_evaluator.h"
+
+namespace ssta {
+namespace {
+
+constexpr double kTol = 1e-12;
+
+// 40 x 40 cells of 0.1 m from (0, 0), traversable except: a 2 x 2 non-traversable block at
+// columns 20-21, rows 20-21 from the bottom; one semi-traversable cell at column 30, row 10;
+// one don't-care cell at column 5, row 5.
+ClassGrid Truth() {
+  ClassGrid grid;
+  grid.classes = ImageU8(40, 40, 1);
+  grid.resolution_m = 0.1;
+  grid.source = "truth.png";
+  auto set = [&](int col, int bottom, int value) {
+    grid.classes(39 - bottom, col) = static_cast<std::uint8_t>(value);
+  };
+  for (int c = 20; c <= 21; ++c) {
+    for (int b = 20; b <= 21; ++b) set(c, b, 3);
+  }
+  set(30, 10, 2);
+  set(5, 5, 255);
+  return grid;
+}
+
+FootprintAnswer Always(std::uint8_t cls, double known) { return {cls, known}; }
+
+TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
+  // 0.3 x 0.3 m at yaw 0 on every cell centre: the cell and its 8 neighbours.
+  FootprintEvalOptions options;
+  options.length_m = options.width_m = 0.3;
+  options.step_m = 0.1;
+  options.yaws_deg = {0.0};
+  int asked = 0;
+  const FootprintEvalSummary s = ScoreFootprints(Truth(), options, [&](const FootprintPose& pose) {
+    ++asked;
+    EXPECT_EQ(pose.yaw_rad, 0.0);
+    return Always(1, 1.0);
+  });
+  EXPECT_EQ(s.poses, 1599);  // every cell but the don't-care one
+  // The border ring (156 poses reach outside the grid) and the don't-care cell's 8 neighbours.
+  EXPECT_EQ(s.partly_unseen, 156 + 8);
+  EXPECT_EQ(s.matrix.Scored(), 1599 - 164);
+  EXPECT_EQ(asked, 1599 - 164);
+  // Truly non-traversable: the 4 x 4 centres around the block; semi: the 3 x 3 around its cell.
+  EXPECT_EQ(s.matrix.Count(3, 1), 16);
+  EXPECT_EQ(s.matrix.Count(2, 1), 9);
+  EXPECT_EQ(s.matrix.Count(1, 1), 1435 - 25);
+  EXPECT_EQ(s.unsafe, 16);
+  EXPECT_EQ(s.falsely_blocked, 0);
+  EXPECT_EQ(s.partly_known, 0);
+  EXPECT_NEAR(s.mean_fraction_known, 1.0, kTol);
+  EXPECT_NEAR(s.matrix.Accuracy(), 1410.0 / 1435.0, kTol);
+
+  // Blocking everything, half known: every truly traversable footprint is falsely blocked.
+  const FootprintEvalSummary b = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(3, 0.5); });
+  EXPECT_EQ(b.falsely_blocked, 1410);
+  EXPECT_EQ(b.unsafe, 0);
+  EXPECT_EQ(b.partly_known, 1435);
+  EXPECT_NEAR(b.mean_fraction_known, 0.5, kTol);
+  // Knowing nothing: no verdict, so neither unsafe nor blocked, and no coverage.
+  const FootprintEvalSummary u = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(0, 0.0); });
+  EXPECT_EQ(u.unsafe + u.falsely_blocked, 0);
+  EXPECT_NEAR(u.matrix.Coverage(), 0.0, kTol);
+}
+
+TEST(eval_Footprints, DiagonalFootprintsCoverTheirDiagonalCells) {
+  // 0.3 x 0.1 m at 45 degrees: the centre and the two cells along the diagonal (0.141 m along,
+  // 0 across); the orthogonal neighbours lie 0.071 m across, outside the 0.05 m half width.
+  FootprintEvalOptions options;
+  options.length_m = 0.3;
+  options.width_m = 0.1;
+  options.step_m = 0.1;
+  for (const double yaw : {45.0, 135.0}) {
+    SCOPED_TRACE(yaw);
+    options.yaws_deg = {yaw};
+    const FootprintEvalSummary s = ScoreFootprints(Truth(), options, [&](const FootprintPose& pose) {
+      EXPECT_NEAR(pose.yaw_rad, yaw * M_PI / 180.0, 1e-12);
+      return Always(2, 1.0);
+    });
+    // Border poses reach outside along the diagonal; the don't-care cell has 2 diagonal poses.
+    EXPECT_EQ(s.partly_unseen, 156 + 2);
+    // The block, and the poses one diagonal step before and after it: 4 + 4 + 4 - 2 overlaps.
+    EXPECT_EQ(s.unsafe, 10);
+    EXPECT_EQ(s.matrix.Count(3, 2), 10);
+    EXPECT_EQ(s.matrix.Count(2, 2), 3);  // the semi cell and its two diagonal poses
+  }
+}
+
+TEST(eval_Footprints, LatticeStepIsAWholeNumberOfCells) {
+  FootprintEvalOptions options;
+  options.length_m = options.width_m = 0.1;  // one cell each
+  options.yaws_deg = {0.0, 90.0};
+  options.step_m = 0.5;  // every 5th cell from the 3rd: 8 x 8 centres
+  const FootprintEvalSummary s = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(1, 1.0); });
+  EXPECT_EQ(s.poses, 2 * 64);
+  EXPECT_EQ(s.partly_unseen, 0);
+  // Centres at columns / rows 2, 7, ..., 37: the block's cells (20, 21) and the semi cell
+  // (30, 10) are not among them.
+  EXPECT_EQ(s.matrix.Count(1, 1), 2 * 64);
+  const std::string json = s.ToJson();
+  EXPECT_NE(json.find("\"kind\": \"footprints\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"poses\": 128"), std::string::npos) << json;
+}
+
+TEST(eval_Footprints, BadOptionsAndTruthAreNamed) {
+  auto error_of = [](const FootprintEvalOptions& options, const ClassGrid& truth) -> std::string {
+    try {
+      ScoreFootprints(truth, options, [](const FootprintPose&) { return FootprintAnswer{}; });
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  FootprintEvalOptions bad;
+  bad.length_m = 0.0;
+  EXPECT_NE(error_of(bad, Truth()).find("length_m"), std::string::npos);
+  bad = FootprintEvalOptions{};
+  bad.width_m = std::nan("");
+  EXPECT_NE(error_of(bad, Truth()).find("width_m"), std::string::npos);
+  bad = FootprintEvalOptions{};
+  bad.step_m = -1.0;
+  EXPECT_NE(error_of(bad, Truth()).find("step_m"), std::string::npos);
+  bad = FootprintEvalOptions{};
+  bad.yaws_deg = {0.0, std::nan("")};
+  EXPECT_NE(error_of(bad, Truth()).find("yaws_deg"), std::string::npos);
+  bad.yaws_deg.clear();
+  EXPECT_NE(error_of(bad, Truth()).find("yaws_deg"), std::string::npos);
+  ClassGrid truth = Truth();
+  truth.classes(0, 0) = 7;
+  EXPECT_NE(error_of(FootprintEvalOptions{}, truth).find("truth.png"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace ssta
