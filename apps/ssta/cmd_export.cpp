@@ -1,6 +1,9 @@
 // ssta export: a map to the formats other tools read.
 
+#include <cmath>
+#include <filesystem>
 #include <iostream>
+#include <system_error>
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
@@ -16,6 +19,15 @@ struct ExportArgs {
   int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
   double local_ground_radius_m = GridExportOptions{}.local_ground_radius_m;
 };
+
+// True when `a` and `b` name the same file (or would, once written).
+bool SameFile(const std::string& a, const std::string& b) {
+  std::error_code error;
+  if (std::filesystem::exists(a, error) && std::filesystem::exists(b, error)) {
+    return std::filesystem::equivalent(a, b, error);
+  }
+  return std::filesystem::weakly_canonical(a, error) == std::filesystem::weakly_canonical(b, error);
+}
 
 }  // namespace
 
@@ -50,9 +62,26 @@ void RegisterExport(CLI::App& app) {
       ->delimiter(',')
       ->expected(4);
   AddGridExportSteps(cmd, "grid: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
-  cmd->callback([args] {
-    const TraversabilityMap map = TraversabilityMap::Load(args->map);
+  cmd->callback([args, cmd] {
     const std::string& f = args->format;
+    if (f != "grid") {  // the grid's options would be ignored: say so instead
+      for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
+        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid");
+      }
+    }
+    if (cmd->count("--resolution") > 0 && !(args->resolution_m > 0.0 && std::isfinite(args->resolution_m))) {
+      throw Error("--resolution: must be a positive number of metres");
+    }
+    const std::vector<std::string> suffixes =
+        f == "grid" ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
+                    : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
+    for (const std::string& suffix : suffixes) {
+      if (SameFile(args->out + suffix, args->map)) {
+        throw Error("--out " + args->out + ": would write " + args->out + suffix + " over the map it reads (" +
+                    args->map + "); choose another prefix, e.g. " + args->out + "_" + f);
+      }
+    }
+    const TraversabilityMap map = TraversabilityMap::Load(args->map);
     std::string written;
     if (f == "grid") {
       GridExportOptions options;

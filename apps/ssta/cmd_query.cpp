@@ -1,5 +1,7 @@
 // ssta query: answers from a map for planners, as CSV on stdout (INTERFACES section 5).
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -9,6 +11,7 @@
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
+#include "ssta/io/file_util.h"
 #include "ssta/mapping/traversability_map.h"
 
 namespace ssta::cli {
@@ -78,16 +81,21 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
             << ", " << Number(100.0 * result.fraction_observed, "%.0f") << " % observed\n";
 }
 
-// x,y[,z] per line; a header line and blank lines are skipped.
+// x,y[,z] per line; blank lines and a header (a first line with letters, such as "x,y") are
+// skipped. Throws naming the file and line on anything else, and when no point is left.
 std::vector<std::vector<double>> ReadPoints(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": file not found");
+  std::istringstream in(ReadTextFile(path));  // names a missing file or a folder
   std::vector<std::vector<double>> out;
   std::string line;
   int n = 0;
+  bool first = true;
   while (std::getline(in, line)) {
     ++n;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    const bool may_be_header = first && std::any_of(line.begin(), line.end(), [](unsigned char c) {
+      return std::isalpha(c) != 0;
+    });
+    first = false;
     std::stringstream ss(line);
     std::string cell;
     std::vector<double> values;
@@ -102,8 +110,8 @@ std::vector<std::vector<double>> ReadPoints(const std::string& path) {
       }
     }
     if (!numeric) {
-      if (n == 1) continue;  // header
-      throw Error(path + ":" + std::to_string(n) + ": expected x,y or x,y,z numbers");
+      if (may_be_header) continue;
+      throw Error(path + ":" + std::to_string(n) + ": expected x,y or x,y,z numbers, comma-separated");
     }
     if (values.size() != 2 && values.size() != 3) {
       throw Error(path + ":" + std::to_string(n) + ": expected 2 or 3 values, found " + std::to_string(values.size()));
@@ -113,6 +121,7 @@ std::vector<std::vector<double>> ReadPoints(const std::string& path) {
     }
     out.push_back(values);
   }
+  if (out.empty()) throw Error(path + ": no points (expected x,y or x,y,z per line)");
   return out;
 }
 

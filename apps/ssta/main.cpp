@@ -12,6 +12,7 @@
 
 int main(int argc, char** argv) {
   CLI::App app{"ssta: stereo superpixel surface traversability analysis (SSTA) and maps"};
+  app.name("ssta");
   app.set_version_flag("--version", std::string("ssta ") + SSTA_VERSION);
   app.require_subcommand(1);
   // Every parallel loop (the matcher, the normals' bands, the analysis's concurrent steps) runs
@@ -32,10 +33,18 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterCalibrateStereo(app);
   ssta::cli::RegisterCalibrateMount(app);
   ssta::cli::RegisterBench(app);
+  if (argc == 1) {  // nothing asked: the usage, as a failed run (nothing ran)
+    std::cerr << app.help();
+    return 2;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // --help and --version end here with status 0 (CLI11 prints them); a bad command line is bad
+    // input like any other: one line naming the option, status 2.
+    if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
+    std::cerr << "ssta: error: " << e.what() << " (--help lists the options)\n";
+    return 2;
   } catch (const ssta::Error& e) {
     std::cerr << "ssta: error: " << e.what() << "\n";
     return 2;

@@ -114,6 +114,7 @@ void WriteTextAtomically(const std::string& path, const std::string& text) {
 
 std::string ReadTextFile(const std::string& path) {
   if (!fs::exists(path)) throw Error(path + ": file not found");
+  if (fs::is_directory(path)) throw Error(path + ": is a folder, not a file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open for reading");
   std::ostringstream s;

@@ -246,6 +246,8 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   const std::string imu_csv = seq.root + "/imu0/data.csv";
   if (fs::exists(imu_csv)) {
     seq.imu = internal::ParseAslImuCsv(ReadTextFile(imu_csv), imu_csv);
+    // A present IMU file without samples is a broken recording, not a sequence without an IMU.
+    if (seq.imu.empty()) throw Error(imu_csv + ": no IMU samples (remove imu0/ if the platform has no IMU)");
     seq.imu_path = imu_csv;
     const std::string imu_yaml = seq.root + "/imu0/sensor.yaml";
     if (fs::exists(imu_yaml)) {

@@ -1,8 +1,30 @@
 #include "yaml_reader.h"
 
 #include <cmath>
+#include <set>
 
 namespace ssta::internal {
+
+namespace {
+
+// yaml-cpp keeps both entries of a key written twice and answers lookups with the first, so a
+// config whose `vehicle:` appears twice would run half of each: refused, naming the line.
+void RejectDuplicateKeys(const YAML::Node& node, const std::string& file) {
+  if (node.IsMap()) {
+    std::set<std::string> keys;
+    for (const auto& entry : node) {
+      if (entry.first.IsScalar() && !keys.insert(entry.first.Scalar()).second) {
+        throw Error(file + ":" + std::to_string(entry.first.Mark().line + 1) + ": key '" + entry.first.Scalar() +
+                    "' appears twice in the same mapping");
+      }
+      RejectDuplicateKeys(entry.second, file);
+    }
+  } else if (node.IsSequence()) {
+    for (const auto& item : node) RejectDuplicateKeys(item, file);
+  }
+}
+
+}  // namespace
 
 YAML::Node ParseYaml(const std::string& text, const std::string& file) {
   std::string body = text;
@@ -11,11 +33,14 @@ YAML::Node ParseYaml(const std::string& text, const std::string& file) {
     const auto eol = body.find('\n');
     body = eol == std::string::npos ? std::string() : "\n" + body.substr(eol + 1);
   }
+  YAML::Node root;
   try {
-    return YAML::Load(body);
+    root = YAML::Load(body);
   } catch (const YAML::Exception& e) {
     throw Error(file + ":" + std::to_string(e.mark.line + 1) + ": YAML syntax error: " + e.msg);
   }
+  RejectDuplicateKeys(root, file);
+  return root;
 }
 
 YamlSection::YamlSection(YAML::Node node, std::string file, std::string path)

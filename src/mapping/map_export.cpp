@@ -282,7 +282,9 @@ void ExportOctovis(const TraversabilityMap& map, const std::string& path) {
     colour.setNodeValue(key, static_cast<float>(octomap::logodds(cell.occupancy)), true);
     colour.setNodeColor(key, rgb.r, rgb.g, rgb.b);
   }
-  colour.updateInnerOccupancy();
+  // ColorOcTree::updateInnerOccupancy reads the root without checking it (OctoMap 1.9): a map
+  // without surface voxels has none.
+  if (colour.getRoot() != nullptr) colour.updateInnerOccupancy();
   WriteFileAtomically(path, [&](const std::string& tmp) {
     if (!colour.write(tmp)) throw Error(path + ": cannot write the ColorOcTree file");
   });

@@ -832,8 +832,16 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
 
   std::vector<Eigen::Vector2d> columns;
   octomap::OcTreeKey lo, hi;
-  if (tree.coordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, lo) &&
-      tree.coordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, hi)) {
+  if (!tree.coordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, lo) ||
+      !tree.coordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, hi)) {
+    throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
+                std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
+  }
+  constexpr double kMaxColumns = 1e7;  // ~100 MB of columns, 1 x 1 km at 0.1 m
+  if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
+    throw Error("footprint query: the rectangle spans more than 10^7 map columns");
+  }
+  {
     for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
       for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
         const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
@@ -875,6 +883,12 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
   }
   const double res = impl_->options.resolution_m;
   const double spacing = 0.5 * res;
+  double total_length = 0.0;
+  for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) total_length += (polyline_world[i + 1] - polyline_world[i]).norm();
+  constexpr double kMaxSamples = 1e7;  // as a footprint's columns: ~1 km x 1 km at 0.1 m
+  if ((total_length / spacing + 1.0) * (width_m / res + 1.0) > kMaxSamples) {
+    throw Error("path query: the path and its width span more than 10^7 samples");
+  }
 
   // Sample points with their direction of travel.
   struct Station {

@@ -1,5 +1,7 @@
 #include "ssta/pipeline/gravity_provider.h"
 
+#include <algorithm>
+
 namespace ssta {
 
 GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions& gravity,
@@ -7,7 +9,26 @@ GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions&
     : sequence_(sequence), gravity_(gravity) {
   if (!sequence.imu().empty() && gravity.source != GravitySource::kPose && gravity.source != GravitySource::kLevel) {
     track_ = std::make_unique<GravityTrack>(sequence.imu(), sequence.body_T_imu(), attitude, sequence.imu_path());
+    // IMU samples that overlap no frame are a mismatched recording, not a few frames to skip.
+    const std::int64_t first = sequence.imu().front().timestamp_ns, last = sequence.imu().back().timestamp_ns;
+    const auto& frames = sequence.frames();
+    const bool overlap = std::any_of(frames.begin(), frames.end(), [&](const StereoFrame& f) {
+      return f.timestamp_ns >= first && f.timestamp_ns <= last;
+    });
+    if (!frames.empty() && !overlap) {
+      throw Error(sequence.imu_path() + ": the IMU samples (" + std::to_string(first) + " to " + std::to_string(last) +
+                  " ns) overlap none of the " + std::to_string(frames.size()) + " frames (" +
+                  std::to_string(frames.front().timestamp_ns) + " to " + std::to_string(frames.back().timestamp_ns) +
+                  " ns)");
+    }
   }
+}
+
+std::string GravityProvider::ImuGap(std::int64_t t) const {
+  const auto& imu = sequence_.imu();
+  return sequence_.imu_path() + ": frame " + std::to_string(t) + " lies outside the IMU samples (" +
+         std::to_string(imu.front().timestamp_ns) + " to " + std::to_string(imu.back().timestamp_ns) +
+         " ns): no attitude for it";
 }
 
 Eigen::Vector3d GravityProvider::UpInBody(std::int64_t t, std::string* source_used) const {
@@ -18,14 +39,12 @@ Eigen::Vector3d GravityProvider::UpInBody(std::int64_t t, std::string* source_us
   };
   if (s == GravitySource::kImu || s == GravitySource::kAuto) {
     if (track_) {
+      // With an IMU, a frame it does not cover is skipped, never guessed from another source.
       if (auto up = track_->UpInBodyAt(t)) return answer(*up, "imu");
+      throw Error(ImuGap(t));
     }
     if (s == GravitySource::kImu) {
-      const auto& imu = sequence_.imu();
-      if (imu.empty()) throw Error(sequence_.root() + ": gravity.source is 'imu' but the sequence has no IMU (imu0/data.csv)");
-      throw Error(sequence_.imu_path() + ": gravity.source is 'imu' but the IMU samples (" +
-                  std::to_string(imu.front().timestamp_ns) + " to " + std::to_string(imu.back().timestamp_ns) +
-                  " ns) do not cover frame " + std::to_string(t));
+      throw Error(sequence_.root() + ": gravity.source is 'imu' but the sequence has no IMU (imu0/data.csv)");
     }
   }
   if (s == GravitySource::kPose || s == GravitySource::kAuto) {
@@ -57,6 +76,7 @@ std::optional<Eigen::Isometry3d> GravityProvider::WorldTBodyAt(std::int64_t t) c
   if (!pose) return std::nullopt;
   if (track_ && gravity_.source != GravitySource::kPose) {
     if (auto up = track_->UpInBodyAt(t)) return CorrectRollPitch(*pose, *up);
+    throw Error(ImuGap(t));
   }
   return pose;
 }

@@ -20,6 +20,17 @@
 namespace ssta {
 namespace {
 
+/// Whether two sequence names (paths as typed) name the same folder: "seq/", "seq" and
+/// "./seq" do.
+bool SameSequenceName(const std::string& a, const std::string& b) {
+  auto normal = [](const std::string& name) {
+    std::string s = std::filesystem::path(name).lexically_normal().string();
+    while (s.size() > 1 && s.back() == '/') s.pop_back();
+    return s;
+  };
+  return normal(a) == normal(b);
+}
+
 std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeometry& g) {
   std::ostringstream s;
   s << std::setprecision(10) << "cam0 " << c.left.width << "x" << c.left.height << " fu " << c.left.fu
@@ -49,7 +60,7 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
     throw Error(m.str());
   }
   MapMetadata metadata = map.metadata();
-  *continues_sequence = !metadata.sequences.empty() && metadata.sequences.back() == sequence_name;
+  *continues_sequence = !metadata.sequences.empty() && SameSequenceName(metadata.sequences.back(), sequence_name);
   if (!*continues_sequence) metadata.sequences.push_back(sequence_name);
   map.set_metadata(metadata);
   return map;
@@ -346,12 +357,19 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
       continue;
     }
     std::optional<Eigen::Isometry3d> world_T_body;
-    if (options.static_platform) {
-      world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
-    } else {
-      world_T_body = gravity.WorldTBodyAt(t);
+    std::string no_attitude;  // a frame the IMU in use does not cover: skipped
+    try {
+      if (options.static_platform) {
+        world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
+      } else {
+        world_T_body = gravity.WorldTBodyAt(t);
+      }
+    } catch (const Error& e) {
+      no_attitude = e.what();
     }
-    if (!world_T_body) {
+    if (!no_attitude.empty()) {
+      skip(t, no_attitude);
+    } else if (!world_T_body) {
       skip(t, "no pose: " + sequence.NoPoseReason(t));
     } else {
       try {

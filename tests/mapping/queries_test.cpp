@@ -1,3 +1,4 @@
+#include <functional>
 #include <cmath>
 #include <string>
 #include <thread>
@@ -140,6 +141,26 @@ TEST_F(FloorAndBoxQueries, PathWidthDecidesWhetherTheBoxIsTouched) {
   EXPECT_DOUBLE_EQ(unknown.fraction_observed, 0.0);
   EXPECT_TRUE(std::isnan(unknown.mean_cost));
   EXPECT_THROW(map().QueryPath({}, 0.1), Error);
+}
+
+TEST_F(FloorAndBoxQueries, QueriesTooLargeToAnswerAreErrorsNotWrongAnswers) {
+  // Beyond the addressable cube (+-3276.8 m at 0.1 m) a rectangle has no columns to read: it
+  // was answered by its centre column alone. Inside it, 10^7 columns is the cap.
+  auto message = [](const std::function<void()>& query) -> std::string {
+    try {
+      query();
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  EXPECT_NE(message([&] { map().QueryFootprint({1.0, 1.0, 0.0, 7000.0, 7000.0}); }).find("addressable area"),
+            std::string::npos);
+  EXPECT_NE(message([&] { map().QueryFootprint({1.0, 1.0, 0.0, 400.0, 400.0}); }).find("10^7 map columns"),
+            std::string::npos);
+  EXPECT_NE(message([&] { map().QueryPath({{0.0, 0.0}, {1e6, 0.0}}, 0.0); }).find("10^7 samples"), std::string::npos);
+  // Just under the caps: answered (unobserved beyond the floor).
+  EXPECT_EQ(map().QueryFootprint({1.0, 1.0, 0.0, 300.0, 300.0}).cells, 3000 * 3000);
 }
 
 TEST_F(FloorAndBoxQueries, ProjectionPutsTheLargestYInRowZero) {

@@ -179,11 +179,24 @@ const std::vector<BadInput>& Cases() {
        [](auto& s, auto&) {
          std::ofstream(s + "/imu0/data.csv") << "#t,wx,wy,wz,ax,ay,az\n1000,0,0,0,9.81,0,0\n2000,0,0,0,9.81,0,0\n";
        },
-       kBuild, {"{seq}/imu0/data.csv: gravity.source is 'imu' but the IMU samples (1000 to 2000 ns) do not cover frame " +
-                std::string(kFirst)}},
+       kBuild, {"{seq}/imu0/data.csv: the IMU samples (1000 to 2000 ns) overlap none of the 3 frames"}},
+      {"ImuCoversOnlyTheFirstFrame",  // the second frame is skipped (strict: fatal), not guessed
+       [](auto& s, auto&) {
+         std::ofstream(s + "/imu0/data.csv") << "#t,wx,wy,wz,ax,ay,az\n1403715274261142976,0,0,0,9.81,0,0\n"
+                                                "1403715274263142976,0,0,0,9.81,0,0\n";
+       },
+       kStrict, {"frame " + std::string(kSecond) + ": {seq}/imu0/data.csv: frame " + std::string(kSecond) +
+                 " lies outside the IMU samples (1403715274261142976 to 1403715274263142976 ns)"}},
+      {"ImuWithoutSamples", [](auto& s, auto&) { std::ofstream(s + "/imu0/data.csv") << "#t,wx,wy,wz,ax,ay,az\n"; },
+       kBuild, {"{seq}/imu0/data.csv: no IMU samples"}},
       // Config.
       {"ConfigUnknownKey", [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "map:\n  resolution: 0.1\n"; },
        kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml: map.resolution: unknown key"}},
+      {"ConfigDuplicateKey",  // yaml-cpp would answer with the first and ignore the second
+       [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "vehicle:\n  max_slope_deg: 20\nvehicle:\n  semi_slope_deg: 10\n"; },
+       kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml:3: key 'vehicle' appears twice in the same mapping"}},
+      {"ConfigIsAFolder", [](auto&, auto& d) { fs::create_directories(d + "/c.yaml"); },
+       kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml: is a folder, not a file"}},
       {"ConfigWrongType", [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "map:\n  resolution_m: fine\n"; },
        kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml: map.resolution_m: wrong type"}},
       {"ConfigOutOfRange", [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "stereo:\n  block_size: -3\n"; },

@@ -248,6 +248,37 @@ TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("nope"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir.path() / "m.ot"));
+
+  // A malformed command line is bad input too: one line naming the option, status 2.
+  for (const std::string& args : {std::string("query --map m.ot --at abc,1"), std::string("classify --sequence s"),
+                                  std::string("export --map m.ot --format Grid --out g")}) {
+    r = RunSsta(args);
+    EXPECT_EQ(r.exit_code, 2) << args;
+    EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
+    EXPECT_EQ(r.output.rfind("ssta: error: ", 0), 0u) << r.output;
+  }
+  EXPECT_NE(r.output.find("--format"), std::string::npos) << r.output;
+  // A point file whose only line is not comma-separated numbers is not taken for a header.
+  TraversabilityMap().Save(dir / "empty.ot");
+  std::ofstream(dir / "semicolon.csv") << "2;0\n";
+  r = RunSsta("query --map " + (dir / "empty.ot") + " --points " + (dir / "semicolon.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("semicolon.csv:1: expected x,y or x,y,z numbers"), std::string::npos) << r.output;
+}
+
+TEST(Cli, ExportRefusesToWriteOverTheMapItReads) {
+  testing::TempDir dir;
+  TraversabilityMap().Save(dir / "m.ot");  // empty: the octovis export of it crashed in OctoMap
+  const std::string before = ReadTextFile(dir / "m.ot");
+  auto r = RunSsta("export --map " + (dir / "m.ot") + " --format octovis --out " + (dir / "m"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("over the map it reads"), std::string::npos) << r.output;
+  EXPECT_EQ(ReadTextFile(dir / "m.ot"), before);
+  r = RunSsta("export --map " + (dir / "m.ot") + " --format octovis --out " + (dir / "m_octovis"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  r = RunSsta("export --map " + (dir / "m.ot") + " --format ply --out " + (dir / "p") + " --resolution 0.2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--resolution: only for --format grid"), std::string::npos) << r.output;
 }
 
 TEST(Cli, StrictMakesASkippedFrameFatal) {

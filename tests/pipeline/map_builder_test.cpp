@@ -312,19 +312,22 @@ TEST(BuildMap, ResumeSkipsOnlyFramesOfTheSameSequence) {
   BuildMapOptions options;
   options.static_platform = true;
   options.map_path = dir / "m.ot";
-  const BuildMapSummary first = BuildMap(Sequence::Open(kEuroc), "s", config, options);
+  const BuildMapSummary first = BuildMap(Sequence::Open(kEuroc), "s/", config, options);
   ASSERT_EQ(first.frames_used, 3);
   options.resume = true;
-  // The same sequence again: an interrupted run's frames are in the map already.
-  const BuildMapSummary again = BuildMap(Sequence::Open(kEuroc), "s", config, options);
-  EXPECT_EQ(again.frames_used, 0);
-  EXPECT_EQ(again.frames_already_in_map, 3);
+  // The same sequence again, its path typed without the slash or with "./": an interrupted
+  // run's frames are in the map already.
+  for (const char* name : {"s", "./s"}) {
+    const BuildMapSummary again = BuildMap(Sequence::Open(kEuroc), name, config, options);
+    EXPECT_EQ(again.frames_used, 0) << name;
+    EXPECT_EQ(again.frames_already_in_map, 3) << name;
+  }
   // Another sequence whose timestamps overlap: every frame is fused.
   const BuildMapSummary other = BuildMap(Sequence::Open(kEuroc), "t", config, options);
   EXPECT_EQ(other.frames_used, 3);
   EXPECT_EQ(other.frames_already_in_map, 0);
   const std::vector<std::string> names = TraversabilityMap::Load(options.map_path).metadata().sequences;
-  EXPECT_EQ(names, (std::vector<std::string>{"s", "t"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"s/", "t"}));
 }
 
 std::string FileBytes(const std::string& path) {

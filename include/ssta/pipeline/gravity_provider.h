@@ -15,24 +15,31 @@ namespace ssta {
 
 /// Gravity and gravity-corrected poses for the frames of one sequence, as `gravity.source`
 /// asks: the IMU attitude filter, the pose's attitude, a level body, or a fixed vector.
-/// Thread-safe for concurrent readers once built.
+/// Thread-safe for concurrent readers once built. With an IMU in use (source auto or imu, and
+/// IMU samples), every frame takes its attitude from the IMU: a frame outside the IMU's time
+/// range throws (the callers skip it with that reason), as INTERFACES section 2 asks.
 class GravityProvider {
  public:
+  /// Throws ssta::Error naming the IMU file when an IMU in use overlaps none of the frames.
   GravityProvider(const Sequence& sequence, const GravityOptions& gravity, const AttitudeFilterOptions& attitude);
 
   /// Unit up vector in the original cam0 frame at `t`. `source_used` (optional) names the
-  /// source that answered: "imu", "pose", "level" or "fixed" (auto falls back in that order).
-  /// Throws ssta::Error when a source named explicitly has no data at `t`.
+  /// source that answered: "imu", "pose", "level" or "fixed" (auto: the IMU when the sequence
+  /// has one, else the pose, else level). Throws ssta::Error when the IMU in use does not cover
+  /// `t` or a source named explicitly has no data at `t`.
   Eigen::Vector3d UpInCamera(std::int64_t t, std::string* source_used = nullptr) const;
 
   /// Up in the body frame at `t` (same sources as UpInCamera, "fixed" excluded).
   Eigen::Vector3d UpInBody(std::int64_t t, std::string* source_used = nullptr) const;
 
-  /// T_WB at `t` with roll and pitch taken from the IMU where an IMU answers (position and yaw
-  /// from the odometry); the odometry pose as it is otherwise; nullopt without a pose at `t`.
+  /// T_WB at `t` with roll and pitch taken from the IMU in use (position and yaw from the
+  /// odometry); the odometry pose as it is without one; nullopt without a pose at `t`. Throws
+  /// ssta::Error when the IMU in use does not cover `t`.
   std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
 
  private:
+  std::string ImuGap(std::int64_t t) const;  // why the IMU gives no attitude at t
+
   const Sequence& sequence_;
   GravityOptions gravity_;
   std::unique_ptr<GravityTrack> track_;  // null without IMU samples
