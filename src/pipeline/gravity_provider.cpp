@@ -24,6 +24,14 @@ GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions&
   }
 }
 
+std::string GravityProvider::Describe() const {
+  if (gravity_.source == GravitySource::kFixed) return "fixed up vector (gravity.up_camera)";
+  if (track_) return "IMU attitude filter (" + sequence_.imu_path() + ")";
+  if (gravity_.source == GravitySource::kLevel) return "level (gravity.source: level)";
+  if (!sequence_.poses().empty()) return "pose attitude (" + sequence_.pose_path() + ")";
+  return "level (no IMU, no poses)";
+}
+
 std::string GravityProvider::ImuGap(std::int64_t t) const {
   const auto& imu = sequence_.imu();
   return sequence_.imu_path() + ": frame " + std::to_string(t) + " lies outside the IMU samples (" +

@@ -239,6 +239,7 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
   BuildMapSummary summary;
   summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
+  summary.gravity = gravity.Describe();
   summary.skipped = sequence.skipped();
   // Strict mode stops at the first unusable frame, once: the per-frame handlers below turn
   // errors into skips, so they let this one through (it is still an ssta::Error for the CLI).
@@ -421,6 +422,7 @@ std::string BuildMapSummary::BriefReport() const {
     << (interrupted ? "; interrupted, the map holds what was fused" : "") << "\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  no verdicts " << s.timestamp_ns << ": " << s.reason << "\n";
+  if (!gravity.empty()) r << "gravity: " << gravity << "\n";
   r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
     << " points fused\n";
   r << "time: " << wall_s << " s (" << (wall_s > 0 ? frames_used / wall_s : 0.0) << " frames/s)\n";
@@ -444,7 +446,8 @@ std::string BuildMapSummary::Json() const {
   list(quality_failed);
   j << ",\n  \"map_nodes\": " << map_nodes << ",\n  \"map_file_bytes\": " << map_file_bytes
     << ",\n  \"points_inserted\": " << points_inserted << ",\n  \"wall_s\": " << wall_s
-    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false");
+    << ",\n  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n  \"gravity\": \""
+    << internal::JsonEscape(gravity) << "\"";
   if (refinement) j << ",\n  \"refinement\": " << refinement->Json();
   j << "\n}\n";
   return j.str();

@@ -314,6 +314,8 @@ TEST(BuildMap, ResumeSkipsOnlyFramesOfTheSameSequence) {
   options.map_path = dir / "m.ot";
   const BuildMapSummary first = BuildMap(Sequence::Open(kEuroc), "s/", config, options);
   ASSERT_EQ(first.frames_used, 3);
+  EXPECT_NE(first.gravity.find("IMU attitude filter ("), std::string::npos) << first.gravity;
+  EXPECT_NE(first.BriefReport().find("gravity: IMU attitude filter"), std::string::npos);
   options.resume = true;
   // The same sequence again, its path typed without the slash or with "./": an interrupted
   // run's frames are in the map already.

@@ -37,6 +37,10 @@ class GravityProvider {
   /// ssta::Error when the IMU in use does not cover `t`.
   std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
 
+  /// Where the frames' up direction comes from, for reports: "IMU attitude filter (FILE)",
+  /// "pose attitude (FILE)", "level ..." or "fixed ...".
+  std::string Describe() const;
+
  private:
   std::string ImuGap(std::int64_t t) const;  // why the IMU gives no attitude at t
 

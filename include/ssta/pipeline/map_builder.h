@@ -51,6 +51,7 @@ struct BuildMapSummary {
   int frames_already_in_map = 0;
   std::vector<SkippedFrame> skipped;         ///< not fused, and why
   std::vector<SkippedFrame> quality_failed;  ///< fused for free space only: no class verdicts
+  std::string gravity;  ///< where roll and pitch came from (GravityProvider::Describe)
   std::size_t map_nodes = 0;
   std::size_t map_file_bytes = 0;
   std::size_t points_inserted = 0;
