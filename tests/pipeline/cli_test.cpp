@@ -113,27 +113,31 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
   EXPECT_NE(r.output.find("--local-ground requires --as-exported"), std::string::npos) << r.output;
 }
 
+// A 3 x 3 m traversable floor map with a level 0.3 x 0.3 m patch at x, y in [0.5, 0.8) that the
+// frames called non-traversable (a step against their plane): the export judges it floor.
+void SaveFloorWithPatch(const std::string& path) {
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 30; ++ix) {
+    for (int iy = 0; iy < 30; ++iy) {
+      ClassifiedPoint p;
+      p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, 0.05f);
+      const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
+      p.cls = patch ? TravClass::kNonTraversable : TravClass::kTraversable;
+      p.slope_deg = 2.0f;
+      p.step_m = patch ? 0.3f : 0.0f;
+      points.push_back(p);
+    }
+  }
+  TraversabilityMap map;
+  map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
+  map.Save(path);
+}
+
 TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   // A 3 x 3 m traversable floor with a level 0.3 x 0.3 m patch at x, y in [0.5, 0.8) that the
   // frames called non-traversable (a step against their plane): the export judges it floor.
   testing::TempDir dir;
-  {
-    std::vector<ClassifiedPoint> points;
-    for (int ix = 0; ix < 30; ++ix) {
-      for (int iy = 0; iy < 30; ++iy) {
-        ClassifiedPoint p;
-        p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, 0.05f);
-        const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
-        p.cls = patch ? TravClass::kNonTraversable : TravClass::kTraversable;
-        p.slope_deg = 2.0f;
-        p.step_m = patch ? 0.3f : 0.0f;
-        points.push_back(p);
-      }
-    }
-    TraversabilityMap map;
-    map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
-    map.Save(dir / "m.ot");
-  }
+  SaveFloorWithPatch(dir / "m.ot");
   const std::string query = "query --map " + (dir / "m.ot");
   auto r = RunSsta(query + " --footprint 0.65,0.65,0,0.3,0.3", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -168,26 +172,11 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
 }
 
 TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
-  // The map: a 3 x 3 m traversable floor with a level patch at cells 5..7 (x, y in [0.5, 0.8))
-  // that the frames called non-traversable. The truth: all traversable except a non-traversable
-  // block at cells 20..22 that the map calls floor.
+  // The map: SaveFloorWithPatch's floor, its patch at cells 5..7. The truth: all traversable
+  // except a non-traversable block at cells 20..22 that the map calls floor.
   testing::TempDir dir;
+  SaveFloorWithPatch(dir / "m.ot");
   {
-    std::vector<ClassifiedPoint> points;
-    for (int ix = 0; ix < 30; ++ix) {
-      for (int iy = 0; iy < 30; ++iy) {
-        ClassifiedPoint p;
-        p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, 0.05f);
-        const bool patch = ix >= 5 && ix < 8 && iy >= 5 && iy < 8;
-        p.cls = patch ? TravClass::kNonTraversable : TravClass::kTraversable;
-        p.slope_deg = 2.0f;
-        p.step_m = patch ? 0.3f : 0.0f;
-        points.push_back(p);
-      }
-    }
-    TraversabilityMap map;
-    map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
-    map.Save(dir / "m.ot");
     ImageU8 truth(30, 30, 1);
     for (int c = 20; c <= 22; ++c) {
       for (int b = 20; b <= 22; ++b) truth(29 - b, c) = 3;
