@@ -174,14 +174,10 @@ void RegisterEval(CLI::App& app) {
   footprints->add_option("--yaws", fp_args->footprint.yaws_deg, "headings [deg], comma-separated")
       ->delimiter(',')
       ->capture_default_str();
-  CLI::Option* as_exported = footprints->add_flag(
-      "--as-exported", fp_args->as_exported,
-      "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "
-      "--as-exported does");
-  AddGridExportSteps(footprints, "with --as-exported: ", &fp_args->exported.fill_min_neighbours,
-                     &fp_args->exported.local_ground_radius_m);
-  footprints->get_option("--fill-holes")->needs(as_exported);
-  footprints->get_option("--local-ground")->needs(as_exported);
+  AddAsExported(footprints,
+                "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "
+                "--as-exported does",
+                &fp_args->as_exported, &fp_args->exported);
   footprints->add_option("--json", fp_args->eval.json_path, "also write the summary as JSON to this file");
   footprints->footer(
       "A pose is scored when every truth cell under it is 1..3 (seen); its truth is their worst class, "

@@ -31,6 +31,13 @@ bool SameFile(const std::string& a, const std::string& b) {
 
 }  // namespace
 
+void AddAsExported(CLI::App* cmd, const std::string& help, bool* as_exported, GridExportOptions* exported) {
+  CLI::Option* flag = cmd->add_flag("--as-exported", *as_exported, help);
+  AddGridExportSteps(cmd, "with --as-exported: ", &exported->fill_min_neighbours, &exported->local_ground_radius_m);
+  cmd->get_option("--fill-holes")->needs(flag);
+  cmd->get_option("--local-ground")->needs(flag);
+}
+
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
                         double* local_ground_radius_m) {
   cmd->add_option("--fill-holes", *fill_min_neighbours,

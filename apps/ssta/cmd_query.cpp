@@ -172,14 +172,10 @@ void RegisterQuery(CLI::App& app) {
     path->excludes(a);
   }
   footprint->excludes(path);
-  CLI::Option* as_exported = cmd->add_flag(
-      "--as-exported", args->as_exported,
-      "X,Y, footprints and paths: read the cells as the exported grid shows them (its local-ground and "
-      "hole-filling steps)");
-  AddGridExportSteps(cmd, "with --as-exported: ", &args->exported.fill_min_neighbours,
-                     &args->exported.local_ground_radius_m);
-  cmd->get_option("--fill-holes")->needs(as_exported);
-  cmd->get_option("--local-ground")->needs(as_exported);
+  AddAsExported(cmd,
+                "X,Y, footprints and paths: read the cells as the exported grid shows them (its local-ground and "
+                "hole-filling steps)",
+                &args->as_exported, &args->exported);
   cmd->callback([args] {
     if (args->at.empty() && args->points.empty() && args->footprint.empty() && args->path.empty()) {
       throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");

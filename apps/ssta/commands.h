@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "ssta/mapping/map_export.h"
+
 namespace ssta::cli {
 
 void RegisterClassify(CLI::App& app);
@@ -21,5 +23,9 @@ void RegisterCalibrateMount(CLI::App& app);
 /// `export` and `query --as-exported`; `scope` starts each help text ("grid: ").
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
                         double* local_ground_radius_m);
+
+/// `--as-exported` (help text `help`) and the export's two steps, which need it: for commands
+/// that read the map as the grid export shows it (`query`, `eval footprints`).
+void AddAsExported(CLI::App* cmd, const std::string& help, bool* as_exported, GridExportOptions* exported);
 
 }  // namespace ssta::cli

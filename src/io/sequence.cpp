@@ -309,6 +309,20 @@ std::vector<StereoFrame> SelectFrames(const std::vector<StereoFrame>& frames, in
   return out;
 }
 
+void Sequence::RequireFramesWithin(std::int64_t first, std::int64_t last, const std::string& file,
+                                   const std::string& what) const {
+  const auto& frames = data_.frames;
+  if (frames.empty() || std::any_of(frames.begin(), frames.end(), [&](const StereoFrame& f) {
+        return f.timestamp_ns >= first && f.timestamp_ns <= last;
+      })) {
+    return;
+  }
+  throw Error(file + ": the " + what + " (" + std::to_string(first) + " to " + std::to_string(last) +
+              " ns) overlap none of the " + std::to_string(frames.size()) + " frames (" +
+              std::to_string(frames.front().timestamp_ns) + " to " + std::to_string(frames.back().timestamp_ns) +
+              " ns)");
+}
+
 std::string Sequence::NoPoseReason(std::int64_t t) const {
   if (data_.poses.empty()) return "the sequence has no poses";
   if (t < data_.poses.front().timestamp_ns || t > data_.poses.back().timestamp_ns) {

@@ -841,15 +841,13 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
   if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
     throw Error("footprint query: the rectangle spans more than 10^7 map columns");
   }
-  {
-    for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
-      for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
-        const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
-        const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
-        const double dx = cx - q.x, dy = cy - q.y;
-        const double along = c * dx + s * dy, across = -s * dx + c * dy;
-        if (std::abs(along) <= half_l && std::abs(across) <= half_w) columns.emplace_back(cx, cy);
-      }
+  for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
+    for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
+      const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
+      const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
+      const double dx = cx - q.x, dy = cy - q.y;
+      const double along = c * dx + s * dy, across = -s * dx + c * dy;
+      if (std::abs(along) <= half_l && std::abs(across) <= half_w) columns.emplace_back(cx, cy);
     }
   }
   if (columns.empty()) columns.emplace_back(q.x, q.y);

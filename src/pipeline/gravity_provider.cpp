@@ -1,7 +1,5 @@
 #include "ssta/pipeline/gravity_provider.h"
 
-#include <algorithm>
-
 namespace ssta {
 
 GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions& gravity,
@@ -9,18 +7,8 @@ GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions&
     : sequence_(sequence), gravity_(gravity) {
   if (!sequence.imu().empty() && gravity.source != GravitySource::kPose && gravity.source != GravitySource::kLevel) {
     track_ = std::make_unique<GravityTrack>(sequence.imu(), sequence.body_T_imu(), attitude, sequence.imu_path());
-    // IMU samples that overlap no frame are a mismatched recording, not a few frames to skip.
-    const std::int64_t first = sequence.imu().front().timestamp_ns, last = sequence.imu().back().timestamp_ns;
-    const auto& frames = sequence.frames();
-    const bool overlap = std::any_of(frames.begin(), frames.end(), [&](const StereoFrame& f) {
-      return f.timestamp_ns >= first && f.timestamp_ns <= last;
-    });
-    if (!frames.empty() && !overlap) {
-      throw Error(sequence.imu_path() + ": the IMU samples (" + std::to_string(first) + " to " + std::to_string(last) +
-                  " ns) overlap none of the " + std::to_string(frames.size()) + " frames (" +
-                  std::to_string(frames.front().timestamp_ns) + " to " + std::to_string(frames.back().timestamp_ns) +
-                  " ns)");
-    }
+    sequence.RequireFramesWithin(sequence.imu().front().timestamp_ns, sequence.imu().back().timestamp_ns,
+                                 sequence.imu_path(), "IMU samples");
   }
 }
 

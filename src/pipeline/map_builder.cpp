@@ -195,18 +195,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
                 "use --static if the platform stands still");
   }
-  if (!options.static_platform && !sequence.frames().empty()) {
-    // Poses that overlap no frame are a mismatched recording, not a few frames to skip.
-    const std::int64_t first = sequence.poses().front().timestamp_ns, last = sequence.poses().back().timestamp_ns;
-    const bool overlap = std::any_of(sequence.frames().begin(), sequence.frames().end(), [&](const StereoFrame& f) {
-      return f.timestamp_ns >= first && f.timestamp_ns <= last;
-    });
-    if (!overlap) {
-      throw Error(sequence.pose_path() + ": the poses (" + std::to_string(first) + " to " + std::to_string(last) +
-                  " ns) overlap none of the " + std::to_string(sequence.frames().size()) +
-                  " frames (" + std::to_string(sequence.frames().front().timestamp_ns) + " to " +
-                  std::to_string(sequence.frames().back().timestamp_ns) + " ns)");
-    }
+  if (!options.static_platform) {
+    sequence.RequireFramesWithin(sequence.poses().front().timestamp_ns, sequence.poses().back().timestamp_ns,
+                                 sequence.pose_path(), "poses");
   }
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);

@@ -103,6 +103,11 @@ class Sequence {
   std::optional<Eigen::Isometry3d> WorldTBodyAt(std::int64_t t) const;
   /// Why WorldTBodyAt(t) has no answer, for reports ("" when it has one).
   std::string NoPoseReason(std::int64_t t) const;
+  /// Throws ssta::Error "FILE: the WHAT (FIRST to LAST ns) overlap none of the N frames (..)"
+  /// when the sequence has frames and none lies in [first, last] (a mismatched recording, not
+  /// a few frames to skip).
+  void RequireFramesWithin(std::int64_t first, std::int64_t last, const std::string& file,
+                           const std::string& what) const;
 
  private:
   SequenceData data_;
