@@ -10,6 +10,8 @@
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/pipeline/sequence_classifier.h"
 #include "ssta/synth/sequence_synthesizer.h"
+#include "ssta/pipeline/config.h"
+#include "ssta_test_paths.h"
 #include "temp_dir.h"
 
 namespace ssta {
@@ -27,6 +29,12 @@ synth::SynthOptions Yard(int frames) {
 synth::SynthOptions Hills(int frames) {
   synth::SynthOptions o = Yard(frames);
   o.scene = "hills";
+  return o;
+}
+
+synth::SynthOptions Dropoff(int frames) {
+  synth::SynthOptions o = Yard(frames);
+  o.scene = "dropoff";
   return o;
 }
 
@@ -148,6 +156,31 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
       << "uncorrected " << without.MeanIou() << " vs corrected " << with_imu.MeanIou();
   // Grid accuracy measured 0.873 on these 20 frames (docs/accuracy.md); the target is 0.90.
   EXPECT_GT(reference.Accuracy(), 0.845);
+}
+
+TEST(EndToEnd, RealtimeOverlayKeepsTheDropOffMap) {
+  // config/realtime.yaml matches at half size and subsamples the normals (about 30 frames/s,
+  // docs/performance.md). Half-size matching makes a few drop-off frames call the lower level
+  // traversable; the overlay lets rays clear that verdict (map.free_space_keeps_traversable:
+  // false). Measured on these 20 frames: shipped 0.955, overlay 0.937, overlay with the
+  // verdicts kept 0.769.
+  testing::TempDir dir;
+  synth::WriteSyntheticSequence(Dropoff(20), dir / "seq");
+  const Config realtime = LoadConfig(std::string(SSTA_CONFIG_DIR) + "/realtime.yaml");
+  ASSERT_EQ(realtime.stereo.downscale, 2);
+  ASSERT_EQ(realtime.normals.subsample, 2);
+  Config kept = realtime;
+  kept.map.fusion.free_space_keeps_traversable = true;
+  testing::TempDir a, b, c;
+  const ConfusionMatrix shipped = MapGridScore(dir / "seq", Config{}, a);
+  const ConfusionMatrix fast = MapGridScore(dir / "seq", realtime, b);
+  const ConfusionMatrix fast_kept = MapGridScore(dir / "seq", kept, c);
+  RecordProperty("shipped", std::to_string(shipped.Accuracy()));
+  RecordProperty("realtime", std::to_string(fast.Accuracy()));
+  RecordProperty("realtime_kept", std::to_string(fast_kept.Accuracy()));
+  EXPECT_GT(fast.Accuracy(), shipped.Accuracy() - 0.03);
+  EXPECT_GT(fast.MeanIou(), shipped.MeanIou() - 0.03);
+  EXPECT_LT(fast_kept.Accuracy(), fast.Accuracy() - 0.10);
 }
 
 }  // namespace
