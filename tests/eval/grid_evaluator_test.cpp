@@ -179,6 +179,102 @@ TEST(eval_ScoreGrid, RejectsPredictedValuesAboveFour) {
   }
 }
 
+// One row of ten 1 m cells along x from the origin: centres (0.5, 0.5) .. (9.5, 0.5).
+ClassGrid RowOfTen(std::uint8_t first_four, std::uint8_t rest, const std::string& source) {
+  ImageU8 classes(10, 1, rest);
+  for (int u = 0; u < 4; ++u) classes(0, u) = first_four;
+  return MakeGrid(classes, 1.0, 0.0, 0.0, source);
+}
+
+TEST(eval_ScoreGridByDistance, BandsHoldTheCellsAtTheirDistanceFromAPoint) {
+  // From (0, 0.5) the centres lie 0.5, 1.5, ..., 9.5 m away: two per 2 m band. The prediction
+  // is right on the first four cells and wrong on the rest.
+  const ClassGrid truth = RowOfTen(1, 1, "t");
+  const ClassGrid predicted = RowOfTen(1, 3, "p");
+  const std::vector<DistanceBand> bands = ScoreGridByDistance(truth, predicted, {{0.0, 0.5}}, 2.0);
+  ASSERT_EQ(bands.size(), 5u);
+  const double accuracy[] = {1.0, 1.0, 0.0, 0.0, 0.0};
+  for (std::size_t k = 0; k < bands.size(); ++k) {
+    EXPECT_DOUBLE_EQ(bands[k].from_m, 2.0 * k);
+    EXPECT_DOUBLE_EQ(bands[k].to_m, 2.0 * k + 2.0);
+    EXPECT_EQ(bands[k].matrix.Scored(), 2) << k;
+    EXPECT_DOUBLE_EQ(bands[k].matrix.Accuracy(), accuracy[k]) << k;
+  }
+  EXPECT_EQ(bands[2].matrix.Count(1, 3), 2);
+  // Bands of 3 m: 0.5 1.5 2.5 | 3.5 4.5 5.5 | 6.5 7.5 8.5 | 9.5.
+  const std::vector<DistanceBand> wide = ScoreGridByDistance(truth, predicted, {{0.0, 0.5}}, 3.0);
+  ASSERT_EQ(wide.size(), 4u);
+  EXPECT_EQ(wide[0].matrix.Scored(), 3);
+  EXPECT_EQ(wide[1].matrix.Correct(), 1);
+  EXPECT_EQ(wide[3].matrix.Scored(), 1);
+}
+
+TEST(eval_ScoreGridByDistance, DistanceIsToThePolylineAndEmptyBandsStay) {
+  // The path runs down x = 0 from y = 5 to y = -5 and on to (2, -5); truth cells of 1 m:
+  //   centre (0.5, 0.5): 0.5 m from the first leg -> band 0
+  //   centre (6.5, 0.5): 6.5 m from the first leg -> band 3 (bands 1 and 2 empty)
+  //   centre (2.5, -7.5): 2.55 m from the end (2, -5) of the second leg -> band 1
+  ImageU8 classes(7, 9, 255);  // 7 x 9 cells of 1 m from (0, -8): y up to 1
+  const ClassGrid empty = MakeGrid(classes, 1.0, 0.0, -8.0, "t");
+  const GridCell a = *empty.CellAt({0.5, 0.5}), b = *empty.CellAt({6.5, 0.5}), c = *empty.CellAt({2.5, -7.5});
+  classes(a.row, a.col) = 1;
+  classes(b.row, b.col) = 3;
+  classes(c.row, c.col) = 2;
+  const ClassGrid truth = MakeGrid(classes, 1.0, 0.0, -8.0, "t");
+  const ClassGrid predicted = MakeGrid(ImageU8(7, 9, 1), 1.0, 0.0, -8.0, "p");
+  const std::vector<DistanceBand> bands =
+      ScoreGridByDistance(truth, predicted, {{0.0, 5.0}, {0.0, -5.0}, {2.0, -5.0}}, 2.0);
+  ASSERT_EQ(bands.size(), 4u);
+  EXPECT_EQ(bands[0].matrix.Count(1, 1), 1);
+  EXPECT_EQ(bands[0].matrix.Scored(), 1);
+  EXPECT_EQ(bands[1].matrix.Count(2, 1), 1);
+  EXPECT_EQ(bands[1].matrix.Scored(), 1);
+  EXPECT_EQ(bands[2].matrix.Scored(), 0);
+  EXPECT_EQ(bands[3].matrix.Count(3, 1), 1);
+  EXPECT_EQ(bands[3].matrix.Scored(), 1);
+}
+
+TEST(eval_ScoreGridByDistance, BadPathOrBandIsAnError) {
+  const ClassGrid grid = RowOfTen(1, 1, "t");
+  EXPECT_THROW(ScoreGridByDistance(grid, grid, {}, 2.0), Error);
+  EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, std::nan("")}}, 2.0), Error);
+  EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, 0.0}}, 0.0), Error);
+  EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, 0.0}}, std::nan("")), Error);
+}
+
+TEST(eval_EvaluateExportedGrid, ScoresByDistanceFromTheSequencesPoses) {
+  TempDir dir;
+  WriteLabels(dir / "seq/gt/grid_classes.png", RowOfTen(1, 1, "t").classes);
+  WriteText(dir / "seq/gt/grid.yaml", GridYaml("grid_classes.png", 1.0, 0.0, 0.0));
+  WriteLabels(dir / "map_classes.png", RowOfTen(1, 3, "p").classes);
+  WriteText(dir / "map.yaml", GridYaml("map.pgm", 1.0, 0.0, 0.0));
+  // Without poses there are no bands.
+  EXPECT_TRUE(EvaluateExportedGrid(dir / "map", dir / "seq").by_distance.empty());
+  // The vehicle stands at (0, 0.5) for three poses: as from one point above.
+  WriteText(dir / "seq/pose0/data.csv",
+            "#timestamp [ns],p_x [m],p_y [m],p_z [m],q_w [],q_x [],q_y [],q_z []\n"
+            "1000,0,0.5,0.2,1,0,0,0\n2000,0,0.5,0.2,1,0,0,0\n3000,0,0.5,0.2,1,0,0,0\n");
+  const GridEvalSummary s = EvaluateExportedGrid(dir / "map", dir / "seq");
+  ASSERT_EQ(s.by_distance.size(), 5u);
+  EXPECT_DOUBLE_EQ(s.by_distance[1].matrix.Accuracy(), 1.0);
+  EXPECT_DOUBLE_EQ(s.by_distance[2].matrix.Accuracy(), 0.0);
+  const std::string json = s.ToJson();
+  EXPECT_NE(json.find("\"by_distance_from_path\""), std::string::npos) << json;
+  // Cumulative: 4 of the 6 cells within 6 m are right.
+  EXPECT_NE(json.find("\"accuracy_within\": 0.6666666666666666"), std::string::npos) << json;
+  const std::string report = s.BriefReport();
+  EXPECT_NE(report.find("by distance from the path"), std::string::npos) << report;
+  EXPECT_NE(report.find("0.6667"), std::string::npos) << report;
+  // A pose file that is there but broken is an error naming it.
+  WriteText(dir / "seq/pose0/data.csv", "1000,0,0.5\n");
+  try {
+    EvaluateExportedGrid(dir / "map", dir / "seq");
+    FAIL() << "expected ssta::Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pose0/data.csv"), std::string::npos) << e.what();
+  }
+}
+
 TEST(eval_EvaluateExportedGrid, ScoresExportAgainstSequenceGroundTruth) {
   TempDir dir;
   WriteLabels(dir / "seq/gt/grid_classes.png", MakeLabels({{1, 1, 2, 2}, {1, 3, 3, 255}}));

@@ -2,6 +2,9 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/confusion_matrix.h"
@@ -28,6 +31,23 @@ ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth);
 /// invalid class values as ScoreGrid.
 ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted);
 
+/// The scored truth cells (truth 1..3) at one range of distances from the vehicle's path.
+struct DistanceBand {
+  double from_m = 0.0;  ///< inclusive [m]
+  double to_m = 0.0;    ///< exclusive [m]
+  ConfusionMatrix matrix;
+};
+
+/// ScoreGrid split by each truth cell centre's distance from `path` (a polyline of world
+/// (x, y) points; one point is a position): band k holds the cells at a distance in
+/// [k * band_m, (k + 1) * band_m). Bands run from 0 to the farthest scored cell; a band
+/// without scored cells is kept (its matrix is empty). A stereo map's error grows with the
+/// square of range, so one accuracy over every cell mixes what the rig resolves with what it
+/// cannot. Throws ssta::Error for an empty path, a non-finite point or band_m <= 0, and on
+/// invalid class values as ScoreGrid.
+std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const ClassGrid& predicted,
+                                              const std::vector<Eigen::Vector2d>& path, double band_m);
+
 /// Result of EvaluateExportedGrid.
 struct GridEvalSummary {
   std::string prediction;  ///< predicted class image
@@ -37,17 +57,27 @@ struct GridEvalSummary {
   std::int64_t scored_cells_outside_prediction = 0;
   ClassGrid truth_grid;      ///< as read (for reports)
   ClassGrid predicted_grid;  ///< as read (for reports)
+  /// Where the sequence has poses (SEQ/pose0/data.csv): the vehicle's positions, the file
+  /// and the score by distance from them in bands of kDistanceBand_m (ScoreGridByDistance).
+  std::vector<Eigen::Vector2d> path;
+  std::string path_source;
+  std::vector<DistanceBand> by_distance;
+  static constexpr double kDistanceBand_m = 2.0;
 
   std::string BriefReport() const;
   /// {"kind": "grid", "unit": "cells", "prediction", "truth", "truth_grid": {width, height,
   ///  resolution, origin}, "prediction_grid": {...}, "scored_cells_outside_prediction",
-  ///  "metrics": {...}} with "metrics" as described at ConfusionMatrix.
+  ///  "metrics": {...}} with "metrics" as described at ConfusionMatrix; with a path also
+  ///  "by_distance_from_path": {"path", "band_m", "bands": [{"from_m", "to_m", "scored",
+  ///  "accuracy", "coverage", "mean_iou", "accuracy_within"}, ...]}, accuracy_within over
+  ///  every cell closer than to_m (figures of no cell are null).
   std::string ToJson() const;
 };
 
 /// Scores a grid exported by `ssta export --format grid --out PREFIX` (PREFIX_classes.png and
-/// PREFIX.yaml) against SEQ/gt/grid_classes.png and SEQ/gt/grid.yaml. Throws ssta::Error
-/// naming the file at fault.
+/// PREFIX.yaml) against SEQ/gt/grid_classes.png and SEQ/gt/grid.yaml, and by distance from the
+/// path when SEQ has poses (pose0/data.csv next to gt/). Throws ssta::Error naming the file at
+/// fault (a pose file that is there but cannot be read is an error too).
 GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence);
 
 }  // namespace ssta
