@@ -166,10 +166,13 @@ int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolera
   return changed;
 }
 
+/// A coordinate [m] with 4 decimals; beyond 1e9 m (a point asked far outside any map, which
+/// %.4f would print with hundreds of digits) in exponent form.
+std::string Coordinate(double v) { return Format(std::abs(v) < 1e9 ? "%.4f" : "%.6e", v); }
+
 std::string QueryCsvRow(const CellInfo& cell) {
   std::string row;
-  row += Format("%.4f", cell.center.x()) + ',' + Format("%.4f", cell.center.y()) + ',' +
-         Format("%.4f", cell.center.z()) + ',';
+  row += Coordinate(cell.center.x()) + ',' + Coordinate(cell.center.y()) + ',' + Coordinate(cell.center.z()) + ',';
   row += std::to_string(static_cast<int>(cell.cls)) + ',';
   row += Format("%.4f", cell.cost) + ',' + Format("%.4f", cell.probability) + ',';
   row += Format("%.2f", cell.slope_deg) + ',' + Format("%.3f", cell.step_m) + ',';

@@ -452,5 +452,14 @@ TEST(MapExport, QueryCsvRowPrintsUnknownAsNaN) {
   EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0");
 }
 
+TEST(MapExport, QueryCsvRowPrintsFarPointsWholeInExponentForm) {
+  // A point asked far outside any map: %.4f would need 300 digits (and was cut at 63).
+  CellInfo far;
+  far.center = Eigen::Vector3d(1e308, -2.5e12, 999999999.0);
+  const std::string row = QueryCsvRow(far);
+  EXPECT_EQ(row, "1.000000e+308,-2.500000e+12,999999999.0000,0,nan,nan,nan,nan,0");
+  EXPECT_DOUBLE_EQ(std::stod(row.substr(0, row.find(','))), 1e308);
+}
+
 }  // namespace
 }  // namespace ssta
