@@ -52,6 +52,7 @@ void ShowProgress(int done, int total) {
 
 struct FootprintArguments {
   EvalArguments eval;
+  std::vector<std::string> config;
   FootprintEvalOptions footprint;
   bool as_exported = false;
   GridExportOptions exported;  // the export's steps, for --as-exported
@@ -69,7 +70,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
     throw Error(error);
   }
   const ClassGrid truth = ReadGroundTruthGrid(args.eval.sequence);
-  const TraversabilityMap map = TraversabilityMap::Load(args.eval.prediction);
+  const TraversabilityMap map = LoadMapForConfig(args.eval.prediction, args.config);
   std::unique_ptr<ExportedSurface> exported;
   if (args.as_exported) {
     const double reach = 0.5 * std::hypot(args.footprint.length_m, args.footprint.width_m);
@@ -162,6 +163,7 @@ void RegisterEval(CLI::App& app) {
       "Score a map's footprint verdicts (query --footprint) against the ground-truth grid: worst class "
       "under a robot rectangle at poses over the seen area");
   footprints->add_option("--map", fp_args->eval.prediction, "map file (.ot) written by build-map")->required();
+  AddMapConfig(footprints, &fp_args->config);
   footprints->add_option("--gt", fp_args->eval.sequence, "synthetic sequence folder holding gt/ (or mav0/gt/)")
       ->required();
   footprints->add_option("--length", fp_args->footprint.length_m, "footprint length along the heading [m]")

@@ -1,13 +1,17 @@
 // ssta export: a map to the formats other tools read.
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <iterator>
+#include <sstream>
 #include <system_error>
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
+#include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 namespace {
@@ -16,6 +20,7 @@ struct ExportArgs {
   std::string map, format, out;
   double resolution_m = 0.0;
   std::vector<double> region;
+  std::vector<std::string> config;
   int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
   double local_ground_radius_m = GridExportOptions{}.local_ground_radius_m;
 };
@@ -30,6 +35,46 @@ bool SameFile(const std::string& a, const std::string& b) {
 }
 
 }  // namespace
+
+void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files) {
+  cmd->add_option("--config", *config_files,
+                  "YAML config, as given to build-map; repeatable, later files win. Its vehicle section must be "
+                  "the vehicle the map was built for (the map's classes are that vehicle's)");
+}
+
+TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files) {
+  TraversabilityMap map = TraversabilityMap::Load(map_path);
+  const VehicleOptions& built = map.metadata().vehicle;
+  struct Key {
+    const char* name;
+    double VehicleOptions::*field;
+  };
+  const Key keys[] = {{"max_slope_deg", &VehicleOptions::max_slope_deg},
+                      {"semi_slope_deg", &VehicleOptions::semi_slope_deg},
+                      {"max_step_m", &VehicleOptions::max_step_m},
+                      {"semi_step_m", &VehicleOptions::semi_step_m},
+                      {"min_camera_height_m", &VehicleOptions::min_camera_height_m},
+                      {"max_camera_height_m", &VehicleOptions::max_camera_height_m}};
+  Config config;
+  config.vehicle = built;  // the files are read over the map's vehicle: a key they leave out matches
+  std::vector<std::string> set_by(std::size(keys));  // the last file that changed each key
+  for (const std::string& file : config_files) {
+    const VehicleOptions before = config.vehicle;
+    ApplyConfigFile(file, &config);
+    for (std::size_t k = 0; k < std::size(keys); ++k) {
+      if (config.vehicle.*keys[k].field != before.*keys[k].field) set_by[k] = file;
+    }
+  }
+  for (std::size_t k = 0; k < std::size(keys); ++k) {
+    const double want = config.vehicle.*keys[k].field, have = built.*keys[k].field;
+    if (std::abs(want - have) <= 1e-9 * std::max(1.0, std::abs(have))) continue;
+    std::ostringstream m;
+    m << set_by[k] << ": vehicle." << keys[k].name << " is " << want << ", but " << map_path << " was built for "
+      << have << "; its classes are that vehicle's: build the map with this config to query it for this vehicle";
+    throw Error(m.str());
+  }
+  return map;
+}
 
 void AddAsExported(CLI::App* cmd, const std::string& help, bool* as_exported, GridExportOptions* exported) {
   CLI::Option* flag = cmd->add_flag("--as-exported", *as_exported, help);
@@ -58,6 +103,7 @@ void RegisterExport(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* cmd = app.add_subcommand("export", "Export a map: a navigation grid, an octovis tree, point clouds or CSV");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
+  AddMapConfig(cmd, &args->config);
   cmd->add_option("--format", args->format,
                   "grid (PREFIX.png, PREFIX_classes.png, PREFIX.pgm, PREFIX.yaml for map_server) | octovis "
                   "(PREFIX.ot ColorOcTree) | ply | pcd | csv")
@@ -88,7 +134,7 @@ void RegisterExport(CLI::App& app) {
                     args->map + "); choose another prefix, e.g. " + args->out + "_" + f);
       }
     }
-    const TraversabilityMap map = TraversabilityMap::Load(args->map);
+    const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
     std::string written;
     if (f == "grid") {
       GridExportOptions options;

@@ -20,6 +20,7 @@ namespace {
 struct QueryArgs {
   std::string map, points, path;
   std::vector<double> at, footprint;
+  std::vector<std::string> config;
   double path_width_m = 0.0;
   bool as_exported = false;
   GridExportOptions exported;  // the export's steps, for --as-exported
@@ -151,6 +152,7 @@ void RegisterQuery(CLI::App& app) {
       "hole: its class, z and cost nan); without it, answers are the map as observed.\n"
       "--footprint and --path print their own headers (see their help) and take --as-exported too.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
+  AddMapConfig(cmd, &args->config);
   auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")->delimiter(',')->expected(2, 3);
   auto* points = cmd->add_option("--points", args->points, "CSV file of points, one x,y or x,y,z per line");
   auto* footprint = cmd->add_option("--footprint", args->footprint,
@@ -180,7 +182,7 @@ void RegisterQuery(CLI::App& app) {
     if (args->at.empty() && args->points.empty() && args->footprint.empty() && args->path.empty()) {
       throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
     }
-    const TraversabilityMap map = TraversabilityMap::Load(args->map);
+    const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
     if (!args->footprint.empty()) return AnswerFootprint(map, *args);
     if (!args->path.empty()) return AnswerPath(map, ReadPoints(args->path), *args);
     std::vector<std::vector<double>> points;

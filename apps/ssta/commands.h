@@ -5,7 +5,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include <string>
+#include <vector>
+
 #include "ssta/mapping/map_export.h"
+#include "ssta/mapping/traversability_map.h"
 
 namespace ssta::cli {
 
@@ -23,6 +27,17 @@ void RegisterCalibrateMount(CLI::App& app);
 /// `export` and `query --as-exported`; `scope` starts each help text ("grid: ").
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
                         double* local_ground_radius_m);
+
+/// `--config FILE` (repeatable) for the commands that read a map (`query`, `export`, `eval
+/// footprints`): every command takes one (INTERFACES section 4), and a script may pass the one
+/// it built the map with. A map's classes were fused for the vehicle it was built for, so the
+/// files, read over that vehicle, must leave it as it is (LoadMapForConfig checks); the other
+/// sections do not apply to reading a map, though a bad value in them is still an error.
+void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files);
+
+/// Loads the map at `map_path` and checks `config_files` against it (AddMapConfig): throws
+/// ssta::Error naming the file and the vehicle key whose value differs from the map's.
+TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files);
 
 /// `--as-exported` (help text `help`) and the export's two steps, which need it: for commands
 /// that read the map as the grid export shows it (`query`, `eval footprints`).

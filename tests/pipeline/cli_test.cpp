@@ -171,6 +171,53 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   EXPECT_NE(r.output.find("xyz.csv: a path vertex is x,y"), std::string::npos) << r.output;
 }
 
+TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
+  // The floor map was built for the default vehicle (max slope 25 deg, max step 0.2 m).
+  testing::TempDir dir;
+  SaveFloorWithPatch(dir / "m.ot");
+  const std::string query = "query --map " + (dir / "m.ot") + " --at 1.05,1.05";
+  const auto plain = RunSsta(query, false);
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  // The defaults, or a file without a vehicle section: the same answer.
+  for (const std::string file : {"/default.yaml", "/realtime.yaml"}) {
+    const auto r = RunSsta(query + " --config " + SSTA_CONFIG_DIR + file, false);
+    EXPECT_EQ(r.exit_code, 0) << file << ": " << r.output;
+    EXPECT_EQ(r.output, plain.output) << file;
+  }
+  // Another vehicle: one line naming the file and the key, for each map-reading command.
+  const std::string large = std::string(SSTA_CONFIG_DIR) + "/vehicles/large_ugv.yaml";
+  fs::create_directories(dir / "seq/gt");
+  WriteImage(ImageU8(30, 30, 1), dir / "seq/gt/grid_classes.png");
+  std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\n";
+  for (const std::string& command : std::vector<std::string>{
+           query, "export --map " + (dir / "m.ot") + " --format csv --out " + (dir / "x"),
+           "eval footprints --map " + (dir / "m.ot") + " --gt " + (dir / "seq")}) {
+    const auto r = RunSsta(command + " --config " + large);
+    EXPECT_EQ(r.exit_code, 2) << command;
+    EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
+    EXPECT_NE(r.output.find("large_ugv.yaml: vehicle.max_slope_deg is 30, but"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("was built for 25"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(dir / "x.csv"));
+  // Later files win: a file that sets the map's values back makes the pair match; the key that
+  // still differs is named with the file that set it.
+  std::ofstream(dir / "back.yaml") << "vehicle:\n  max_slope_deg: 25\n  semi_slope_deg: 15\n  max_step_m: 0.2\n"
+                                      "  semi_step_m: 0.1\n  min_camera_height_m: 0.2\n  max_camera_height_m: 3\n";
+  auto r = RunSsta(query + " --config " + large + " --config " + (dir / "back.yaml"), false);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output, plain.output);
+  std::ofstream(dir / "step.yaml") << "vehicle:\n  max_step_m: 0.25\n";
+  r = RunSsta(query + " --config " + (dir / "step.yaml") + " --config " + (dir / "back.yaml") + " --config " +
+              (dir / "step.yaml"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("step.yaml: vehicle.max_step_m is 0.25, but"), std::string::npos) << r.output;
+  // A bad value in any section is still an error.
+  std::ofstream(dir / "bad.yaml") << "map:\n  resolution_m: -1\n";
+  r = RunSsta(query + " --config " + (dir / "bad.yaml"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("bad.yaml"), std::string::npos) << r.output;
+}
+
 TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   // The map: SaveFloorWithPatch's floor, its patch at cells 5..7. The truth: all traversable
   // except a non-traversable block at cells 20..22 that the map calls floor.
