@@ -75,6 +75,7 @@ std::vector<Eigen::Vector2d> ReadPath(const std::string& pose_csv) {
 
 std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const ClassGrid& predicted,
                                               const std::vector<Eigen::Vector2d>& path, double band_m) {
+  constexpr int kMaxBands = 10000;
   if (!(band_m > 0.0) || !std::isfinite(band_m)) throw Error("distance bands: band_m must be positive");
   if (path.empty()) throw Error("distance bands: the path has no points");
   for (const Eigen::Vector2d& p : path) {
@@ -88,7 +89,13 @@ std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const Clas
       const std::uint8_t t = truth.classes(row, col);
       if (!IsVerdict(t)) continue;
       const Eigen::Vector2d centre = truth.CellCentre({row, col});
-      const auto band = static_cast<std::size_t>(std::floor(DistanceToPath(centre, path) / band_m));
+      const double distance = DistanceToPath(centre, path);
+      if (distance / band_m >= kMaxBands) {
+        throw Error("distance bands: a scored cell lies " + std::to_string(distance) + " m from the path (over " +
+                    std::to_string(kMaxBands) + " bands of " + std::to_string(band_m) +
+                    " m): is the path this grid's?");
+      }
+      const auto band = static_cast<std::size_t>(std::floor(distance / band_m));
       while (bands.size() <= band) {
         DistanceBand b;
         b.from_m = static_cast<double>(bands.size()) * band_m;

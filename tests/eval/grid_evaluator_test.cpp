@@ -240,6 +240,9 @@ TEST(eval_ScoreGridByDistance, BadPathOrBandIsAnError) {
   EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, std::nan("")}}, 2.0), Error);
   EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, 0.0}}, 0.0), Error);
   EXPECT_THROW(ScoreGridByDistance(grid, grid, {{0.0, 0.0}}, std::nan("")), Error);
+  // A path 100 km away is not this grid's (and would make 50000 bands).
+  EXPECT_THROW(ScoreGridByDistance(grid, grid, {{1e5, 0.0}}, 2.0), Error);
+  EXPECT_EQ(ScoreGridByDistance(grid, grid, {{1e4, 0.0}}, 2.0).size(), 5000u);  // 9990.5..9999.5 m: bands to 4999
 }
 
 TEST(eval_EvaluateExportedGrid, ScoresByDistanceFromTheSequencesPoses) {

@@ -43,8 +43,9 @@ struct DistanceBand {
 /// [k * band_m, (k + 1) * band_m). Bands run from 0 to the farthest scored cell; a band
 /// without scored cells is kept (its matrix is empty). A stereo map's error grows with the
 /// square of range, so one accuracy over every cell mixes what the rig resolves with what it
-/// cannot. Throws ssta::Error for an empty path, a non-finite point or band_m <= 0, and on
-/// invalid class values as ScoreGrid.
+/// cannot. Throws ssta::Error for an empty path, a non-finite point or band_m <= 0, a cell more
+/// than 10000 bands from the path (not this grid's path), and on invalid class values as
+/// ScoreGrid.
 std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const ClassGrid& predicted,
                                               const std::vector<Eigen::Vector2d>& path, double band_m);
 

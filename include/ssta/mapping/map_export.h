@@ -15,8 +15,8 @@ namespace ssta {
 inline constexpr char kQueryCsvHeader[] = "x,y,z,class,cost,probability,slope_deg,step_m,observations";
 
 /// One CSV row (no newline) for `cell` under kQueryCsvHeader: centre x, y, z [m] with 4
-/// decimals (in exponent form from 1e9 m on), class id, cost and probability with 4 decimals, slope [deg] with 2, mean step [m]
-/// with 3, observations. Unknown values print as "nan".
+/// decimals (in exponent form from 1e9 m on), class id, cost and probability with 4 decimals,
+/// slope [deg] with 2, mean step [m] with 3, observations. Unknown values print as "nan".
 std::string QueryCsvRow(const CellInfo& cell);
 
 struct GridExportOptions {
