@@ -105,6 +105,13 @@ std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const Clas
       bands[band].matrix.Add(t, predicted.ClassAt(centre));
     }
   }
+  std::int64_t scored = 0, correct = 0;  // of the bands so far
+  for (DistanceBand& b : bands) {
+    scored += b.matrix.Scored();
+    correct += b.matrix.Correct();
+    b.accuracy_within = scored > 0 ? static_cast<double>(correct) / static_cast<double>(scored)
+                                   : std::numeric_limits<double>::quiet_NaN();
+  }
   return bands;
 }
 
@@ -171,13 +178,14 @@ ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& pred
 
 GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::string& sequence) {
   GridEvalSummary summary;
-  summary.truth_grid = ReadGroundTruthGrid(sequence);
+  const std::string gt_dir = FindGroundTruthDir(sequence);
+  summary.truth_grid = ReadGroundTruthGrid(gt_dir);
   summary.predicted_grid = ReadClassGrid(prefix + ".yaml", prefix + "_classes.png");
   summary.truth = summary.truth_grid.source;
   summary.prediction = summary.predicted_grid.source;
   summary.matrix = ScoreGrid(summary.truth_grid, summary.predicted_grid);
   const std::filesystem::path pose_csv =
-      std::filesystem::path(FindGroundTruthDir(sequence)).lexically_normal().parent_path() / "pose0" / "data.csv";
+      std::filesystem::path(gt_dir).lexically_normal().parent_path() / "pose0" / "data.csv";
   if (std::filesystem::exists(pose_csv)) {
     summary.path_source = pose_csv.string();
     summary.path = ReadPath(summary.path_source);
@@ -208,14 +216,11 @@ std::string GridEvalSummary::BriefReport() const {
   if (!by_distance.empty()) {
     out += "by distance from the path (" + path_source + "):\n";
     out += "distance [m]   scored   accuracy   coverage   mean IoU   accuracy within\n";
-    std::int64_t scored = 0, correct = 0;  // of the bands so far
     for (const DistanceBand& b : by_distance) {
       char line[200];
       const ConfusionMatrix& m = b.matrix;
-      scored += m.Scored();
-      correct += m.Correct();
       char within[32] = "-";
-      if (scored > 0) std::snprintf(within, sizeof within, "%.4f", static_cast<double>(correct) / scored);
+      if (std::isfinite(b.accuracy_within)) std::snprintf(within, sizeof within, "%.4f", b.accuracy_within);
       if (m.Scored() == 0) {
         std::snprintf(line, sizeof line, "%5.0f - %-5.0f %8d          -          -          - %17s\n", b.from_m,
                       b.to_m, 0, within);
@@ -257,10 +262,9 @@ std::string GridEvalSummary::ToJson() const {
     json.Number(kDistanceBand_m);
     json.Key("bands");
     json.BeginArray();
-    std::int64_t scored = 0, correct = 0;  // of the bands so far
+    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
     for (const DistanceBand& b : by_distance) {
       const bool any = b.matrix.Scored() > 0;
-      constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
       json.BeginObject();
       json.Key("from_m");
       json.Number(b.from_m);
@@ -274,10 +278,8 @@ std::string GridEvalSummary::ToJson() const {
       json.Number(any ? b.matrix.Coverage() : kNaN);
       json.Key("mean_iou");
       json.Number(any ? b.matrix.MeanIou() : kNaN);
-      scored += b.matrix.Scored();
-      correct += b.matrix.Correct();
       json.Key("accuracy_within");
-      json.Number(scored > 0 ? static_cast<double>(correct) / static_cast<double>(scored) : kNaN);
+      json.Number(b.accuracy_within);  // NaN: null
       json.EndObject();
     }
     json.EndArray();

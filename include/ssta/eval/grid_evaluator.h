@@ -36,6 +36,8 @@ struct DistanceBand {
   double from_m = 0.0;  ///< inclusive [m]
   double to_m = 0.0;    ///< exclusive [m]
   ConfusionMatrix matrix;
+  /// Accuracy over the scored cells of this band and every nearer one (NaN while there are none).
+  double accuracy_within = 0.0;
 };
 
 /// ScoreGrid split by each truth cell centre's distance from `path` (a polyline of world
