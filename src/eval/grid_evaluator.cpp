@@ -91,9 +91,11 @@ std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const Clas
       const Eigen::Vector2d centre = truth.CellCentre({row, col});
       const double distance = DistanceToPath(centre, path);
       if (distance / band_m >= kMaxBands) {
-        throw Error("distance bands: a scored cell lies " + std::to_string(distance) + " m from the path (over " +
-                    std::to_string(kMaxBands) + " bands of " + std::to_string(band_m) +
-                    " m): is the path this grid's?");
+        char message[200];
+        std::snprintf(message, sizeof message,
+                      "a scored cell lies %.0f m from the path (over %d bands of %g m): is the path this grid's?",
+                      distance, kMaxBands, band_m);
+        throw Error(std::string("distance bands: ") + message);
       }
       const auto band = static_cast<std::size_t>(std::floor(distance / band_m));
       while (bands.size() <= band) {
@@ -190,8 +192,12 @@ GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::strin
     summary.path_source = pose_csv.string();
     summary.path = ReadPath(summary.path_source);
     if (!summary.path.empty()) {
-      summary.by_distance = ScoreGridByDistance(summary.truth_grid, summary.predicted_grid, summary.path,
-                                                GridEvalSummary::kDistanceBand_m);
+      try {
+        summary.by_distance = ScoreGridByDistance(summary.truth_grid, summary.predicted_grid, summary.path,
+                                                  GridEvalSummary::kDistanceBand_m);
+      } catch (const Error& e) {  // the path is the pose file's: name it
+        throw Error(summary.path_source + ": " + e.what());
+      }
     }
   }
   const ClassGrid& truth = summary.truth_grid;
