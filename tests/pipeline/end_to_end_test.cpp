@@ -38,6 +38,12 @@ synth::SynthOptions Dropoff(int frames) {
   return o;
 }
 
+synth::SynthOptions Forest(int frames) {
+  synth::SynthOptions o = Yard(frames);
+  o.scene = "forest";
+  return o;
+}
+
 // Classifies every `every`-th frame and scores those frames.
 ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& out_dir,
                                  const Config& config = Config{}, int every = 1) {
@@ -156,6 +162,23 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
       << "uncorrected " << without.MeanIou() << " vs corrected " << with_imu.MeanIou();
   // Grid accuracy measured 0.873 on these 20 frames (docs/accuracy.md); the issue's target is 0.90.
   EXPECT_GT(reference.Accuracy(), 0.845);
+}
+
+TEST(EndToEnd, DropOffAndForestMapsReachTheIssuesAccuracy) {
+  // Issue 4: the exported grid scored against the rendered truth reaches 0.90. Measured on 20
+  // frames, seed 1 (docs/accuracy.md): drop-off 0.955, forest 0.920 (seeds 2 and 3: 0.919 /
+  // 0.954 and 0.902 / 0.939). The yard (0.876 on 30 frames) and the hills (0.746) do not reach
+  // it; docs/accuracy.md says where and why. Coverage is asserted too: an empty map would score
+  // no wrong cell it saw.
+  for (const synth::SynthOptions& scene : {Dropoff(20), Forest(20)}) {
+    SCOPED_TRACE(scene.scene);
+    testing::TempDir seq, out;
+    synth::WriteSyntheticSequence(scene, seq / "seq");
+    const ConfusionMatrix m = MapGridScore(seq / "seq", Config{}, out);
+    RecordProperty(scene.scene + "_accuracy", std::to_string(m.Accuracy()));
+    EXPECT_GE(m.Accuracy(), 0.90);
+    EXPECT_GT(m.Coverage(), 0.95);
+  }
 }
 
 TEST(EndToEnd, RealtimeOverlayKeepsTheDropOffMap) {
