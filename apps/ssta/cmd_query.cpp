@@ -33,6 +33,19 @@ std::string Number(double v, const char* format) {
   return buffer;
 }
 
+// Runs a map query; its error names the option that asked it instead of the library's query
+// ("footprint query: ..." -> "--footprint 1,1,0,1e9,0.5: ...").
+template <typename Query>
+auto NamingTheOption(const std::string& option, const std::string& library_prefix, Query&& query) {
+  try {
+    return query();
+  } catch (const Error& e) {
+    std::string message = e.what();
+    if (message.rfind(library_prefix, 0) == 0) message.erase(0, library_prefix.size());
+    throw Error(option + ": " + message);
+  }
+}
+
 // --footprint X,Y,YAW_DEG,LENGTH,WIDTH: one row under its own header.
 void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   const auto& f = args.footprint;
@@ -43,8 +56,11 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   const FootprintQuery q{f[0], f[1], f[2] * M_PI / 180.0, f[3], f[4]};
   const double r = 0.5 * std::hypot(q.length_m, q.width_m);  // the rectangle lies within r of (x, y)
   const Eigen::AlignedBox2d box(Eigen::Vector2d(q.x - r, q.y - r), Eigen::Vector2d(q.x + r, q.y + r));
-  const FootprintResult result =
-      args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
+  std::string option = "--footprint ";
+  for (std::size_t i = 0; i < f.size(); ++i) option += (i ? "," : "") + Number(f[i], "%g");
+  const FootprintResult result = NamingTheOption(option, "footprint query: ", [&] {
+    return args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
+  });
   std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n"
             << static_cast<int>(result.worst) << ',' << Number(result.mean_cost, "%.4f") << ','
             << Number(result.max_cost, "%.4f") << ',' << Number(result.fraction_observed, "%.4f") << ','
@@ -63,12 +79,14 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
   }
   if (polyline.empty()) throw Error(args.path + ": no vertices");
   const Eigen::Vector2d half_width = Eigen::Vector2d::Constant(0.5 * args.path_width_m);
-  const PathResult result =
-      args.as_exported
-          ? map.QueryPath(polyline, args.path_width_m,
-                          ExportedSurface(map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width),
-                                          args.exported))
-          : map.QueryPath(polyline, args.path_width_m);
+  const std::string option = "--path " + args.path + " --width " + Number(args.path_width_m, "%g");
+  const PathResult result = NamingTheOption(option, "path query: ", [&] {
+    return args.as_exported
+               ? map.QueryPath(polyline, args.path_width_m,
+                               ExportedSurface(map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width),
+                                               args.exported))
+               : map.QueryPath(polyline, args.path_width_m);
+  });
   std::cout << "distance_m,x,y,class,cost,fraction_observed\n";
   for (const PathSample& sample : result.samples) {
     std::cout << Number(sample.distance_m, "%.4f") << ',' << Number(sample.point.x(), "%.4f") << ','

@@ -169,6 +169,19 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   r = RunSsta(query + " --path " + (dir / "xyz.csv"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("xyz.csv: a path vertex is x,y"), std::string::npos) << r.output;
+  // Queries too large for the map name the option that asked them, with its values.
+  r = RunSsta(query + " --footprint 0.65,0.65,0,1e9,0.3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--footprint 0.65,0.65,0,1e+09,0.3: the rectangle reaches beyond the map's addressable"),
+            std::string::npos)
+      << r.output;
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 1e9");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("path.csv --width 1e+09: the path and its width span more than"), std::string::npos)
+      << r.output;
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 1e9 --as-exported");  // the projection refuses
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("path.csv --width 1e+09: grid projection: more than"), std::string::npos) << r.output;
 }
 
 TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
