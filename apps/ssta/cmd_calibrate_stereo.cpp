@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "config_loading.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/error.h"
 
@@ -21,6 +22,7 @@ struct CalibrateStereoArgs {
   std::string out;
   bool fix_intrinsics = false;
   bool quiet = false;
+  std::vector<std::string> config;
   StereoCalibratorOptions options;
 };
 
@@ -71,6 +73,7 @@ void Run(CalibrateStereoArgs& a) {
   ParseGrid(a.coverage_grid, "--coverage-grid", &a.options.coverage_cols, &a.options.coverage_rows);
   if (!a.body_T_cam0.empty()) a.options.body_T_cam0 = ParseBodyTransform(a.body_T_cam0);
   a.options.intrinsics = a.fix_intrinsics ? StereoIntrinsics::kFix : StereoIntrinsics::kRefine;
+  a.options.rectification = LoadLayeredConfig(nullptr, a.config).rectification;  // names a bad file or key
   std::string error;
   if (!a.options.IsValid(&error)) throw Error("--" + error);
 
@@ -111,6 +114,9 @@ void RegisterCalibrateStereo(CLI::App& app) {
                   "fewest pairs with the board in both views")->capture_default_str();
   cmd->add_option("--coverage-grid", args->coverage_grid,
                   "image cells COLSxROWS for the board coverage figure")->capture_default_str();
+  cmd->add_option("--config", args->config,
+                  "YAML config (see config/default.yaml); repeatable, later files win. Its rectification "
+                  "section (alpha, crop) is how the check rectifies the pairs, as classify and build-map will");
   cmd->add_flag("--quiet,-q", args->quiet, "no report on stdout");
   cmd->callback([args] { Run(*args); });
 }

@@ -4,14 +4,17 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include <unistd.h>
 
 #include "commands.h"
+#include "ssta/eval/class_grid.h"
 #include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/eval/label_evaluator.h"
@@ -20,6 +23,7 @@
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
+#include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 namespace {
@@ -30,6 +34,7 @@ struct EvalArguments {
   std::string json_path;
   std::string pictures_dir;
   std::string picture_path;
+  std::vector<std::string> config;
   bool skip_missing = false;
 };
 
@@ -38,7 +43,37 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
   command->add_option("--gt", args->sequence,
                       "synthetic sequence folder holding gt/ (or mav0/gt/)")
       ->required();
+  command->add_option("--config", args->config,
+                      "YAML config, as given to the command that made --pred; repeatable, later files win. Its "
+                      "vehicle section must be the one the truth was rendered for (the sequence's vehicle.yaml)");
   command->add_option("--json", args->json_path, "also write the summary as JSON to this file");
+}
+
+// The truth of a synthetic sequence is classed for the vehicle in its vehicle.yaml (ssta synth
+// writes it beside gt/): --config files read over that vehicle must leave it as it is, else the
+// scores would compare the classes of two vehicles. Without a vehicle.yaml the files are only
+// checked for bad keys and values.
+void RequireTruthVehicle(const EvalArguments& args) {
+  if (args.config.empty()) return;
+  namespace fs = std::filesystem;
+  const fs::path gt = FindGroundTruthDir(args.sequence);
+  std::optional<std::string> vehicle_yaml;
+  for (const fs::path& candidate : {gt.parent_path() / "vehicle.yaml", fs::path(args.sequence) / "vehicle.yaml"}) {
+    if (fs::is_regular_file(candidate)) {
+      vehicle_yaml = candidate.string();
+      break;
+    }
+  }
+  if (!vehicle_yaml) {
+    Config checked;
+    for (const std::string& file : args.config) ApplyConfigFile(file, &checked);
+    return;
+  }
+  Config truth;
+  ApplyConfigFile(*vehicle_yaml, &truth);
+  RequireVehicle(truth.vehicle, args.config, "the truth in " + gt.string() + " was classed for", *vehicle_yaml,
+                 "scores against it would compare the classes of two vehicles: render the sequence for this "
+                 "vehicle (ssta synth --config)");
 }
 
 // Progress on stderr when it is a terminal; one line, rewritten in place.
@@ -120,6 +155,7 @@ void RegisterEval(CLI::App& app) {
                    "leave truth frames without a prediction out of the scores (default: score "
                    "them as all unknown); they are reported either way");
   labels->callback([labels_args] {
+    RequireTruthVehicle(*labels_args);
     LabelEvalOptions options;
     options.pictures_dir = labels_args->pictures_dir;
     options.progress = ShowProgress;
@@ -139,6 +175,7 @@ void RegisterEval(CLI::App& app) {
   grid->add_option("--picture", grid_args->picture_path,
                    "write a truth | prediction | errors PNG on the truth grid (north up), cropped to the scored cells");
   grid->callback([grid_args] {
+    RequireTruthVehicle(*grid_args);
     const GridEvalSummary summary = EvaluateExportedGrid(grid_args->prediction, grid_args->sequence);
     Report(summary, *grid_args);
     if (!grid_args->picture_path.empty()) {
@@ -154,6 +191,7 @@ void RegisterEval(CLI::App& app) {
   AddCommon(query, query_args.get(),
             "CSV written by ssta query (x,y,z,class,cost,probability,slope_deg,step_m,observations)");
   query->callback([query_args] {
+    RequireTruthVehicle(*query_args);
     Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);
   });
 

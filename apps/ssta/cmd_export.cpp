@@ -42,9 +42,8 @@ void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files) {
                   "the vehicle the map was built for (the map's classes are that vehicle's)");
 }
 
-TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files) {
-  TraversabilityMap map = TraversabilityMap::Load(map_path);
-  const VehicleOptions& built = map.metadata().vehicle;
+void RequireVehicle(const VehicleOptions& expected, const std::vector<std::string>& config_files,
+                    const std::string& expected_for, const std::string& source, const std::string& advice) {
   struct Key {
     const char* name;
     double VehicleOptions::*field;
@@ -56,7 +55,7 @@ TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vecto
                       {"min_camera_height_m", &VehicleOptions::min_camera_height_m},
                       {"max_camera_height_m", &VehicleOptions::max_camera_height_m}};
   Config config;
-  config.vehicle = built;  // the files are read over the map's vehicle: a key they leave out matches
+  config.vehicle = expected;  // the files are read over the expected vehicle: a key they leave out matches
   std::vector<std::string> set_by(std::size(keys));  // the last file that changed each key
   for (const std::string& file : config_files) {
     const VehicleOptions before = config.vehicle;
@@ -66,13 +65,19 @@ TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vecto
     }
   }
   for (std::size_t k = 0; k < std::size(keys); ++k) {
-    const double want = config.vehicle.*keys[k].field, have = built.*keys[k].field;
+    const double want = config.vehicle.*keys[k].field, have = expected.*keys[k].field;
     if (std::abs(want - have) <= 1e-9 * std::max(1.0, std::abs(have))) continue;
     std::ostringstream m;
-    m << set_by[k] << ": vehicle." << keys[k].name << " is " << want << ", but " << map_path << " was built for "
-      << have << "; its classes are that vehicle's: build the map with this config to query it for this vehicle";
+    m << set_by[k] << ": vehicle." << keys[k].name << " is " << want << ", but " << expected_for << " " << have
+      << (source.empty() ? "" : " (" + source + ")") << "; " << advice;
     throw Error(m.str());
   }
+}
+
+TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files) {
+  TraversabilityMap map = TraversabilityMap::Load(map_path);
+  RequireVehicle(map.metadata().vehicle, config_files, map_path + " was built for", "",
+                 "its classes are that vehicle's: build the map with this config to query it for this vehicle");
   return map;
 }
 

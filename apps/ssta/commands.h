@@ -35,6 +35,14 @@ void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_n
 /// sections do not apply to reading a map, though a bad value in them is still an error.
 void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files);
 
+/// Reads `config_files` in turn over `expected` (a key they leave out matches) and throws
+/// ssta::Error when a vehicle key ends up different: "<file>: vehicle.<key> is <value>, but
+/// <expected_for> <expected value> (<source>); <advice>" (no brackets for an empty source),
+/// naming the last file that set it. A bad value in any section is an error naming its file and
+/// key, as always.
+void RequireVehicle(const VehicleOptions& expected, const std::vector<std::string>& config_files,
+                    const std::string& expected_for, const std::string& source, const std::string& advice);
+
 /// Loads the map at `map_path` and checks `config_files` against it (AddMapConfig): throws
 /// ssta::Error naming the file and the vehicle key whose value differs from the map's.
 TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files);

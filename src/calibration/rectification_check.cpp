@@ -49,7 +49,7 @@ ImageRgb DrawPicture(RectifiedPair& pair, const std::vector<cv::Point2f>& left_c
 
 RectificationCheck CheckRectification(const StereoCalibration& calibration,
                                       const StereoCalibrationSummary& summary, ImageRgb* picture) {
-  const Rectifier rectifier(calibration, RectifierOptions{});
+  const Rectifier rectifier(calibration, summary.options.rectification);
   const RectifiedGeometry& g = rectifier.geometry();
   RectificationCheck check;
   check.rectified_f_px = g.f;

@@ -342,6 +342,8 @@ bool StereoCalibratorOptions::IsValid(std::string* error) const {
       std::abs(r.determinant() - 1.0) > 1e-6) {
     return fail("body-T-cam0: not a rigid transform (rotation not orthonormal with determinant +1)");
   }
+  std::string rectification_error;
+  if (!rectification.IsValid(&rectification_error)) return fail("rectification." + rectification_error);
   return true;
 }
 

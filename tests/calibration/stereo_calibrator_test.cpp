@@ -201,6 +201,39 @@ TEST(StereoCalibrator, WrittenFilesLoadAsSequenceAndRectifyOntoTheSameRows) {
   EXPECT_NE(json.find("\"mean_abs_dv_px\""), std::string::npos);
 }
 
+TEST(StereoCalibratorCli, ConfigRectificationIsWhatTheCheckUses) {
+  // With alpha 0 cv::stereoRectify zooms in until every rectified pixel has a source pixel: the
+  // common area is the whole 640x480 image and the focal length grows. The report must give the
+  // geometry of a Rectifier built with those options from the written files, not the default's.
+  TempDir dir;
+  std::ofstream(dir / "alpha0.yaml") << "rectification:\n  alpha: 0\n";
+  const RunResult r = CalibrateAll(dir, "--config " + (dir / "alpha0.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string rig = dir / "rig";
+  const StereoCalibration written = LoadStereoCalibration(rig + "/cam0/sensor.yaml", rig + "/cam1/sensor.yaml");
+  RectifierOptions alpha0;
+  alpha0.alpha = 0.0;
+  const RectifiedGeometry zoomed = Rectifier(written, alpha0).geometry();
+  const RectifiedGeometry shipped = Rectifier(written, RectifierOptions{}).geometry();
+  EXPECT_EQ(zoomed.crop_width, 640);
+  EXPECT_EQ(zoomed.crop_height, 480);
+  EXPECT_GT(zoomed.f, shipped.f * 1.1);
+  const std::string json = ReadTextFile(rig + "/calibration_report.json");
+  const std::size_t f_at = json.find("\"rectified_f_px\": ");
+  ASSERT_NE(f_at, std::string::npos) << json;
+  EXPECT_NEAR(std::stod(json.substr(f_at + 18)), zoomed.f, 1e-6);
+  EXPECT_NE(json.find("\"common_area\": [640, 480]"), std::string::npos) << json;
+
+  // A bad value is one error naming the file and key, before any calibration is written.
+  std::ofstream(dir / "bad.yaml") << "rectification:\n  alpha: 2\n";
+  TempDir other;
+  const RunResult bad = CalibrateAll(other, "--config " + (dir / "bad.yaml"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(ErrorLine(bad.output).find("bad.yaml: rectification.alpha: must lie in [0, 1]"), std::string::npos)
+      << bad.output;
+  EXPECT_FALSE(fs::exists(other / "rig"));
+}
+
 TEST(StereoCalibrator, BodyTransformPlacesCam0AndComposesCam1) {
   TempDir dir;
   // A forward-looking camera on a body (x forward, z up), 0.2 m ahead, 0.5 m up.

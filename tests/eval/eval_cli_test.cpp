@@ -65,6 +65,40 @@ TEST_F(eval_Cli, BadInputExitsNonZeroNamingTheFile) {
   EXPECT_NE(r.output.find("bad.csv:2"), std::string::npos) << r.output;
 }
 
+TEST_F(eval_Cli, ConfigMustNameTheVehicleTheTruthWasClassedFor) {
+  // The truth is classed for the sequence's vehicle.yaml; a config for another vehicle would
+  // score one vehicle's classes against another's.
+  WriteText(dir_ / "seq/vehicle.yaml", "vehicle:\n  max_slope_deg: 25\n  max_step_m: 0.2\n");
+  WriteLabels(dir_ / "map_classes.png", MakeLabels({{1, 2}, {3, 0}}));
+  WriteText(dir_ / "map.yaml", GridYaml("map.pgm", 1.0, 0.0, 0.0));
+  WriteText(dir_ / "q.csv", "x,y,z,class,cost,probability,slope_deg,step_m,observations\n0.5,1.5,0,1,0,1,0,0,1\n");
+  WriteText(dir_ / "same.yaml", "vehicle:\n  max_slope_deg: 25\nstereo:\n  block_size: 7\n");
+  WriteText(dir_ / "steeper.yaml", "vehicle:\n  max_slope_deg: 30\n");
+  WriteText(dir_ / "broken.yaml", "vehicle:\n  max_step_m: -1\n");
+  const std::string gt = " --gt " + (dir_ / "seq");
+  for (const std::string& command : {"eval labels --pred " + (dir_ / "out") + gt, "eval grid --pred " + (dir_ / "map") + gt,
+                                    "eval query --pred " + (dir_ / "q.csv") + gt}) {
+    SCOPED_TRACE(command);
+    const RunResult plain = RunSsta(command, false);
+    ASSERT_EQ(plain.exit_code, 0) << plain.output;
+    const RunResult same = RunSsta(command + " --config " + (dir_ / "same.yaml"), false);
+    EXPECT_EQ(same.exit_code, 0) << same.output;
+    EXPECT_EQ(same.output, plain.output);
+    const RunResult other = RunSsta(command + " --config " + (dir_ / "steeper.yaml"));
+    EXPECT_EQ(other.exit_code, 2);
+    EXPECT_NE(other.output.find("steeper.yaml: vehicle.max_slope_deg is 30, but the truth in"), std::string::npos)
+        << other.output;
+    EXPECT_NE(other.output.find("was classed for 25 (" + (dir_ / "seq/vehicle.yaml") + ")"), std::string::npos)
+        << other.output;
+    // A later file that sets it back wins.
+    const RunResult back = RunSsta(command + " --config " + (dir_ / "steeper.yaml") + " --config " + (dir_ / "same.yaml"), false);
+    EXPECT_EQ(back.exit_code, 0) << back.output;
+    const RunResult broken = RunSsta(command + " --config " + (dir_ / "broken.yaml"));
+    EXPECT_EQ(broken.exit_code, 2);
+    EXPECT_NE(broken.output.find("broken.yaml: vehicle.max_step_m"), std::string::npos) << broken.output;
+  }
+}
+
 TEST_F(eval_Cli, HelpListsTheSubCommands) {
   const RunResult r = RunSsta("eval --help");
   EXPECT_EQ(r.exit_code, 0);

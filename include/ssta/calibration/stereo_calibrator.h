@@ -7,6 +7,7 @@
 
 #include "ssta/core/image.h"
 #include "ssta/io/camera_calibration.h"
+#include "ssta/stereo/rectifier.h"
 
 namespace ssta {
 
@@ -52,9 +53,13 @@ struct StereoCalibratorOptions {
   /// Pose of cam0 in the body frame (T_BS of cam0); cam1's T_BS is body_T_cam0 * cam0_T_cam1.
   /// Must be rigid.
   Eigen::Isometry3d body_T_cam0 = Eigen::Isometry3d::Identity();
+  /// How CheckRectification rectifies the pairs to check the result: as the pipeline will with
+  /// the same config section (`rectification`: alpha, crop to the common area), so that the
+  /// check's focal length, common area and picture are the ones classification will see.
+  RectifierOptions rectification;
 
   /// On failure writes a message that starts with the option name (as on the command line,
-  /// without "--") and returns false.
+  /// without "--", or the config key for `rectification`) and returns false.
   bool IsValid(std::string* error) const;
 };
 
@@ -142,8 +147,8 @@ class StereoCalibrator {
   StereoCalibratorOptions options_;
 };
 
-/// Rectifies the used pairs of `summary` with the project's Rectifier (default
-/// RectifierOptions) built from `calibration` (normally read back from the written files),
+/// Rectifies the used pairs of `summary` with the project's Rectifier (the options'
+/// `rectification`) built from `calibration` (normally read back from the written files),
 /// detects the board again in each rectified pair, and measures |v_left - v_right| of
 /// corresponding corners. Returns the figures and, in `*picture` (may be null), one rectified
 /// pair side by side (left | right, cropped to the common area) with horizontal lines every 20
