@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <unistd.h>
 
@@ -50,11 +51,12 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
 }
 
 // The truth of a synthetic sequence is classed for the vehicle in its vehicle.yaml (ssta synth
-// writes it beside gt/): --config files read over that vehicle must leave it as it is, else the
-// scores would compare the classes of two vehicles. Without a vehicle.yaml the files are only
-// checked for bad keys and values.
-void RequireTruthVehicle(const EvalArguments& args) {
-  if (args.config.empty()) return;
+// writes it beside gt/). Scores against it mean something only for classes made for that
+// vehicle: --config files read over it must leave it as it is, and so must the config.yaml that
+// `ssta classify` writes beside its labels (`prediction_config`, when there is one). Without a
+// vehicle.yaml the --config files are only checked for bad keys and values.
+void RequireTruthVehicle(const EvalArguments& args, const std::string& prediction_config = "") {
+  if (args.config.empty() && prediction_config.empty()) return;
   namespace fs = std::filesystem;
   const fs::path gt = FindGroundTruthDir(args.sequence);
   std::optional<std::string> vehicle_yaml;
@@ -71,9 +73,26 @@ void RequireTruthVehicle(const EvalArguments& args) {
   }
   Config truth;
   ApplyConfigFile(*vehicle_yaml, &truth);
-  RequireVehicle(truth.vehicle, args.config, "the truth in " + gt.string() + " was classed for", *vehicle_yaml,
-                 "scores against it would compare the classes of two vehicles: render the sequence for this "
-                 "vehicle (ssta synth --config)");
+  const std::string expected_for = "the truth in " + gt.string() + " was classed for";
+  const std::string advice =
+      "scores against it would compare the classes of two vehicles: classify for that vehicle, or render the "
+      "sequence for this one (ssta synth --config)";
+  RequireVehicle(truth.vehicle, args.config, expected_for, *vehicle_yaml, advice);
+  if (!prediction_config.empty()) RequireVehicle(truth.vehicle, {prediction_config}, expected_for, *vehicle_yaml, advice);
+}
+
+// The config.yaml that `ssta classify` wrote with the labels of --pred (DIR, or DIR/labels), or
+// "" when there is none (a folder of label PNGs from elsewhere).
+std::string ClassifyConfigOf(const std::string& prediction) {
+  namespace fs = std::filesystem;
+  fs::path dir = fs::path(prediction).lexically_normal();
+  if (dir.filename().empty()) dir = dir.parent_path();  // trailing slash
+  std::vector<fs::path> candidates{dir / "config.yaml"};
+  if (dir.filename() == "labels") candidates.push_back(dir.parent_path() / "config.yaml");
+  for (const fs::path& candidate : candidates) {
+    if (fs::is_regular_file(candidate)) return candidate.string();
+  }
+  return "";
 }
 
 // Progress on stderr when it is a terminal; one line, rewritten in place.
@@ -155,7 +174,7 @@ void RegisterEval(CLI::App& app) {
                    "leave truth frames without a prediction out of the scores (default: score "
                    "them as all unknown); they are reported either way");
   labels->callback([labels_args] {
-    RequireTruthVehicle(*labels_args);
+    RequireTruthVehicle(*labels_args, ClassifyConfigOf(labels_args->prediction));
     LabelEvalOptions options;
     options.pictures_dir = labels_args->pictures_dir;
     options.progress = ShowProgress;

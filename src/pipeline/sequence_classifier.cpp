@@ -88,6 +88,11 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
   MakeDirectories(options.out_dir);
+  // The configuration the labels were made with, every key: `--config DIR/config.yaml` repeats
+  // the run, and `ssta eval labels` checks its vehicle against the truth's.
+  WriteTextAtomically(options.out_dir + "/config.yaml",
+                      "# ssta classify: the configuration of this run (defaults, the sequence's vehicle.yaml, "
+                      "--config files)\n" + ConfigToYaml(config));
 
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
 

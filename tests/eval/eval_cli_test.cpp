@@ -99,6 +99,25 @@ TEST_F(eval_Cli, ConfigMustNameTheVehicleTheTruthWasClassedFor) {
   }
 }
 
+TEST_F(eval_Cli, LabelsMadeForAnotherVehicleAreNotScored) {
+  // `ssta classify` writes config.yaml beside labels/: eval labels reads its vehicle.
+  WriteText(dir_ / "seq/vehicle.yaml", "vehicle:\n  max_slope_deg: 25\n");
+  WriteText(dir_ / "out/config.yaml", "vehicle:\n  max_slope_deg: 25\n");
+  for (const std::string pred : {"out", "out/labels", "out/labels/"}) {
+    const RunResult r = RunSsta("eval labels --pred " + (dir_ / pred) + " --gt " + (dir_ / "seq"));
+    EXPECT_EQ(r.exit_code, 0) << pred << ": " << r.output;
+    EXPECT_NE(r.output.find("accuracy 0.7500"), std::string::npos) << r.output;
+  }
+  WriteText(dir_ / "out/config.yaml", "vehicle:\n  max_slope_deg: 20\n");
+  for (const std::string pred : {"out", "out/labels"}) {
+    const RunResult r = RunSsta("eval labels --pred " + (dir_ / pred) + " --gt " + (dir_ / "seq"));
+    EXPECT_EQ(r.exit_code, 2) << pred;
+    EXPECT_NE(r.output.find((dir_ / "out/config.yaml") + ": vehicle.max_slope_deg is 20, but the truth"),
+              std::string::npos)
+        << r.output;
+  }
+}
+
 TEST_F(eval_Cli, HelpListsTheSubCommands) {
   const RunResult r = RunSsta("eval --help");
   EXPECT_EQ(r.exit_code, 0);

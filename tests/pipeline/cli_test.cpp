@@ -361,6 +361,22 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   EXPECT_EQ(labels, 3u);
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "summary.json"));
   EXPECT_TRUE(fs::exists(dir.path() / "o" / "overlay"));
+  // config.yaml holds the run's configuration: given alone, it repeats the run label for label,
+  // while the defaults alone do not (euroc.yaml changes the stereo ranges).
+  const std::string config = dir / "o/config.yaml";
+  ASSERT_TRUE(fs::exists(config));
+  const auto again = RunSsta("classify --sequence " + kEuroc + " --config " + config + " --out " + (dir / "again") + " -q");
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  const auto plain = RunSsta("classify --sequence " + kEuroc + " --out " + (dir / "plain") + " -q");
+  ASSERT_EQ(plain.exit_code, 0) << plain.output;
+  int same = 0, differ = 0;
+  for (const auto& e : fs::directory_iterator(dir.path() / "o" / "labels")) {
+    const std::string name = e.path().filename().string();
+    EXPECT_EQ(ReadTextFile(e.path().string()), ReadTextFile(dir / ("again/labels/" + name))) << name;
+    (ReadTextFile(e.path().string()) == ReadTextFile(dir / ("plain/labels/" + name)) ? same : differ) += 1;
+  }
+  EXPECT_GT(differ, 0) << "euroc.yaml should change some labels, or the repeat proves nothing";
+  EXPECT_EQ(ReadTextFile(dir / "again/config.yaml"), ReadTextFile(config));
 }
 
 TEST(Cli, ThreadsCapTheWorkButNeverChangeTheLabels) {

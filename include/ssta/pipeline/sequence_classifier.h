@@ -15,7 +15,7 @@ namespace ssta {
 
 /// How a sequence is classified (`ssta classify` options that are not in the config file).
 struct ClassifyOptions {
-  std::string out_dir;          ///< where labels/, overlay/, frames/ and summary.json go
+  std::string out_dir;          ///< where labels/, overlay/, frames/, summary.json and config.yaml go
   int max_frames = 0;           ///< 0: all frames
   int every = 1;                ///< use every n-th frame
   bool write_disparity = false; ///< also write disparity/<ts>.png in false colour
@@ -61,8 +61,8 @@ void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const 
 /// Called after each frame: (frames done, frames to do).
 using ProgressCallback = std::function<void(int done, int total)>;
 
-/// Classifies every usable frame of `sequence` and writes the per-frame outputs and
-/// summary.json. Frames that cannot be read are skipped with a reason; bad config or
+/// Classifies every usable frame of `sequence` and writes the per-frame outputs, summary.json
+/// and config.yaml (ConfigToYaml of `config`, written first). Frames that cannot be read are skipped with a reason; bad config or
 /// calibration throw ssta::Error before any work.
 ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
                                  const ClassifyOptions& options, const ProgressCallback& progress = {});
