@@ -34,6 +34,7 @@ Done. Look at:
   $out/classified/overlay/   the left images tinted by class (green traversable, blue semi,
                              red non-traversable, dark unknown, untinted undecided)
   $out/classified/frames/    per-frame JSON: every segment's plane, slope, step, class, reason
+  $out/classified/config.yaml  every setting used (--config it to repeat the run)
   $out/compare/              ground truth | prediction, side by side
   $out/eval.json             accuracy, per-class IoU, coverage, confusion matrix
 MSG
