@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "config_loading.h"
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"
@@ -67,8 +68,7 @@ void RequireTruthVehicle(const EvalArguments& args, const std::string& predictio
     }
   }
   if (!vehicle_yaml) {
-    Config checked;
-    for (const std::string& file : args.config) ApplyConfigFile(file, &checked);
+    LoadLayeredConfig(nullptr, args.config);  // bad keys and values still name their file
     return;
   }
   Config truth;
