@@ -29,7 +29,8 @@ void Run(const BuildMapArgs& a) {
   const Sequence sequence = Sequence::Open(a.sequence);
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
-  if (!a.options.resume && std::filesystem::exists(a.options.map_path) && !a.quiet) {
+  const bool map_existed = std::filesystem::exists(a.options.map_path);
+  if (!a.options.resume && map_existed && !a.quiet) {
     std::cerr << "ssta: replacing " << a.options.map_path << " (use --resume to continue it)\n";
   }
   // SIGINT / SIGTERM stop after the current frame; the map is saved before exiting.
@@ -45,7 +46,8 @@ void Run(const BuildMapArgs& a) {
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
   if (summary.frames_used == 0 && summary.frames_already_in_map == 0) {
-    throw Error(a.sequence + ": no frame could be fused");
+    throw Error(a.sequence + ": no frame could be fused; " + a.options.map_path +
+                (map_existed ? " was left as it was" : " was not written"));
   }
   if (summary.interrupted) throw Error("interrupted; the map holds the frames fused so far (continue with --resume)");
 }

@@ -44,29 +44,20 @@ void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files) {
 
 void RequireVehicle(const VehicleOptions& expected, const std::vector<std::string>& config_files,
                     const std::string& expected_for, const std::string& source, const std::string& advice) {
-  struct Key {
-    const char* name;
-    double VehicleOptions::*field;
-  };
-  const Key keys[] = {{"max_slope_deg", &VehicleOptions::max_slope_deg},
-                      {"semi_slope_deg", &VehicleOptions::semi_slope_deg},
-                      {"max_step_m", &VehicleOptions::max_step_m},
-                      {"semi_step_m", &VehicleOptions::semi_step_m},
-                      {"min_camera_height_m", &VehicleOptions::min_camera_height_m},
-                      {"max_camera_height_m", &VehicleOptions::max_camera_height_m}};
+  const auto& keys = VehicleKeys();
   Config config;
   config.vehicle = expected;  // the files are read over the expected vehicle: a key they leave out matches
-  std::vector<std::string> set_by(std::size(keys));  // the last file that changed each key
+  std::vector<std::string> set_by(keys.size());  // the last file that changed each key
   for (const std::string& file : config_files) {
     const VehicleOptions before = config.vehicle;
     ApplyConfigFile(file, &config);
-    for (std::size_t k = 0; k < std::size(keys); ++k) {
+    for (std::size_t k = 0; k < keys.size(); ++k) {
       if (config.vehicle.*keys[k].field != before.*keys[k].field) set_by[k] = file;
     }
   }
-  for (std::size_t k = 0; k < std::size(keys); ++k) {
+  for (std::size_t k = 0; k < keys.size(); ++k) {
     const double want = config.vehicle.*keys[k].field, have = expected.*keys[k].field;
-    if (std::abs(want - have) <= 1e-9 * std::max(1.0, std::abs(have))) continue;
+    if (SameVehicleValue(want, have)) continue;
     std::ostringstream m;
     m << set_by[k] << ": vehicle." << keys[k].name << " is " << want << ", but " << expected_for << " " << have
       << (source.empty() ? "" : " (" + source + ")") << "; " << advice;

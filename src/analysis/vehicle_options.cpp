@@ -1,5 +1,6 @@
 #include "ssta/analysis/vehicle_options.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace ssta {
@@ -22,6 +23,18 @@ TravClass VehicleOptions::ClassifyStep(double step_m) const {
   if (h <= semi_step_m) return TravClass::kTraversable;
   return TravClass::kSemiTraversable;
 }
+
+const std::array<VehicleKey, 6>& VehicleKeys() {
+  static const std::array<VehicleKey, 6> keys{{{"max_slope_deg", &VehicleOptions::max_slope_deg},
+                                                {"semi_slope_deg", &VehicleOptions::semi_slope_deg},
+                                                {"max_step_m", &VehicleOptions::max_step_m},
+                                                {"semi_step_m", &VehicleOptions::semi_step_m},
+                                                {"min_camera_height_m", &VehicleOptions::min_camera_height_m},
+                                                {"max_camera_height_m", &VehicleOptions::max_camera_height_m}}};
+  return keys;
+}
+
+bool SameVehicleValue(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); }
 
 bool VehicleOptions::IsValid(std::string* error) const {
   if (!(max_slope_deg > 0 && max_slope_deg < 90)) return Fail(error, "max_slope_deg: must be in (0, 90) degrees");

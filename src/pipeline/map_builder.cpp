@@ -41,6 +41,21 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
 }
 
 /// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
+/// A resumed map's classes are its vehicle's: frames classed for another vehicle would mix two
+/// verdicts in one voxel, so the config must give the vehicle the map was built for.
+void RequireSameVehicle(const VehicleOptions& map_vehicle, const VehicleOptions& config_vehicle,
+                        const std::string& map_path) {
+  for (const VehicleKey& k : VehicleKeys()) {
+    const double have = map_vehicle.*k.field, want = config_vehicle.*k.field;
+    if (SameVehicleValue(want, have)) continue;
+    std::ostringstream m;
+    m << map_path << ": the map was built for vehicle." << k.name << " " << have
+      << ", but the config gives " << want
+      << " (a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one)";
+    throw Error(m.str());
+  }
+}
+
 TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
                           const std::string& calibration, bool* continues_sequence) {
   *continues_sequence = false;
@@ -59,6 +74,7 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
       << config.map.fusion.resolution_m << " m in the config (a resumed map keeps its resolution)";
     throw Error(m.str());
   }
+  RequireSameVehicle(map.metadata().vehicle, config.vehicle, options.map_path);
   MapMetadata metadata = map.metadata();
   *continues_sequence = !metadata.sequences.empty() && SameSequenceName(metadata.sequences.back(), sequence_name);
   if (!*continues_sequence) metadata.sequences.push_back(sequence_name);
@@ -237,9 +253,14 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   struct StrictStop : Error {
     using Error::Error;
   };
+  // The map file is written only once this run has fused a frame: a run that fuses nothing
+  // (every frame skipped, or a strict stop at the first) leaves the file as it was.
+  auto save_if_fused = [&] {
+    if (summary.frames_used > 0) map.Save(options.map_path);
+  };
   auto fail_if_strict = [&](std::int64_t t, const std::string& reason) {
     if (!options.strict) return;
-    map.Save(options.map_path);  // nothing fused so far is lost
+    save_if_fused();  // nothing fused so far is lost
     throw StrictStop(sequence.root() + ": frame " + std::to_string(t) + ": " + reason +
                      " (strict: no frame may be skipped)");
   };
@@ -385,16 +406,18 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
     }
     ++done;
     if (config.map.checkpoint_every_frames > 0 && done % config.map.checkpoint_every_frames == 0) {
-      fusion.Submit([&] { map.Save(options.map_path); });
+      fusion.Submit([&] { save_if_fused(); });
     }
     if (progress) progress(done, static_cast<int>(todo.size()));
   }
   fuse_held();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
   fusion.Drain();
   summary.frames_already_in_map = already_in_map;
-  map.Save(options.map_path);
+  save_if_fused();
   summary.map_nodes = map.NumNodes();
-  summary.map_file_bytes = std::filesystem::file_size(options.map_path);
+  std::error_code no_file;
+  const std::uintmax_t bytes = std::filesystem::file_size(options.map_path, no_file);
+  summary.map_file_bytes = no_file ? 0 : static_cast<std::size_t>(bytes);
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (refiner) {
     summary.refinement = refiner->summary();

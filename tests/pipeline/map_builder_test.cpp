@@ -407,6 +407,61 @@ TEST(BuildMap, ResumeRefusesAnotherResolution) {
   }
 }
 
+TEST(BuildMap, ResumeRefusesAnotherVehicleAndLeavesTheMapAsItWas) {
+  testing::TempDir dir;
+  BuildMapOptions options;
+  options.static_platform = true;
+  options.max_frames = 1;
+  options.map_path = dir / "m.ot";
+  Config config = EurocConfig();
+  BuildMap(Sequence::Open(kEuroc), "s", config, options);
+  const std::string before = FileBytes(options.map_path);
+  ASSERT_GT(before.size(), 1000u);
+  config.vehicle.max_step_m = 0.3;  // another vehicle's verdicts must not join this map's
+  options.resume = true;
+  options.max_frames = 0;
+  try {
+    BuildMap(Sequence::Open(kEuroc), "t", config, options);
+    FAIL() << "a resumed map must refuse frames classed for another vehicle";
+  } catch (const Error& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(options.map_path + ": the map was built for vehicle.max_step_m 0.2, but the config gives 0.3"),
+              std::string::npos)
+        << what;
+  }
+  EXPECT_TRUE(FileBytes(options.map_path) == before);
+}
+
+TEST(BuildMap, ARunThatFusesNoFrameLeavesAnExistingMapAsItWas) {
+  testing::TempDir dir;
+  BuildMapOptions options;
+  options.static_platform = true;
+  options.map_path = dir / "m.ot";
+  const Config config = EurocConfig();
+  BuildMap(Sequence::Open(kEuroc), "s", config, options);
+  const std::string before = FileBytes(options.map_path);
+  ASSERT_GT(before.size(), 1000u);
+  // A copy whose every right image is unreadable: each frame is skipped with its reason.
+  const std::string seq = CopyWithFrames(dir, "bad", 0, 2);
+  for (const auto& e : fs::directory_iterator(fs::path(seq) / "mav0" / "cam1" / "data")) {
+    std::ofstream(e.path(), std::ios::binary) << "not a png";
+  }
+  for (const bool resume : {false, true}) {
+    options.resume = resume;
+    const BuildMapSummary summary = BuildMap(Sequence::Open(seq), "bad", config, options);
+    EXPECT_EQ(summary.frames_used, 0) << resume;
+    EXPECT_EQ(summary.skipped.size(), 3u) << resume;
+    EXPECT_EQ(summary.map_file_bytes, before.size()) << resume;
+    EXPECT_TRUE(FileBytes(options.map_path) == before) << "resume " << resume;
+  }
+  // Strict: the first frame stops the run before anything is fused.
+  options.resume = false;
+  options.strict = true;
+  EXPECT_THROW(BuildMap(Sequence::Open(seq), "bad", config, options), Error);
+  EXPECT_TRUE(FileBytes(options.map_path) == before);
+  EXPECT_EQ(TraversabilityMap::Load(options.map_path).metadata().sequences, std::vector<std::string>{"s"});
+}
+
 TEST(BuildMap, OracleDisparityPutsARampAtItsTrueHeightAndSkipsAFrameWithoutTruth) {
   // The `ramp` scene is the plane z = tan(10 deg) x: with the true disparity every observed
   // column's top surface lies on it within a voxel and is traversable (10 < 15 deg).

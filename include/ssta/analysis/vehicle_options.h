@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <string>
 
 #include "ssta/core/classes.h"
@@ -24,5 +25,15 @@ struct VehicleOptions {
   /// On failure names the offending key (e.g. "semi_slope_deg: must not exceed max_slope_deg").
   bool IsValid(std::string* error) const;
 };
+
+/// One key of the vehicle section: its YAML name and its field.
+struct VehicleKey {
+  const char* name;
+  double VehicleOptions::*field;
+};
+/// Every key of the vehicle section, in the order of INTERFACES section 4.
+const std::array<VehicleKey, 6>& VehicleKeys();
+/// Whether two values of a vehicle key are the same (relative tolerance 1e-9).
+bool SameVehicleValue(double a, double b);
 
 }  // namespace ssta

@@ -110,8 +110,10 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
 /// sensor.yaml mount equals the recorded configured one starts from the recorded refined one
 /// (a different sensor.yaml starts from its own). The map is saved atomically every
 /// config.map.checkpoint_every_frames frames and at the end, also when `stop` turns true (the
-/// run then ends after the current frame). Throws ssta::Error on bad input before any work.
-/// With `resume`, when the map's last sequence is `sequence_name` (a run that was interrupted
+/// run then ends after the current frame), but only once the run has fused a frame: a run that
+/// fuses none leaves the file at map_path as it was. Throws ssta::Error on bad input before any
+/// work; with `resume`, also when the config's vehicle differs from the map's (its classes are
+/// that vehicle's) or its map.resolution_m from the map's resolution. With `resume`, when the map's last sequence is `sequence_name` (a run that was interrupted
 /// or killed), frames up to the map's last fused timestamp are already in it and are not fused
 /// again; another sequence is fused whole.
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
