@@ -1,5 +1,7 @@
 #include "ssta/io/file_util.h"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -8,6 +10,7 @@
 #include <random>
 #include <sstream>
 #include <system_error>
+#include <vector>
 
 #include <fcntl.h>
 #include <signal.h>
@@ -128,6 +131,27 @@ void MakeDirectories(const std::string& path) {
   if (ec || !fs::is_directory(path)) {
     throw Error(path + ": cannot create directory" + (ec ? ": " + ec.message() : ""));
   }
+}
+
+int RemoveFrameFiles(const std::string& dir, const std::string& extension) {
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return 0;
+  std::vector<fs::path> stale;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (!entry.is_regular_file() || entry.path().extension().string() != extension) continue;
+    const std::string stem = entry.path().stem().string();
+    const bool digits = !stem.empty() && std::all_of(stem.begin(), stem.end(), [](unsigned char c) {
+      return std::isdigit(c) != 0;
+    });
+    if (digits) stale.push_back(entry.path());
+  }
+  if (ec) throw Error(dir + ": cannot list folder: " + ec.message());
+  for (const fs::path& file : stale) {
+    if (!fs::remove(file, ec) || ec) {
+      throw Error(file.string() + ": cannot remove a file of an earlier run" + (ec ? ": " + ec.message() : ""));
+    }
+  }
+  return static_cast<int>(stale.size());
 }
 
 }  // namespace ssta

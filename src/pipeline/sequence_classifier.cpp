@@ -88,6 +88,13 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
   MakeDirectories(options.out_dir);
+  // The frames of an earlier, longer run would stay beside this one's and be scored.
+  const std::pair<const char*, const char*> outputs[] = {{"labels", ".png"}, {"overlay", ".png"}, {"frames", ".json"},
+                                                         {"disparity", ".png"}, {"disparity_colour", ".png"}};
+  int stale_files_removed = 0;
+  for (const auto& [dir, extension] : outputs) {
+    stale_files_removed += RemoveFrameFiles(options.out_dir + "/" + dir, extension);
+  }
   // The configuration the labels were made with, every key: `--config DIR/config.yaml` repeats
   // the run, and `ssta eval labels` checks its vehicle against the truth's.
   WriteTextAtomically(options.out_dir + "/config.yaml",
@@ -97,6 +104,7 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
 
   ClassifySummary summary;
+  summary.stale_files_removed = stale_files_removed;
   summary.frames_total = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
   summary.skipped = sequence.skipped();
   if (options.strict && !summary.skipped.empty()) {
@@ -145,6 +153,7 @@ std::string ClassifySummary::BriefReport() const {
     << quality_failed.size() << " failed the quality check (of " << frames_total << " listed)\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  undecided " << s.timestamp_ns << ": " << s.reason << "\n";
+  if (stale_files_removed > 0) r << "removed " << stale_files_removed << " frame files of an earlier run first\n";
   std::int64_t total = 0;
   for (auto n : class_pixels) total += n;
   if (total > 0) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <numeric>
 #include <sstream>
@@ -19,6 +20,8 @@
 
 namespace ssta::synth {
 namespace {
+
+namespace fs = std::filesystem;
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 /// Time of the first IMU / pose sample; EuRoC-like magnitude to exercise int64 handling [ns].
@@ -222,6 +225,17 @@ std::string VehicleYaml(const VehicleOptions& v) {
   return out.str();
 }
 
+/// synth writes into an empty or new folder, or over an earlier synth output (it has gt/): a
+/// recorded sequence there would lose its images and its data.csv files.
+void RequireSynthFolder(const std::string& out_dir) {
+  std::error_code ec;
+  const bool recorded = fs::exists(Join(out_dir, "cam0/data.csv"), ec) || fs::exists(Join(out_dir, "mav0"), ec);
+  if (recorded && !fs::is_directory(Join(out_dir, "gt"), ec)) {
+    throw Error(out_dir + ": holds a recorded sequence (cam0/data.csv or mav0/, and no gt/); synth writes only "
+                "into a new or empty folder or over its own earlier output");
+  }
+}
+
 }  // namespace
 
 std::string SynthSummary::BriefReport() const {
@@ -229,6 +243,7 @@ std::string SynthSummary::BriefReport() const {
   out << std::fixed << std::setprecision(1) << "synth: " << frames_written << " frames ("
       << frames_dropped << " dropped from cam1), " << imu_samples << " IMU samples, largest disparity "
       << max_disparity_px << " px, " << render_ms_per_frame << " ms per stereo frame";
+  if (stale_files_removed > 0) out << "; removed " << stale_files_removed << " frame files of an earlier run";
   return out.str();
 }
 
@@ -266,8 +281,13 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   written_cam1.translation() =
       body_T_cam0.translation() + r_err * (body_T_cam1.translation() - body_T_cam0.translation());
 
+  RequireSynthFolder(out_dir);
   for (const char* dir : {"cam0/data", "cam1/data", "imu0", "pose0", "gt/labels", "gt/disparity"}) {
     MakeDirectories(Join(out_dir, dir));
+  }
+  // The frames of an earlier, longer run would stay beside this one's and be scored.
+  for (const char* dir : {"cam0/data", "cam1/data", "gt/labels", "gt/disparity"}) {
+    summary.stale_files_removed += RemoveFrameFiles(Join(out_dir, dir), ".png");
   }
 
   // Calibration files.

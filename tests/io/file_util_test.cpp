@@ -3,6 +3,7 @@
 
 #include "ssta/io/file_util.h"
 
+#include <algorithm>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
@@ -158,6 +159,23 @@ TEST(WriteFileAtomically, AWriterKilledMidWriteLeavesItsTemporaryForTheNextMapSa
   EXPECT_FALSE(fs::exists(leftovers[0])) << leftovers[0] << " should have been removed";
   for (const std::string& k : keep) EXPECT_TRUE(fs::exists(k)) << k;
   EXPECT_EQ(EntriesIn(dir.path()), 1 + static_cast<int>(keep.size()));
+}
+
+TEST(RemoveFrameFiles, RemovesOnlyFilesNamedByATimestampWithTheExtension) {
+  testing::TempDir dir;
+  const fs::path d = dir.path();
+  for (const char* name : {"1600000000100000000.png", "17.png", "1600000000100000000.json", "a17.png", "17a.png",
+                           "notes.txt", ".png"}) {
+    std::ofstream(d / name) << "x";
+  }
+  fs::create_directory(d / "18.png");  // a folder of that name is not a frame file
+  EXPECT_EQ(RemoveFrameFiles(d.string(), ".png"), 2);
+  std::vector<std::string> left;
+  for (const auto& e : fs::directory_iterator(d)) left.push_back(e.path().filename().string());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, (std::vector<std::string>{".png", "1600000000100000000.json", "17a.png", "18.png", "a17.png",
+                                            "notes.txt"}));
+  EXPECT_EQ(RemoveFrameFiles((d / "missing").string(), ".png"), 0);
 }
 
 }  // namespace

@@ -378,6 +378,19 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   }
   EXPECT_GT(differ, 0) << "euroc.yaml should change some labels, or the repeat proves nothing";
   EXPECT_EQ(ReadTextFile(dir / "again/config.yaml"), ReadTextFile(config));
+  // A shorter run into the same folder leaves none of the longer run's frames behind (eval
+  // would score them), and nothing that is not a frame file of its own is touched.
+  std::ofstream(dir.path() / "o" / "labels" / "notes.txt") << "mine";
+  const auto shorter = RunSsta("classify --sequence " + kEuroc + " --config " + config + " --max-frames 1 --out " +
+                               (dir / "o"));
+  ASSERT_EQ(shorter.exit_code, 0) << shorter.output;
+  EXPECT_NE(shorter.output.find("removed 9 frame files of an earlier run first"), std::string::npos) << shorter.output;
+  for (const char* sub : {"labels", "overlay", "frames"}) {
+    std::size_t frame_files = 0;
+    for (const auto& e : fs::directory_iterator(dir.path() / "o" / sub)) frame_files += e.path().stem() != "notes";
+    EXPECT_EQ(frame_files, 1u) << sub;
+  }
+  EXPECT_EQ(ReadTextFile(dir / "o/labels/notes.txt"), "mine");
 }
 
 TEST(Cli, ThreadsCapTheWorkButNeverChangeTheLabels) {

@@ -569,6 +569,26 @@ TEST(SynthCli, WritesASequenceAndRejectsBadOptions) {
                            "/gt/extrinsics.yaml", "/gt/faults.yaml", "/pose0/data.csv"}) {
     EXPECT_TRUE(fs::exists(out + file)) << file;
   }
+  // A shorter run into the same folder leaves none of the longer run's frames to be scored.
+  EXPECT_EQ(std::system((binary + common + " --scene forest --frames 2 --out " + out + log).c_str()), 0)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  // 4 cam0 images, 2 cam1 (two dropped), 4 label and 4 disparity images.
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("removed 14 frame files of an earlier run"), std::string::npos)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  for (const char* dir : {"/cam0/data", "/cam1/data", "/gt/labels", "/gt/disparity"}) {
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(out + dir)) files += e.is_regular_file() ? 1 : 0;
+    EXPECT_EQ(files, 2) << dir;
+  }
+  // A recorded sequence (data.csv, no gt/) is not overwritten.
+  const std::string recorded = tmp.Sub("recorded");
+  fs::create_directories(recorded + "/cam0/data");
+  std::ofstream(recorded + "/cam0/data.csv") << "#timestamp [ns],filename\n";
+  std::ofstream(recorded + "/cam0/data/1.png") << "x";
+  EXPECT_NE(std::system((binary + common + " --frames 1 --out " + recorded + log).c_str()), 0);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find(recorded + ": holds a recorded sequence"), std::string::npos)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  EXPECT_TRUE(fs::exists(recorded + "/cam0/data/1.png"));
   EXPECT_NE(std::system((binary + common + " --scene moon --out " + tmp.Sub("bad") + log).c_str()), 0);
   EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("scene: unknown scene 'moon'"), std::string::npos);
   EXPECT_NE(std::system((binary + common + " --drop-frames 0.x --out " + tmp.Sub("bad") + log).c_str()), 0);

@@ -23,4 +23,11 @@ std::string ReadTextFile(const std::string& path);
 /// Creates a directory and its parents; throws ssta::Error naming it on failure.
 void MakeDirectories(const std::string& path);
 
+/// Removes the per-frame files of an earlier run from `dir`: regular files named
+/// `<digits><extension>` (e.g. `1600000000100000000.png`), nothing else. Returns how many were
+/// removed; a missing folder removes none. Throws ssta::Error naming a file it cannot remove.
+/// Commands that write one file per frame into folders of their own call it first, so that a
+/// shorter run into the same folder does not leave the frames of a longer one to be scored.
+int RemoveFrameFiles(const std::string& dir, const std::string& extension);
+
 }  // namespace ssta

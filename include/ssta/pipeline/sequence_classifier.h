@@ -38,6 +38,8 @@ struct ClassifySummary {
   std::array<std::int64_t, 5> class_pixels{};  ///< pixels per class id over all frames
   StageTimings mean_timings;
   double wall_s = 0.0;
+  /// Per-frame files of an earlier run in the output folders, removed first (RemoveFrameFiles).
+  int stale_files_removed = 0;
 
   /// A few lines for people.
   std::string BriefReport() const;
@@ -62,7 +64,9 @@ void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const 
 using ProgressCallback = std::function<void(int done, int total)>;
 
 /// Classifies every usable frame of `sequence` and writes the per-frame outputs, summary.json
-/// and config.yaml (ConfigToYaml of `config`, written first). Frames that cannot be read are skipped with a reason; bad config or
+/// and config.yaml (ConfigToYaml of `config`, written first). The per-frame files of an earlier
+/// run in the output folders (labels/, overlay/, frames/, disparity/, disparity_colour/) are
+/// removed first. Frames that cannot be read are skipped with a reason; bad config or
 /// calibration throw ssta::Error before any work.
 ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
                                  const ClassifyOptions& options, const ProgressCallback& progress = {});

@@ -22,6 +22,8 @@ struct SynthSummary {
   Eigen::Isometry3d body_T_cam0 = Eigen::Isometry3d::Identity();  ///< true cam0 mount
   /// Not empty when the run drives past the scene's clear run (Scene::clear_run_m).
   std::string warning;
+  /// Per-frame files of an earlier run in the same folder, removed first (RemoveFrameFiles).
+  int stale_files_removed = 0;
 
   /// One line: frames, drops, largest disparity, render time.
   std::string BriefReport() const;
@@ -36,7 +38,8 @@ using SynthProgress = std::function<void(int done, int total)>;
 Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& motion);
 
 /// Renders a complete synthetic ASL sequence with ground truth into `out_dir` (created when
-/// missing; files of an earlier run are overwritten): cam0/, cam1/, imu0/, pose0/,
+/// missing; files of an earlier synth run are overwritten, and its per-frame images removed
+/// first; a folder holding a recorded sequence, without gt/, is refused): cam0/, cam1/, imu0/, pose0/,
 /// vehicle.yaml and gt/ (labels, disparity, grid_classes.png + grid.yaml, extrinsics.yaml,
 /// faults.yaml), as INTERFACES sections 2 and 6 describe. Deterministic for given options.
 /// Conventions: IMU and pose0 start 0.1 s before the first frame and end 0.1 s after the last;
