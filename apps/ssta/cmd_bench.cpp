@@ -97,7 +97,7 @@ void RegisterBench(CLI::App& app) {
   cmd->add_flag("--refine", args->refine,
                 "also time the online mount refinement per frame (sets refinement.online, as build-map --refine)");
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
-  cmd->add_option("--json", args->json, "also write the report as JSON to this file");
+  cmd->add_option("--json", args->json, "also write the report as JSON to this file")->check(OutputFile());
   cmd->add_option("--scene", args->synth.scene, "scene to render: yard | hills | dropoff | forest | ramp")
       ->capture_default_str();
   cmd->add_option("--seed", args->synth.seed, "seed of the rendered scene")->capture_default_str();

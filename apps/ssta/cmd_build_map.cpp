@@ -58,7 +58,7 @@ void RegisterBuildMap(CLI::App& app) {
   auto args = std::make_shared<BuildMapArgs>();
   CLI::App* cmd = app.add_subcommand("build-map", "Fuse a sequence's classified frames into a 3D traversability map (OctoMap)");
   cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
-  cmd->add_option("--map", args->options.map_path, "map file to write (.ot)")->required();
+  cmd->add_option("--map", args->options.map_path, "map file to write (.ot)")->required()->check(OutputFile());
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
   cmd->add_flag("--resume", args->options.resume,
                 "continue the existing map: with another sequence, or finish an interrupted run of this one "
@@ -67,7 +67,7 @@ void RegisterBuildMap(CLI::App& app) {
                 "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
   cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");
-  cmd->add_option("--json", args->json, "write the run's summary as JSON to this file");
+  cmd->add_option("--json", args->json, "write the run's summary as JSON to this file")->check(OutputFile());
   cmd->add_flag("--refine", args->refine,
                 "refine cam0's mount pitch and roll online from the ground (sets refinement.online; "
                 "docs/mount_calibration.md)");

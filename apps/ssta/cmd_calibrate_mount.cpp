@@ -97,7 +97,8 @@ void RegisterCalibrateMount(CLI::App& app) {
                   "gravity: the ground is level, its normal is up from the IMU-corrected pose "
                   "(default: refinement.ground_reference in the config, body)")
       ->check(CLI::IsMember({"body", "gravity"}));
-  cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON");
+  cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON")
+      ->check(OutputFile());
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");
   cmd->callback([args] {
     std::string error;

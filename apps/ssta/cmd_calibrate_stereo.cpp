@@ -100,7 +100,7 @@ void RegisterCalibrateStereo(CLI::App& app) {
   cmd->add_option("--right", args->right, "right images, as --left")->required();
   cmd->add_option("--board", args->board, "inner corners of the chessboard, COLSxROWS")->capture_default_str();
   cmd->add_option("--square", args->options.square_m, "side of one chessboard square [m]")->required();
-  cmd->add_option("--out", args->out, "output folder (cam0/, cam1/, report, picture)")->required();
+  cmd->add_option("--out", args->out, "output folder (cam0/, cam1/, report, picture)")->required()->check(OutputFolder());
   cmd->add_option("--body-T-cam0", args->body_T_cam0,
                   "pose of cam0 in the body frame: a YAML file (a T_BS block such as a sensor.yaml, "
                   "or data: [16 numbers]) or 16 comma-separated numbers, row-major 4x4; default identity");

@@ -72,7 +72,7 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_option("--calib1", args->calib1, "single-pair mode: cam1 sensor.yaml");
   cmd->add_option("--up", args->up, "single-pair mode: up direction in cam0 (x right, y down, z forward); "
                                     "default: a level body through cam0's T_BS")->expected(3)->delimiter(',');
-  cmd->add_option("--out", args->options.out_dir, "output folder")->required();
+  cmd->add_option("--out", args->options.out_dir, "output folder")->required()->check(OutputFolder());
   cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); repeatable, later files win; overrides the sequence's vehicle.yaml");
   cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
   cmd->add_option("--every", args->options.every, "use every N-th frame");

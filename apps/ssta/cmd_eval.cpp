@@ -48,7 +48,7 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
   command->add_option("--config", args->config,
                       "YAML config, as given to the command that made --pred; repeatable, later files win. Its "
                       "vehicle section must be the one the truth was rendered for (the sequence's vehicle.yaml)");
-  command->add_option("--json", args->json_path, "also write the summary as JSON to this file");
+  command->add_option("--json", args->json_path, "also write the summary as JSON to this file")->check(OutputFile());
 }
 
 // The truth of a synthetic sequence is classed for the vehicle in its vehicle.yaml (ssta synth
@@ -169,7 +169,8 @@ void RegisterEval(CLI::App& app) {
   AddCommon(labels, labels_args.get(),
             "classify output folder (PNGs in DIR/labels/) or a folder of label PNGs");
   labels->add_option("--pictures", labels_args->pictures_dir,
-                     "write truth | prediction | errors pictures per frame to this folder");
+                     "write truth | prediction | errors pictures per frame to this folder")
+      ->check(OutputFolder());
   labels->add_flag("--skip-missing", labels_args->skip_missing,
                    "leave truth frames without a prediction out of the scores (default: score "
                    "them as all unknown); they are reported either way");
@@ -192,7 +193,8 @@ void RegisterEval(CLI::App& app) {
       "grid", "Score an exported grid (ssta export --format grid) against gt/grid_classes.png");
   AddCommon(grid, grid_args.get(), "export prefix: reads PREFIX_classes.png and PREFIX.yaml");
   grid->add_option("--picture", grid_args->picture_path,
-                   "write a truth | prediction | errors PNG on the truth grid (north up), cropped to the scored cells");
+                   "write a truth | prediction | errors PNG on the truth grid (north up), cropped to the scored cells")
+      ->check(OutputFile());
   grid->callback([grid_args] {
     RequireTruthVehicle(*grid_args);
     const GridEvalSummary summary = EvaluateExportedGrid(grid_args->prediction, grid_args->sequence);
@@ -237,7 +239,7 @@ void RegisterEval(CLI::App& app) {
                 "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "
                 "--as-exported does",
                 &fp_args->as_exported, &fp_args->exported);
-  footprints->add_option("--json", fp_args->eval.json_path, "also write the summary as JSON to this file");
+  footprints->add_option("--json", fp_args->eval.json_path, "also write the summary as JSON to this file")->check(OutputFile());
   footprints->footer(
       "A pose is scored when every truth cell under it is 1..3 (seen); its truth is their worst class, "
       "the map's answer the worst class of the cells it knows (0 when none). unsafe: truly "

@@ -105,7 +105,7 @@ void RegisterExport(CLI::App& app) {
                   "(PREFIX.ot ColorOcTree) | ply | pcd | csv")
       ->required()
       ->check(CLI::IsMember({"grid", "octovis", "ply", "pcd", "csv"}));
-  cmd->add_option("--out", args->out, "output prefix (the extension is added)")->required();
+  cmd->add_option("--out", args->out, "output prefix (the extension is added)")->required()->check(OutputPrefix());
   cmd->add_option("--resolution", args->resolution_m, "grid: pixel edge [m] (default: the map's)");
   cmd->add_option("--region", args->region, "grid: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')

@@ -71,7 +71,7 @@ void RegisterSynth(CLI::App& app) {
       "band on class boundaries; vertical faces are non-traversable.");
   cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp")
       ->capture_default_str();
-  cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required();
+  cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required()->check(OutputFolder());
   cmd->add_option("--frames", options->frames, "number of stereo frames")->capture_default_str();
   cmd->add_option("--seed", options->seed, "seed of layout, texture and noise")->capture_default_str();
   cmd->add_option("--ramp-slope-deg", options->ramp_slope_deg, "slope of the ramp scene [deg]")

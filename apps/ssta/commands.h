@@ -23,6 +23,14 @@ void RegisterCalibrateStereo(CLI::App& app);
 void RegisterBench(CLI::App& app);
 void RegisterCalibrateMount(CLI::App& app);
 
+/// Validators for the paths a command writes, checked while the command line is parsed, so a
+/// run fails before its work and not after it. A file needs an existing folder and must not be
+/// a folder; a prefix (to which extensions are added) the same; a folder may be new (it is
+/// created) but must not be a file. Their messages name the path and what is wrong with it.
+CLI::Validator OutputFile();
+CLI::Validator OutputPrefix();
+CLI::Validator OutputFolder();
+
 /// The grid export's two steps as options (`--fill-holes N`, `--local-ground R`), shared by
 /// `export` and `query --as-exported`; `scope` starts each help text ("grid: ").
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,

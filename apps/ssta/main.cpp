@@ -43,7 +43,17 @@ int main(int argc, char** argv) {
     // --help and --version end here with status 0 (CLI11 prints them); a bad command line is bad
     // input like any other: one line naming the option, status 2.
     if (e.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success)) return app.exit(e);
-    std::cerr << "ssta: error: " << e.what() << " (--help lists the options)\n";
+    const std::vector<std::string> unparsed = app.remaining();
+    if (app.get_subcommands().empty() && !unparsed.empty() && unparsed.front().rfind('-', 0) != 0) {
+      std::string names;
+      for (const CLI::App* sub : app.get_subcommands({})) names += (names.empty() ? "" : ", ") + sub->get_name();
+      std::cerr << "ssta: error: unknown command '" << unparsed.front() << "' (commands: " << names << ")\n";
+      return 2;
+    }
+    // A path an option would write to that cannot be written (OutputFile and its kin) names
+    // itself; other mistakes point at --help.
+    const bool path_check = dynamic_cast<const CLI::ValidationError*>(&e) != nullptr;
+    std::cerr << "ssta: error: " << e.what() << (path_check ? "" : " (--help lists the options)") << "\n";
     return 2;
   } catch (const ssta::Error& e) {
     std::cerr << "ssta: error: " << e.what() << "\n";

@@ -87,7 +87,9 @@ void WriteFileAtomically(const std::string& path, const std::function<void(const
                          bool remove_stale) {
   const fs::path target(path);
   if (target.has_parent_path() && !fs::is_directory(target.parent_path())) {
-    throw Error(path + ": the folder " + target.parent_path().string() + " does not exist");
+    const std::string folder = target.parent_path().string();
+    throw Error(path + (fs::exists(target.parent_path()) ? ": " + folder + " is a file, not a folder"
+                                                          : ": the folder " + folder + " does not exist"));
   }
   const std::string tmp = TemporaryName(path);
   try {

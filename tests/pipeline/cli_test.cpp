@@ -315,6 +315,37 @@ TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
   EXPECT_NE(r.output.find("semicolon.csv:1: expected x,y or x,y,z numbers"), std::string::npos) << r.output;
 }
 
+TEST(Cli, PathsAnOptionWritesAreCheckedBeforeTheWork) {
+  testing::TempDir dir;
+  std::ofstream(dir / "afile") << "x";
+  fs::create_directory(dir.path() / "adir");
+  struct Case {
+    std::string args, expected;
+  };
+  const std::string map = dir / "m.ot";
+  const Case cases[] = {
+      // The map would be built and written, then the summary refused.
+      {"build-map --sequence " + kEuroc + " --static --map " + map + " --json " + (dir / "nodir/s.json"),
+       "--json: " + (dir / "nodir/s.json") + ": the folder " + (dir / "nodir") + " does not exist"},
+      {"build-map --sequence " + kEuroc + " --static --map " + map + " --json " + (dir / "afile/s.json"),
+       "--json: " + (dir / "afile/s.json") + ": " + (dir / "afile") + " is a file, not a folder"},
+      {"build-map --sequence " + kEuroc + " --static --map " + (dir / "adir"), "--map: " + (dir / "adir") + ": is a folder"},
+      {"export --map " + map + " --format grid --out " + (dir / "adir") + "/",
+       "--out: " + (dir / "adir") + "/: is a folder; give a prefix such as"},
+      {"eval grid --pred " + (dir / "g") + " --gt " + kEuroc + " --picture " + (dir / "nodir/e.png"),
+       "--picture: " + (dir / "nodir/e.png") + ": the folder"},
+      {"classify --sequence " + kEuroc + " --out " + (dir / "afile"), "--out: " + (dir / "afile") + ": is a file, not a folder"},
+      {"frobnicate --map " + map, "unknown command 'frobnicate' (commands: classify, synth, build-map"},
+  };
+  for (const Case& c : cases) {
+    const auto r = RunSsta(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
+    EXPECT_NE(r.output.find("ssta: error: " + c.expected), std::string::npos) << r.output;
+    EXPECT_FALSE(fs::exists(map)) << c.args << ": the work ran";
+  }
+}
+
 TEST(Cli, ExportRefusesToWriteOverTheMapItReads) {
   testing::TempDir dir;
   TraversabilityMap().Save(dir / "m.ot");  // empty: the octovis export of it crashed in OctoMap

@@ -228,8 +228,8 @@ TEST_F(BuildMapFaults, AnUnwritableMapPathFailsWithAOneLineError) {
   const std::string map = dir_ / "file/m.ot";
   const auto r = RunSsta(BuildMapArgs(map));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_EQ(r.output.rfind("ssta: error: " + map + ": ", 0), 0u) << r.output;
-  EXPECT_EQ(r.output.find('\n'), r.output.size() - 1) << r.output;
+  // Refused while the command line is parsed, before any frame is classified.
+  EXPECT_EQ(r.output, "ssta: error: --map: " + map + ": " + (dir_ / "file") + " is a file, not a folder\n");
 }
 
 TEST_F(BuildMapFaults, AnImuAtRestReadingGIsRejectedNamingTheFile) {

@@ -1,0 +1,61 @@
+// Checks of output paths while the command line is parsed: a run that would fail to write its
+// results fails before it does its work.
+
+#include <filesystem>
+#include <string>
+
+#include "commands.h"
+
+namespace ssta::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The folder a file or prefix `path` goes into must exist and be a folder; "" when it does.
+std::string FolderProblem(const fs::path& path) {
+  const fs::path parent = path.parent_path();
+  if (parent.empty()) return "";
+  std::error_code ec;
+  if (!fs::exists(parent, ec)) return "the folder " + parent.string() + " does not exist";
+  if (!fs::is_directory(parent, ec)) return parent.string() + " is a file, not a folder";
+  return "";
+}
+
+bool NamesAFolder(const std::string& path) {
+  std::error_code ec;
+  return path.empty() || path.back() == '/' || fs::is_directory(path, ec);
+}
+
+}  // namespace
+
+CLI::Validator OutputFile() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        if (NamesAFolder(path)) return path + ": is a folder; give a file name";
+        const std::string problem = FolderProblem(path);
+        return problem.empty() ? "" : path + ": " + problem;
+      },
+      "FILE");
+}
+
+CLI::Validator OutputPrefix() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        if (NamesAFolder(path)) return path + ": is a folder; give a prefix such as " + (fs::path(path) / "map").string();
+        const std::string problem = FolderProblem(path);
+        return problem.empty() ? "" : path + ": " + problem;
+      },
+      "PREFIX");
+}
+
+CLI::Validator OutputFolder() {
+  return CLI::Validator(
+      [](std::string& path) -> std::string {
+        std::error_code ec;
+        if (fs::exists(path, ec) && !fs::is_directory(path, ec)) return path + ": is a file, not a folder";
+        return "";
+      },
+      "DIR");
+}
+
+}  // namespace ssta::cli
