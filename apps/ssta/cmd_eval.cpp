@@ -8,6 +8,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -56,29 +57,52 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
 // vehicle: --config files read over it must leave it as it is, and so must the config.yaml that
 // `ssta classify` writes beside its labels (`prediction_config`, when there is one). Without a
 // vehicle.yaml the --config files are only checked for bad keys and values.
+// The vehicle.yaml beside the truth of `sequence`, if it has one.
+std::optional<std::string> TruthVehicleYaml(const std::string& sequence) {
+  namespace fs = std::filesystem;
+  const fs::path gt = FindGroundTruthDir(sequence);
+  for (const fs::path& candidate : {gt.parent_path() / "vehicle.yaml", fs::path(sequence) / "vehicle.yaml"}) {
+    if (fs::is_regular_file(candidate)) return candidate.string();
+  }
+  return std::nullopt;
+}
+
+const char* const kTwoVehiclesAdvice =
+    "scores against it would compare the classes of two vehicles: classify for that vehicle, or render the "
+    "sequence for this one (ssta synth --config)";
+
 void RequireTruthVehicle(const EvalArguments& args, const std::string& prediction_config = "") {
   if (args.config.empty() && prediction_config.empty()) return;
-  namespace fs = std::filesystem;
-  const fs::path gt = FindGroundTruthDir(args.sequence);
-  std::optional<std::string> vehicle_yaml;
-  for (const fs::path& candidate : {gt.parent_path() / "vehicle.yaml", fs::path(args.sequence) / "vehicle.yaml"}) {
-    if (fs::is_regular_file(candidate)) {
-      vehicle_yaml = candidate.string();
-      break;
-    }
-  }
+  const std::optional<std::string> vehicle_yaml = TruthVehicleYaml(args.sequence);
   if (!vehicle_yaml) {
     LoadLayeredConfig(nullptr, args.config);  // bad keys and values still name their file
     return;
   }
   Config truth;
   ApplyConfigFile(*vehicle_yaml, &truth);
-  const std::string expected_for = "the truth in " + gt.string() + " was classed for";
-  const std::string advice =
-      "scores against it would compare the classes of two vehicles: classify for that vehicle, or render the "
-      "sequence for this one (ssta synth --config)";
-  RequireVehicle(truth.vehicle, args.config, expected_for, *vehicle_yaml, advice);
-  if (!prediction_config.empty()) RequireVehicle(truth.vehicle, {prediction_config}, expected_for, *vehicle_yaml, advice);
+  const std::string expected_for = "the truth in " + FindGroundTruthDir(args.sequence) + " was classed for";
+  RequireVehicle(truth.vehicle, args.config, expected_for, *vehicle_yaml, kTwoVehiclesAdvice);
+  if (!prediction_config.empty()) {
+    RequireVehicle(truth.vehicle, {prediction_config}, expected_for, *vehicle_yaml, kTwoVehiclesAdvice);
+  }
+}
+
+// A map's classes are its vehicle's (its metadata): scored against the truth of another
+// vehicle they would compare two vehicles' classes.
+void RequireMapForTruthVehicle(const TraversabilityMap& map, const std::string& map_path, const std::string& sequence) {
+  const std::optional<std::string> vehicle_yaml = TruthVehicleYaml(sequence);
+  if (!vehicle_yaml) return;
+  Config truth;
+  ApplyConfigFile(*vehicle_yaml, &truth);
+  for (const VehicleKey& k : VehicleKeys()) {
+    const double have = map.metadata().vehicle.*k.field, want = truth.vehicle.*k.field;
+    if (SameVehicleValue(have, want)) continue;
+    std::ostringstream m;
+    m << map_path << ": the map was built for vehicle." << k.name << " " << have << ", but the truth in "
+      << FindGroundTruthDir(sequence) << " was classed for " << want << " (" << *vehicle_yaml << "); "
+      << kTwoVehiclesAdvice;
+    throw Error(m.str());
+  }
 }
 
 // The config.yaml that `ssta classify` wrote with the labels of --pred (DIR, or DIR/labels), or
@@ -125,6 +149,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   }
   const ClassGrid truth = ReadGroundTruthGrid(args.eval.sequence);
   const TraversabilityMap map = LoadMapForConfig(args.eval.prediction, args.config);
+  RequireMapForTruthVehicle(map, args.eval.prediction, args.eval.sequence);
   std::unique_ptr<ExportedSurface> exported;
   if (args.as_exported) {
     const double reach = 0.5 * std::hypot(args.footprint.length_m, args.footprint.width_m);

@@ -273,6 +273,17 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   r = RunSsta(eval + " --local-ground 2");  // only with --as-exported
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--local-ground requires --as-exported"), std::string::npos) << r.output;
+  // Truth classed for another vehicle than the map's (the map: the default vehicle): refused.
+  std::ofstream(dir / "seq/vehicle.yaml") << "vehicle:\n  max_step_m: 0.3\n";
+  r = RunSsta(eval);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find((dir / "m.ot") + ": the map was built for vehicle.max_step_m 0.2, but the truth in " +
+                          (dir / "seq/gt") + " was classed for 0.3 (" + (dir / "seq/vehicle.yaml") + ")"),
+            std::string::npos)
+      << r.output;
+  std::ofstream(dir / "seq/vehicle.yaml") << "vehicle:\n  max_step_m: 0.2\n";  // the map's: scored
+  r = RunSsta(eval);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
 TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
