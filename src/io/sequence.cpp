@@ -221,11 +221,11 @@ Sequence Sequence::OpenAsl(const std::string& path) {
       seq.skipped.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
       continue;
     }
+    right_used[j] = true;  // paired: a missing image skips the pair once, as one frame
     if (!fs::exists(l.file)) {
       seq.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
       continue;
     }
-    right_used[j] = true;
     if (!fs::exists(right[j].file)) {
       seq.skipped.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
       continue;

@@ -62,6 +62,18 @@ TEST_F(AslFixture, PairsWithinOneMillisecondAndReportsWhatItSkips) {
   EXPECT_NE(seq.skipped()[2].reason.find("cam1 frame without a cam0 frame"), std::string::npos);
 }
 
+TEST_F(AslFixture, AMissingCam0ImageSkipsItsPairOnce) {
+  fs::remove(root_ / "cam0/data/200000000.png");
+  const Sequence seq = Sequence::Open(root_.path().string());
+  ASSERT_EQ(seq.frames().size(), 1u);
+  // 100 ms (cam1 image missing), 200 ms (cam0 image missing: its cam1 row is not reported
+  // again as unpaired), 300 ms and the cam1 row at 305 ms: 4 + 1 = 5 rows listed, 1 frame used.
+  ASSERT_EQ(seq.skipped().size(), 4u);
+  EXPECT_EQ(seq.skipped()[1].timestamp_ns, 200'000'000);
+  EXPECT_NE(seq.skipped()[1].reason.find("cam0 image missing"), std::string::npos);
+  for (const SkippedFrame& s : seq.skipped()) EXPECT_NE(s.timestamp_ns, 200'400'000) << s.reason;
+}
+
 TEST_F(AslFixture, FindsTheMav0SubFolder) {
   testing::TempDir outer;
   fs::copy(root_.path(), outer.path() / "mav0", fs::copy_options::recursive);
