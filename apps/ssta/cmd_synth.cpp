@@ -7,6 +7,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "commands.h"
 #include "config_loading.h"
@@ -39,6 +40,32 @@ void ParseDropFrames(const std::string& text, synth::FaultOptions* faults) {
     throw Error("--drop-frames: expected a fraction like 0.1 or frame indices like 3,7,12, got '" +
                 text + "'");
   }
+}
+
+/// SynthOptions::IsValid names its keys ("rig.width: ..."); on the command line they are the
+/// options that set them ("--width: ..."). Keys no option sets (vehicle.*: --config) stay.
+std::string NameTheOption(const std::string& error) {
+  static const std::pair<const char*, const char*> kFlags[] = {
+      {"scene", "--scene"}, {"frames", "--frames"}, {"ramp_slope_deg", "--ramp-slope-deg"},
+      {"grid_resolution_m", "--grid-resolution"}, {"rig.width", "--width"}, {"rig.height", "--height"},
+      {"rig.focal_px", "--focal"}, {"rig.baseline_m", "--baseline"}, {"rig.camera_height_m", "--camera-height"},
+      {"rig.pitch_down_deg", "--camera-pitch-deg"}, {"rig.rate_hz", "--rate"}, {"motion.speed_mps", "--speed"},
+      {"motion.weave_amplitude_m", "--weave"}, {"motion.weave_period_s", "--weave-period"},
+      {"motion.imu_rate_hz", "--imu-rate"}, {"render.max_label_range_m", "--max-label-range"},
+      {"render.boundary_band_px", "--boundary-band"}, {"render.supersample", "--supersample"},
+      {"render.sensor_noise_grey", "--noise"}, {"render.threads", "--threads"},
+      {"faults.mount_pitch_error_deg", "--mount-pitch-error-deg"},
+      {"faults.mount_roll_error_deg", "--mount-roll-error-deg"},
+      {"faults.pose_drift_roll_deg_per_s", "--pose-drift-roll-deg-per-s"},
+      {"faults.pose_drift_pitch_deg_per_s", "--pose-drift-pitch-deg-per-s"},
+      {"faults.imu_gyro_noise", "--imu-gyro-noise"}, {"faults.imu_accel_noise", "--imu-accel-noise"},
+      {"faults.imu_gyro_bias", "--imu-gyro-bias"}, {"faults.imu_accel_bias", "--imu-accel-bias"},
+      {"faults.drop_frames", "--drop-frames"}, {"faults.textureless_patches", "--textureless-patches"}};
+  for (const auto& [key, flag] : kFlags) {
+    const std::string prefix = std::string(key) + ":";
+    if (error.rfind(prefix, 0) == 0) return flag + error.substr(std::string(key).size());
+  }
+  return error;
 }
 
 }  // namespace
@@ -136,6 +163,8 @@ void RegisterSynth(CLI::App& app) {
   cmd->callback([options, out_dir, drop_frames, config_files] {
     ParseDropFrames(*drop_frames, &options->faults);
     if (!config_files->empty()) options->vehicle = LoadLayeredConfig(nullptr, *config_files).vehicle;
+    std::string error;
+    if (!options->IsValid(&error)) throw Error(NameTheOption(error));
     const bool tty = isatty(fileno(stderr)) != 0;
     synth::SynthProgress progress;
     if (tty) {

@@ -590,7 +590,18 @@ TEST(SynthCli, WritesASequenceAndRejectsBadOptions) {
       << ReadTextFile(tmp.Sub("log.txt"));
   EXPECT_TRUE(fs::exists(recorded + "/cam0/data/1.png"));
   EXPECT_NE(std::system((binary + common + " --scene moon --out " + tmp.Sub("bad") + log).c_str()), 0);
-  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("scene: unknown scene 'moon'"), std::string::npos);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("--scene: unknown scene 'moon'"), std::string::npos);
+  // A bad value names the option the user typed, not the key behind it.
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {" --width 0", "ssta: error: --width: must be in [16, 8192] px"},
+           {" --speed nan", "ssta: error: --speed:"},
+           {" --frames 0", "ssta: error: --frames: must be in [1, 100000]"},
+           {" --frames 2 --drop-frames 5", "ssta: error: --drop-frames: frame index 5 is not below frames"},
+           {" --mount-pitch-error-deg 50", "ssta: error: --mount-pitch-error-deg: must be within +-30 degrees"}}) {
+    EXPECT_NE(std::system((binary + " synth" + args + " --out " + tmp.Sub("bad") + log).c_str()), 0) << args;
+    EXPECT_EQ(ReadTextFile(tmp.Sub("log.txt")).rfind(expected, 0), 0u) << ReadTextFile(tmp.Sub("log.txt"));
+  }
+  EXPECT_FALSE(fs::exists(tmp.Sub("bad/cam0"))) << "a bad option must stop synth before it writes";
   EXPECT_NE(std::system((binary + common + " --drop-frames 0.x --out " + tmp.Sub("bad") + log).c_str()), 0);
   EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("--drop-frames"), std::string::npos);
 }
