@@ -3,8 +3,10 @@
 // Private helper: reads a YAML mapping key by key, names every key it reports on with its full
 // path ("stereo.num_disparities"), and reports keys that nobody asked for.
 
+#include <cctype>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -54,6 +56,17 @@ template <typename T>
 void YamlSection::Read(const std::string& key, T* value) {
   used_.insert(key);
   if (!node_ || !node_[key]) return;
+  if constexpr (std::is_arithmetic_v<T>) {
+    // yaml-cpp reads a quote left open on the last line ('max_slope_deg: "20' + newline) as
+    // the scalar "20 " and converts it: a number with white space around it is a mistake.
+    const YAML::Node n = node_[key];
+    const std::string text = n.IsScalar() ? n.Scalar() : std::string("x");
+    if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) ||
+        std::isspace(static_cast<unsigned char>(text.back()))) {
+      throw Error(Name(key) + ": wrong type (value '" + YAML::Dump(n) + "': a number with white space around it; "
+                  "is a quote left open?)");
+    }
+  }
   try {
     *value = node_[key].template as<T>();
   } catch (const YAML::Exception&) {

@@ -1,13 +1,14 @@
 #include "ssta/stereo/triangulator.h"
 
 #include <cmath>
+#include <sstream>
 
 #include "ssta/core/error.h"
 
 namespace ssta {
 
 bool TriangulationOptions::IsValid(std::string* error) const {
-  auto fail = [error](const char* message) {
+  auto fail = [error](const std::string& message) {
     if (error) *error = message;
     return false;
   };
@@ -15,7 +16,10 @@ bool TriangulationOptions::IsValid(std::string* error) const {
     return fail("min_range_m: must be a finite number >= 0");
   }
   if (!(std::isfinite(max_range_m) && max_range_m > min_range_m)) {
-    return fail("max_range_m: must be finite and greater than min_range_m");
+    std::ostringstream m;  // either key may be the one at fault: both values are named
+    m << "max_range_m: must be finite and greater than min_range_m (max_range_m " << max_range_m
+      << ", min_range_m " << min_range_m << ")";
+    return fail(m.str());
   }
   return true;
 }

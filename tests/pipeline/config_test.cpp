@@ -82,6 +82,12 @@ TEST(Config, ErrorsNameTheKey) {
   EXPECT_NE(ErrorOf("? [a, b]\n: 1\n").find("keys must be plain names"), std::string::npos);
   EXPECT_NE(ErrorOf("vehicle: [1, 2]\n").find("expected a mapping"), std::string::npos);
   EXPECT_NE(ErrorOf("vehicle:\n  max_slope_deg: [\n").find("YAML syntax error"), std::string::npos);
+  // A quote left open on the last line: yaml-cpp reads "20 " and would convert it.
+  EXPECT_NE(ErrorOf("vehicle:\n  max_slope_deg: \"20\n").find("vehicle.max_slope_deg: wrong type"), std::string::npos);
+  EXPECT_NE(ErrorOf("vehicle:\n  max_slope_deg: '20\n").find("is a quote left open?"), std::string::npos);
+  // A cross-key limit names both keys and their values: either may be the one at fault.
+  EXPECT_NE(ErrorOf("triangulation:\n  min_range_m: 30\n").find("(max_range_m 25, min_range_m 30)"),
+            std::string::npos);
 }
 
 TEST(Config, YamlDumpReadsBackToTheSameConfig) {
