@@ -144,7 +144,9 @@ void RegisterExport(CLI::App& app) {
       }
       GridExportChanges changes;
       const GridProjection grid = ExportGrid(map, args->out, options, &changes);
-      written = args->out + ".{png,_classes.png,pgm,yaml} (" + std::to_string(grid.width()) + "x" +
+      std::string files;  // each file whole: a brace expansion would read "yard._classes.png"
+      for (const std::string& suffix : suffixes) files += (files.empty() ? "" : ", ") + args->out + suffix;
+      written = files + " (" + std::to_string(grid.width()) + "x" +
                 std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
                 " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
                 " holes filled)";

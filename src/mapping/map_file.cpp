@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -90,14 +91,24 @@ class MemoryStreamBuf : public std::streambuf {
   std::size_t consumed() const { return static_cast<std::size_t>(gptr() - eback()); }
 };
 
-/// The shortest decimal text that reads back as exactly `v` ("0.1", not "0.10000000000000001").
+/// The shortest decimal text that reads back as exactly `v` ("0.1", not "0.10000000000000001";
+/// "30", not "3e+01"; "1e-07", not "0.0000001").
 std::string ShortestDecimal(double v) {
-  char buffer[32];
+  char buffer[40];
   for (int precision = 1; precision <= 17; ++precision) {
     std::snprintf(buffer, sizeof(buffer), "%.*g", precision, v);
     if (std::strtod(buffer, nullptr) == v) break;
   }
-  return buffer;
+  std::string shortest = buffer;
+  if (std::isfinite(v) && std::abs(v) < 1e16) {  // fixed notation, when it is shorter
+    for (int decimals = 0; decimals <= 17; ++decimals) {
+      std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
+      if (std::strtod(buffer, nullptr) != v) continue;
+      if (std::strlen(buffer) < shortest.size()) shortest = buffer;
+      break;
+    }
+  }
+  return shortest;
 }
 
 std::string MetadataYaml(const TraversabilityMap& map) {

@@ -140,6 +140,12 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(ReadBytes(path).find("free_space_obstacle_shortening_per_m2"), std::string::npos);
   EXPECT_FALSE(loaded.options().free_space_keeps_traversable);
   EXPECT_EQ(ReadBytes(path).find("free_space_keeps_traversable"), std::string::npos);
+  // Numbers as the shortest text that reads back exactly (maps/README.md): 30, not 3e+01.
+  const std::string bytes = ReadBytes(path);
+  for (const char* text : {"max_slope_deg: 30\n", "semi_slope_deg: 12.5\n", "max_step_m: 0.25\n", "max_range_m: 12\n",
+                           "resolution_m: 0.1\n", "class_hit_log_odds: 0.30000000000000004\n"}) {
+    EXPECT_NE(bytes.find(text), std::string::npos) << text;
+  }
   // Saving the loaded map again gives the same bytes.
   loaded.Save(dir / "again.ot");
   EXPECT_EQ(ReadBytes(dir / "again.ot"), ReadBytes(path));

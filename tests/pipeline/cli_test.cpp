@@ -67,7 +67,10 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
 
   r = RunSsta("export --map " + map + " --format grid --out " + (dir / "g"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* f : {"g.png", "g_classes.png", "g.pgm", "g.yaml"}) EXPECT_TRUE(fs::exists(dir.path() / f)) << f;
+  for (const char* f : {"g.png", "g_classes.png", "g.pgm", "g.yaml"}) {
+    EXPECT_TRUE(fs::exists(dir.path() / f)) << f;
+    EXPECT_NE(r.output.find(dir / f), std::string::npos) << "the report names each file: " << r.output;
+  }
   const std::string yaml = ReadTextFile(dir / "g.yaml");
   for (const char* key : {"image:", "resolution:", "origin:", "negate:", "occupied_thresh:", "free_thresh:"}) {
     EXPECT_NE(yaml.find(key), std::string::npos) << key;
