@@ -6,7 +6,9 @@
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
+#include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_report.h"
 #include "ssta/pipeline/sequence_classifier.h"
 
@@ -31,7 +33,7 @@ void RunSequence(const ClassifyArgs& a) {
   if (!a.quiet) {
     std::cout << summary.BriefReport();
     std::cout << "outputs: " << a.options.out_dir << "/{labels,overlay,frames}/<timestamp>.{png,json}, "
-              << a.options.out_dir << "/summary.json\n";
+              << a.options.out_dir << "/summary.json, " << a.options.out_dir << "/config.yaml\n";
   }
   if (summary.frames_classified == 0) throw Error(a.sequence + ": no frame could be classified");
 }
@@ -50,12 +52,17 @@ void RunPair(const ClassifyArgs& a) {
   }
   const FrameResult result = pipeline.Process(ReadGreyImage(a.left), ReadGreyImage(a.right), up.normalized());
   const std::string name = std::filesystem::path(a.left).stem().string();
+  MakeDirectories(a.options.out_dir);
+  // As for a sequence: the run's every setting, for `--config` and eval's vehicle check.
+  WriteTextAtomically(a.options.out_dir + "/config.yaml",
+                      "# ssta classify: the configuration of this run (defaults, --config files)\n" + ConfigToYaml(config));
   WriteFrameOutputs(result, a.options.out_dir, name, a.options.write_disparity);
   if (!a.quiet) {
     const auto& q = result.analysis.quality;
     std::cout << "quality check: " << (q.passed ? "passed" : "failed: " + q.reason) << "\n"
               << "segments: " << result.num_segments << ", total " << result.timings.total_ms << " ms\n"
-              << "outputs: " << a.options.out_dir << "/{labels,overlay,frames}/" << name << ".{png,json}\n";
+              << "outputs: " << a.options.out_dir << "/{labels,overlay,frames}/" << name << ".{png,json}, "
+              << a.options.out_dir << "/config.yaml\n";
   }
 }
 
@@ -65,13 +72,19 @@ void RegisterClassify(CLI::App& app) {
   auto args = std::make_shared<ClassifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "classify", "Classify every stereo frame of a sequence (or one pair) into the five SSTA classes");
-  cmd->add_option("--sequence", args->sequence, "ASL sequence folder (INTERFACES section 2)");
-  cmd->add_option("--left", args->left, "single-pair mode: left image");
-  cmd->add_option("--right", args->right, "single-pair mode: right image");
-  cmd->add_option("--calib0", args->calib0, "single-pair mode: cam0 sensor.yaml");
-  cmd->add_option("--calib1", args->calib1, "single-pair mode: cam1 sensor.yaml");
-  cmd->add_option("--up", args->up, "single-pair mode: up direction in cam0 (x right, y down, z forward); "
-                                    "default: a level body through cam0's T_BS")->expected(3)->delimiter(',');
+  CLI::Option* sequence = cmd->add_option("--sequence", args->sequence, "ASL sequence folder (INTERFACES section 2)");
+  // The single pair's options and the sequence exclude each other: one of them would be ignored.
+  for (CLI::Option* pair_option :
+       {cmd->add_option("--left", args->left, "single-pair mode: left image"),
+        cmd->add_option("--right", args->right, "single-pair mode: right image"),
+        cmd->add_option("--calib0", args->calib0, "single-pair mode: cam0 sensor.yaml"),
+        cmd->add_option("--calib1", args->calib1, "single-pair mode: cam1 sensor.yaml"),
+        cmd->add_option("--up", args->up, "single-pair mode: up direction in cam0 (x right, y down, z forward); "
+                                          "default: a level body through cam0's T_BS")
+            ->expected(3)
+            ->delimiter(',')}) {
+    pair_option->excludes(sequence);
+  }
   cmd->add_option("--out", args->options.out_dir, "output folder")->required()->check(OutputFolder());
   cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); repeatable, later files win; overrides the sequence's vehicle.yaml");
   cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
@@ -81,12 +94,15 @@ void RegisterClassify(CLI::App& app) {
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
   cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
-  cmd->callback([args] {
+  cmd->callback([args, cmd] {
     std::string error;
     if (!args->options.IsValid(&error)) throw Error("--" + error);
     if (!args->sequence.empty()) {
       RunSequence(*args);
     } else {
+      for (const char* option : {"--max-frames", "--every", "--oracle-disparity", "--strict"}) {
+        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only with --sequence");
+      }
       RunPair(*args);
     }
   });

@@ -438,6 +438,36 @@ TEST(Cli, ClassifyWritesTheInterfaceOutputs) {
   EXPECT_EQ(ReadTextFile(dir / "o/labels/notes.txt"), "mine");
 }
 
+TEST(Cli, ClassifyOnePairWritesItsLabelsAndConfig) {
+  testing::TempDir dir;
+  const std::string kitti = std::string(SSTA_TEST_DATA_DIR) + "/kitti-street-pair";
+  const std::string config = " --config " + std::string(SSTA_CONFIG_DIR) + "/sensors/kitti.yaml";
+  const std::string pair = " --left " + kitti + "/cam0/data/1000000000.png --right " + kitti +
+                           "/cam1/data/1000000000.png --calib0 " + kitti + "/cam0/sensor.yaml --calib1 " + kitti +
+                           "/cam1/sensor.yaml" + config;
+  auto r = RunSsta("classify" + pair + " --out " + (dir / "o"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // The pair is the one-frame sequence's frame (no IMU: a level body in both modes).
+  r = RunSsta("classify --sequence " + kitti + config + " -q --out " + (dir / "s"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const ImageU8 labels = ReadLabelImage(dir / "o/labels/1000000000.png");
+  std::size_t decided = 0;
+  for (std::size_t i = 0; i < labels.size(); ++i) decided += labels[i] >= 1 && labels[i] <= 3;
+  EXPECT_GT(decided, labels.size() / 2);
+  EXPECT_EQ(ReadTextFile(dir / "o/labels/1000000000.png"), ReadTextFile(dir / "s/labels/1000000000.png"));
+  // The config.yaml a sequence run writes, for --config and eval's vehicle check.
+  EXPECT_EQ(ReadTextFile(dir / "o/config.yaml").substr(ReadTextFile(dir / "o/config.yaml").find("vehicle:")),
+            ReadTextFile(dir / "s/config.yaml").substr(ReadTextFile(dir / "s/config.yaml").find("vehicle:")));
+  // Options of the other mode would be ignored: refused instead.
+  r = RunSsta("classify --sequence " + kitti + pair + " --out " + (dir / "p"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--sequence excludes --left"), std::string::npos) << r.output;
+  r = RunSsta("classify" + pair + " --every 2 --out " + (dir / "p"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--every: only with --sequence"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir.path() / "p"));
+}
+
 TEST(Cli, ThreadsCapTheWorkButNeverChangeTheLabels) {
   // --threads (before or after the command's name) caps OpenCV's pool, which runs the matcher,
   // the normals' bands and the analysis's concurrent steps; every label must be the same.
