@@ -208,6 +208,9 @@ BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_n
   if (!options.IsValid(&error)) throw Error(error);
   if (!config.IsValid(&error)) throw Error("config: " + error);
   if (!options.static_platform && sequence.poses().empty()) {
+    if (!sequence.pose_path().empty()) {  // the file is there, with a header and no rows
+      throw Error(sequence.pose_path() + ": lists no poses; use --static if the platform stands still");
+    }
     throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
                 "use --static if the platform stands still");
   }

@@ -576,6 +576,16 @@ TEST(BuildMap, SequenceWithoutPosesNeedsStatic) {
     EXPECT_NE(std::string(e.what()).find("--static"), std::string::npos) << e.what();
   }
   EXPECT_FALSE(fs::exists(options.map_path));
+  // A pose file with its header and no rows is named, not reported as missing.
+  const std::string seq = CopyWithFrames(dir, "c", 0, 2);
+  fs::create_directories(fs::path(seq) / "mav0" / "pose0");
+  std::ofstream(fs::path(seq) / "mav0" / "pose0" / "data.csv") << "#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z\n";
+  try {
+    BuildMap(Sequence::Open(seq), "c", EurocConfig(), options);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("pose0/data.csv: lists no poses; use --static"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
