@@ -72,8 +72,7 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
   if (!(args.path_width_m >= 0.0 && std::isfinite(args.path_width_m))) throw Error("--width: must be >= 0");
   std::vector<Eigen::Vector2d> polyline;
   Eigen::AlignedBox2d box;
-  for (const auto& v : vertices) {
-    if (v.size() != 2) throw Error(args.path + ": a path vertex is x,y, got " + std::to_string(v.size()) + " values");
+  for (const auto& v : vertices) {  // x,y each (ReadPoints)
     polyline.emplace_back(v[0], v[1]);
     box.extend(polyline.back());
   }
@@ -100,47 +99,56 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
             << ", " << Number(100.0 * result.fraction_observed, "%.0f") << " % observed\n";
 }
 
-// x,y[,z] per line; blank lines and a header (a first line with letters, such as "x,y") are
+// One point per line, `max_values` numbers (x,y, or x,y[,z] when 3), comma-separated; blank
+// lines and a header (a first line whose every cell starts with a letter, such as "x,y") are
 // skipped. Throws naming the file and line on anything else, and when no point is left.
-std::vector<std::vector<double>> ReadPoints(const std::string& path) {
+std::vector<std::vector<double>> ReadPoints(const std::string& path, std::size_t max_values) {
+  const std::string expected = max_values == 2 ? "x,y" : "x,y or x,y,z";
   std::istringstream in(ReadTextFile(path));  // names a missing file or a folder
   std::vector<std::vector<double>> out;
   std::string line;
   int n = 0;
-  bool first = true;
+  bool first = true, header = false;
   while (std::getline(in, line)) {
     ++n;
     if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-    const bool may_be_header = first && std::any_of(line.begin(), line.end(), [](unsigned char c) {
-      return std::isalpha(c) != 0;
-    });
-    first = false;
     std::stringstream ss(line);
     std::string cell;
+    std::vector<std::string> cells;
+    while (std::getline(ss, cell, ',')) cells.push_back(cell);
+    const bool is_header = first && !cells.empty() && std::all_of(cells.begin(), cells.end(), [](const std::string& c) {
+      const std::size_t at = c.find_first_not_of(" \t\r");
+      return at != std::string::npos && std::isalpha(static_cast<unsigned char>(c[at])) != 0;
+    });
+    first = false;
+    if (is_header) {
+      header = true;
+      continue;
+    }
+    const std::string where = path + ":" + std::to_string(n) + ": ";
     std::vector<double> values;
-    bool numeric = true;
-    while (std::getline(ss, cell, ',')) {
+    for (const std::string& c : cells) {
+      std::size_t used = 0;
+      double v = 0.0;
       try {
-        std::size_t used = 0;
-        values.push_back(std::stod(cell, &used));
-        if (cell.find_first_not_of(" \t\r", used) != std::string::npos) numeric = false;
+        v = std::stod(c, &used);
+      } catch (const std::out_of_range&) {
+        throw Error(where + "'" + c + "' is out of the range of a double");
       } catch (const std::exception&) {
-        numeric = false;
+        used = 0;
       }
+      if (used == 0 || c.find_first_not_of(" \t\r", used) != std::string::npos) {
+        throw Error(where + "expected " + expected + " numbers, comma-separated, got '" + line + "'");
+      }
+      if (!std::isfinite(v)) throw Error(where + "NaN or infinite value");
+      values.push_back(v);
     }
-    if (!numeric) {
-      if (may_be_header) continue;
-      throw Error(path + ":" + std::to_string(n) + ": expected x,y or x,y,z numbers, comma-separated");
-    }
-    if (values.size() != 2 && values.size() != 3) {
-      throw Error(path + ":" + std::to_string(n) + ": expected 2 or 3 values, found " + std::to_string(values.size()));
-    }
-    for (double v : values) {
-      if (!std::isfinite(v)) throw Error(path + ":" + std::to_string(n) + ": NaN or infinite value");
+    if (values.size() < 2 || values.size() > max_values) {
+      throw Error(where + "expected " + expected + ", got " + std::to_string(values.size()) + " values");
     }
     out.push_back(values);
   }
-  if (out.empty()) throw Error(path + ": no points (expected x,y or x,y,z per line)");
+  if (out.empty()) throw Error(path + ": no points" + (header ? " after its header" : "") + " (expected " + expected + " per line)");
   return out;
 }
 
@@ -165,13 +173,17 @@ void RegisterQuery(CLI::App& app) {
   cmd->footer(
       "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations.\n"
       "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
-      "an unobserved cell is class 0 with cost nan: the planner decides. --as-exported gives X,Y the class\n"
+      "x,y,z are then that voxel's centre. An unobserved cell is the point asked (z nan for X,Y), class 0\n"
+      "with cost nan: the planner decides. --as-exported gives X,Y the class\n"
       "and cost of `export --format grid` (steps judged by the local ground: class 1, cost 0; a filled\n"
       "hole: its class, z and cost nan); without it, answers are the map as observed.\n"
       "--footprint and --path print their own headers (see their help) and take --as-exported too.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   AddMapConfig(cmd, &args->config);
-  auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")->delimiter(',')->expected(2, 3);
+  auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")
+                 ->delimiter(',')
+                 ->expected(1, 3)  // 1 only for the help's sake ("X,Y[,Z]", not "x 2"): refused below
+                 ->type_name("X,Y[,Z]");
   auto* points = cmd->add_option("--points", args->points, "CSV file of points, one x,y or x,y,z per line");
   auto* footprint = cmd->add_option("--footprint", args->footprint,
                                     "the ground under a vehicle: X,Y [m], YAW_DEG [deg from +x towards +y], LENGTH "
@@ -202,15 +214,16 @@ void RegisterQuery(CLI::App& app) {
     }
     const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
     if (!args->footprint.empty()) return AnswerFootprint(map, *args);
-    if (!args->path.empty()) return AnswerPath(map, ReadPoints(args->path), *args);
+    if (!args->path.empty()) return AnswerPath(map, ReadPoints(args->path, 2), *args);
     std::vector<std::vector<double>> points;
     if (!args->at.empty()) {
+      if (args->at.size() < 2) throw Error("--at: expected X,Y or X,Y,Z");
       for (double v : args->at) {
         if (!std::isfinite(v)) throw Error("--at: NaN or infinite value");
       }
       points.push_back(args->at);
     } else {
-      points = ReadPoints(args->points);
+      points = ReadPoints(args->points, 3);
     }
     for (const auto& p : points) {
       if (args->as_exported && p.size() == 3) {

@@ -8,6 +8,9 @@
 #include <algorithm>
 #include <cstdio>
 #include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
 
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
@@ -171,7 +174,7 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   std::ofstream(dir / "xyz.csv") << "1,2,3\n";
   r = RunSsta(query + " --path " + (dir / "xyz.csv"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("xyz.csv: a path vertex is x,y"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("xyz.csv:1: expected x,y, got 3 values"), std::string::npos) << r.output;
   // Queries too large for the map name the option that asked them, with its values.
   r = RunSsta(query + " --footprint 0.65,0.65,0,1e9,0.3");
   EXPECT_EQ(r.exit_code, 2);
@@ -327,6 +330,25 @@ TEST(Cli, BadInputGivesOneLineNamingTheFileOrKey) {
   r = RunSsta("query --map " + (dir / "empty.ot") + " --points " + (dir / "semicolon.csv"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("semicolon.csv:1: expected x,y or x,y,z numbers"), std::string::npos) << r.output;
+  // A first line is a header only when every cell starts with a letter: "4,1e999" is a number
+  // out of range, "4,a" a bad row, each named with its line; a path's vertex is x,y, by line.
+  for (const auto& [file, text, expected] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"huge.csv", "4,1e999\n", "huge.csv:1: '1e999' is out of the range of a double"},
+           {"letter.csv", "4,a\n", "letter.csv:1: expected x,y or x,y,z numbers, comma-separated, got '4,a'"},
+           {"header.csv", "x,y\n", "header.csv: no points after its header"},
+           {"four.csv", "x,y\n1,2,3,4\n", "four.csv:2: expected x,y or x,y,z, got 4 values"}}) {
+    std::ofstream(dir / file) << text;
+    r = RunSsta("query --map " + (dir / "empty.ot") + " --points " + (dir / file));
+    EXPECT_EQ(r.exit_code, 2) << file;
+    EXPECT_NE(r.output.find(expected), std::string::npos) << r.output;
+  }
+  std::ofstream(dir / "path.csv") << "0,0\n2,0,0\n";
+  r = RunSsta("query --map " + (dir / "empty.ot") + " --path " + (dir / "path.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("path.csv:2: expected x,y, got 3 values"), std::string::npos) << r.output;
+  r = RunSsta("query --map " + (dir / "empty.ot") + " --at 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--at: expected X,Y or X,Y,Z"), std::string::npos) << r.output;
 }
 
 TEST(Cli, PathsAnOptionWritesAreCheckedBeforeTheWork) {
