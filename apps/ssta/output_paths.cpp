@@ -26,27 +26,26 @@ bool NamesAFolder(const std::string& path) {
   return path.empty() || path.back() == '/' || fs::is_directory(path, ec);
 }
 
+// A file to write, or a prefix to which extensions are added: its folder must exist, and the
+// path must not name a folder.
+CLI::Validator FileOrPrefix(bool prefix) {
+  return CLI::Validator(
+      [prefix](std::string& path) -> std::string {
+        if (NamesAFolder(path)) {
+          return path + (prefix ? ": is a folder; give a prefix such as " + (fs::path(path) / "map").string()
+                                : std::string(": is a folder; give a file name"));
+        }
+        const std::string problem = FolderProblem(path);
+        return problem.empty() ? "" : path + ": " + problem;
+      },
+      prefix ? "PREFIX" : "FILE");
+}
+
 }  // namespace
 
-CLI::Validator OutputFile() {
-  return CLI::Validator(
-      [](std::string& path) -> std::string {
-        if (NamesAFolder(path)) return path + ": is a folder; give a file name";
-        const std::string problem = FolderProblem(path);
-        return problem.empty() ? "" : path + ": " + problem;
-      },
-      "FILE");
-}
+CLI::Validator OutputFile() { return FileOrPrefix(false); }
 
-CLI::Validator OutputPrefix() {
-  return CLI::Validator(
-      [](std::string& path) -> std::string {
-        if (NamesAFolder(path)) return path + ": is a folder; give a prefix such as " + (fs::path(path) / "map").string();
-        const std::string problem = FolderProblem(path);
-        return problem.empty() ? "" : path + ": " + problem;
-      },
-      "PREFIX");
-}
+CLI::Validator OutputPrefix() { return FileOrPrefix(true); }
 
 CLI::Validator OutputFolder() {
   return CLI::Validator(
