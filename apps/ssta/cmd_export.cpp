@@ -106,7 +106,7 @@ void RegisterExport(CLI::App& app) {
       ->required()
       ->check(CLI::IsMember({"grid", "octovis", "ply", "pcd", "csv"}));
   cmd->add_option("--out", args->out, "output prefix (the extension is added)")->required()->check(OutputPrefix());
-  cmd->add_option("--resolution", args->resolution_m, "grid: pixel edge [m] (default: the map's)");
+  cmd->add_option("--resolution", args->resolution_m, "grid: pixel edge [m] (default: the map's); a coarser pixel takes the worst class of the map columns it holds");
   cmd->add_option("--region", args->region, "grid: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')
       ->expected(4);

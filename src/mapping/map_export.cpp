@@ -228,9 +228,12 @@ CellInfo ExportedSurface::Answer(double x, double y, bool reproject_outside) con
     return ExportedSurface(*map_, Eigen::AlignedBox2d(p, p), options_).Answer(x, y, false);
   }
   if (!grid_.classes.Contains(v, u)) return cell;  // not reached: the column lies in its own projection
-  cell.cls = static_cast<TravClass>(grid_.classes(v, u));
+  const auto exported = static_cast<TravClass>(grid_.classes(v, u));
+  // A class the export decided (a step judged by the local ground, a filled hole) has no
+  // probability under the map's evidence, which was for the other class.
+  if (!cell.observed || exported != cell.cls) cell.probability = std::numeric_limits<double>::quiet_NaN();
+  cell.cls = exported;
   cell.cost = grid_.cost(v, u);
-  if (!cell.observed) cell.probability = std::numeric_limits<double>::quiet_NaN();
   return cell;
 }
 

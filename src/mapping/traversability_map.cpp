@@ -837,7 +837,7 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
     throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
                 std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
   }
-  constexpr double kMaxColumns = 1e7;  // ~100 MB of columns, 1 x 1 km at 0.1 m
+  constexpr double kMaxColumns = 1e7;  // ~160 MB of columns, 316 x 316 m at 0.1 m
   if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
     throw Error("footprint query: the rectangle spans more than 10^7 map columns");
   }
@@ -847,7 +847,9 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
       const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
       const double dx = cx - q.x, dy = cy - q.y;
       const double along = c * dx + s * dy, across = -s * dx + c * dy;
-      if (std::abs(along) <= half_l && std::abs(across) <= half_w) columns.emplace_back(cx, cy);
+      // 1e-9 m: an edge on a column centre counts whatever rounding cos and sin of yaw give.
+      constexpr double kEdge = 1e-9;
+      if (std::abs(along) <= half_l + kEdge && std::abs(across) <= half_w + kEdge) columns.emplace_back(cx, cy);
     }
   }
   if (columns.empty()) columns.emplace_back(q.x, q.y);
@@ -883,7 +885,7 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
   const double spacing = 0.5 * res;
   double total_length = 0.0;
   for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) total_length += (polyline_world[i + 1] - polyline_world[i]).norm();
-  constexpr double kMaxSamples = 1e7;  // as a footprint's columns: ~1 km x 1 km at 0.1 m
+  constexpr double kMaxSamples = 1e7;  // as a footprint's columns
   if ((total_length / spacing + 1.0) * (width_m / res + 1.0) > kMaxSamples) {
     throw Error("path query: the path and its width span more than 10^7 samples");
   }
@@ -895,19 +897,41 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
     double s;
   };
   std::vector<Station> stations;
+  // The lateral line turning about a point from direction `from` by `angle` [rad] sweeps a
+  // sector of the disc of the half width: stations at the point, their lateral ends at most
+  // `spacing` apart along the arc (`from` itself included, the end direction not).
+  auto turn = [&](const Eigen::Vector2d& at, const Eigen::Vector2d& from, double angle, double s_at) {
+    if (width_m <= 0.0) return;
+    const int n = static_cast<int>(std::ceil(std::abs(angle) * 0.5 * width_m / spacing));
+    for (int k = 0; k < n; ++k) {
+      const double a = angle * k / n;
+      const Eigen::Vector2d dir(std::cos(a) * from.x() - std::sin(a) * from.y(),
+                                std::sin(a) * from.x() + std::cos(a) * from.y());
+      stations.push_back({at, dir, s_at});
+    }
+  };
   double s = 0.0;
   Eigen::Vector2d last_dir(1.0, 0.0);
+  bool moved = false;
   for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) {
     const Eigen::Vector2d a = polyline_world[i], b = polyline_world[i + 1];
     const double len = (b - a).norm();
     if (len <= 0.0) continue;
-    last_dir = (b - a) / len;
+    const Eigen::Vector2d dir = (b - a) / len;
+    // At a vertex the vehicle turns: the outside of the turn is swept too.
+    if (moved) turn(a, last_dir, std::atan2(last_dir.x() * dir.y() - last_dir.y() * dir.x(), last_dir.dot(dir)), s);
+    last_dir = dir;
+    moved = true;
     const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
     for (int k = 0; k < n; ++k) {
       const double t = static_cast<double>(k) / n;
       stations.push_back({a + t * (b - a), last_dir, s + t * len});
     }
     s += len;
+  }
+  if (!moved) {
+    // One point (or only repeated ones): no heading, so any: the disc of the half width.
+    turn(polyline_world.back(), last_dir, M_PI, s);
   }
   stations.push_back({polyline_world.back(), last_dir, s});
 
@@ -983,10 +1007,28 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
   grid.height_m = ImageF(width, height, nan);
   grid.slope_deg = ImageF(width, height, nan);
   grid.step_m = ImageF(width, height, nan);
+  // A pixel coarser than the map's columns takes the worst of the columns whose centres it
+  // holds (a planner must not read an obstacle's pixel as free); at the map's resolution or
+  // finer, the column under the pixel's centre.
+  const double map_res = impl_->options.resolution_m;
+  const bool coarse = resolution_m > map_res * (1.0 + 1e-9);
+  auto worst_in_pixel = [&](int v, int u) {
+    const Eigen::Vector2d c = grid.PixelCenter(v, u);
+    if (!coarse) return TopSurfaceAt(c.x(), c.y());
+    const Eigen::Vector2d lo = c.array() - 0.5 * resolution_m, hi = c.array() + 0.5 * resolution_m;
+    CellInfo worst = TopSurfaceAt(c.x(), c.y());
+    // Column centres sit at (k + 0.5) * map_res: those in [lo, hi).
+    for (double x = (std::ceil(lo.x() / map_res - 0.5) + 0.5) * map_res; x < hi.x(); x += map_res) {
+      for (double y = (std::ceil(lo.y() / map_res - 0.5) + 0.5) * map_res; y < hi.y(); y += map_res) {
+        const CellInfo cell = TopSurfaceAt(x, y);
+        if (cell.observed && (!worst.observed || Severity(cell.cls) > Severity(worst.cls))) worst = cell;
+      }
+    }
+    return worst;
+  };
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
-      const Eigen::Vector2d c = grid.PixelCenter(v, u);
-      const CellInfo cell = TopSurfaceAt(c.x(), c.y());
+      const CellInfo cell = worst_in_pixel(v, u);
       if (!cell.observed) continue;
       grid.classes(v, u) = static_cast<std::uint8_t>(cell.cls);
       grid.cost(v, u) = static_cast<float>(cell.cost);

@@ -314,6 +314,12 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
   EXPECT_EQ(patch.cls, TravClass::kTraversable);
   EXPECT_EQ(patch.cost, 0.0);
   EXPECT_NEAR(patch.center.z(), testing::C(0), 1e-9);
+  // The map's evidence there was for non-traversable: no probability for the export's class.
+  EXPECT_TRUE(std::isnan(patch.probability));
+  const CellInfo floor = TopSurfaceAsExported(map, testing::C(2), testing::C(2));  // kept as it is
+  EXPECT_EQ(floor.cls, TravClass::kTraversable);
+  EXPECT_EQ(floor.probability, map.TopSurfaceAt(testing::C(2), testing::C(2)).probability);
+  EXPECT_GT(floor.probability, 0.5);
   EXPECT_EQ(map.TopSurfaceAt(testing::C(6), testing::C(6)).cls, TravClass::kNonTraversable);
   const CellInfo hole = TopSurfaceAsExported(map, testing::C(12), testing::C(12));
   EXPECT_FALSE(hole.observed);

@@ -143,6 +143,40 @@ TEST_F(FloorAndBoxQueries, PathWidthDecidesWhetherTheBoxIsTouched) {
   EXPECT_THROW(map().QueryPath({}, 0.1), Error);
 }
 
+TEST_F(FloorAndBoxQueries, APathChecksTheOutsideOfItsTurns) {
+  // East along y = 0.85, then south from (0.85, 0.85), 0.5 m wide: the lateral line turning at
+  // the vertex sweeps the quarter disc towards the box's corner column [1.0, 1.1)^2, which
+  // the straight legs miss (the eastern leg ends at x = 0.85, the southern leg's line stays at
+  // y = 0.85 and below).
+  const std::vector<Eigen::Vector2d> turn{{0.2, 0.85}, {0.85, 0.85}, {0.85, 0.2}};
+  const PathResult r = map().QueryPath(turn, 0.5);
+  EXPECT_TRUE(r.blocked);
+  EXPECT_NEAR(r.first_non_traversable_distance_m, 0.65, 1e-9);  // at the vertex
+  EXPECT_NEAR(r.length_m, 1.3, 1e-12);
+  // 0.2 m wide: the swept quarter disc (radius 0.1 m) stays on the floor.
+  EXPECT_FALSE(map().QueryPath(turn, 0.2).blocked);
+  // One point with a width: the disc around it (radius 0.25 m reaches (1.03, 1.03)).
+  const PathResult point = map().QueryPath({{0.85, 0.85}}, 0.5);
+  EXPECT_TRUE(point.blocked);
+  EXPECT_FALSE(map().QueryPath({{0.85, 0.85}}, 0.3).blocked);  // radius 0.15: short of the box
+  EXPECT_EQ(map().QueryPath({{0.85, 0.85}}, 0.0).samples.size(), 1u);
+}
+
+TEST_F(FloorAndBoxQueries, AProjectionCoarserThanTheMapTakesEachPixelsWorstColumn) {
+  // One 0.3 m pixel over [0.8, 1.1)^2: its centre (0.95, 0.95) is floor, its corner column
+  // (1.05, 1.05) the box. A planner reading the pixel must see the box.
+  const GridProjection coarse =
+      map().Project(Eigen::AlignedBox2d(Eigen::Vector2d(0.8, 0.8), Eigen::Vector2d(1.1, 1.1)), 0.3);
+  ASSERT_EQ(coarse.classes.size(), 1u);
+  EXPECT_EQ(coarse.classes(0, 0), 3);
+  EXPECT_NEAR(coarse.height_m(0, 0), 0.25, 1e-6);
+  EXPECT_EQ(coarse.cost(0, 0), 1.0f);
+  // All floor: the pixel is floor.
+  const GridProjection floor =
+      map().Project(Eigen::AlignedBox2d(Eigen::Vector2d(0.2, 0.2), Eigen::Vector2d(0.5, 0.5)), 0.3);
+  EXPECT_EQ(floor.classes(0, 0), 1);
+}
+
 TEST_F(FloorAndBoxQueries, QueriesTooLargeToAnswerAreErrorsNotWrongAnswers) {
   // Beyond the addressable cube (+-3276.8 m at 0.1 m) a rectangle has no columns to read: it
   // was answered by its centre column alone. Inside it, 10^7 columns is the cap.

@@ -55,7 +55,8 @@ struct CellInfo {
   TravClass cls = TravClass::kUnknown;
   /// Planning cost in [0, 1] (see TraversabilityMap); NaN unless cls is 1..3.
   double cost = std::numeric_limits<double>::quiet_NaN();
-  /// Probability of `cls` (softmax of the class log-odds); NaN unless cls is 1..3.
+  /// Probability of `cls` (softmax of the class log-odds); NaN unless cls is 1..3, and NaN
+  /// where an export step, not the map's evidence, gave the class (ExportedSurface).
   double probability = std::numeric_limits<double>::quiet_NaN();
   double occupancy = std::numeric_limits<double>::quiet_NaN();  ///< P(occupied); NaN unobserved
   double slope_deg = std::numeric_limits<double>::quiet_NaN();  ///< mean slope [deg]
@@ -76,7 +77,8 @@ struct FootprintQuery {
 };
 
 /// The ground under a footprint: one top-surface cell per map column whose centre lies inside
-/// the rectangle (the column under (x, y) when none does).
+/// the rectangle (the column under (x, y) when none does). An undecided top surface (class 4)
+/// counts as observed but gives no verdict: `worst` stays kUnknown if all cells are such.
 struct FootprintResult {
   TravClass worst = TravClass::kUnknown;  ///< worst of the 1..3 verdicts; kUnknown if none
   /// Mean cost over the observed cells that have one (class 1..3); NaN when there are none.

@@ -88,20 +88,30 @@ class TraversabilityMap {
   using SurfaceSource = std::function<CellInfo(double x, double y)>;
 
   /// The top surfaces under a vehicle footprint (see FootprintResult), read from `surface`
-  /// (empty: TopSurfaceAt).
+  /// (empty: TopSurfaceAt). A column counts when its centre lies inside the rectangle (edges
+  /// included, to 1e-9 m): pad length and width by one resolution to also catch obstacles
+  /// that overlap the rectangle by less than half a column. Throws ssta::Error for a
+  /// non-finite x, y or yaw, a negative or non-finite size, a rectangle beyond the map's
+  /// addressable area (+-32768 resolutions) or over more than 10^7 columns.
   FootprintResult QueryFootprint(const FootprintQuery& query, const SurfaceSource& surface = {}) const;
 
   /// Checks a path: samples every resolution/2 along `polyline_world` (x, y in W [m]); at each
   /// sample the top surfaces across `width_m` (perpendicular to the segment, one every
   /// resolution, at least the centre), read from `surface` (empty: TopSurfaceAt), give the
-  /// sample's worst class and max cost.
-  /// Precondition: at least one vertex, width_m >= 0 (else ssta::Error).
+  /// sample's worst class and max cost. Where the path turns, extra samples at the vertex (same
+  /// distance_m) turn the lateral line from one segment's direction to the next, so the outside
+  /// of the turn is checked; a path of one point (or only repeated ones) checks the disc of
+  /// radius width_m / 2 around it.
+  /// Throws ssta::Error without a vertex, for a non-finite vertex, width_m < 0 or not finite,
+  /// and for more than 10^7 samples (length / (resolution / 2) x width / resolution).
   PathResult QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m,
                        const SurfaceSource& surface = {}) const;
 
-  /// The top surface over `region` (x, y in W [m]) on a grid of `resolution_m` pixels, one
-  /// TopSurfaceAt per pixel centre; the grid starts at region.min() and covers the region
-  /// (ceil). Throws ssta::Error for an empty region, resolution <= 0, or more than 2^28 pixels.
+  /// The top surface over `region` (x, y in W [m]) on a grid of `resolution_m` pixels: at the
+  /// map's resolution or finer, TopSurfaceAt of each pixel centre; coarser, the worst class
+  /// among the map columns whose centres the pixel holds (its cost, height, slope, step). The
+  /// grid starts at region.min() and covers the region (ceil). Throws ssta::Error for an
+  /// empty region, resolution <= 0, or more than 2^28 pixels.
   GridProjection Project(const Eigen::AlignedBox2d& region, double resolution_m) const;
 
   /// Every occupied voxel at map resolution (pruned blocks expanded), in OctoMap key order.
