@@ -527,8 +527,8 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
 
   octomap::OcTreeKey origin_key;
   if (!sensor_origin_world.allFinite() ||
-      !tree.coordToKeyChecked(sensor_origin_world.x(), sensor_origin_world.y(),
-                              sensor_origin_world.z(), origin_key)) {
+      !tree.CoordToKeyChecked(sensor_origin_world.x(), sensor_origin_world.y(), sensor_origin_world.z(),
+                              &origin_key)) {
     stats.inserted = false;
     stats.reason = "sensor origin is not finite or lies outside the map's addressable cube";
     stats.points_rejected = points.size();
@@ -793,7 +793,7 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
 CellInfo TraversabilityMap::CellAt(const Eigen::Vector3d& p_world) const {
   const TravOcTree& tree = *impl_->tree;
   octomap::OcTreeKey key;
-  if (!p_world.allFinite() || !tree.coordToKeyChecked(p_world.x(), p_world.y(), p_world.z(), key)) {
+  if (!p_world.allFinite() || !tree.CoordToKeyChecked(p_world.x(), p_world.y(), p_world.z(), &key)) {
     CellInfo cell;
     cell.center = p_world;
     return cell;
@@ -805,7 +805,7 @@ CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
   const TravOcTree& tree = *impl_->tree;
   octomap::OcTreeKey key;
   CellInfo unobserved;
-  if (!std::isfinite(x) || !std::isfinite(y) || !tree.coordToKeyChecked(x, y, 0.0, key)) {
+  if (!std::isfinite(x) || !std::isfinite(y) || !tree.CoordToKeyChecked(x, y, 0.0, &key)) {
     unobserved.center = {x, y, kNaN};
     return unobserved;
   }
@@ -832,8 +832,8 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
 
   std::vector<Eigen::Vector2d> columns;
   octomap::OcTreeKey lo, hi;
-  if (!tree.coordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, lo) ||
-      !tree.coordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, hi)) {
+  if (!tree.CoordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, &lo) ||
+      !tree.CoordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, &hi)) {
     throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
                 std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
   }
@@ -885,10 +885,15 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
   const double spacing = 0.5 * res;
   double total_length = 0.0;
   for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) total_length += (polyline_world[i + 1] - polyline_world[i]).norm();
-  constexpr double kMaxSamples = 1e7;  // as a footprint's columns
-  if ((total_length / spacing + 1.0) * (width_m / res + 1.0) > kMaxSamples) {
-    throw Error("path query: the path and its width span more than 10^7 samples");
-  }
+  // Caps: 10^7 cells read (as a footprint's columns), 10^6 samples kept (~260 MB of them).
+  constexpr double kMaxCells = 1e7, kMaxSamples = 1e6;
+  auto check_size = [&](double samples) {
+    if (samples * (width_m / res + 1.0) > kMaxCells) {
+      throw Error("path query: the path and its width span more than 10^7 samples");
+    }
+    if (samples > kMaxSamples) throw Error("path query: the path spans more than 10^6 samples (resolution / 2 apart)");
+  };
+  check_size(total_length / spacing + 1.0);
 
   // Sample points with their direction of travel.
   struct Station {
@@ -934,6 +939,7 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
     turn(polyline_world.back(), last_dir, M_PI, s);
   }
   stations.push_back({polyline_world.back(), last_dir, s});
+  check_size(static_cast<double>(stations.size()));  // with the turns' samples
 
   const int lateral = width_m > 0.0 ? static_cast<int>(std::ceil(width_m / res)) + 1 : 1;
   PathResult result;
@@ -994,8 +1000,8 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
   const Eigen::Vector2d cells = (region.sizes() / resolution_m).array() - 1e-9;
   const double w = std::max(1.0, std::ceil(cells.x()));
   const double h = std::max(1.0, std::ceil(cells.y()));
-  if (w * h > static_cast<double>(1 << 28)) {
-    throw Error("grid projection: more than 2^28 pixels; use a coarser resolution or a smaller region");
+  if (w * h > static_cast<double>(1 << 26)) {  // 17 bytes a pixel: ~1.1 GB (819 m square at 0.1 m)
+    throw Error("grid projection: more than 2^26 pixels; use a coarser resolution or a smaller region");
   }
   GridProjection grid;
   grid.origin = region.min();

@@ -67,6 +67,13 @@ TEST_F(FloorAndBoxQueries, UnobservedIsClassZeroWithNaNCost) {
     EXPECT_TRUE(std::isnan(cell.probability));
   }
   EXPECT_TRUE(std::isnan(map().TopSurfaceAt(50.0, 50.0).center.z()));
+  // Far beyond the addressable cube (an int cast of the scaled coordinate would overflow):
+  // unobserved, and a footprint there is an error.
+  for (const double far : {1e12, -1e12, 1e300}) {
+    EXPECT_FALSE(map().CellAt({far, 0.0, 0.0}).observed) << far;
+    EXPECT_FALSE(map().TopSurfaceAt(0.0, far).observed) << far;
+    EXPECT_THROW(map().QueryFootprint({far, 0.0, 0.0, 1.0, 1.0}), Error) << far;
+  }
 }
 
 TEST_F(FloorAndBoxQueries, CellAtAnswersForEachVoxelOfTheBox) {
@@ -193,6 +200,8 @@ TEST_F(FloorAndBoxQueries, QueriesTooLargeToAnswerAreErrorsNotWrongAnswers) {
   EXPECT_NE(message([&] { map().QueryFootprint({1.0, 1.0, 0.0, 400.0, 400.0}); }).find("10^7 map columns"),
             std::string::npos);
   EXPECT_NE(message([&] { map().QueryPath({{0.0, 0.0}, {1e6, 0.0}}, 0.0); }).find("10^7 samples"), std::string::npos);
+  // 60 km of centre line: 1.2 * 10^6 samples to return (~300 MB): refused.
+  EXPECT_NE(message([&] { map().QueryPath({{0.0, 0.0}, {6e4, 0.0}}, 0.0); }).find("10^6 samples"), std::string::npos);
   // Just under the caps: answered (unobserved beyond the floor).
   EXPECT_EQ(map().QueryFootprint({1.0, 1.0, 0.0, 300.0, 300.0}).cells, 3000 * 3000);
 }

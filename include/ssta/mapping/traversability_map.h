@@ -103,7 +103,7 @@ class TraversabilityMap {
   /// of the turn is checked; a path of one point (or only repeated ones) checks the disc of
   /// radius width_m / 2 around it.
   /// Throws ssta::Error without a vertex, for a non-finite vertex, width_m < 0 or not finite,
-  /// and for more than 10^7 samples (length / (resolution / 2) x width / resolution).
+  /// for more than 10^7 cells to read (samples x lateral cells) or 10^6 samples to return.
   PathResult QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m,
                        const SurfaceSource& surface = {}) const;
 
@@ -111,7 +111,7 @@ class TraversabilityMap {
   /// map's resolution or finer, TopSurfaceAt of each pixel centre; coarser, the worst class
   /// among the map columns whose centres the pixel holds (its cost, height, slope, step). The
   /// grid starts at region.min() and covers the region (ceil). Throws ssta::Error for an
-  /// empty region, resolution <= 0, or more than 2^28 pixels.
+  /// empty region, resolution <= 0, or more than 2^26 pixels (~1.1 GB).
   GridProjection Project(const Eigen::AlignedBox2d& region, double resolution_m) const;
 
   /// Every occupied voxel at map resolution (pruned blocks expanded), in OctoMap key order.
