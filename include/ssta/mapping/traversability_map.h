@@ -38,7 +38,14 @@ inline constexpr int kMapFormatVersion = 1;
 ///
 /// Thread safety: const methods only read (OctoMap's search and traversal do not mutate the
 /// tree), so any number of threads may query concurrently while no thread calls a non-const
-/// method. InsertFrame, set_metadata and assignment need exclusive access.
+/// method. InsertFrame, set_metadata and assignment need exclusive access: a planner that reads
+/// while a map is being built guards it with a reader-writer lock (std::shared_mutex), or reads
+/// a copy saved and loaded (Save / Load). A moved-from map may only be destroyed or assigned to.
+///
+/// A voxel's class is its fused per-class evidence (votes of the frames that saw it), not a
+/// function of its stored mean slope and step: those are averages over the same frames, so a
+/// voxel may hold class 3 with a mean slope under max_slope_deg (one frame's verdict against
+/// another's, ties to the worse class). Planners take the class; slope and step explain it.
 class TraversabilityMap {
  public:
   /// An empty map. Throws ssta::Error naming the key when `options` or `metadata.vehicle` is
