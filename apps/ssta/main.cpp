@@ -50,8 +50,8 @@ int main(int argc, char** argv) {
       std::cerr << "ssta: error: unknown command '" << unparsed.front() << "' (commands: " << names << ")\n";
       return 2;
     }
-    // A path an option would write to that cannot be written (OutputFile and its kin) names
-    // itself; other mistakes point at --help.
+    // A value a validator refused (an output path that cannot be written, a format not among
+    // the choices, a number out of range) is named with the option; other mistakes point at --help.
     const bool path_check = dynamic_cast<const CLI::ValidationError*>(&e) != nullptr;
     std::cerr << "ssta: error: " << e.what() << (path_check ? "" : " (--help lists the options)") << "\n";
     return 2;

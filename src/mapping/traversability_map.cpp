@@ -936,7 +936,8 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
   }
   if (!moved) {
     // One point (or only repeated ones): no heading, so any: the disc of the half width.
-    turn(polyline_world.back(), last_dir, M_PI, s);
+    constexpr double kHalfTurn = 3.14159265358979323846;
+    turn(polyline_world.back(), last_dir, kHalfTurn, s);
   }
   stations.push_back({polyline_world.back(), last_dir, s});
   check_size(static_cast<double>(stations.size()));  // with the turns' samples

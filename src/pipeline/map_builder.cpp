@@ -40,7 +40,6 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
   return s.str();
 }
 
-/// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
 /// A resumed map's classes are its vehicle's: frames classed for another vehicle would mix two
 /// verdicts in one voxel, so the config must give the vehicle the map was built for.
 void RequireSameVehicle(const VehicleOptions& map_vehicle, const VehicleOptions& config_vehicle,
@@ -56,6 +55,7 @@ void RequireSameVehicle(const VehicleOptions& map_vehicle, const VehicleOptions&
   }
 }
 
+/// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
 TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
                           const std::string& calibration, bool* continues_sequence) {
   *continues_sequence = false;

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 #include "core/json_escape.h"
 #include "ssta/io/file_util.h"
