@@ -6,9 +6,7 @@
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
-#include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
-#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_report.h"
 #include "ssta/pipeline/sequence_classifier.h"
 
@@ -52,10 +50,7 @@ void RunPair(const ClassifyArgs& a) {
   }
   const FrameResult result = pipeline.Process(ReadGreyImage(a.left), ReadGreyImage(a.right), up.normalized());
   const std::string name = std::filesystem::path(a.left).stem().string();
-  MakeDirectories(a.options.out_dir);
-  // As for a sequence: the run's every setting, for `--config` and eval's vehicle check.
-  WriteTextAtomically(a.options.out_dir + "/config.yaml",
-                      "# ssta classify: the configuration of this run (defaults, --config files)\n" + ConfigToYaml(config));
+  WriteRunConfig(config, a.options.out_dir);  // as for a sequence
   WriteFrameOutputs(result, a.options.out_dir, name, a.options.write_disparity);
   if (!a.quiet) {
     const auto& q = result.analysis.quality;

@@ -52,17 +52,20 @@ void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_h
   command->add_option("--json", args->json_path, "also write the summary as JSON to this file")->check(OutputFile());
 }
 
-// The truth of a synthetic sequence is classed for the vehicle in its vehicle.yaml (ssta synth
-// writes it beside gt/). Scores against it mean something only for classes made for that
-// vehicle: --config files read over it must leave it as it is, and so must the config.yaml that
-// `ssta classify` writes beside its labels (`prediction_config`, when there is one). Without a
-// vehicle.yaml the --config files are only checked for bad keys and values.
-// The vehicle.yaml beside the truth of `sequence`, if it has one.
-std::optional<std::string> TruthVehicleYaml(const std::string& sequence) {
+// The vehicle the truth of `sequence` was classed for: its vehicle.yaml (ssta synth writes it
+// beside gt/), read over the defaults; nullopt when the sequence has none.
+struct TruthVehicle {
+  VehicleOptions vehicle;
+  std::string yaml;
+};
+std::optional<TruthVehicle> ReadTruthVehicle(const std::string& sequence) {
   namespace fs = std::filesystem;
   const fs::path gt = FindGroundTruthDir(sequence);
   for (const fs::path& candidate : {gt.parent_path() / "vehicle.yaml", fs::path(sequence) / "vehicle.yaml"}) {
-    if (fs::is_regular_file(candidate)) return candidate.string();
+    if (!fs::is_regular_file(candidate)) continue;
+    Config truth;
+    ApplyConfigFile(candidate.string(), &truth);
+    return TruthVehicle{truth.vehicle, candidate.string()};
   }
   return std::nullopt;
 }
@@ -71,38 +74,35 @@ const char* const kTwoVehiclesAdvice =
     "scores against it would compare the classes of two vehicles: classify for that vehicle, or render the "
     "sequence for this one (ssta synth --config)";
 
+// Scores mean something only for classes made for the truth's vehicle: --config files read
+// over it must leave it as it is, and so must the config.yaml that `ssta classify` writes
+// beside its labels (`prediction_config`, when there is one). Without a vehicle.yaml the
+// --config files are only checked for bad keys and values.
 void RequireTruthVehicle(const EvalArguments& args, const std::string& prediction_config = "") {
   if (args.config.empty() && prediction_config.empty()) return;
-  const std::optional<std::string> vehicle_yaml = TruthVehicleYaml(args.sequence);
-  if (!vehicle_yaml) {
+  const std::optional<TruthVehicle> truth = ReadTruthVehicle(args.sequence);
+  if (!truth) {
     LoadLayeredConfig(nullptr, args.config);  // bad keys and values still name their file
     return;
   }
-  Config truth;
-  ApplyConfigFile(*vehicle_yaml, &truth);
   const std::string expected_for = "the truth in " + FindGroundTruthDir(args.sequence) + " was classed for";
-  RequireVehicle(truth.vehicle, args.config, expected_for, *vehicle_yaml, kTwoVehiclesAdvice);
+  RequireVehicle(truth->vehicle, args.config, expected_for, truth->yaml, kTwoVehiclesAdvice);
   if (!prediction_config.empty()) {
-    RequireVehicle(truth.vehicle, {prediction_config}, expected_for, *vehicle_yaml, kTwoVehiclesAdvice);
+    RequireVehicle(truth->vehicle, {prediction_config}, expected_for, truth->yaml, kTwoVehiclesAdvice);
   }
 }
 
-// A map's classes are its vehicle's (its metadata): scored against the truth of another
-// vehicle they would compare two vehicles' classes.
+// A map's classes are its vehicle's (its metadata): the truth's vehicle must be the same.
 void RequireMapForTruthVehicle(const TraversabilityMap& map, const std::string& map_path, const std::string& sequence) {
-  const std::optional<std::string> vehicle_yaml = TruthVehicleYaml(sequence);
-  if (!vehicle_yaml) return;
-  Config truth;
-  ApplyConfigFile(*vehicle_yaml, &truth);
-  for (const VehicleKey& k : VehicleKeys()) {
-    const double have = map.metadata().vehicle.*k.field, want = truth.vehicle.*k.field;
-    if (SameVehicleValue(have, want)) continue;
-    std::ostringstream m;
-    m << map_path << ": the map was built for vehicle." << k.name << " " << have << ", but the truth in "
-      << FindGroundTruthDir(sequence) << " was classed for " << want << " (" << *vehicle_yaml << "); "
-      << kTwoVehiclesAdvice;
-    throw Error(m.str());
-  }
+  const std::optional<TruthVehicle> truth = ReadTruthVehicle(sequence);
+  if (!truth) return;
+  const VehicleKey* k = FirstDifferingKey(map.metadata().vehicle, truth->vehicle);
+  if (k == nullptr) return;
+  std::ostringstream m;
+  m << map_path << ": the map was built for vehicle." << k->name << " " << map.metadata().vehicle.*k->field
+    << ", but the truth in " << FindGroundTruthDir(sequence) << " was classed for " << truth->vehicle.*k->field
+    << " (" << truth->yaml << "); " << kTwoVehiclesAdvice;
+  throw Error(m.str());
 }
 
 // The config.yaml that `ssta classify` wrote with the labels of --pred (DIR, or DIR/labels), or

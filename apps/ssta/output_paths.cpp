@@ -5,21 +5,12 @@
 #include <string>
 
 #include "commands.h"
+#include "ssta/io/file_util.h"
 
 namespace ssta::cli {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The folder a file or prefix `path` goes into must exist and be a folder; "" when it does.
-std::string FolderProblem(const fs::path& path) {
-  const fs::path parent = path.parent_path();
-  if (parent.empty()) return "";
-  std::error_code ec;
-  if (!fs::exists(parent, ec)) return "the folder " + parent.string() + " does not exist";
-  if (!fs::is_directory(parent, ec)) return parent.string() + " is a file, not a folder";
-  return "";
-}
 
 bool NamesAFolder(const std::string& path) {
   std::error_code ec;
@@ -35,7 +26,7 @@ CLI::Validator FileOrPrefix(bool prefix) {
           return path + (prefix ? ": is a folder; give a prefix such as " + (fs::path(path) / "map").string()
                                 : std::string(": is a folder; give a file name"));
         }
-        const std::string problem = FolderProblem(path);
+        const std::string problem = ParentFolderProblem(path);
         return problem.empty() ? "" : path + ": " + problem;
       },
       prefix ? "PREFIX" : "FILE");

@@ -36,6 +36,13 @@ const std::array<VehicleKey, 6>& VehicleKeys() {
 
 bool SameVehicleValue(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); }
 
+const VehicleKey* FirstDifferingKey(const VehicleOptions& a, const VehicleOptions& b) {
+  for (const VehicleKey& k : VehicleKeys()) {
+    if (!SameVehicleValue(a.*k.field, b.*k.field)) return &k;
+  }
+  return nullptr;
+}
+
 bool VehicleOptions::IsValid(std::string* error) const {
   if (!(max_slope_deg > 0 && max_slope_deg < 90)) return Fail(error, "max_slope_deg: must be in (0, 90) degrees");
   if (!(semi_slope_deg >= 0 && semi_slope_deg <= max_slope_deg)) {

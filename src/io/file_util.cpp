@@ -83,14 +83,18 @@ void InjectedWriteFault(const std::string& path, const std::string& tmp) {
 
 }  // namespace
 
+std::string ParentFolderProblem(const std::string& path) {
+  const fs::path parent = fs::path(path).parent_path();
+  std::error_code ec;
+  if (parent.empty() || fs::is_directory(parent, ec)) return "";
+  return fs::exists(parent, ec) ? parent.string() + " is a file, not a folder"
+                                : "the folder " + parent.string() + " does not exist";
+}
+
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,
                          bool remove_stale) {
   const fs::path target(path);
-  if (target.has_parent_path() && !fs::is_directory(target.parent_path())) {
-    const std::string folder = target.parent_path().string();
-    throw Error(path + (fs::exists(target.parent_path()) ? ": " + folder + " is a file, not a folder"
-                                                          : ": the folder " + folder + " does not exist"));
-  }
+  if (const std::string problem = ParentFolderProblem(path); !problem.empty()) throw Error(path + ": " + problem);
   const std::string tmp = TemporaryName(path);
   try {
     write(tmp);

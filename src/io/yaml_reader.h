@@ -60,11 +60,13 @@ void YamlSection::Read(const std::string& key, T* value) {
     // yaml-cpp reads a quote left open on the last line ('max_slope_deg: "20' + newline) as
     // the scalar "20 " and converts it: a number with white space around it is a mistake.
     const YAML::Node n = node_[key];
-    const std::string text = n.IsScalar() ? n.Scalar() : std::string("x");
-    if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) ||
-        std::isspace(static_cast<unsigned char>(text.back()))) {
-      throw Error(Name(key) + ": wrong type (value '" + YAML::Dump(n) + "': a number with white space around it; "
-                  "is a quote left open?)");
+    if (n.IsScalar()) {  // other kinds fail the conversion below
+      const std::string& text = n.Scalar();
+      if (text.empty() || std::isspace(static_cast<unsigned char>(text.front())) ||
+          std::isspace(static_cast<unsigned char>(text.back()))) {
+        throw Error(Name(key) + ": wrong type (value '" + YAML::Dump(n) +
+                    "': a number with white space around it; is a quote left open?)");
+      }
     }
   }
   try {

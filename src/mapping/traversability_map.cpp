@@ -1023,7 +1023,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
     const Eigen::Vector2d c = grid.PixelCenter(v, u);
     if (!coarse) return TopSurfaceAt(c.x(), c.y());
     const Eigen::Vector2d lo = c.array() - 0.5 * resolution_m, hi = c.array() + 0.5 * resolution_m;
-    CellInfo worst = TopSurfaceAt(c.x(), c.y());
+    CellInfo worst;  // unobserved until a column is; a coarser pixel holds at least one centre
     // Column centres sit at (k + 0.5) * map_res: those in [lo, hi).
     for (double x = (std::ceil(lo.x() / map_res - 0.5) + 0.5) * map_res; x < hi.x(); x += map_res) {
       for (double y = (std::ceil(lo.y() / map_res - 0.5) + 0.5) * map_res; y < hi.y(); y += map_res) {

@@ -108,6 +108,21 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
   return j.str();
 }
 
+int RemoveFrameOutputs(const std::string& out_dir) {
+  int removed = 0;
+  for (const char* dir : {"labels", "overlay", "disparity", "disparity_colour"}) {
+    removed += RemoveFrameFiles(out_dir + "/" + dir, ".png");
+  }
+  return removed + RemoveFrameFiles(out_dir + "/frames", ".json");
+}
+
+void WriteRunConfig(const Config& config, const std::string& out_dir) {
+  MakeDirectories(out_dir);
+  WriteTextAtomically(out_dir + "/config.yaml",
+                      "# ssta classify: the configuration of this run (defaults, the sequence's vehicle.yaml, "
+                      "--config files)\n" + ConfigToYaml(config));
+}
+
 void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, const std::string& name,
                        bool disparity) {
   for (const char* sub : {"labels", "overlay", "frames"}) MakeDirectories(out_dir + "/" + sub);

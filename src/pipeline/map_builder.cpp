@@ -44,15 +44,13 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
 /// verdicts in one voxel, so the config must give the vehicle the map was built for.
 void RequireSameVehicle(const VehicleOptions& map_vehicle, const VehicleOptions& config_vehicle,
                         const std::string& map_path) {
-  for (const VehicleKey& k : VehicleKeys()) {
-    const double have = map_vehicle.*k.field, want = config_vehicle.*k.field;
-    if (SameVehicleValue(want, have)) continue;
-    std::ostringstream m;
-    m << map_path << ": the map was built for vehicle." << k.name << " " << have
-      << ", but the config gives " << want
-      << " (a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one)";
-    throw Error(m.str());
-  }
+  const VehicleKey* k = FirstDifferingKey(map_vehicle, config_vehicle);
+  if (k == nullptr) return;
+  std::ostringstream m;
+  m << map_path << ": the map was built for vehicle." << k->name << " " << map_vehicle.*k->field
+    << ", but the config gives " << config_vehicle.*k->field
+    << " (a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one)";
+  throw Error(m.str());
 }
 
 /// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).

@@ -4,7 +4,6 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
-#include <utility>
 
 #include "core/json_escape.h"
 #include "ssta/io/file_util.h"
@@ -88,19 +87,9 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   if (!options.IsValid(&error)) throw Error(error);
   FramePipeline pipeline(sequence.calibration(), config);
   const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  MakeDirectories(options.out_dir);
   // The frames of an earlier, longer run would stay beside this one's and be scored.
-  const std::pair<const char*, const char*> outputs[] = {{"labels", ".png"}, {"overlay", ".png"}, {"frames", ".json"},
-                                                         {"disparity", ".png"}, {"disparity_colour", ".png"}};
-  int stale_files_removed = 0;
-  for (const auto& [dir, extension] : outputs) {
-    stale_files_removed += RemoveFrameFiles(options.out_dir + "/" + dir, extension);
-  }
-  // The configuration the labels were made with, every key: `--config DIR/config.yaml` repeats
-  // the run, and `ssta eval labels` checks its vehicle against the truth's.
-  WriteTextAtomically(options.out_dir + "/config.yaml",
-                      "# ssta classify: the configuration of this run (defaults, the sequence's vehicle.yaml, "
-                      "--config files)\n" + ConfigToYaml(config));
+  const int stale_files_removed = RemoveFrameOutputs(options.out_dir);
+  WriteRunConfig(config, options.out_dir);  // creates out_dir
 
   const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
 

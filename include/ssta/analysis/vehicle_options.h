@@ -35,5 +35,7 @@ struct VehicleKey {
 const std::array<VehicleKey, 6>& VehicleKeys();
 /// Whether two values of a vehicle key are the same (relative tolerance 1e-9).
 bool SameVehicleValue(double a, double b);
+/// The first key (VehicleKeys order) whose values differ between `a` and `b`; null when none.
+const VehicleKey* FirstDifferingKey(const VehicleOptions& a, const VehicleOptions& b);
 
 }  // namespace ssta

@@ -14,6 +14,11 @@ namespace ssta {
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,
                          bool remove_stale = false);
 
+/// What keeps a file from being written at `path` for lack of a folder: "the folder F does not
+/// exist" or "F is a file, not a folder" (F its parent); "" when the parent is a folder or
+/// `path` has none.
+std::string ParentFolderProblem(const std::string& path);
+
 /// Writes `text` to `path` atomically.
 void WriteTextAtomically(const std::string& path, const std::string& text);
 

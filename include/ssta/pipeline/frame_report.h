@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
 
 namespace ssta {
@@ -17,5 +18,13 @@ std::string FrameReportJson(const FrameResult& frame, const std::string& name);
 /// With `disparity`, also `out_dir/disparity/<name>.png` (false colour, for people).
 void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, const std::string& name,
                        bool disparity);
+
+/// Removes the per-frame files an earlier run's WriteFrameOutputs left in `out_dir`
+/// (RemoveFrameFiles on each of its folders); returns how many.
+int RemoveFrameOutputs(const std::string& out_dir);
+
+/// Writes `out_dir/config.yaml` atomically: every setting of the run (ConfigToYaml), so that
+/// `--config out_dir/config.yaml` repeats it and `ssta eval labels` can check its vehicle.
+void WriteRunConfig(const Config& config, const std::string& out_dir);
 
 }  // namespace ssta
