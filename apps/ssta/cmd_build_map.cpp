@@ -30,9 +30,6 @@ void Run(const BuildMapArgs& a) {
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
   const bool map_existed = std::filesystem::exists(a.options.map_path);
-  if (!a.options.resume && map_existed && !a.quiet) {
-    std::cerr << "ssta: replacing " << a.options.map_path << " (use --resume to continue it)\n";
-  }
   // SIGINT / SIGTERM stop after the current frame; the map is saved before exiting.
   std::signal(SIGINT, RequestStop);
   std::signal(SIGTERM, RequestStop);
@@ -42,7 +39,10 @@ void Run(const BuildMapArgs& a) {
                                            [&](int done, int total) { progress.Update(done, total); }, &g_stop);
   progress.Finish();
   if (!a.quiet) {
-    std::cout << summary.BriefReport() << "map: " << a.options.map_path << "\n";
+    // Said once the file is written: a run that fuses nothing leaves it as it was.
+    const bool replaced = !a.options.resume && map_existed && summary.frames_used > 0;
+    std::cout << summary.BriefReport() << "map: " << a.options.map_path
+              << (replaced ? " (replaced the earlier file; --resume continues a map)" : "") << "\n";
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
   if (summary.frames_used == 0 && summary.frames_already_in_map == 0) {

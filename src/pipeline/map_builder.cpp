@@ -438,8 +438,14 @@ std::string BuildMapSummary::BriefReport() const {
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  no verdicts " << s.timestamp_ns << ": " << s.reason << "\n";
   if (!gravity.empty()) r << "gravity: " << gravity << "\n";
-  r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
-    << " points fused\n";
+  if (frames_used == 0 && frames_already_in_map == 0) {  // BuildMap wrote nothing
+    r << "map: nothing fused, the file was not written"
+      << (map_file_bytes > 0 ? " (the earlier one, " + std::to_string(map_file_bytes / 1024) + " KiB, is as it was)" : "")
+      << "\n";
+  } else {
+    r << "map: " << map_nodes << " nodes, " << map_file_bytes / 1024.0 << " KiB on disk, " << points_inserted
+      << " points fused\n";
+  }
   r << "time: " << wall_s << " s (" << (wall_s > 0 ? frames_used / wall_s : 0.0) << " frames/s)\n";
   if (refinement) r << refinement->BriefReport();
   return r.str();

@@ -438,6 +438,9 @@ TEST(BuildMap, ARunThatFusesNoFrameLeavesAnExistingMapAsItWas) {
     EXPECT_EQ(summary.frames_used, 0) << resume;
     EXPECT_EQ(summary.skipped.size(), 3u) << resume;
     EXPECT_EQ(summary.map_file_bytes, before.size()) << resume;
+    EXPECT_NE(summary.BriefReport().find("map: nothing fused, the file was not written (the earlier one, "),
+              std::string::npos)
+        << summary.BriefReport();
     EXPECT_TRUE(FileBytes(options.map_path) == before) << "resume " << resume;
   }
   // Strict: the first frame stops the run before anything is fused.
