@@ -7,6 +7,7 @@ ssta_add_test(pipeline_test
   ${CMAKE_CURRENT_LIST_DIR}/end_to_end_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/fault_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_pipeline_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/golden_output_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_builder_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/online_refinement_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/real_data_test.cpp)
