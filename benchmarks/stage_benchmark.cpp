@@ -27,6 +27,8 @@
 #include <pcl/segmentation/organized_multi_plane_segmentation.h>
 #include <pcl/segmentation/plane_refinement_comparator.h>
 
+#include "ssta/analysis/frame_analysis.h"
+#include "ssta/mapping/frame_points.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/geometry/normal_estimator.h"
@@ -210,15 +212,16 @@ void BM_Segment(benchmark::State& state, const Dataset* d) {
   CountFrames(state);
 }
 
-/// The whole analysis after segmentation, as FramePipeline runs it (AnalyzeFrame: planes, classes
+/// The whole analysis after segmentation, as FramePipeline runs it (FrameAnalyzer: planes, classes
 /// and every label refinement of the config).
 void BM_Analyze(benchmark::State& state, const Dataset* d) {
   const RectifiedGeometry geometry = Rectifier(d->calibration, d->config.rectification).geometry();
+  FrameAnalyzer analyzer(d->config.vehicle, d->config.analysis);
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    benchmark::DoNotOptimize(AnalyzeFrame(d->config, geometry, f.result.disparity, f.result.cloud, f.normals,
-                                          f.result.segment_ids, f.result.num_segments, f.result.up_rectified));
+    benchmark::DoNotOptimize(analyzer.Analyze({&geometry, &f.result.disparity, &f.result.cloud, &f.normals,
+                                               &f.result.segment_ids, f.result.num_segments, f.result.up_rectified}));
   }
   CountFrames(state);
 }
@@ -241,13 +244,14 @@ void BM_Geometry(benchmark::State& state, const Dataset* d, int threads = 0) {
   if (threads > 0) normal_options.threads = threads;
   NormalEstimator estimator(normal_options);
   Segmenter segmenter(d->config.segmentation);
+  FrameAnalyzer analyzer(d->config.vehicle, d->config.analysis);
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
     const Image3f& normals = estimator.Compute(f.result.cloud);
     const Segmentation& s = segmenter.Compute(normals, &f.result.disparity);
-    benchmark::DoNotOptimize(AnalyzeFrame(d->config, geometry, f.result.disparity, f.result.cloud, normals, s.labels,
-                                          s.num_segments(), f.result.up_rectified));
+    benchmark::DoNotOptimize(analyzer.Analyze({&geometry, &f.result.disparity, &f.result.cloud, &normals, &s.labels,
+                                               s.num_segments(), f.result.up_rectified}));
   }
   CountFrames(state);
 }
@@ -274,7 +278,7 @@ void BM_MapPoints(benchmark::State& state, const Dataset* d) {
   std::vector<ClassifiedPoint> points;
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    MapPointsOfFrame(f.result, f.world_T_rectified, d->config, geometry, &points);
+    MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry, &points);
     benchmark::DoNotOptimize(points.data());
   }
   CountFrames(state);
@@ -288,7 +292,7 @@ void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    const auto points = MapPointsOfFrame(f.result, f.world_T_rectified, d->config, geometry);
+    const auto points = MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry);
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);
@@ -332,7 +336,7 @@ void BM_EndToEndWithMap(benchmark::State& state, const Dataset* d) {
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
     const FrameResult r = pipeline.Process(f.left, f.right, f.up_camera);
-    const auto points = MapPointsOfFrame(r, f.world_T_rectified, d->config, pipeline.geometry());
+    const auto points = MapPointsOfFrame(r, f.world_T_rectified, d->config.map, pipeline.geometry());
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);

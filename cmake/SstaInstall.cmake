@@ -1,7 +1,11 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-install(TARGETS ssta EXPORT sstaTargets
+set(ssta_install_targets ssta)
+foreach(module ${SSTA_MODULES})
+  list(APPEND ssta_install_targets ssta_${module})
+endforeach()
+install(TARGETS ${ssta_install_targets} EXPORT sstaTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}

@@ -11,7 +11,7 @@
 #include "config_loading.h"
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
-#include "ssta/pipeline/bench.h"
+#include "ssta/bench/pipeline_bench.h"
 #include "ssta/synth/sequence_synthesizer.h"
 
 namespace ssta::cli {

@@ -62,4 +62,27 @@ bool MapOptions::IsValid(std::string* error) const {
   return true;
 }
 
+MapOptions PipelineMapDefaults() {
+  MapOptions o;
+  o.max_range_m = 14.0;
+  o.occupied_threshold_prob = 0.8;
+  o.occupancy_miss_prob = 0.45;
+  o.class_free_decay_log_odds = 0.1;
+  o.free_space_clearance_m = 0.1;
+  o.free_space_obstacle_shortening_per_m2 = 0.008;
+  o.free_space_keeps_traversable = true;
+  return o;
+}
+
+bool MappingOptions::IsValid(std::string* error) const {
+  if (!fusion.IsValid(error)) return false;
+  if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
+  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
+  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
+    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
+  }
+  if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
+  return true;
+}
+
 }  // namespace ssta

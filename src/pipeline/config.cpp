@@ -125,17 +125,6 @@ SegmenterOptions PipelineSegmenterDefaults() {
   return o;
 }
 
-MapOptions PipelineMapDefaults() {
-  MapOptions o;
-  o.max_range_m = 14.0;
-  o.occupied_threshold_prob = 0.8;
-  o.occupancy_miss_prob = 0.45;
-  o.class_free_decay_log_odds = 0.1;
-  o.free_space_clearance_m = 0.1;
-  o.free_space_obstacle_shortening_per_m2 = 0.008;
-  o.free_space_keeps_traversable = true;
-  return o;
-}
 
 AnalysisOptions PipelineAnalysisDefaults() {
   AnalysisOptions o;
@@ -153,23 +142,7 @@ AnalysisOptions PipelineAnalysisDefaults() {
   return o;
 }
 
-bool GravityOptions::IsValid(std::string* error) const {
-  if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
-    return Fail(error, "up_camera: must be a finite, non-zero vector");
-  }
-  return true;
-}
 
-bool MappingOptions::IsValid(std::string* error) const {
-  if (!fusion.IsValid(error)) return false;
-  if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
-  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
-  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
-    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
-  }
-  if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
-  return true;
-}
 
 bool Config::IsValid(std::string* error) const {
   return CheckSection(vehicle, "vehicle", error) && CheckSection(rectification, "rectification", error) &&
@@ -310,16 +283,6 @@ Config LoadConfig(const std::string& path) {
   return config;
 }
 
-std::string GravitySourceName(GravitySource source) {
-  switch (source) {
-    case GravitySource::kAuto: return "auto";
-    case GravitySource::kImu: return "imu";
-    case GravitySource::kPose: return "pose";
-    case GravitySource::kLevel: return "level";
-    case GravitySource::kFixed: return "fixed";
-  }
-  return "auto";
-}
 
 std::string ConfigToYaml(const Config& c) {
   std::ostringstream y;

@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "core/run_both.h"
+#include "ssta/analysis/frame_analysis.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/stereo/rectifier.h"
@@ -38,11 +39,12 @@ Config Validated(const Config& config) {
 struct FramePipeline::Stages {
   Stages(const StereoCalibration& calibration, const Config& config)
       : rectifier(calibration, config.rectification), matcher(config.stereo), normals(config.normals),
-        segmenter(config.segmentation) {}
+        segmenter(config.segmentation), analyzer(config.vehicle, config.analysis) {}
   Rectifier rectifier;
   StereoMatcher matcher;
   NormalEstimator normals;
   Segmenter segmenter;
+  FrameAnalyzer analyzer;
 };
 
 FramePipeline::FramePipeline(const StereoCalibration& calibration, const Config& config)
@@ -98,8 +100,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
-  out.analysis = AnalyzeFrame(config_, g, out.disparity, cloud, normals, segmentation.labels, out.num_segments,
-                              out.up_rectified);
+  out.analysis = stages_->analyzer.Analyze(
+      {&g, &out.disparity, &cloud, &normals, &segmentation.labels, out.num_segments, out.up_rectified});
   if (config_.analysis.label_min_texture > 0.0) {
     // The same test as the map's min_texture, on the full rectified image (the block reaches
     // past the common area's border as the matcher's does).
@@ -119,6 +121,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
     std::copy(src, src + g.crop_width, out.labels.row(v + g.crop_v0) + g.crop_u0);
   }
   out.left_rectified = std::move(pair.left_full);
+  out.texture_block_px = config_.stereo.block_size;
+  out.labels_min_texture = config_.analysis.label_min_texture;
   // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
   // per-frame path; the classification keeps the matcher's disparity.
   if (disparity == nullptr && config_.map.subpixel_window_px > 0 && config_.stereo.subpixel_window_px == 0) {
@@ -129,58 +133,6 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.total_ms = t.rectify_ms + t.match_ms + t.triangulate_ms + t.normals_ms + t.segment_ms +
                          t.analyze_ms + clock.LapMs();
   return out;
-}
-
-AnalysisResult AnalyzeFrame(const Config& config, const RectifiedGeometry& g, const ImageF& disparity,
-                            const Image3f& cloud, const Image3f& normals, const ImageI32& segment_ids,
-                            int num_segments, const Eigen::Vector3d& up_rectified) {
-  const double focal_times_baseline = g.f * g.baseline_m;
-  const AnalysisOptions& options = config.analysis;
-  // Two of the label steps do their costly part on inputs the others do not change: the pixel
-  // slopes on the normals, the face test on the disparity. Each part runs beside the steps before
-  // it, and its result is applied at its place in the chain, so the labels are those of the
-  // steps one after the other:
-  //   AnalyzeSurfaces                              | pixel slope classes
-  //   apply slopes, ground consistency, fragments  | face search
-  //   apply faces, consensus fill, height fill
-  // The slope classes are computed before the quality check is known: on a frame that fails it
-  // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
-  thread_local ImageU8 slope_classes_of_thread;  // kept between frames; workers write these
-  thread_local DisparityFaces faces_of_thread;
-  ImageU8& slope_classes = slope_classes_of_thread;
-  DisparityFaces& faces = faces_of_thread;
-  AnalysisResult a;
-  RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, num_segments, up_rectified, config.vehicle, options); },
-          [&] {
-            if (options.pixel_slopes) {
-              PixelSlopeClasses(normals, up_rectified, config.vehicle, &segment_ids, options.pixel_slope_window_px,
-                                &slope_classes);
-            }
-          });
-  RunBoth(
-      [&] {
-        if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes, &a.labels);
-        RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
-        RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
-      },
-      [&] {
-        // Only for a frame that passed the quality check (known from here on): on the others
-        // the faces are not applied, and the search would keep the chain waiting.
-        if (options.face_window_px > 0 && a.quality.passed) {
-          FindDisparityFaces(disparity, g.f, g.cu, g.cv, up_rectified, options, &faces);
-        }
-      });
-  if (a.quality.passed) {
-    ApplyDisparityFaces(faces, disparity, options, &a.labels);  // nothing when the test is off
-    FillUndecidedByConsensus(options, &a.labels);
-    FillUndecidedByHeight(cloud, focal_times_baseline, config.vehicle, options, &a);
-  }
-  return a;
-}
-
-ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
-  return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
-                     block, min_std);
 }
 
 }  // namespace ssta

@@ -7,8 +7,9 @@
 
 #include "core/json_escape.h"
 #include "ssta/io/file_util.h"
+#include "ssta/io/ground_truth.h"
 #include "ssta/io/image_io.h"
-#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/sensors/gravity_provider.h"
 #include "ssta/pipeline/frame_report.h"
 
 namespace ssta {
@@ -32,21 +33,12 @@ void Scale(double k, StageTimings* t) {
   }
 }
 
-/// gt/<kind>/<ts>.png beside the sequence's cam0/, or in its parent folder (ASL's mav0/ layout).
-std::string TruthPath(const Sequence& sequence, const char* kind, std::int64_t timestamp_ns) {
-  namespace fs = std::filesystem;
-  const std::string name = std::to_string(timestamp_ns) + ".png";
-  fs::path gt = fs::path(sequence.root()) / "gt" / kind / name;
-  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / kind / name;
-  return gt.string();
-}
-
 }  // namespace
 
 void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const RectifiedGeometry& geometry,
                      ImageU8* labels) {
-  const std::string path = TruthPath(sequence, "labels", timestamp_ns);
-  const ImageU8 truth = ReadLabelImage(path);
+  const std::string path = TruthFramePath(sequence, "labels", timestamp_ns);
+  const ImageU8 truth = ReadTrueLabels(sequence, timestamp_ns);
   if (truth.width() != geometry.full_width || truth.height() != geometry.full_height) {
     throw Error(path + ": the true labels are " + std::to_string(truth.width()) + "x" +
                 std::to_string(truth.height()) + ", the frames are " + std::to_string(geometry.full_width) + "x" +
@@ -63,12 +55,6 @@ void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const 
   }
 }
 
-ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns) {
-  const ImageU16 raw = ReadImageU16(TruthPath(sequence, "disparity", timestamp_ns));
-  ImageF disparity(raw.width(), raw.height());
-  for (std::size_t i = 0; i < raw.size(); ++i) disparity[i] = raw[i] / 256.0f;
-  return disparity;
-}
 
 bool ClassifyOptions::IsValid(std::string* error) const {
   auto fail = [&](const char* m) {

@@ -5,7 +5,7 @@
 
 #include "cli_runner.h"
 #include "ssta/io/file_util.h"
-#include "ssta/pipeline/bench.h"
+#include "ssta/bench/pipeline_bench.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
 

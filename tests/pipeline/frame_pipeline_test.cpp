@@ -3,6 +3,8 @@
 #include <cmath>
 
 #include "plane_stereo_renderer.h"
+#include "ssta/analysis/frame_analysis.h"
+#include "ssta/mapping/frame_points.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/pipeline/frame_pipeline.h"
@@ -69,8 +71,8 @@ TEST(FramePipeline, MapPointsAtTheSubPixelDisparityLieCloserToTheSurface) {
   Config off = config;
   off.map.subpixel_window_px = 0;
   const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();  // a rectified rig: camera = rectified
-  const auto refined = MapPointsOfFrame(r, identity, config, pipeline.geometry());
-  const auto plain = MapPointsOfFrame(r, identity, off, pipeline.geometry());
+  const auto refined = MapPointsOfFrame(r, identity, config.map, pipeline.geometry());
+  const auto plain = MapPointsOfFrame(r, identity, off.map, pipeline.geometry());
   ASSERT_EQ(refined.size(), plain.size());
   ASSERT_GT(plain.size(), 20000u);
   const Eigen::Vector3f n = scene.NormalCamera().cast<float>();
@@ -162,11 +164,11 @@ TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {
             count(on, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }));
 }
 
-// AnalyzeFrame runs the costly parts of the pixel-slope and face steps beside the plane, ground
+// FrameAnalyzer runs the costly parts of the pixel-slope and face steps beside the plane, ground
 // and fragment steps and applies them at their places: its labels must be those of the steps run
 // one after the other, on a rendered yard frame where both steps change labels, with the
 // shipped options and with unwindowed slopes and no face test.
-TEST(AnalyzeFrame, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
+TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
   synth::SynthOptions o;
   const Config shipped;
   o.vehicle = shipped.vehicle;
@@ -195,8 +197,9 @@ TEST(AnalyzeFrame, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
   plain.analysis.face_window_px = 0;
   for (const Config& config : {shipped, plain}) {
     SCOPED_TRACE(config.analysis.face_window_px > 0 ? "shipped" : "unwindowed slopes, no face test");
-    const AnalysisResult concurrent = AnalyzeFrame(config, g, r.disparity, r.cloud, normals, r.segment_ids,
-                                                   r.num_segments, r.up_rectified);
+    const AnalysisResult concurrent = FrameAnalyzer(config.vehicle, config.analysis)
+                                          .Analyze({&g, &r.disparity, &r.cloud, &normals, &r.segment_ids,
+                                                    r.num_segments, r.up_rectified});
 
     AnalysisResult a = AnalyzeSurfaces(r.cloud, r.segment_ids, r.num_segments, r.up_rectified, config.vehicle,
                                        config.analysis);

@@ -7,6 +7,8 @@
 #include <fstream>
 #include <random>
 
+#include "ssta/analysis/frame_analysis.h"
+#include "ssta/mapping/frame_points.h"
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"

@@ -9,7 +9,7 @@
 #include "ssta/io/sequence.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/frame_pipeline.h"
-#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/sensors/gravity_provider.h"
 #include "ssta/pipeline/sequence_classifier.h"
 #include "ssta_test_paths.h"
 

@@ -1,5 +1,4 @@
 ssta_add_test(pipeline_test
-  ${CMAKE_CURRENT_LIST_DIR}/attitude_filter_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/bad_input_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/bench_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp

@@ -74,6 +74,30 @@ struct MapOptions {
   bool IsValid(std::string* error) const;
 };
 
+/// The map's fusion defaults for stereo: hits only within 12 m (farther stereo points are too
+/// noisy to classify), a voxel counts as occupied from 2 hits (P >= 0.8), so one stray point
+/// does not become a column's top surface, and free space is carved gently (P 0.45 per ray),
+/// because rays to far ground graze the voxels of nearer ground and would clear them.
+MapOptions PipelineMapDefaults();
+
+/// YAML section `map`: how frames are fused into a TraversabilityMap.
+struct MappingOptions {
+  MapOptions fusion = PipelineMapDefaults();  ///< voxel size, range and the log-odds sensor model
+  int pixel_stride = 1;         ///< insert every n-th pixel in u and v (the map thins per voxel)
+  /// Pixels whose left-image grey-level standard deviation over the stereo block is below this
+  /// are not inserted (sky and blank areas: matching noise); 0: off. Unlike stereo.min_texture
+  /// it leaves the per-frame classification as it is. In [0, 128).
+  double min_texture = 2.0;
+  /// [px, odd] the map's points sit at the matcher's disparity refined to sub-pixel precision
+  /// over this window (RefineDisparitySubpixel; 0: off). SGBM's disparities lean ~0.12 px short
+  /// and lock to whole pixels: at 12 m that is ~0.35 m of range bias. The per-frame classes keep
+  /// the matcher's disparity, on which they were measured; without effect when
+  /// stereo.subpixel_window_px already refines it, or with a given (oracle) disparity.
+  int subpixel_window_px = 7;
+  int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
+  bool IsValid(std::string* error) const;
+};
+
 /// What a map remembers about how it was made. It is written into the map file with the voxels.
 /// cam0's mount as an online refinement (`ssta build-map --refine`) left it, with the mount from
 /// sensor.yaml it corrects: a resumed build with the same sensor.yaml starts from `refined`.

@@ -67,39 +67,6 @@ struct BuildMapSummary {
 /// Called after each frame: (frames done, frames to do).
 using BuildProgress = std::function<void(int done, int total)>;
 
-/// The classified points of one frame in the world frame, every `stride`-th pixel of the
-/// common area with a 3D point and a class: class (a pixel labelled 0, without depth or
-/// untextured under analysis.label_min_texture, is never emitted), the slope and step of its
-/// segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
-/// (the common area's size), pixels where it is 0 are left out. With `point_disparity` (the
-/// common area's size), each point moves along its ray to that disparity where both it and the
-/// frame's are positive (a refined disparity: MapPointsOfFrame).
-std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
-                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
-                                                     const ImageU8* keep = nullptr,
-                                                     const ImageF* point_disparity = nullptr);
-/// The same into `*points` (cleared first; its capacity is reused from frame to frame).
-void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
-                             const ImageU8* keep, std::vector<ClassifiedPoint>* points,
-                             const ImageF* point_disparity = nullptr);
-
-/// Gauss-Newton steps of the map's sub-pixel refinement (map.subpixel_window_px): one moved the
-/// yard, drop-off and forest maps as two did (0.866 / 0.971 / 0.895 against 0.865 / 0.971 /
-/// 0.896, refined across outlines) at half the cost.
-inline constexpr int kMapSubpixelSteps = 1;
-
-/// The points build-map inserts for a frame: ClassifiedPointsInWorld at map.pixel_stride, without
-/// the untextured pixels (map.min_texture over stereo.block_size windows; not computed again
-/// when analysis.label_min_texture, the same test on the labels, is at least as strict). It
-/// keeps noise matches out of the map. With map.subpixel_window_px, and a frame that kept the
-/// matcher's images (FrameResult::left_matched, right_matched), the points sit at the disparity refined to
-/// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's.
-std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                                              const Config& config, const RectifiedGeometry& geometry);
-/// The same into `*points` (cleared first; its capacity is reused from frame to frame).
-void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
-                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points);
-
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
 /// pitch corrected by the IMU attitude filter where there is an IMU (GravityProvider); frames

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "ssta/io/ground_truth.h"
 #include "ssta/io/sequence.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
@@ -46,11 +47,6 @@ struct ClassifySummary {
   /// Machine-readable summary (written as summary.json).
   std::string Json() const;
 };
-
-/// The true disparity of frame `timestamp_ns` of a synthetic sequence: gt/disparity/<ts>.png
-/// (16 bit, disparity * 256, 0 = none) beside the sequence's cam0/, or in its parent folder
-/// (ASL's mav0/ layout). Throws ssta::Error naming the file when it is missing or unreadable.
-ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns);
 
 /// Overwrites a frame's labels (`labels`: the rectified common area, `geometry`'s crop) with the
 /// verdicts of its true labels, gt/labels/<ts>.png of a synthetic sequence (ids 1-3 at the full

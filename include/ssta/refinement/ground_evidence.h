@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "ssta/pipeline/frame_pipeline.h"
+#include "ssta/analysis/frame_result.h"
 #include "ssta/refinement/refinement_options.h"
 
 namespace ssta {

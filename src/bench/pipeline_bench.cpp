@@ -1,4 +1,5 @@
-#include "ssta/pipeline/bench.h"
+#include "ssta/mapping/frame_points.h"
+#include "ssta/bench/pipeline_bench.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -15,12 +16,12 @@
 #include <thread>
 
 #include "core/json_writer.h"
-#include "pipeline/ordered_worker.h"
+#include "core/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/traversability_map.h"
-#include "ssta/pipeline/attitude_filter.h"
+#include "ssta/sensors/attitude_filter.h"
 #include "ssta/pipeline/frame_pipeline.h"
-#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/sensors/gravity_provider.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/refinement/ground_evidence.h"
 #include "ssta/refinement/online_mount_refiner.h"
@@ -106,7 +107,7 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
       auto result = std::make_shared<FrameResult>(pipeline.Process(in.left, in.right, up_camera));
       const Eigen::Isometry3d world_T_rectified = in.world_T_body * body_T_rectified;
       fusion.Submit([&, k, result, world_T_rectified] {
-        MapPointsOfFrame(*result, world_T_rectified, config, pipeline.geometry(), &map_points);
+        MapPointsOfFrame(*result, world_T_rectified, config.map, pipeline.geometry(), &map_points);
         map.InsertFrame(map_points, world_T_rectified.translation(), inputs[k].t);
         finished[k] = Clock::now();
       });
@@ -343,7 +344,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     if (options.with_map) {
       const Timer map_timer;
       const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
-      MapPointsOfFrame(result, world_T_rectified, config, pipeline.geometry(), &points);
+      MapPointsOfFrame(result, world_T_rectified, config.map, pipeline.geometry(), &points);
       map.InsertFrame(points, world_T_rectified.translation(), t);
       map_wall = map_timer.WallMs();
       map_cpu = map_timer.CpuMs();

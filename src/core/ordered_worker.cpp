@@ -1,4 +1,4 @@
-#include "pipeline/ordered_worker.h"
+#include "core/ordered_worker.h"
 
 #include <utility>
 

@@ -7,7 +7,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/sequence.h"
-#include "ssta/pipeline/attitude_filter.h"
+#include "ssta/sensors/attitude_filter.h"
 #include "ssta_test_paths.h"
 
 namespace ssta {

@@ -1,4 +1,4 @@
-#include "ssta/pipeline/attitude_filter.h"
+#include "ssta/sensors/attitude_filter.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,26 @@
-#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/sensors/gravity_provider.h"
 
 namespace ssta {
+
+std::string GravitySourceName(GravitySource source) {
+  switch (source) {
+    case GravitySource::kAuto: return "auto";
+    case GravitySource::kImu: return "imu";
+    case GravitySource::kPose: return "pose";
+    case GravitySource::kLevel: return "level";
+    case GravitySource::kFixed: return "fixed";
+  }
+  return "auto";
+}
+
+bool GravityOptions::IsValid(std::string* error) const {
+  if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
+    if (error) *error = "up_camera: must be a finite, non-zero vector";
+    return false;
+  }
+  return true;
+}
+
 
 GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions& gravity,
                                  const AttitudeFilterOptions& attitude)

@@ -8,10 +8,27 @@
 #include <Eigen/Geometry>
 
 #include "ssta/io/sequence.h"
-#include "ssta/pipeline/attitude_filter.h"
-#include "ssta/pipeline/config.h"
+#include "ssta/sensors/attitude_filter.h"
 
 namespace ssta {
+
+/// Where each frame's gravity (up direction) comes from (YAML `gravity.source`).
+enum class GravitySource {
+  kAuto,   ///< "auto": the IMU when it has samples around the frame, else the pose, else level
+  kImu,    ///< "imu": mean accelerometer reading around the frame (platform at rest or cruising)
+  kPose,   ///< "pose": the attitude of pose0 (or EuRoC's ground truth) at the frame
+  kLevel,  ///< "level": the body is level, up = body z; the camera tilt comes from cam0's T_BS
+  kFixed,  ///< "fixed": `up_camera` as given, in the original cam0 frame
+};
+
+/// YAML section `gravity`.
+struct GravityOptions {
+  GravitySource source = GravitySource::kAuto;
+  Eigen::Vector3d up_camera{0.0, -1.0, 0.0};  ///< for source "fixed": up in cam0 (y down)
+  bool IsValid(std::string* error) const;
+};
+
+std::string GravitySourceName(GravitySource source);
 
 /// Gravity and gravity-corrected poses for the frames of one sequence, as `gravity.source`
 /// asks: the IMU attitude filter, the pose's attitude, a level body, or a fixed vector.

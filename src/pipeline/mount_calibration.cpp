@@ -1,4 +1,4 @@
-#include "ssta/refinement/mount_calibration.h"
+#include "ssta/pipeline/mount_calibration.h"
 
 #include <chrono>
 #include <sstream>
@@ -7,7 +7,7 @@
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/frame_pipeline.h"
-#include "ssta/pipeline/gravity_provider.h"
+#include "ssta/sensors/gravity_provider.h"
 
 namespace ssta {
 

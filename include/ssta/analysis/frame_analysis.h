@@ -1,0 +1,58 @@
+#pragma once
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/core/image.h"
+#include "ssta/stereo/rectifier.h"
+
+namespace ssta {
+
+/// What the stages before the analysis produced for one frame, all on the rectified common
+/// area (`geometry`'s crop) and in the rectified cam0 frame.
+struct FrameAnalysisInput {
+  const RectifiedGeometry* geometry = nullptr;  ///< focal length, principal point, baseline
+  const ImageF* disparity = nullptr;            ///< [px], 0 invalid
+  const Image3f* cloud = nullptr;               ///< organized points [m], NaN invalid
+  const Image3f* normals = nullptr;             ///< unit normals per pixel, NaN where none
+  const ImageI32* segment_ids = nullptr;        ///< segment per pixel in [0, num_segments), -1 none
+  int num_segments = 0;
+  Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< unit up in the rectified cam0 frame
+};
+
+/// The analysis of one frame after segmentation: the paper's SSTA (AnalyzeSurfaces, eq. 2-5)
+/// followed by the label refinements the analysis options turn on, in this order:
+///   1. per-pixel slopes (RefineByPixelSlope),
+///   2. ground consistency (RefineByGroundDisparity),
+///   3. fragments on a neighbour's plane (RefineByFragmentPlanes),
+///   4. thin faces from the disparity (RefineByDisparityFaces),
+///   5. undecided pixels amid a consensus (FillUndecidedByConsensus),
+///   6. undecided pixels by their own height (FillUndecidedByHeight).
+/// Steps 1 and 4-6 run only on a frame that passed the quality check. The costly parts of
+/// steps 1 and 4 read inputs no other step changes; they run beside the steps before them, and
+/// their results are applied at their places in the chain, so the labels are those of the steps
+/// one after the other (the texture mask of analysis.label_min_texture needs the full image and
+/// is applied by FramePipeline after this).
+/// Not thread-safe: Analyze reuses the analyzer's buffers; use one analyzer per thread.
+class FrameAnalyzer {
+ public:
+  /// Throws ssta::Error naming the key when `vehicle` or `options` is invalid.
+  FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options);
+
+  /// Precondition: every input is set and of the cloud's size.
+  AnalysisResult Analyze(const FrameAnalysisInput& input);
+
+ private:
+  VehicleOptions vehicle_;
+  AnalysisOptions options_;
+  ImageU8 slope_classes_;   // step 1's classes, kept between frames
+  DisparityFaces faces_;    // step 4's faces, kept between frames
+};
+
+/// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
+/// left image) has texture: the grey-level standard deviation of the full image over the
+/// `block` x `block` window around the pixel (clipped at the image border) is at least
+/// `min_std`; 0 elsewhere. Sky and other blank areas, where matching finds noise.
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
+
+}  // namespace ssta

@@ -1,0 +1,68 @@
+#include "ssta/analysis/frame_analysis.h"
+
+#include "core/run_both.h"
+#include "ssta/core/error.h"
+#include "ssta/stereo/stereo_matcher.h"
+
+namespace ssta {
+
+using internal::RunBoth;
+
+FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options)
+    : vehicle_(vehicle), options_(options) {
+  std::string error;
+  if (!vehicle_.IsValid(&error)) throw Error("vehicle." + error);
+  if (!options_.IsValid(&error)) throw Error("analysis." + error);
+}
+
+AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
+  SSTA_CHECK(in.geometry && in.disparity && in.cloud && in.normals && in.segment_ids,
+             "FrameAnalyzer::Analyze: every input must be set");
+  const RectifiedGeometry& g = *in.geometry;
+  const Image3f& cloud = *in.cloud;
+  const ImageI32& segment_ids = *in.segment_ids;
+  const Eigen::Vector3d& up = in.up_rectified;
+  const double focal_times_baseline = g.f * g.baseline_m;
+  const AnalysisOptions& options = options_;
+  // Two steps do their costly part on inputs the others do not change: the pixel slopes on the
+  // normals, the face test on the disparity. Each runs beside the steps before it:
+  //   AnalyzeSurfaces                              | pixel slope classes
+  //   apply slopes, ground consistency, fragments  | face search
+  //   apply faces, consensus fill, height fill
+  // The slope classes are computed before the quality check is known: on a frame that fails it
+  // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
+  AnalysisResult a;
+  RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options); },
+          [&] {
+            if (options.pixel_slopes) {
+              PixelSlopeClasses(*in.normals, up, vehicle_, &segment_ids, options.pixel_slope_window_px,
+                                &slope_classes_);
+            }
+          });
+  RunBoth(
+      [&] {
+        if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes_, &a.labels);
+        RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
+        RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
+      },
+      [&] {
+        // Only for a frame that passed the quality check (known from here on): on the others
+        // the faces are not applied, and the search would keep the chain waiting.
+        if (options.face_window_px > 0 && a.quality.passed) {
+          FindDisparityFaces(*in.disparity, g.f, g.cu, g.cv, up, options, &faces_);
+        }
+      });
+  if (a.quality.passed) {
+    ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);  // nothing when the test is off
+    FillUndecidedByConsensus(options, &a.labels);
+    FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
+  }
+  return a;
+}
+
+ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
+  return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
+                     block, min_std);
+}
+
+}  // namespace ssta

@@ -1,0 +1,113 @@
+#include "ssta/mapping/frame_points.h"
+
+#include <limits>
+#include <utility>
+
+#include "core/run_both.h"
+#include "ssta/analysis/frame_analysis.h"
+#include "ssta/core/error.h"
+#include "ssta/stereo/stereo_matcher.h"
+
+namespace ssta {
+
+void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
+                             const ImageU8* keep, std::vector<ClassifiedPoint>* points,
+                             const ImageF* point_disparity) {
+  SSTA_CHECK(stride >= 1, "stride must be at least 1");
+  SSTA_CHECK(points != nullptr, "points must not be null");
+  const Image3f& cloud = frame.cloud;
+  SSTA_CHECK(keep == nullptr || (keep->width() == cloud.width() && keep->height() == cloud.height()),
+             "the keep mask must have the size of the common area");
+  SSTA_CHECK(point_disparity == nullptr ||
+                 (point_disparity->width() == cloud.width() && point_disparity->height() == cloud.height() &&
+                  frame.disparity.width() == cloud.width() && frame.disparity.height() == cloud.height()),
+             "the point disparity and the frame's disparity must have the size of the common area");
+  const ImageU8& labels = frame.analysis.labels;
+  // Each segment's (slope, step) once, as the points carry them: a small flat table instead
+  // of a SegmentResult (with its plane and statistics) read per point.
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  const auto& segments = frame.analysis.segments;
+  std::vector<std::pair<float, float>> segment_values(segments.size());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const SegmentResult& s = segments[i];
+    segment_values[i] = {s.has_plane ? static_cast<float>(s.slope_deg) : kNaN, static_cast<float>(s.step_m)};
+  }
+  const bool has_ground = frame.analysis.ground.found && frame.analysis.quality.passed;
+  const Eigen::Vector4f ground = frame.analysis.ground.plane.cast<float>();
+  points->clear();
+  points->reserve(cloud.size() / (stride * stride) + 1);
+  const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
+  for (int v = 0; v < cloud.height(); v += stride) {
+    for (int u = 0; u < cloud.width(); u += stride) {
+      const Eigen::Vector3f& p = cloud(v, u);
+      if (!IsFinite(p) || labels(v, u) == static_cast<std::uint8_t>(TravClass::kUnknown) ||
+          (keep != nullptr && (*keep)(v, u) == 0)) {
+        continue;
+      }
+      ClassifiedPoint out;
+      Eigen::Vector3f q = p;
+      if (point_disparity != nullptr) {
+        // The same ray at the other disparity: Z' = f b / d' = Z d / d'.
+        const float d = frame.disparity(v, u), refined = (*point_disparity)(v, u);
+        if (refined > 0.0f && d > 0.0f) q = p * (d / refined);
+      }
+      out.world_p = transform * q;
+      if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
+      out.cls = static_cast<TravClass>(labels(v, u));
+      const int id = frame.segment_ids(v, u);
+      if (id >= 0) {
+        out.slope_deg = segment_values[static_cast<std::size_t>(id)].first;
+        out.step_m = segment_values[static_cast<std::size_t>(id)].second;
+      } else {
+        out.slope_deg = out.step_m = kNaN;
+      }
+      points->push_back(out);
+    }
+  }
+}
+
+std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
+                                                     const Eigen::Isometry3d& world_T_rectified, int stride,
+                                                     const ImageU8* keep, const ImageF* point_disparity) {
+  std::vector<ClassifiedPoint> points;
+  ClassifiedPointsInWorld(frame, world_T_rectified, stride, keep, &points, point_disparity);
+  return points;
+}
+
+void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                      const MappingOptions& options, const RectifiedGeometry& geometry,
+                      std::vector<ClassifiedPoint>* points) {
+  // Sub-pixel disparity for the points (map.subpixel_window_px), when the frame kept the
+  // matcher's images for it.
+  thread_local ImageF refined_of_thread;  // kept between frames; a worker may write it
+  ImageF& refined = refined_of_thread;
+  const bool refine = options.subpixel_window_px > 0 && !frame.right_matched.empty();
+  // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
+  // never emitted: a map threshold no stricter than that needs no mask of its own.
+  const bool mask = options.min_texture > 0.0 && frame.labels_min_texture < options.min_texture;
+  ImageU8 keep;
+  // The refinement and the texture mask are independent: they run side by side.
+  internal::RunBoth(
+      [&] {
+        if (!refine) return;
+        refined = frame.disparity;
+        // Only inside one segment: a window across an obstacle's outline would blend its depth
+        // with the ground's behind it where the two lie less than 1 px of disparity apart.
+        RefineDisparitySubpixel(frame.left_matched, frame.right_matched, options.subpixel_window_px,
+                                kMapSubpixelSteps, &refined, &frame.segment_ids);
+      },
+      [&] {
+        if (mask) keep = TexturedPixels(frame.left_rectified, geometry, frame.texture_block_px, options.min_texture);
+      });
+  ClassifiedPointsInWorld(frame, world_T_rectified, options.pixel_stride, mask ? &keep : nullptr, points,
+                          refine ? &refined : nullptr);
+}
+
+std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                                              const MappingOptions& options, const RectifiedGeometry& geometry) {
+  std::vector<ClassifiedPoint> points;
+  MapPointsOfFrame(frame, world_T_rectified, options, geometry, &points);
+  return points;
+}
+
+}  // namespace ssta
