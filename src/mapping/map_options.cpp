@@ -62,17 +62,6 @@ bool MapOptions::IsValid(std::string* error) const {
   return true;
 }
 
-MapOptions PipelineMapDefaults() {
-  MapOptions o;
-  o.max_range_m = 14.0;
-  o.occupied_threshold_prob = 0.8;
-  o.occupancy_miss_prob = 0.45;
-  o.class_free_decay_log_odds = 0.1;
-  o.free_space_clearance_m = 0.1;
-  o.free_space_obstacle_shortening_per_m2 = 0.008;
-  o.free_space_keeps_traversable = true;
-  return o;
-}
 
 bool MappingOptions::IsValid(std::string* error) const {
   if (!fusion.IsValid(error)) return false;

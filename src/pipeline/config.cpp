@@ -104,43 +104,10 @@ void ReadGravity(YamlSection s, GravityOptions* o) {
 
 }  // namespace
 
-StereoMatcherOptions PipelineStereoDefaults() {
-  StereoMatcherOptions o;
-  o.block_size = 9;
-  o.border_margin = 4;
-  return o;
-}
-
-NormalOptions PipelineNormalDefaults() {
-  NormalOptions o;
-  o.smoothing_size_px = 31;
-  o.depth_dependent_smoothing = true;
-  return o;
-}
-
-SegmenterOptions PipelineSegmenterDefaults() {
-  SegmenterOptions o;
-  o.roughness_deg = 9.0;
-  o.max_segment_angle_deg = 10.0;
-  return o;
-}
 
 
-AnalysisOptions PipelineAnalysisDefaults() {
-  AnalysisOptions o;
-  o.small_segments = SmallSegmentPolicy::kAll;
-  o.pixel_slopes = true;
-  o.ground_tolerance_px = 1.0;
-  o.pixel_slope_window_px = 31;
-  o.step_reference = StepReference::kReachableLarge;
-  o.face_window_px = 11;
-  o.face_columns_px = 17;
-  o.face_grow_tolerance_px = 0.25;
-  o.fragment_tolerance_px = 1.5;
-  o.undecided_fill_radius_px = 4;
-  o.undecided_height_fill = true;
-  return o;
-}
+
+
 
 
 

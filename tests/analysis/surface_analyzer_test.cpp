@@ -13,6 +13,24 @@
 namespace ssta {
 namespace {
 
+/// The segment verdicts alone, which most of these tests check: steps against the dominant plane
+/// (eq. 5), small obstacles flagged, and none of the label refinements.
+AnalysisOptions PlanesOnly() {
+  AnalysisOptions o;
+  o.pixel_slopes = false;
+  o.pixel_slope_window_px = 1;
+  o.step_reference = StepReference::kDominantPlane;
+  o.small_segments = SmallSegmentPolicy::kObstacles;
+  o.ground_tolerance_px = 0.0;
+  o.fragment_tolerance_px = 0.0;
+  o.undecided_fill_radius_px = 0;
+  o.undecided_height_fill = false;
+  o.face_window_px = 0;
+  o.face_columns_px = 1;
+  o.face_grow_tolerance_px = 0.0;
+  return o;
+}
+
 // An analytic world seen by a level camera 1 m above a floor (camera y points down, so up is
 // -y). Regions are painted into an organized cloud with known segment ids; the analysis must
 // recover planes, slopes, steps and classes in closed form.
@@ -34,7 +52,7 @@ class AnalyticWorld {
     num_segments_ = std::max(num_segments_, id + 1);
   }
 
-  AnalysisResult Analyze(const VehicleOptions& vehicle = {}, AnalysisOptions options = {}) const {
+  AnalysisResult Analyze(const VehicleOptions& vehicle = {}, AnalysisOptions options = PlanesOnly()) const {
     return AnalyzeSurfaces(cloud_, ids_, num_segments_, kUp, vehicle, options);
   }
 
@@ -76,7 +94,7 @@ TEST(SurfaceAnalyzer, RampsOfKnownSlopeGetTheirSlopeClass) {
     PaintFloor(w, 0, 0, 100, 0, 100);
     // A short ramp so that its centroid stays within semi_step of the floor plane.
     PaintRamp(w, 1, 0, 4, 100, 200, slope);
-    AnalysisOptions options;
+    AnalysisOptions options = PlanesOnly();
     options.inliers_min_ratio = 0.01;  // the ramp (400 px) is a full segment
     const AnalysisResult r = w.Analyze({}, options);
     ASSERT_TRUE(r.quality.passed) << r.quality.reason;
@@ -92,7 +110,7 @@ TEST(SurfaceAnalyzer, StepsOfKnownHeightGetTheirStepClass) {
     AnalyticWorld w(200, 100);
     PaintFloor(w, 0, 0, 100, 0, 100, 1.0);
     PaintFloor(w, 1, 0, 50, 100, 200, 1.0 - height);  // a raised flat top (y down: smaller y)
-    AnalysisOptions options;
+    AnalysisOptions options = PlanesOnly();
     options.inliers_min_ratio = 0.01;
     const AnalysisResult r = w.Analyze({}, options);
     ASSERT_TRUE(r.quality.passed) << r.quality.reason;
@@ -111,7 +129,7 @@ TEST(SurfaceAnalyzer, BoxFaceIsNonTraversableAndItsTopIsAStep) {
   w.Paint(1, 0, 20, 100, 150, {0.0, 1.0, 3.0}, {1, 0, 0}, {0, -1, 0});
   // Box top at 0.4 m above the floor.
   w.Paint(2, 20, 40, 100, 150, {0.0, 0.6, 3.0}, {1, 0, 0}, {0, 0, 1});
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.inliers_min_ratio = 0.01;
   const AnalysisResult r = w.Analyze({}, options);
   ASSERT_TRUE(r.quality.passed);
@@ -130,7 +148,7 @@ TEST(SurfaceAnalyzer, SmallObstacleIsFlaggedUnlessPaperExact) {
   EXPECT_TRUE(ours.segments[1].small);
   EXPECT_EQ(ours.segments[1].verdict, TravClass::kNonTraversable);
   EXPECT_EQ(ours.segments[2].verdict, TravClass::kUndecided);  // small and harmless: no verdict
-  AnalysisOptions paper;
+  AnalysisOptions paper = PlanesOnly();
   paper.small_segments = SmallSegmentPolicy::kPaper;
   const AnalysisResult exact = w.Analyze({}, paper);
   EXPECT_EQ(exact.segments[1].verdict, TravClass::kUndecided);
@@ -166,7 +184,7 @@ TEST(RefineByGroundDisparity, SmallSegmentsOnTheGroundWithinNoiseBecomeTraversab
   w.Paint(1, 0, 8, 0, 8, {0.0, 1.0, 8.0}, {1, 0, 0}, {0, -std::sin(s), std::cos(s)}, 0.025);
   // A small patch 0.5 m above the floor 3 m ahead: 50 / 3 px against 50 / 6 px on the floor.
   w.Paint(2, 8, 16, 0, 8, {0.0, 0.5, 3.0}, {1, 0, 0}, {0, 0, 1}, 0.02);
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.small_segments = SmallSegmentPolicy::kAll;
   options.min_plane_points = 30;
   AnalysisResult r = w.Analyze({}, options);
@@ -218,7 +236,7 @@ TEST(RefineByFragmentPlanes, FragmentsOnAnAdjacentPlaneTakeItsVerdict) {
     }
   }
   w.Paint(4, 80, 88, 20, 28, {-0.4, 1.0, 3.6}, {1, 0, 0}, {0, -std::sin(s40), std::cos(s40)}, 0.005);
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.small_segments = SmallSegmentPolicy::kAll;
   options.min_plane_points = 30;
   AnalysisResult r = w.Analyze({}, options);
@@ -269,7 +287,7 @@ TEST(RefineByGroundDisparity, LargeSegmentsKeepTheirVerdicts) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 80);
   PaintRamp(w, 1, 0, 100, 80, 100, 40.0);  // 2000 px: large, steep, starting on the floor
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.ground_tolerance_px = 16.0;  // everything near the floor would pass
   AnalysisResult r = w.Analyze({}, options);
   ASSERT_FALSE(r.segments[1].small);
@@ -404,7 +422,7 @@ TEST(SurfaceAnalyzer, ReachableStepsLetARampUpButNotOntoABox) {
   }
   // A box top 0.3 m above the floor inside it, reached only across a 0.3 m jump.
   w.Paint(2, 40, 60, 20, 30, {-0.5, 0.7, 2.5}, {1, 0, 0}, {0, 0, 1});
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.inliers_min_ratio = 0.01;
   const AnalysisResult paper = w.Analyze({}, options);
   ASSERT_TRUE(paper.quality.passed);
@@ -439,7 +457,7 @@ AnalyticWorld FloorAndRamp(double slope_deg) {
 }
 
 TEST(SurfaceAnalyzer, ReachableLargeLiftsOnlyLargeSegmentsThatEq5CallsAStep) {
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.inliers_min_ratio = 0.01;  // inliers_min = 100: the ramp is large, its 80-point end small
   options.small_segments = SmallSegmentPolicy::kAll;
 
@@ -535,7 +553,7 @@ struct StepScene {
 };
 
 AnalysisOptions FaceOptions() {
-  AnalysisOptions o;
+  AnalysisOptions o = PlanesOnly();
   o.face_window_px = 11;
   o.face_min_slope_deg = 40;
   return o;
@@ -775,7 +793,7 @@ TEST(RefineByDisparityFaces, GrowsAFaceOverAllItsRowsAndNoFurther) {
 }
 
 TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.undecided_fill_radius_px = 1;
   options.undecided_fill_share = 0.9;
   // Row 1: undecided amid 8 traversable -> traversable. Row 4: 7 traversable and 1
@@ -804,7 +822,7 @@ TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
 }
 
 TEST(FillUndecidedByConsensus, LeavesSplitWindowsAndWideGapsUndecided) {
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.undecided_fill_radius_px = 4;
   // Traversable left of column 20, non-traversable from column 22, undecided in columns 20-21
   // (an obstacle's outline), and a 12 px wide band of undecided rows 30..41 across the image.
@@ -843,7 +861,7 @@ TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUnd
   point_at(57, 10, -0.05, 3.0);  // 0.05 m below, 0.83 px off: ground within noise -> traversable
   w.cloud_(60, 10) = NanVector3f();  // no depth: stays unknown
   w.ids_(60, 10) = -1;
-  AnalysisOptions options;
+  AnalysisOptions options = PlanesOnly();
   options.ground_tolerance_px = 1.0;
   options.undecided_height_fill = true;
   const AnalysisResult analysed = w.Analyze({}, options);
@@ -884,12 +902,7 @@ TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUnd
 }
 
 TEST(AnalysisOptions, RejectsBadFaceFragmentAndFillSettingsNamingTheKey) {
-  AnalysisOptions valid;
-  valid.face_window_px = 11;
-  valid.face_columns_px = 17;
-  valid.face_grow_tolerance_px = 0.25;
-  valid.fragment_tolerance_px = 1.5;
-  valid.undecided_fill_radius_px = 4;
+  const AnalysisOptions valid;  // every refinement on
   std::string error;
   ASSERT_TRUE(valid.IsValid(&error)) << error;
   // One bad value at a time, on top of valid options: rejected, and the message names the key.

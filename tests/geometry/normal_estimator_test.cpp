@@ -61,7 +61,7 @@ Scene TiltedPlaneScene() {
 }
 
 NormalOptions OptionsFor(NormalMethod method) {
-  NormalOptions options;
+  NormalOptions options = test::FixedWindow13();
   options.method = method;
   return options;
 }
@@ -208,7 +208,7 @@ TEST(NormalEstimator, WindowsDoNotStraddleDepthEdges) {
     EXPECT_LT(wall.max_deg, 0.05);
   }
   // Without edge handling the same pixels are badly off: the check above can fail.
-  NormalOptions blind;
+  NormalOptions blind = test::FixedWindow13();
   blind.max_depth_change_factor = 100.0;
   const ErrorStats straddled = Compare(EstimateNormals(cloud, blind), truth, near_silhouette);
   RecordProperty("straddled_max_deg", std::to_string(straddled.max_deg));
@@ -222,7 +222,7 @@ TEST(NormalEstimator, CovarianceNormalsOfNoisyStereoGroundStayClose) {
   // 0.15 px disparity noise: sigma_Z = 0.15 / (f b) * Z^2 (0.28 m at 10 m).
   const double k = 0.15 / (camera.f_px * camera.baseline_m);
   test::AddDepthNoise(k, 42, &cloud);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
   auto in_range = [&](double z_min, double z_max) {
     return [&, z_min, z_max](int v, int u) {
       return IsFinite(cloud(v, u)) && cloud(v, u).z() >= z_min && cloud(v, u).z() < z_max;
@@ -242,7 +242,7 @@ TEST(NormalEstimator, CovarianceNormalsOfNoisyStereoGroundStayClose) {
   EXPECT_LT(far.mean_deg, 2.5);
 
   // Depth-dependent smoothing trades near detail for far accuracy.
-  NormalOptions adaptive;
+  NormalOptions adaptive = test::FixedWindow13();
   adaptive.depth_dependent_smoothing = true;
   const Image3f adaptive_normals = EstimateNormals(cloud, adaptive);
   const ErrorStats adaptive_far = Compare(adaptive_normals, truth, in_range(10.0, 20.0));
@@ -261,7 +261,7 @@ TEST(NormalEstimator, ReusesBuffersAcrossFrameSizes) {
   Image3f truth_big, truth_small;
   const Image3f cloud_big = TiltedPlaneScene().Render(big, &truth_big);
   const Image3f cloud_small = TiltedPlaneScene().Render(small, &truth_small);
-  NormalEstimator estimator(NormalOptions{});
+  NormalEstimator estimator(test::FixedWindow13());
   for (int i = 0; i < 2; ++i) {
     const ErrorStats a =
         Compare(estimator.Compute(cloud_big), truth_big, [](int, int) { return true; });
@@ -280,7 +280,7 @@ TEST(NormalEstimator, ReusesBuffersAcrossFrameSizes) {
 TEST(NormalEstimator, WindowRadiusIsReportedAndCutAtEdges) {
   const PinholeCamera camera;
   const Image3f cloud = BoxBeforeWallScene().Render(camera);
-  NormalEstimator estimator(NormalOptions{});
+  NormalEstimator estimator(test::FixedWindow13());
   estimator.Compute(cloud);
   const ImageU8& radius = estimator.window_radius_px();
   EXPECT_EQ(radius(240, 320), 6);  // box centre: full 13 x 13 window
@@ -319,7 +319,7 @@ TEST(NormalEstimator, SubsampledNormalsEqualFullOnesOnPlanes) {
     for (int u = 300; u < 310; ++u) cloud(260, u) = NanVector3f();
     for (const bool adaptive : {false, true}) {
       SCOPED_TRACE(adaptive ? "depth-dependent" : "fixed window");
-      NormalOptions options;
+      NormalOptions options = test::FixedWindow13();
       options.smoothing_size_px = 31;
       options.depth_dependent_smoothing = adaptive;
       const Image3f full = EstimateNormals(cloud, options);
@@ -375,7 +375,7 @@ TEST(NormalEstimator, SubsampledDepthEdgesAreTheFullImagesAtTwoPixels) {
       }
     }
     const Eigen::Vector3f truth = Eigen::Vector3f(slope * f, 0.0f, slope * cu + 0.3f).normalized();
-    NormalOptions options;
+    NormalOptions options = test::FixedWindow13();
     options.smoothing_size_px = 15;
     const bool edge_at_two_pixels = 2.0 * slope > options.max_depth_change_factor * std::sqrt(2.0);
     for (const int subsample : {1, 2}) {
@@ -411,7 +411,7 @@ TEST(NormalEstimator, SubsampledDepthEdgesAreTheFullImagesAtTwoPixels) {
 TEST(NormalEstimator, DepthDependentRadiusFollowsTheFormulaExactly) {
   const PinholeCamera camera;
   const Image3f cloud = TiltedPlaneScene().Render(camera);
-  NormalOptions options;
+  NormalOptions options = test::FixedWindow13();
   options.smoothing_size_px = 17;
   options.depth_dependent_smoothing = true;
   NormalEstimator estimator(options);

@@ -65,18 +65,14 @@ auto Facing(const Image3f& truth, const Eigen::Vector3f& n) {
       [&truth, n](int v, int u) { return IsFinite(truth(v, u)) && truth(v, u).dot(n) > 0.9998f; };
 }
 
-SegmenterOptions WithRoughness(double deg) {
-  SegmenterOptions options;
-  options.roughness_deg = deg;
-  return options;
-}
+SegmenterOptions WithRoughness(double deg) { return test::NeighbourNormals(deg); }
 
 TEST(Segmenter, SplitsRampFromFloorBelowCreaseRotationAndMergesAboveRampAngle) {
   const PinholeCamera camera;
   Image3f truth;
   const Image3f cloud = FloorAndRampScene(20.0).Render(camera, &truth, 20.0);
   const ImageF disparity = test::DisparityOf(cloud, camera);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
   const auto floor = Facing(truth, {0, -1, 0});
   const Eigen::Vector3f ramp_n =
       Eigen::Vector3f(0, -std::cos(20 * kPi / 180), -std::sin(20 * kPi / 180));
@@ -92,7 +88,7 @@ TEST(Segmenter, SplitsRampFromFloorBelowCreaseRotationAndMergesAboveRampAngle) {
   EXPECT_GT(max_turn_deg, 2.0);
   EXPECT_LT(max_turn_deg, 5.0);
 
-  for (const double roughness : {1.0, SegmenterOptions{}.roughness_deg}) {
+  for (const double roughness : {1.0, test::NeighbourNormals().roughness_deg}) {
     SCOPED_TRACE(roughness);
     const Segmentation split = SegmentNormals(normals, &disparity, WithRoughness(roughness));
     const Mode f = ModeOf(split, floor), r = ModeOf(split, ramp);
@@ -114,7 +110,7 @@ TEST(Segmenter, SegmentAngleStopsAGradualCreaseFromChaining) {
   Image3f truth;
   const Image3f cloud = FloorAndRampScene(20.0).Render(camera, &truth, 20.0);
   const ImageF disparity = test::DisparityOf(cloud, camera);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
   const auto floor = Facing(truth, {0, -1, 0});
   const auto ramp = Facing(truth, Eigen::Vector3f(0, -std::cos(20 * kPi / 180), -std::sin(20 * kPi / 180)));
 
@@ -136,8 +132,8 @@ TEST(Segmenter, BoxTopAndFrontAreSeparateSegments) {
   Image3f truth;
   const Image3f cloud = BoxOnFloorScene().Render(camera, &truth, 20.0);
   const ImageF disparity = test::DisparityOf(cloud, camera);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
-  const Segmentation s = SegmentNormals(normals, &disparity, SegmenterOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
+  const Segmentation s = SegmentNormals(normals, &disparity, test::NeighbourNormals());
   auto top = [&](int v, int u) {
     return Facing(truth, {0, -1, 0})(v, u) && std::abs(cloud(v, u).y() - 0.7f) < 1e-3f;
   };
@@ -178,16 +174,16 @@ TEST(Segmenter, DisparityJumpSeparatesBoxTopFromFloorBehindIt) {
   auto floor = [&](int v, int u) {
     return IsFinite(cloud(v, u)) && std::abs(cloud(v, u).y() - 1.0f) < 1e-3f;
   };
-  const Segmentation with = SegmentNormals(truth, &disparity, SegmenterOptions{});
+  const Segmentation with = SegmentNormals(truth, &disparity, test::NeighbourNormals());
   EXPECT_NE(ModeOf(with, top).label, ModeOf(with, floor).label);
   EXPECT_EQ(ModeOf(with, top).count, ModeOf(with, top).selected);
 
-  SegmenterOptions pure;
+  SegmenterOptions pure = test::NeighbourNormals();
   pure.max_disparity_jump_px = 0.0;
   const Segmentation without = SegmentNormals(truth, &disparity, pure);
   EXPECT_EQ(ModeOf(without, top).label, ModeOf(without, floor).label);
   // No disparity image: the pure normal criterion too.
-  const Segmentation no_disparity = SegmentNormals(truth, nullptr, SegmenterOptions{});
+  const Segmentation no_disparity = SegmentNormals(truth, nullptr, test::NeighbourNormals());
   EXPECT_EQ(ModeOf(no_disparity, top).label, ModeOf(no_disparity, floor).label);
 }
 
@@ -198,8 +194,8 @@ TEST(Segmenter, NanNormalsAreUnlabelledAndSizesAddUp) {
     for (int u = 100; u < 140; ++u) cloud(v, u) = NanVector3f();
   }
   const ImageF disparity = test::DisparityOf(cloud, camera);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
-  Segmenter segmenter(SegmenterOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
+  Segmenter segmenter(test::NeighbourNormals());
   for (int repeat = 0; repeat < 2; ++repeat) {  // reused buffers give the same answer
     const Segmentation& s = segmenter.Compute(normals, &disparity);
     int labelled = 0;
@@ -243,8 +239,8 @@ TEST(Segmenter, NoisyStereoGroundStaysOneSegmentAtDefaults) {
   Image3f cloud = test::GroundScene(1.0).Render(camera, nullptr, 20.0);
   test::AddDepthNoise(0.15 / (camera.f_px * camera.baseline_m), 11, &cloud);
   const ImageF disparity = test::DisparityOf(cloud, camera);
-  const Image3f normals = EstimateNormals(cloud, NormalOptions{});
-  const Segmentation s = SegmentNormals(normals, &disparity, SegmenterOptions{});
+  const Image3f normals = EstimateNormals(cloud, test::FixedWindow13());
+  const Segmentation s = SegmentNormals(normals, &disparity, test::NeighbourNormals());
   int with_normal = 0, near_with_normal = 0, near_in_largest = 0;
   const int largest = s.LargestSegment();
   for (std::size_t i = 0; i < normals.size(); ++i) {
@@ -282,7 +278,7 @@ TEST(SegmenterOptions, ValidationNamesTheKey) {
 TEST(Segmenter, DisparityOfAnotherSizeIsAProgrammerError) {
   const Image3f normals(4, 4, Eigen::Vector3f(0, 0, -1));
   const ImageF disparity(3, 4, 1.0f);
-  EXPECT_THROW(SegmentNormals(normals, &disparity, SegmenterOptions{}), InternalError);
+  EXPECT_THROW(SegmentNormals(normals, &disparity, test::NeighbourNormals()), InternalError);
 }
 
 }  // namespace

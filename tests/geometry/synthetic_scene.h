@@ -6,6 +6,8 @@
 #include <Eigen/Core>
 
 #include "ssta/core/image.h"
+#include "ssta/geometry/normal_estimator.h"
+#include "ssta/geometry/segmenter.h"
 
 namespace ssta::test {
 
@@ -61,5 +63,22 @@ void AddDepthNoise(double k_per_m, unsigned seed, Image3f* cloud);
 
 /// Angle between two vectors [deg] (NaN if either is not finite).
 double AngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b);
+
+/// Normals over a fixed 13 px window, the scale of the analytic worlds these tests render.
+inline NormalOptions FixedWindow13() {
+  NormalOptions options;
+  options.smoothing_size_px = 13;
+  options.depth_dependent_smoothing = false;
+  return options;
+}
+
+/// Segmentation by neighbouring normals alone (eq. 1) within `roughness_deg`, with the
+/// disparity test and without the segment-angle test.
+inline SegmenterOptions NeighbourNormals(double roughness_deg = 2.0) {
+  SegmenterOptions options;
+  options.roughness_deg = roughness_deg;
+  options.max_segment_angle_deg = 0.0;
+  return options;
+}
 
 }  // namespace ssta::test

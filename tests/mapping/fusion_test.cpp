@@ -12,6 +12,8 @@
 namespace ssta {
 namespace {
 
+using testing::OctoMapCarving;
+
 using testing::NodeAt;
 using testing::Pt;
 using testing::Softmax;
@@ -39,7 +41,7 @@ std::array<float, 3> ExpectedLogOdds(const std::vector<int>& verdicts, const Map
 }
 
 TEST(Fusion, RepeatedObservationsRaiseTheClassProbabilityMonotonicallyToTheClamp) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   const MapOptions& o = map.options();
   double previous = 0.0;
   int strictly_rising = 0;
@@ -64,7 +66,7 @@ TEST(Fusion, RepeatedObservationsRaiseTheClassProbabilityMonotonicallyToTheClamp
 }
 
 TEST(Fusion, AVoxelSeenThroughLosesOccupancyAndItsClass) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(At(kA, TravClass::kTraversable), kOrigin, 1);
   ASSERT_TRUE(map.CellAt(kA).occupied);
   // The surface is gone: now the rays run through A to B. Log-odds after one hit and n misses:
@@ -111,7 +113,7 @@ TEST(Fusion, RaysLeaveVoxelsHeldAsTraversableAsTheyAreWhenAskedTo) {
   };
   for (const bool keep : {false, true}) {
     for (std::size_t i = 0; i < cases.size(); ++i) {
-      MapOptions options;
+      MapOptions options = OctoMapCarving();
       options.free_space_keeps_traversable = keep;
       TraversabilityMap map(options);
       std::int64_t t = 0;
@@ -141,7 +143,7 @@ TEST(Fusion, GrazingRaysKeepTheGroundTheyPassOverWithClearance) {
   const Eigen::Vector3d camera(0.05, 0.05, 0.85);
   const Eigen::Vector3d near(9.55, 0.05, 0.05), far(10.05, 0.05, 0.05);
   for (const double clearance : {0.0, 0.1}) {
-    MapOptions options;
+    MapOptions options = OctoMapCarving();
     options.free_space_clearance_m = clearance;
     TraversabilityMap map(options);
     map.InsertFrame(At(near, TravClass::kTraversable), camera, 1);
@@ -182,7 +184,7 @@ TEST(Fusion, RaysToObstaclesClearTheSmearInFrontOfThemUnlessTheyEndBelowTheGroun
                         Case{0.008, TravClass::kTraversable, 0.45f, false}}) {
     SCOPED_TRACE(::testing::Message() << "k " << c.k << ", class " << static_cast<int>(c.cls) << ", height "
                                       << c.height_m);
-    MapOptions options;
+    MapOptions options = OctoMapCarving();
     options.free_space_clearance_m = 0.1;
     options.free_space_obstacle_shortening_per_m2 = c.k;
     TraversabilityMap map(options);
@@ -197,7 +199,7 @@ TEST(Fusion, RaysToObstaclesClearTheSmearInFrontOfThemUnlessTheyEndBelowTheGroun
     EXPECT_TRUE(map.CellAt(end).occupied);
     EXPECT_EQ(map.CellAt(end).cls, c.cls);
   }
-  MapOptions bad;
+  MapOptions bad = OctoMapCarving();
   bad.free_space_obstacle_shortening_per_m2 = std::nan("");
   std::string error;
   EXPECT_FALSE(bad.IsValid(&error));
@@ -205,7 +207,7 @@ TEST(Fusion, RaysToObstaclesClearTheSmearInFrontOfThemUnlessTheyEndBelowTheGroun
 }
 
 TEST(Fusion, ThreeNonTraversableViewsOutvoteOneTraversable) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   for (int i = 0; i < 3; ++i) map.InsertFrame(At(kA, TravClass::kNonTraversable), kOrigin, i);
   map.InsertFrame(At(kA, TravClass::kTraversable), kOrigin, 3);
   const CellInfo cell = map.CellAt(kA);
@@ -220,7 +222,7 @@ TEST(Fusion, ThreeNonTraversableViewsOutvoteOneTraversable) {
 }
 
 TEST(Fusion, OneUpdatePerVoxelPerFrameByMajority) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   std::vector<ClassifiedPoint> points;
   // Seven traversable and three non-traversable points inside voxel A, off-centre.
   for (int i = 0; i < 7; ++i) points.push_back(Pt(2.01 + 0.01 * i, 0.02, 0.03, TravClass::kTraversable, 10.0f, 0.02f));
@@ -239,14 +241,14 @@ TEST(Fusion, OneUpdatePerVoxelPerFrameByMajority) {
   EXPECT_NEAR(cell.step_m, (7 * 0.02 - 3 * 0.3) / 10.0, 1e-6);
   EXPECT_NEAR(cell.max_step_m, 0.3, 1e-6);
   // A tie goes to the worse class.
-  TraversabilityMap tie;
+  TraversabilityMap tie(OctoMapCarving());
   tie.InsertFrame({Pt(kA.x(), 0.05, 0.05, TravClass::kTraversable), Pt(kA.x(), 0.05, 0.05, TravClass::kSemiTraversable)},
                   kOrigin, 1);
   EXPECT_EQ(tie.CellAt(kA).cls, TravClass::kSemiTraversable);
 }
 
 TEST(Fusion, SlopeAndStepAreRunningMeansOverFrames) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(At(kA, TravClass::kSemiTraversable, 10.0f, 0.05f), kOrigin, 1);
   map.InsertFrame(At(kA, TravClass::kSemiTraversable, 20.0f, 0.15f), kOrigin, 2);
   map.InsertFrame(At(kA, TravClass::kSemiTraversable, NAN, NAN), kOrigin, 3);  // not averaged
@@ -260,7 +262,7 @@ TEST(Fusion, SlopeAndStepAreRunningMeansOverFrames) {
 }
 
 TEST(Fusion, UndecidedPointsUpdateOccupancyButNotClasses) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(At(kA, TravClass::kUndecided), kOrigin, 7);
   map.InsertFrame(At(kB, TravClass::kUnknown), {4.05, 2.05, 0.05}, 8);
   for (const auto& p : {kA, kB}) {
@@ -278,7 +280,7 @@ TEST(Fusion, UndecidedPointsUpdateOccupancyButNotClasses) {
 }
 
 TEST(Fusion, PointsBeyondRangeClearSpaceOnlyUpToTheRange) {
-  TraversabilityMap map;  // max_range_m 15
+  TraversabilityMap map(OctoMapCarving());  // max_range_m 15
   const Eigen::Vector3d far(20.05, 0.05, 0.05);
   const InsertStats stats = map.InsertFrame(At(far, TravClass::kTraversable), kOrigin, 1);
   EXPECT_EQ(stats.points_beyond_range, 1u);
@@ -292,7 +294,7 @@ TEST(Fusion, PointsBeyondRangeClearSpaceOnlyUpToTheRange) {
 }
 
 TEST(Fusion, AFrameFromAnInvalidOriginIsSkippedWithAReason) {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   const InsertStats stats = map.InsertFrame(At(kA, TravClass::kTraversable), {NAN, 0.0, 0.0}, 1);
   EXPECT_FALSE(stats.inserted);
   EXPECT_FALSE(stats.reason.empty());
@@ -305,22 +307,22 @@ TEST(Fusion, AFrameFromAnInvalidOriginIsSkippedWithAReason) {
 }
 
 TEST(Fusion, OptionsAreValidatedNamingTheKey) {
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   std::string error;
   EXPECT_TRUE(options.IsValid(&error));
   options.resolution_m = 0.0;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("resolution_m:", 0), 0u) << error;
-  options = MapOptions{};
+  options = OctoMapCarving();
   options.occupancy_hit_prob = 0.4;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("occupancy_hit_prob:", 0), 0u) << error;
-  options = MapOptions{};
+  options = OctoMapCarving();
   options.class_clamp_max = -1.0;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("class_clamp_max:", 0), 0u) << error;
   EXPECT_THROW(TraversabilityMap{options}, Error);
-  options = MapOptions{};
+  options = OctoMapCarving();
   options.free_space_ray_cell = 3;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("free_space_ray_cell:", 0), 0u) << error;
@@ -396,13 +398,13 @@ void ExpectFreeSpaceIsComputeRayKeys(const MapOptions& options, const Eigen::Vec
 }
 
 TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkInsideTheRayBox) {
-  MapOptions options;  // free_space_clearance_m 0: rays run to the points
+  MapOptions options = OctoMapCarving();  // free_space_clearance_m 0: rays run to the points
   // Points out to 17 m, so some lie beyond max_range_m (15 m) and clear space only.
   ExpectFreeSpaceIsComputeRayKeys(options, {0.37, -1.21, 1.53}, 12.0, 3000, 11);
 }
 
 TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkWhenTheRayBoxIsTooLargeForABitmap) {
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   options.resolution_m = 1.0;
   options.max_range_m = 1000.0;
   // +-600 voxels in x and y: over 2^26 voxels in the rays' box, so the free voxels go to a set.
@@ -423,7 +425,7 @@ void LeafVoxels(const internal::TravOcTree& tree, std::unordered_set<octomap::Oc
 TEST(Fusion, CoarseRaysCastOneRayPerCellToTheMeanOfItsEnds) {
   // Closed form by OctoMap's own walk: with free_space_ray_cell 2 the free voxels are the
   // computeRayKeys voxels of one ray per 2x2x2 cell of ray ends, to the mean of its ends.
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   options.free_space_ray_cell = 2;
   TraversabilityMap map(options);
   const internal::TravOcTree& tree = testing::Tree(map);
@@ -480,7 +482,7 @@ TEST(Fusion, CoarseRaysKeepTheOccupiedVoxelsAndFreeOnlyNearTheExactRays) {
   // of a voxel the exact rays free or hit (the mean ray runs inside the cone of the cell's rays).
   const std::vector<Eigen::Vector3d> origins = {{1.5, 1.25, 3.0}, {-2.0, 1.2, 1.5}, {4.9, 0.3, 1.2}, {1.4, 4.6, 2.2}};
   for (const int cell : {2, 4}) {
-    MapOptions coarse_options;
+    MapOptions coarse_options = OctoMapCarving();
     coarse_options.free_space_ray_cell = cell;
     TraversabilityMap exact, coarse(coarse_options);
     for (std::size_t f = 0; f < origins.size(); ++f) {

@@ -19,6 +19,8 @@
 namespace ssta {
 namespace {
 
+using testing::OctoMapCarving;
+
 using testing::Pt;
 using testing::TempDir;
 
@@ -37,7 +39,7 @@ TraversabilityMap AsymmetricMap() {
       points.push_back(Pt(-0.95 + 0.1 * i, 2.05 + 0.1 * j, 0.05, c, 18.0f, 0.05f));
     }
   }
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(points, {-0.75, 2.15, 2.0}, 1);
   return map;
 }
@@ -238,7 +240,7 @@ TraversabilityMap FloorWithPatchAndBox(bool hole) {
                           non ? TravClass::kNonTraversable : TravClass::kTraversable, 2.0f, 0.3f));
     }
   }
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
   return map;
 }
@@ -375,7 +377,7 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
 
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {
   const TempDir dir;
-  const TraversabilityMap empty;
+  const TraversabilityMap empty(OctoMapCarving());
   EXPECT_THROW(ExportGrid(empty, dir / "g"), Error);
   GridExportOptions options;
   options.region = Eigen::AlignedBox2d(Eigen::Vector2d(0.0, 0.0), Eigen::Vector2d(0.3, 0.2));

@@ -19,6 +19,8 @@
 namespace ssta {
 namespace {
 
+using testing::OctoMapCarving;
+
 using internal::TravNode;
 using internal::TravOcTree;
 using testing::Pt;
@@ -84,7 +86,7 @@ MapMetadata SomeMetadata() {
 }
 
 TraversabilityMap BuildMap(int frames) {
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   options.max_range_m = 12.0;
   options.class_hit_log_odds = 0.1 + 0.2;  // 0.30000000000000004: must come back exactly
   TraversabilityMap map(options, SomeMetadata());
@@ -200,7 +202,7 @@ TEST(MapFile, IsAnOctoMapFileThatOctoMapsFactoryReads) {
 
 TEST(MapFile, EmptyMapRoundTrips) {
   const TempDir dir;
-  const TraversabilityMap map;
+  const TraversabilityMap map(OctoMapCarving());
   map.Save(dir / "empty.ot");
   const TraversabilityMap loaded = TraversabilityMap::Load(dir / "empty.ot");
   EXPECT_EQ(loaded.NumNodes(), 0u);
@@ -315,7 +317,7 @@ TEST(MapFile, ANewerFormatVersionIsAnError) {
 
 TEST(MapFile, ResumingEqualsOnePass) {
   const auto frames = Frames(6);
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   options.max_range_m = 12.0;
   TraversabilityMap one_pass(options, SomeMetadata());
   for (int f = 0; f < 6; ++f) one_pass.InsertFrame(frames[f], FrameOrigin(f), 1000 + f);
@@ -340,7 +342,7 @@ TEST(MapFile, SaveIntoAMissingFolderNamesTheFile) {
   const TempDir dir;
   const std::string path = dir / "no/such/dir/map.ot";
   try {
-    TraversabilityMap().Save(path);
+    TraversabilityMap(OctoMapCarving()).Save(path);
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
@@ -352,7 +354,7 @@ TEST(MapFile, OptionsOnlyNamedWhenSetTravelWithTheMapFile) {
   // free_space_ray_cell, free_space_obstacle_shortening_per_m2 and free_space_keeps_traversable
   // are written only when they are not their defaults (test above); set, they must come back.
   const TempDir dir;
-  MapOptions options;
+  MapOptions options = OctoMapCarving();
   options.free_space_ray_cell = 4;
   options.free_space_obstacle_shortening_per_m2 = 0.008;
   options.free_space_keeps_traversable = true;

@@ -14,6 +14,21 @@
 
 namespace ssta::testing {
 
+/// OctoMap's plain sensor model, which these tests are written against: every ray carves to its
+/// endpoint (no clearance, no shortening before obstacles, traversable voxels not spared), a
+/// voxel is occupied from P 0.5, and the class evidence decays by 0.4 per passing ray.
+inline MapOptions OctoMapCarving() {
+  MapOptions o;
+  o.max_range_m = 15.0;
+  o.occupancy_miss_prob = 0.4;
+  o.occupied_threshold_prob = 0.5;
+  o.class_free_decay_log_odds = 0.4;
+  o.free_space_clearance_m = 0.0;
+  o.free_space_obstacle_shortening_per_m2 = -1.0;
+  o.free_space_keeps_traversable = false;
+  return o;
+}
+
 inline ClassifiedPoint Pt(double x, double y, double z, TravClass cls, float slope_deg = 0.0f,
                           float step_m = 0.0f) {
   ClassifiedPoint p;
@@ -53,7 +68,7 @@ inline std::vector<ClassifiedPoint> FloorAndBox() {
 inline Eigen::Vector3d FloorAndBoxOrigin() { return {1.5, 1.25, 3.0}; }
 
 inline TraversabilityMap FloorAndBoxMap() {
-  TraversabilityMap map;
+  TraversabilityMap map(OctoMapCarving());
   map.InsertFrame(FloorAndBox(), FloorAndBoxOrigin(), 1000);
   return map;
 }

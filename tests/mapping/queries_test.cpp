@@ -12,6 +12,8 @@
 namespace ssta {
 namespace {
 
+using testing::OctoMapCarving;
+
 using testing::FloorAndBoxMap;
 
 constexpr double kPi = 3.14159265358979323846;
@@ -256,7 +258,7 @@ TEST_F(FloorAndBoxQueries, ConcurrentReadersGetTheSameAnswers) {
 }
 
 TEST(TraversabilityMapCost, SemiTraversableCostGrowsThroughTheBand) {
-  const TraversabilityMap map;  // vehicle defaults: slope 15..25 deg, step 0.10..0.20 m
+  const TraversabilityMap map(OctoMapCarving());  // vehicle defaults: slope 15..25 deg, step 0.10..0.20 m
   EXPECT_EQ(map.Cost(TravClass::kTraversable, 30.0, 1.0), 0.0);
   EXPECT_EQ(map.Cost(TravClass::kNonTraversable, 0.0, 0.0), 1.0);
   EXPECT_DOUBLE_EQ(map.Cost(TravClass::kSemiTraversable, 10.0, 0.05), 0.25);

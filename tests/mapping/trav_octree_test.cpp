@@ -14,12 +14,13 @@ namespace {
 
 using internal::TravNode;
 using internal::TravOcTree;
+using testing::OctoMapCarving;
 using testing::Tree;
 
 TEST(TravOcTree, InlineCoordToKeyCheckedIsOctoMapsOwn) {
   std::mt19937 rng(5);
   for (const double res : {0.1, 0.05, 0.25}) {
-    MapOptions options;
+    MapOptions options = OctoMapCarving();
     options.resolution_m = res;
     const TraversabilityMap map(options);
     const TravOcTree& tree = Tree(map);
@@ -45,7 +46,7 @@ TEST(TravOcTree, InlineCoordToKeyCheckedIsOctoMapsOwn) {
 TEST(TravOcTree, WorldToKeyToWorldStaysWithinHalfAVoxel) {
   std::mt19937 rng(7);
   for (const double res : {0.1, 0.05, 0.25}) {
-    MapOptions options;
+    MapOptions options = OctoMapCarving();
     options.resolution_m = res;
     const TraversabilityMap map(options);
     const TravOcTree& tree = Tree(map);

@@ -134,7 +134,9 @@ void SaveFloorWithPatch(const std::string& path) {
       points.push_back(p);
     }
   }
-  TraversabilityMap map;
+  MapOptions options;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
+  TraversabilityMap map(options);
   map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
   map.Save(path);
 }

@@ -44,7 +44,7 @@ struct NormalOptions {
   /// at 640 x 480 and f ~ 450 px it covers 0.06 m x 0.06 m at 2 m and 0.3 m across at 10 m,
   /// enough points to average stereo depth noise while staying smaller than the obstacles that
   /// matter (a 0.2 m step at 5 m spans ~18 rows).
-  int smoothing_size_px = 13;
+  int smoothing_size_px = 31;
 
   /// Depth-edge threshold in inverse depth [1/m]. Two neighbouring points (4-neighbours, or the
   /// valid points at both ends of a gap of invalid pixels shorter than the window) are a depth
@@ -66,7 +66,7 @@ struct NormalOptions {
   /// angle the error of a fixed pixel window hardly depends on Z, and shrinking the near
   /// windows costs more there than the far ones gain (measured, 0.15 px disparity noise: mean
   /// error 1.6 -> 0.8 degrees beyond 10 m, but 4.3 -> 7.0 degrees closer than 2.5 m).
-  bool depth_dependent_smoothing = false;
+  bool depth_dependent_smoothing = true;
 
   /// 1: a normal per pixel. 2: normals on every 2nd pixel in each direction only - the
   /// estimator runs on the cloud's (even row, even column) points with half the smoothing size

@@ -20,7 +20,7 @@ struct SegmenterOptions {
   /// their window, stays one segment (97% of the ground within 10 m at 0.15 px disparity
   /// noise). Gentler creases merge into one segment; their slopes lie below the default
   /// semi-traversable slope (15 degrees) anyway.
-  double roughness_deg = 2.0;
+  double roughness_deg = 9.0;
 
   /// Maximum disparity difference between two 4-neighbours that join one segment [px]; 0
   /// disables the test, restoring the paper's pure normal criterion. Why: a box top and the
@@ -36,7 +36,7 @@ struct SegmenterOptions {
   /// so a crease smoothed over the normal window (ground into a 20-degree ramp) is crossed in
   /// steps each below roughness_deg and the ramp joins the ground. Comparing whole segments
   /// stops that chaining, and lets roughness_deg be loose enough for stereo noise.
-  double max_segment_angle_deg = 0.0;
+  double max_segment_angle_deg = 10.0;
 
   /// On failure writes a message starting with the offending key (e.g.
   /// "roughness_deg: must be in (0, 90) degrees") to *error when error is not null.

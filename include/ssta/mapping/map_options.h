@@ -21,14 +21,14 @@ struct MapOptions {
   double resolution_m = 0.10;  ///< voxel edge [m], in (0.005, 10]
   /// Free space is carved only up to this distance from the sensor [m]; points farther away
   /// are not inserted as hits, their rays clear space up to this range only.
-  double max_range_m = 15.0;
+  double max_range_m = 14.0;
 
   double occupancy_hit_prob = 0.7;         ///< P(occupied | endpoint in voxel), in (0.5, 1)
-  double occupancy_miss_prob = 0.4;        ///< P(occupied | ray passes through), in (0, 0.5)
+  double occupancy_miss_prob = 0.45;       ///< P(occupied | ray passes through), in (0, 0.5)
   double occupancy_clamp_min_prob = 0.1192;  ///< occupancy clamped below here, in (0, 0.5)
   double occupancy_clamp_max_prob = 0.971;   ///< occupancy clamped above here, in (0.5, 1)
   /// A voxel is occupied when P(occupied) >= this; strictly between the two clamps.
-  double occupied_threshold_prob = 0.5;
+  double occupied_threshold_prob = 0.8;
 
   /// Added to the log-odds of the observed class when a frame's verdict for a voxel is that
   /// class; > 0.
@@ -37,14 +37,14 @@ struct MapOptions {
   double class_miss_log_odds = -0.4;
   /// When a ray passes through a voxel, each class log-odds moves this much towards 0 (no
   /// evidence), never past it; >= 0. Free space so forgets what moved away.
-  double class_free_decay_log_odds = 0.4;
+  double class_free_decay_log_odds = 0.1;
   double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
   double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
   /// A ray stops clearing free space where it comes within this height [m] of its endpoint,
   /// i.e. clearance / sin(elevation) before the end (at most 2 m). Why: a ray to far ground
   /// runs within one voxel of nearer ground for its last resolution/sin(elevation) metres and
   /// would clear the ground seen before. 0 disables it (OctoMap's usual carving); >= 0.
-  double free_space_clearance_m = 0.0;
+  double free_space_clearance_m = 0.1;
   /// Rays to an obstacle stop k r^2 short of their end instead (r: the ray's length, k this
   /// value in 1/m), when that is less than the clearance's shortening: rays to voxels whose
   /// points are mostly non-traversable and not below the frame's ground plane
@@ -53,7 +53,7 @@ struct MapOptions {
   /// voxels take the smear away. The band k r^2 follows stereo's range error, r^2 dd / (f b):
   /// it keeps the obstacle's own voxels from the rays of its points smeared behind it. 0.008 is
   /// 0.4 px of disparity at f b = 50 px m (0.8 m at 10 m). Negative: off (the clearance applies).
-  double free_space_obstacle_shortening_per_m2 = -1.0;
+  double free_space_obstacle_shortening_per_m2 = 0.008;
   /// Free-space rays whose ends fall in the same cell of this many voxels per edge (aligned to
   /// the voxel grid) are cast once, to the mean of their ends: an approximation that walks
   /// fewer rays. 1: one ray per hit voxel and per far voxel (exact, OctoMap's carving); 2, 4
@@ -67,22 +67,16 @@ struct MapOptions {
   /// scene that left a fifth of the seen ground without a class. Obstacles, undecided voxels
   /// and free space are still cleared; a traversable surface that goes away (a flat top moved)
   /// stays until frames vote it otherwise. false: every voxel a ray passes takes the miss.
-  bool free_space_keeps_traversable = false;
+  bool free_space_keeps_traversable = true;
 
   /// True when every field is in range; otherwise `*error` (when not null) gets a message that
   /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
   bool IsValid(std::string* error) const;
 };
 
-/// The map's fusion defaults for stereo: hits only within 12 m (farther stereo points are too
-/// noisy to classify), a voxel counts as occupied from 2 hits (P >= 0.8), so one stray point
-/// does not become a column's top surface, and free space is carved gently (P 0.45 per ray),
-/// because rays to far ground graze the voxels of nearer ground and would clear them.
-MapOptions PipelineMapDefaults();
-
 /// YAML section `map`: how frames are fused into a TraversabilityMap.
 struct MappingOptions {
-  MapOptions fusion = PipelineMapDefaults();  ///< voxel size, range and the log-odds sensor model
+  MapOptions fusion;  ///< voxel size, range and the log-odds sensor model
   int pixel_stride = 1;         ///< insert every n-th pixel in u and v (the map thins per voxel)
   /// Pixels whose left-image grey-level standard deviation over the stereo block is below this
   /// are not inserted (sky and blank areas: matching noise); 0: off. Unlike stereo.min_texture

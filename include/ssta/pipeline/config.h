@@ -17,26 +17,16 @@
 
 namespace ssta {
 
-/// The pipeline's tuned stage defaults where they differ from each module's own neutral ones
-/// (measured on the synthetic yard with SGBM; see docs/accuracy.md): a wider matching block, a
-/// depth-dependent 31 px normal window, looser neighbour roughness held together by the
-/// segment-angle test, a verdict for every small segment that has a trustworthy plane, and
-/// per-pixel slopes within segments (smooth hillsides).
-StereoMatcherOptions PipelineStereoDefaults();
-NormalOptions PipelineNormalDefaults();
-SegmenterOptions PipelineSegmenterDefaults();
-AnalysisOptions PipelineAnalysisDefaults();
-
 /// Every option of the per-frame pipeline, one struct per stage (one YAML section each).
 /// Defaults are the values documented in config/default.yaml.
 struct Config {
   VehicleOptions vehicle;
   RectifierOptions rectification;
-  StereoMatcherOptions stereo = PipelineStereoDefaults();
+  StereoMatcherOptions stereo;
   TriangulationOptions triangulation;
-  NormalOptions normals = PipelineNormalDefaults();
-  SegmenterOptions segmentation = PipelineSegmenterDefaults();
-  AnalysisOptions analysis = PipelineAnalysisDefaults();
+  NormalOptions normals;
+  SegmenterOptions segmentation;
+  AnalysisOptions analysis;
   GravityOptions gravity;
   AttitudeFilterOptions attitude;
   MappingOptions map;

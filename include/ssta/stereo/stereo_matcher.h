@@ -53,7 +53,7 @@ struct StereoMatcherOptions {
   MatcherType algorithm = MatcherType::kSemiGlobal;
   int min_disparity = 0;       ///< smallest disparity searched [px], >= 0
   int num_disparities = 64;    ///< search range [px], a positive multiple of 16
-  int block_size = 7;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
+  int block_size = 9;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
                                ///< pcl_acso the length of the aggregation column
   SgbmMode sgbm_mode = SgbmMode::kThreeWay;  ///< sgbm only: cost aggregation directions
   int uniqueness_ratio = 10;   ///< [%] bm/sgbm: best cost must beat the second best by this margin
@@ -69,7 +69,7 @@ struct StereoMatcherOptions {
   /// images at different columns there (and SGBM's horizontal paths start there), so the
   /// disparities are biased. The top and bottom rows keep theirs: rows are epipolar lines, both
   /// windows see the same padding. 0: off.
-  int border_margin = 0;
+  int border_margin = 4;
   /// [px, odd] sub-pixel refinement window (0: off). Matchers interpolate a parabola through
   /// three costs, which pulls disparities towards whole pixels ("pixel locking"): far ground
   /// becomes terraces. Refinement (two steps) warps the right image by each pixel's disparity
