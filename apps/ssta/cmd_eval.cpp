@@ -96,13 +96,9 @@ void RequireTruthVehicle(const EvalArguments& args, const std::string& predictio
 void RequireMapForTruthVehicle(const TraversabilityMap& map, const std::string& map_path, const std::string& sequence) {
   const std::optional<TruthVehicle> truth = ReadTruthVehicle(sequence);
   if (!truth) return;
-  const VehicleKey* k = FirstDifferingKey(map.metadata().vehicle, truth->vehicle);
-  if (k == nullptr) return;
-  std::ostringstream m;
-  m << map_path << ": the map was built for vehicle." << k->name << " " << map.metadata().vehicle.*k->field
-    << ", but the truth in " << FindGroundTruthDir(sequence) << " was classed for " << truth->vehicle.*k->field
-    << " (" << truth->yaml << "); " << kTwoVehiclesAdvice;
-  throw Error(m.str());
+  RequireSameVehicle(map.metadata().vehicle, map_path + ": the map was built for", truth->vehicle,
+                     "the truth in " + FindGroundTruthDir(sequence) + " was classed for", " (" + truth->yaml + ")",
+                     kTwoVehiclesAdvice);
 }
 
 // The config.yaml that `ssta classify` wrote with the labels of --pred (DIR, or DIR/labels), or

@@ -1,5 +1,6 @@
 // ssta export: a map to the formats other tools read.
 
+#include <map>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -44,25 +45,22 @@ void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files) {
 
 void RequireVehicle(const VehicleOptions& expected, const std::vector<std::string>& config_files,
                     const std::string& expected_for, const std::string& source, const std::string& advice) {
-  const auto& keys = VehicleKeys();
+  // The files are read over the expected vehicle, so a key they leave out matches; the message
+  // names the last file that made the vehicle differ.
   Config config;
-  config.vehicle = expected;  // the files are read over the expected vehicle: a key they leave out matches
-  std::vector<std::string> set_by(keys.size());  // the last file that changed each key
+  config.vehicle = expected;
+  std::map<std::string, std::string> set_by;  // key -> the last file that changed it
   for (const std::string& file : config_files) {
     const VehicleOptions before = config.vehicle;
     ApplyConfigFile(file, &config);
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (config.vehicle.*keys[k].field != before.*keys[k].field) set_by[k] = file;
+    for (const OptionField<VehicleOptions>& f : VehicleOptions::Fields()) {
+      if (f.get(before) != f.get(config.vehicle)) set_by[f.key] = file;
     }
   }
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    const double want = config.vehicle.*keys[k].field, have = expected.*keys[k].field;
-    if (SameVehicleValue(want, have)) continue;
-    std::ostringstream m;
-    m << set_by[k] << ": vehicle." << keys[k].name << " is " << want << ", but " << expected_for << " " << have
-      << (source.empty() ? "" : " (" + source + ")") << "; " << advice;
-    throw Error(m.str());
-  }
+  const auto* differing = FirstDifferingField(config.vehicle, expected, VehicleOptions::Fields());
+  if (differing == nullptr) return;
+  RequireSameVehicle(config.vehicle, set_by[differing->key] + ": gives", expected, expected_for,
+                     source.empty() ? "" : " (" + source + ")", advice);
 }
 
 TraversabilityMap LoadMapForConfig(const std::string& map_path, const std::vector<std::string>& config_files) {

@@ -13,6 +13,7 @@
 #include "ssta/mapping/map_export.h"
 #include "ssta/io/file_util.h"
 #include "ssta/mapping/traversability_map.h"
+#include "ssta/core/units.h"
 
 namespace ssta::cli {
 namespace {
@@ -53,7 +54,7 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
     if (!std::isfinite(v)) throw Error("--footprint: NaN or infinite value");
   }
   if (f[3] < 0 || f[4] < 0) throw Error("--footprint: LENGTH and WIDTH must be >= 0");
-  const FootprintQuery q{f[0], f[1], f[2] * M_PI / 180.0, f[3], f[4]};
+  const FootprintQuery q{f[0], f[1], DegToRad(f[2]), f[3], f[4]};
   const double r = 0.5 * std::hypot(q.length_m, q.width_m);  // the rectangle lies within r of (x, y)
   const Eigen::AlignedBox2d box(Eigen::Vector2d(q.x - r, q.y - r), Eigen::Vector2d(q.x + r, q.y + r));
   std::string option = "--footprint ";

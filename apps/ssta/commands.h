@@ -22,6 +22,7 @@ void RegisterExport(CLI::App& app);
 void RegisterCalibrateStereo(CLI::App& app);
 void RegisterBench(CLI::App& app);
 void RegisterCalibrateMount(CLI::App& app);
+void RegisterConfig(CLI::App& app);
 
 /// Validators for the paths a command writes, checked while the command line is parsed, so a
 /// run fails before its work and not after it. A file needs an existing folder and must not be
@@ -44,10 +45,9 @@ void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_n
 void AddMapConfig(CLI::App* cmd, std::vector<std::string>* config_files);
 
 /// Reads `config_files` in turn over `expected` (a key they leave out matches) and throws
-/// ssta::Error when a vehicle key ends up different: "<file>: vehicle.<key> is <value>, but
-/// <expected_for> <expected value> (<source>); <advice>" (no brackets for an empty source),
-/// naming the last file that set it. A bad value in any section is an error naming its file and
-/// key, as always.
+/// ssta::Error when a vehicle key ends up different (RequireSameVehicle): "<file>: gives
+/// vehicle.<key> <value>, but <expected_for> <expected value> (<source>); <advice>", naming the
+/// last file that set the key. A bad value in any section is an error naming its file and key.
 void RequireVehicle(const VehicleOptions& expected, const std::vector<std::string>& config_files,
                     const std::string& expected_for, const std::string& source, const std::string& advice);
 

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterCalibrateStereo(app);
   ssta::cli::RegisterCalibrateMount(app);
   ssta::cli::RegisterBench(app);
+  ssta::cli::RegisterConfig(app);
   if (argc == 1) {  // nothing asked: the usage, as a failed run (nothing ran)
     std::cerr << app.help();
     return 2;

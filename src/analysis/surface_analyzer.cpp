@@ -10,15 +10,13 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "ssta/core/error.h"
+#include "ssta/core/units.h"
+
 namespace ssta {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / M_PI;
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 std::string Format(const char* label, double value, int precision, const char* unit) {
   std::ostringstream s;
@@ -166,54 +164,76 @@ std::string SmallSegmentPolicyName(SmallSegmentPolicy policy) {
   return "obstacles";
 }
 
-bool AnalysisOptions::IsValid(std::string* error) const {
-  if (!(inliers_min_ratio >= 0 && inliers_min_ratio < 1)) {
-    return Fail(error, "inliers_min_ratio: must be in [0, 1)");
-  }
-  if (min_plane_points < 3) return Fail(error, "min_plane_points: must be at least 3");
-  if (!(min_ground_share >= 0 && min_ground_share <= 1)) {
-    return Fail(error, "min_ground_share: must be in [0, 1]");
-  }
-  if (!(max_ground_rms_m > 0)) return Fail(error, "max_ground_rms_m: must be positive");
-  if (pixel_slope_window_px < 1 || pixel_slope_window_px % 2 == 0 || pixel_slope_window_px > 255) {
-    return Fail(error, "pixel_slope_window_px: must be odd and in [1, 255] px");
-  }
-  if (!(ground_tolerance_px >= 0 && ground_tolerance_px <= 16)) {
-    return Fail(error, "ground_tolerance_px: must be in [0, 16] px (0: off)");
-  }
-  if (!(ground_consistent_share > 0 && ground_consistent_share <= 1)) {
-    return Fail(error, "ground_consistent_share: must be in (0, 1]");
-  }
-  if (undecided_fill_radius_px < 0 || undecided_fill_radius_px > 64) {
-    return Fail(error, "undecided_fill_radius_px: must be in [0, 64] px (0: off)");
-  }
-  if (!(undecided_fill_share > 0.5 && undecided_fill_share <= 1)) {
-    return Fail(error, "undecided_fill_share: must be in (0.5, 1]");
-  }
-  if (!(fragment_tolerance_px >= 0 && fragment_tolerance_px <= 16)) {
-    return Fail(error, "fragment_tolerance_px: must be in [0, 16] px (0: off)");
-  }
-  if (!(fragment_consistent_share > 0 && fragment_consistent_share <= 1)) {
-    return Fail(error, "fragment_consistent_share: must be in (0, 1]");
-  }
-  if (fragment_host_min_points < 3) return Fail(error, "fragment_host_min_points: must be at least 3");
-  if (face_window_px != 0 && (face_window_px < 3 || face_window_px % 2 == 0 || face_window_px > 63)) {
-    return Fail(error, "face_window_px: must be 0 (off) or odd and in [3, 63] px");
-  }
-  if (!(face_grow_tolerance_px >= 0 && face_grow_tolerance_px <= 5)) {
-    return Fail(error, "face_grow_tolerance_px: must be in [0, 5] px (0: off)");
-  }
-  if (face_columns_px < 1 || face_columns_px % 2 == 0 || face_columns_px > 63) {
-    return Fail(error, "face_columns_px: must be odd and in [1, 63] px (1: each column alone)");
-  }
-  if (!(face_min_slope_deg > 0 && face_min_slope_deg < 90)) {
-    return Fail(error, "face_min_slope_deg: must be in (0, 90) degrees");
-  }
-  if (!(label_min_texture >= 0 && label_min_texture < 128)) {
-    return Fail(error, "label_min_texture: must be in [0, 128) grey levels (0: off)");
-  }
-  return true;
+const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
+  using O = AnalysisOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("inliers_min_ratio", &O::inliers_min_ratio, ClosedOpen(0, 1), "",
+                        "inliers_min = ratio * width * height (eq. 4): smaller segments are small"));
+    f.push_back(Flag<O>("pixel_slopes", &O::pixel_slopes,
+                        "a traversable or semi pixel whose own normal is steeper takes that slope class "
+                        "(smooth hillsides have no segment boundary); false: the paper"));
+    f.push_back(Integer<O>("pixel_slope_window_px", &O::pixel_slope_window_px, Closed(1, 255), "px",
+                           "that normal is the mean over a box this wide within the pixel's segment; 1: its own")
+                    .Require([](const O& o) { return o.pixel_slope_window_px % 2 == 1; }, "must be odd"));
+    f.push_back(Choice<O>("step_reference", &O::step_reference,
+                          {StepReference::kDominantPlane, StepReference::kReachable, StepReference::kReachableLarge},
+                          StepReferenceName,
+                          "dominant_plane: centroid distance to the ground plane (eq. 5) | reachable: class "
+                          "of the best way from the ground across segment boundaries | reachable_large: "
+                          "eq. 5, but a large segment that eq. 5 calls non-traversable takes its reachable class"));
+    f.push_back(Choice<O>("small_segments", &O::small_segments,
+                          {SmallSegmentPolicy::kPaper, SmallSegmentPolicy::kObstacles, SmallSegmentPolicy::kAll},
+                          SmallSegmentPolicyName,
+                          "what segments below inliers_min get: paper (undecided) | obstacles (non-traversable "
+                          "when off the ground by more than max_step_m or steeper than max_slope_deg) | all "
+                          "(obstacles, and any with min_plane_points points gets its class)"));
+    f.push_back(Integer<O>("min_plane_points", &O::min_plane_points, AtLeast(3), "points",
+                           "fewest points for the slope of a small segment to count"));
+    f.push_back(Real<O>("min_ground_share", &O::min_ground_share, Closed(0, 1), "",
+                        "quality check: least share of the depth pixels on the ground plane"));
+    f.push_back(Real<O>("max_ground_rms_m", &O::max_ground_rms_m, Above(0), "m",
+                        "quality check: largest RMS of the ground plane fit"));
+    f.push_back(Real<O>("ground_tolerance_px", &O::ground_tolerance_px, Closed(0, 16), "px",
+                        "a small segment whose disparities lie this close to the ground plane's is ground "
+                        "(disparity noise does not grow with range); 0: off"));
+    f.push_back(Real<O>("ground_consistent_share", &O::ground_consistent_share, OpenClosed(0, 1), "",
+                        "share of a small segment's points that must be that close"));
+    f.push_back(Real<O>("fragment_tolerance_px", &O::fragment_tolerance_px, Closed(0, 16), "px",
+                        "a small segment whose points lie within this of a large neighbour's plane, in "
+                        "disparity along their rays, is a piece of it and takes its verdict; 0: off"));
+    f.push_back(Real<O>("fragment_consistent_share", &O::fragment_consistent_share, OpenClosed(0, 1), "",
+                        "share of the small segment's points that must be that close"));
+    f.push_back(Integer<O>("fragment_host_min_points", &O::fragment_host_min_points, AtLeast(3), "points",
+                           "fewest points of a segment whose plane takes in fragments (and more than twice "
+                           "the fragment's)"));
+    f.push_back(Integer<O>("undecided_fill_radius_px", &O::undecided_fill_radius_px, Closed(0, 64), "px",
+                           "an undecided pixel takes the class that undecided_fill_share of the decided pixels "
+                           "within this radius hold; 0: off"));
+    f.push_back(Real<O>("undecided_fill_share", &O::undecided_fill_share, OpenClosed(0.5, 1), "",
+                        "share of the window's decided pixels that must agree"));
+    f.push_back(Flag<O>("undecided_height_fill", &O::undecided_height_fill,
+                        "an undecided pixel left then takes the step class of its own height above the "
+                        "ground plane where that is drivable"));
+    f.push_back(Real<O>("label_min_texture", &O::label_min_texture, ClosedOpen(0, 128), "grey levels",
+                        "pixels whose left-image standard deviation over the stereo block is lower are "
+                        "labelled unknown (sky, blank walls); 0: off"));
+    f.push_back(OddOrOff<O>("face_window_px", &O::face_window_px, Closed(3, 63), "px",
+                            "thin vertical faces (a curb's front): the disparity fitted along the image column "
+                            "over this many rows gives the surface's rise along the column; 0: off"));
+    f.push_back(Integer<O>("face_columns_px", &O::face_columns_px, Closed(1, 63), "px",
+                           "the column fits of this many neighbouring columns are pooled; 1: each alone")
+                    .Require([](const O& o) { return o.face_columns_px % 2 == 1; }, "must be odd"));
+    f.push_back(Real<O>("face_min_slope_deg", &O::face_min_slope_deg, Open(0, 90), "deg",
+                        "a pixel rising steeper than this along its column is on a face: non-traversable"));
+    f.push_back(Real<O>("face_grow_tolerance_px", &O::face_grow_tolerance_px, Closed(0, 5), "px",
+                        "rows within the window whose disparity is a face's within this join it; 0: off"));
+    return f;
+  }();
+  return fields;
 }
+
+bool AnalysisOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 Eigen::Vector3d PlaneAccumulator::Mean() const {
   SSTA_CHECK(count_ >= 1, "the mean of no points");
@@ -281,7 +301,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     s.normal = fit.normal.dot(up_camera) < 0 ? -fit.normal : fit.normal;
     s.plane << s.normal, -s.normal.dot(s.centroid);
     s.rms_m = fit.rms_m;
-    s.slope_deg = std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)) * kRadToDeg;
+    s.slope_deg = RadToDeg(std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)));
     s.slope_class = vehicle.ClassifySlope(s.slope_deg);
   }
 
@@ -528,8 +548,8 @@ void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera,
     *slope_classes = ImageU8(normals.width(), normals.height(), 0);
   }
   const Eigen::Vector3f up = up_camera.cast<float>();
-  const float cos_semi = static_cast<float>(std::cos(vehicle.semi_slope_deg * M_PI / 180.0));
-  const float cos_max = static_cast<float>(std::cos(vehicle.max_slope_deg * M_PI / 180.0));
+  const float cos_semi = static_cast<float>(std::cos(DegToRad(vehicle.semi_slope_deg)));
+  const float cos_max = static_cast<float>(std::cos(DegToRad(vehicle.max_slope_deg)));
   // c: |cos| of the slope at the pixel; NaN compares false: no class is forced.
   auto slope_class = [&](float c) -> std::uint8_t {
     if (c < cos_max) return static_cast<std::uint8_t>(TravClass::kNonTraversable);
@@ -637,7 +657,7 @@ void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv,
   const int r = options.face_columns_px / 2;
   if (h < 2 * k + 1) return;
   const Eigen::Vector3d up = up_camera.normalized();
-  const double sin_min = std::sin(options.face_min_slope_deg * M_PI / 180.0);
+  const double sin_min = std::sin(DegToRad(options.face_min_slope_deg));
   const double sin2_min = sin_min * sin_min;
   double sum_jj = 0.0;
   for (int j = -k; j <= k; ++j) sum_jj += static_cast<double>(j) * j;
@@ -681,7 +701,7 @@ void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv,
   // disparity (the face's, constant along the column) is kept to grow the face along the column.
   constexpr double kGrowSeedSlopeDeg = 70.0;
   const bool grow = options.face_grow_tolerance_px > 0;
-  const double sin_seed = std::sin(kGrowSeedSlopeDeg * M_PI / 180.0), sin2_seed = sin_seed * sin_seed;
+  const double sin_seed = std::sin(DegToRad(kGrowSeedSlopeDeg)), sin2_seed = sin_seed * sin_seed;
   std::vector<std::pair<int, float>>& seeds = faces->seeds;
   auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
   for (int v = k;; ++v) {

@@ -3,14 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-namespace ssta {
-namespace {
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-}  // namespace
+#include "ssta/core/error.h"
 
+namespace ssta {
 TravClass VehicleOptions::ClassifySlope(double slope_deg) const {
   if (!(slope_deg <= max_slope_deg)) return TravClass::kNonTraversable;  // NaN too
   if (slope_deg <= semi_slope_deg) return TravClass::kTraversable;
@@ -24,41 +19,48 @@ TravClass VehicleOptions::ClassifyStep(double step_m) const {
   return TravClass::kSemiTraversable;
 }
 
-const std::array<VehicleKey, 6>& VehicleKeys() {
-  static const std::array<VehicleKey, 6> keys{{{"max_slope_deg", &VehicleOptions::max_slope_deg},
-                                                {"semi_slope_deg", &VehicleOptions::semi_slope_deg},
-                                                {"max_step_m", &VehicleOptions::max_step_m},
-                                                {"semi_step_m", &VehicleOptions::semi_step_m},
-                                                {"min_camera_height_m", &VehicleOptions::min_camera_height_m},
-                                                {"max_camera_height_m", &VehicleOptions::max_camera_height_m}}};
-  return keys;
+void RequireSameVehicle(const VehicleOptions& a, const std::string& a_says, const VehicleOptions& b,
+                        const std::string& b_says, const std::string& b_note, const std::string& advice) {
+  const OptionField<VehicleOptions>* f = FirstDifferingField(a, b, VehicleOptions::Fields());
+  if (f == nullptr) return;
+  throw Error(a_says + " vehicle." + f->key + " " + FormatOptionValue(f->get(a), f->kind) + ", but " + b_says + " " +
+              FormatOptionValue(f->get(b), f->kind) + b_note + "; " + advice);
 }
 
-bool SameVehicleValue(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); }
-
-const VehicleKey* FirstDifferingKey(const VehicleOptions& a, const VehicleOptions& b) {
-  for (const VehicleKey& k : VehicleKeys()) {
-    if (!SameVehicleValue(a.*k.field, b.*k.field)) return &k;
-  }
-  return nullptr;
+const OptionFields<VehicleOptions>& VehicleOptions::Fields() {
+  using O = VehicleOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("max_slope_deg", &O::max_slope_deg, Open(0, 90), "deg",
+                        "steeper than this: non-traversable"));
+    f.push_back(Real<O>("semi_slope_deg", &O::semi_slope_deg, Closed(0, 90), "deg",
+                        "steeper than this (up to max): semi-traversable")
+                    .Require([](const O& o) { return o.semi_slope_deg <= o.max_slope_deg; },
+                             [](const O& o) {
+                               return "must not exceed max_slope_deg (semi_slope_deg " + ShortestDecimal(o.semi_slope_deg) +
+                                      ", max_slope_deg " + ShortestDecimal(o.max_slope_deg) + ")";
+                             }));
+    f.push_back(Real<O>("max_step_m", &O::max_step_m, Open(0, 10), "m",
+                        "a height jump above this within step_radius_m: non-traversable"));
+    f.push_back(Real<O>("semi_step_m", &O::semi_step_m, Closed(0, 10), "m",
+                        "a height jump above this (up to max): semi-traversable")
+                    .Require([](const O& o) { return o.semi_step_m <= o.max_step_m; },
+                             [](const O& o) {
+                               return "must not exceed max_step_m (semi_step_m " + ShortestDecimal(o.semi_step_m) +
+                                      ", max_step_m " + ShortestDecimal(o.max_step_m) + ")";
+                             }));
+    f.push_back(Real<O>("min_camera_height_m", &O::min_camera_height_m, ClosedOpen(0, 100), "m",
+                        "plausible camera height above the ground plane: a frame whose ground plane "
+                        "lies outside [min, max] fails the quality check"));
+    f.push_back(Real<O>("max_camera_height_m", &O::max_camera_height_m, Open(0, 100), "m",
+                        "upper end of that band")
+                    .Require([](const O& o) { return o.max_camera_height_m > o.min_camera_height_m; },
+                             "must be above min_camera_height_m"));
+    return f;
+  }();
+  return fields;
 }
 
-bool VehicleOptions::IsValid(std::string* error) const {
-  if (!(max_slope_deg > 0 && max_slope_deg < 90)) return Fail(error, "max_slope_deg: must be in (0, 90) degrees");
-  if (!(semi_slope_deg >= 0 && semi_slope_deg <= max_slope_deg)) {
-    return Fail(error, "semi_slope_deg: must be in [0, max_slope_deg]");
-  }
-  if (!(max_step_m > 0 && max_step_m < 10)) return Fail(error, "max_step_m: must be in (0, 10) metres");
-  if (!(semi_step_m >= 0 && semi_step_m <= max_step_m)) {
-    return Fail(error, "semi_step_m: must be in [0, max_step_m]");
-  }
-  if (!(min_camera_height_m >= 0 && min_camera_height_m < 100)) {
-    return Fail(error, "min_camera_height_m: must be in [0, 100) metres");
-  }
-  if (!(max_camera_height_m > min_camera_height_m && max_camera_height_m < 100)) {
-    return Fail(error, "max_camera_height_m: must be above min_camera_height_m and below 100 m");
-  }
-  return true;
-}
+bool VehicleOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 }  // namespace ssta

@@ -248,12 +248,8 @@ std::string BenchReport::Json() const {
 }
 
 bool PipelineBenchOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (max_frames < 0) return fail("frames: must not be negative");
-  if (warmup_frames < 0) return fail("warmup: must not be negative");
+  if (max_frames < 0) return Fail(error, "frames: must not be negative");
+  if (warmup_frames < 0) return Fail(error, "warmup: must not be negative");
   return true;
 }
 

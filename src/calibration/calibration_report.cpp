@@ -9,6 +9,7 @@
 
 #include "core/json_writer.h"
 #include "ssta/calibration/stereo_calibrator.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
@@ -34,7 +35,7 @@ std::string Status(const CalibrationPairReport& p) {
 }
 
 double RotationDeg(const Eigen::Isometry3d& t) {
-  return Eigen::AngleAxisd(t.rotation()).angle() * 180.0 / EIGEN_PI;
+  return RadToDeg(Eigen::AngleAxisd(t.rotation()).angle());
 }
 
 void WriteCamera(const CameraCalibration& c, internal::JsonWriter* json) {

@@ -323,27 +323,23 @@ void FillRig(const Solution& solution, const std::vector<PairCorners>& used, con
 }  // namespace
 
 bool StereoCalibratorOptions::IsValid(std::string* error) const {
-  auto fail = [&](const std::string& m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (board_cols < 2 || board_rows < 2) return fail("board: needs at least 2x2 inner corners");
+  if (board_cols < 2 || board_rows < 2) return Fail(error, "board: needs at least 2x2 inner corners");
   if (board_cols == board_rows) {
-    return fail("board: a square corner grid (" + SizeText(board_cols, board_rows) +
+    return Fail(error, "board: a square corner grid (" + SizeText(board_cols, board_rows) +
                 ") has no defined orientation; use a board with different inner corner counts");
   }
-  if (!(std::isfinite(square_m) && square_m > 0.0)) return fail("square: must be a positive length [m]");
-  if (!(std::isfinite(outlier_px) && outlier_px > 0.0)) return fail("outlier-px: must be positive [px]");
-  if (min_pairs < 3) return fail("min-pairs: must be at least 3 (the fewest boards that fix the intrinsics)");
-  if (coverage_cols < 1 || coverage_rows < 1) return fail("coverage-grid: needs at least 1x1 cells");
+  if (!(std::isfinite(square_m) && square_m > 0.0)) return Fail(error, "square: must be a positive length [m]");
+  if (!(std::isfinite(outlier_px) && outlier_px > 0.0)) return Fail(error, "outlier-px: must be positive [px]");
+  if (min_pairs < 3) return Fail(error, "min-pairs: must be at least 3 (the fewest boards that fix the intrinsics)");
+  if (coverage_cols < 1 || coverage_rows < 1) return Fail(error, "coverage-grid: needs at least 1x1 cells");
   const Eigen::Matrix4d m = body_T_cam0.matrix();
   const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
   if (!m.allFinite() || !(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-6) ||
       std::abs(r.determinant() - 1.0) > 1e-6) {
-    return fail("body-T-cam0: not a rigid transform (rotation not orthonormal with determinant +1)");
+    return Fail(error, "body-T-cam0: not a rigid transform (rotation not orthonormal with determinant +1)");
   }
   std::string rectification_error;
-  if (!rectification.IsValid(&rectification_error)) return fail("rectification." + rectification_error);
+  if (!rectification.IsValid(&rectification_error)) return Fail(error, "rectification." + rectification_error);
   return true;
 }
 

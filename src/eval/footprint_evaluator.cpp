@@ -10,16 +10,11 @@
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error != nullptr) *error = message;
-  return false;
-}
 
 bool IsVerdict(std::uint8_t c) { return c >= 1 && c <= 3; }
 
@@ -97,7 +92,7 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
       if (!IsVerdict(truth.classes(cell.row, cell.col))) continue;
       const Eigen::Vector2d centre = truth.CellCentre(cell);
       for (const double yaw_deg : options.yaws_deg) {
-        const FootprintPose pose{centre.x(), centre.y(), yaw_deg * kPi / 180.0};
+        const FootprintPose pose{centre.x(), centre.y(), DegToRad(yaw_deg)};
         ++summary.poses;
         const std::uint8_t t = TruthUnder(truth, pose, half_l, half_w);
         if (t == 0) {

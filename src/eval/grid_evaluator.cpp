@@ -58,15 +58,15 @@ double DistanceToPath(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2
   return best;
 }
 
-/// The vehicle's (x, y) positions from a pose file, thinned to one per kPathSpacing_m of travel
+/// The vehicle's (x, y) positions from a pose file, thinned to one per kPathSpacingM of travel
 /// (the polyline between them is what ScoreGridByDistance measures to).
 std::vector<Eigen::Vector2d> ReadPath(const std::string& pose_csv) {
-  constexpr double kPathSpacing_m = 0.25;
+  constexpr double kPathSpacingM = 0.25;
   std::vector<Eigen::Vector2d> path;
   const std::vector<PoseSample> poses = internal::ParseAslPoseCsv(ReadTextFile(pose_csv), pose_csv);
   for (std::size_t i = 0; i < poses.size(); ++i) {
     const Eigen::Vector2d p = poses[i].world_p_body.head<2>();
-    if (path.empty() || (p - path.back()).norm() >= kPathSpacing_m || i + 1 == poses.size()) path.push_back(p);
+    if (path.empty() || (p - path.back()).norm() >= kPathSpacingM || i + 1 == poses.size()) path.push_back(p);
   }
   return path;
 }
@@ -194,7 +194,7 @@ GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::strin
     if (!summary.path.empty()) {
       try {
         summary.by_distance = ScoreGridByDistance(summary.truth_grid, summary.predicted_grid, summary.path,
-                                                  GridEvalSummary::kDistanceBand_m);
+                                                  GridEvalSummary::kDistanceBandM);
       } catch (const Error& e) {  // the path is the pose file's: name it
         throw Error(summary.path_source + ": " + e.what());
       }
@@ -265,7 +265,7 @@ std::string GridEvalSummary::ToJson() const {
     json.Key("path");
     json.String(path_source);
     json.Key("band_m");
-    json.Number(kDistanceBand_m);
+    json.Number(kDistanceBandM);
     json.Key("bands");
     json.BeginArray();
     constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();

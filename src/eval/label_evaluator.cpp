@@ -75,14 +75,10 @@ ConfusionMatrix ScoreLabels(const ImageU8& truth, const ImageU8& predicted,
 }
 
 bool LabelEvalOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& message) {
-    if (error != nullptr) *error = message;
-    return false;
-  };
   if (!pictures_dir.empty() && fs::exists(pictures_dir) && !fs::is_directory(pictures_dir)) {
-    return fail("pictures_dir: " + pictures_dir + " exists and is not a folder");
+    return Fail(error, "pictures_dir: " + pictures_dir + " exists and is not a folder");
   }
-  if (worst_frames_listed < 0) return fail("worst_frames_listed: must be >= 0");
+  if (worst_frames_listed < 0) return Fail(error, "worst_frames_listed: must be >= 0");
   return true;
 }
 

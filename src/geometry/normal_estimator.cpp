@@ -13,6 +13,8 @@
 #include "geometry/integral_row_ring.h"
 #include "geometry/smallest_eigenvector.h"
 
+#include "ssta/core/error.h"
+
 namespace ssta {
 namespace {
 
@@ -38,10 +40,6 @@ constexpr double kMaxWindowSum64 = 2.2e15;
 // Covariance windows whose lambda2 * lambda3 / trace^2 is below this are (nearly) collinear.
 constexpr float kMinRank2Float = 1e-6f;
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 inline bool IsValidPoint(const Eigen::Vector3f& p) {
   return p.z() > 0.0f && std::isfinite(p.z()) && std::isfinite(p.x()) && std::isfinite(p.y());
@@ -231,26 +229,34 @@ const char* NormalMethodName(NormalMethod method) {
   return "unknown";
 }
 
-bool NormalOptions::IsValid(std::string* error) const {
-  if (method != NormalMethod::kCovarianceMatrix && method != NormalMethod::kAverage3dGradient &&
-      method != NormalMethod::kAverageDepthChange) {
-    return Fail(error, "method: must be covariance, average_3d_gradient or average_depth_change");
-  }
-  if (!(smoothing_size_px >= kMinSmoothingSizePx && smoothing_size_px <= kMaxSmoothingSizePx)) {
-    return Fail(error, "smoothing_size_px: must be in [" + std::to_string(kMinSmoothingSizePx) +
-                           ", " + std::to_string(kMaxSmoothingSizePx) + "] pixels");
-  }
-  if (subsample != 1 && subsample != 2) return Fail(error, "subsample: must be 1 or 2");
-  if (subsample == 2 && smoothing_size_px / 2 < kMinSmoothingSizePx) {
-    return Fail(error, "smoothing_size_px: must be at least " +
-                           std::to_string(2 * kMinSmoothingSizePx) + " with subsample 2");
-  }
-  if (!(max_depth_change_factor > 0.0 && max_depth_change_factor <= 100.0)) {
-    return Fail(error, "max_depth_change_factor: must be in (0, 100] 1/m (inverse-depth jump)");
-  }
-  if (threads < 0 || threads > 256) return Fail(error, "threads: must be in [0, 256] (0 = OpenCV's thread count)");
-  return true;
+const OptionFields<NormalOptions>& NormalOptions::Fields() {
+  using O = NormalOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Choice<O>("method", &O::method,
+                          {NormalMethod::kCovarianceMatrix, NormalMethod::kAverage3dGradient,
+                           NormalMethod::kAverageDepthChange},
+                          NormalMethodName, "covariance | average_3d_gradient | average_depth_change"));
+    f.push_back(Integer<O>("smoothing_size_px", &O::smoothing_size_px, Closed(kMinSmoothingSizePx, kMaxSmoothingSizePx),
+                           "px", "side of the smoothing window")
+                    .Require([](const O& o) { return o.subsample == 1 || o.smoothing_size_px / 2 >= kMinSmoothingSizePx; },
+                             "must be at least " + std::to_string(2 * kMinSmoothingSizePx) + " with subsample 2"));
+    f.push_back(Real<O>("max_depth_change_factor", &O::max_depth_change_factor, OpenClosed(0, 100), "1/m",
+                        "windows stop at jumps of inverse depth above this (a disparity jump of factor * f * b px)"));
+    f.push_back(Flag<O>("depth_dependent_smoothing", &O::depth_dependent_smoothing,
+                        "the window side scales with sqrt(depth / 5 m), 0.5x to 2x: far ground, whose "
+                        "depth noise grows as Z^2, is averaged over more pixels"));
+    f.push_back(Integer<O>("subsample", &O::subsample, Closed(1, 2), "",
+                           "1 | 2: normals on every 2nd pixel in each direction (about 3x faster)"));
+    f.push_back(Integer<O>("threads", &O::threads, Closed(0, 256), "",
+                           "bands of rows on this many threads (0: OpenCV's count); the normals are the "
+                           "same for any value"));
+    return f;
+  }();
+  return fields;
 }
+
+bool NormalOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 // What one sweep over a band of output rows needs for itself: its integral rows start at the
 // band (IntegralRowRing's first_row), so bands run on separate threads and give exactly the

@@ -3,15 +3,13 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ssta/core/error.h"
+#include "ssta/core/units.h"
+
 namespace ssta {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 // Root of i with path halving; roots are the smallest index of their set.
 inline std::int32_t Find(std::int32_t* parent, std::int32_t i) {
@@ -57,18 +55,24 @@ SSTA_NOINLINE void JoinTestsWithDisparity(int n, const float* __restrict a,
 
 }  // namespace
 
-bool SegmenterOptions::IsValid(std::string* error) const {
-  if (!(roughness_deg > 0.0 && roughness_deg < 90.0)) {
-    return Fail(error, "roughness_deg: must be in (0, 90) degrees");
-  }
-  if (!(max_disparity_jump_px >= 0.0 && std::isfinite(max_disparity_jump_px))) {
-    return Fail(error, "max_disparity_jump_px: must be >= 0 pixels (0 disables the test)");
-  }
-  if (!(max_segment_angle_deg >= 0.0 && max_segment_angle_deg < 90.0)) {
-    return Fail(error, "max_segment_angle_deg: must be in [0, 90) degrees (0 disables the test)");
-  }
-  return true;
+const OptionFields<SegmenterOptions>& SegmenterOptions::Fields() {
+  using O = SegmenterOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("roughness_deg", &O::roughness_deg, Open(0, 90), "deg",
+                        "neighbours join while their normals differ by less (eq. 1)"));
+    f.push_back(Real<O>("max_disparity_jump_px", &O::max_disparity_jump_px, AtLeast(0), "px",
+                        "... and their disparities by at most this (0: off, the paper's pure normal test)"));
+    f.push_back(Real<O>("max_segment_angle_deg", &O::max_segment_angle_deg, ClosedOpen(0, 90), "deg",
+                        "... and the mean normals of their segments by less than this (0: off, the "
+                        "paper's neighbour-only test): stops a gradual crease from chaining a ramp "
+                        "into the ground"));
+    return f;
+  }();
+  return fields;
 }
+
+bool SegmenterOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 int Segmentation::LargestSegment() const {
   if (sizes.empty()) return -1;
@@ -86,10 +90,10 @@ const Segmentation& Segmenter::Compute(const Image3f& normals, const ImageF* dis
   SSTA_CHECK(disparity == nullptr || (disparity->width() == width && disparity->height() == height),
              "disparity and normals must have the same size");
   const bool use_disparity = disparity != nullptr && options_.max_disparity_jump_px > 0.0;
-  const float cos_min = static_cast<float>(std::cos(options_.roughness_deg * kPi / 180.0));
+  const float cos_min = static_cast<float>(std::cos(DegToRad(options_.roughness_deg)));
   const float max_jump = static_cast<float>(options_.max_disparity_jump_px);
   const bool use_segment_angle = options_.max_segment_angle_deg > 0.0;
-  const float cos_segment = static_cast<float>(std::cos(options_.max_segment_angle_deg * kPi / 180.0));
+  const float cos_segment = static_cast<float>(std::cos(DegToRad(options_.max_segment_angle_deg)));
 
   Segmentation& out = result_;
   if (out.labels.width() != width || out.labels.height() != height) {

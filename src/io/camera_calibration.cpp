@@ -10,15 +10,6 @@
 #include "yaml_reader.h"
 
 namespace ssta {
-namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-
-}  // namespace
-
 bool IsRigidTransform(const Eigen::Matrix4d& m, std::string* why) {
   if (!m.allFinite()) return Fail(why, "contains NaN or infinite values");
   if (!m.row(3).isApprox(Eigen::RowVector4d(0, 0, 0, 1), 1e-9)) {

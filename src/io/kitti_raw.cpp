@@ -12,6 +12,7 @@
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/sequence.h"
+#include "ssta/core/units.h"
 #include "text_parsers.h"
 
 namespace fs = std::filesystem;
@@ -226,9 +227,9 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
     const std::string file = Indexed(drive / "oxts/data", i, ".txt");
     const std::vector<double> v = internal::ParseOxtsRow(ReadTextFile(file), file);
     const double lat = v[0], lon = v[1], alt = v[2];
-    if (i == 0) scale = std::cos(lat * M_PI / 180.0);
-    const double mx = scale * lon * M_PI * kEarthRadiusM / 180.0;
-    const double my = scale * kEarthRadiusM * std::log(std::tan((90.0 + lat) * M_PI / 360.0));
+    if (i == 0) scale = std::cos(DegToRad(lat));
+    const double mx = scale * DegToRad(lon) * kEarthRadiusM;
+    const double my = scale * kEarthRadiusM * std::log(std::tan(DegToRad(90.0 + lat) / 2.0));
     Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
     t.linear() = (Eigen::AngleAxisd(v[5], Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(v[4], Eigen::Vector3d::UnitY()) *
                   Eigen::AngleAxisd(v[3], Eigen::Vector3d::UnitX()))

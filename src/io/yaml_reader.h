@@ -12,6 +12,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "ssta/core/error.h"
+#include "ssta/core/option_fields.h"
 
 namespace ssta::internal {
 
@@ -82,6 +83,57 @@ T YamlSection::Require(const std::string& key) {
   T value{};
   Read(key, &value);
   return value;
+}
+
+/// Reads every key of `fields` that `section` holds into `*options`, each by its kind; a choice
+/// outside its names is an error naming the key and the names. Keys the section holds that
+/// `fields` does not know are left for RejectUnknownKeys.
+template <class O>
+void ReadOptions(YamlSection& section, const OptionFields<O>& fields, O* options) {
+  for (const OptionField<O>& f : fields) {
+    if (!section.Has(f.key)) {
+      section.Ignore(f.key);
+      continue;
+    }
+    switch (f.kind) {
+      case OptionKind::kReal: {
+        double v = 0.0;
+        section.Read(f.key, &v);
+        f.set(options, v);
+        break;
+      }
+      case OptionKind::kInteger: {
+        int v = 0;
+        section.Read(f.key, &v);
+        f.set(options, static_cast<double>(v));
+        break;
+      }
+      case OptionKind::kFlag: {
+        bool v = false;
+        section.Read(f.key, &v);
+        f.set(options, v);
+        break;
+      }
+      case OptionKind::kChoice: {
+        const auto v = section.Require<std::string>(f.key);
+        std::string names;
+        bool known = false;
+        for (const std::string& c : f.choices) {
+          names += (names.empty() ? "" : ", ") + c;
+          known = known || c == v;
+        }
+        if (!known) throw Error(section.Name(f.key) + ": unknown value '" + v + "' (" + names + ")");
+        f.set(options, v);
+        break;
+      }
+      case OptionKind::kVector3: {
+        std::vector<double> v;
+        section.ReadList(f.key, &v, 3);
+        f.set(options, Eigen::Vector3d(v[0], v[1], v[2]));
+        break;
+      }
+    }
+  }
 }
 
 }  // namespace ssta::internal

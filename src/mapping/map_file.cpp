@@ -91,24 +91,27 @@ class MemoryStreamBuf : public std::streambuf {
   std::size_t consumed() const { return static_cast<std::size_t>(gptr() - eback()); }
 };
 
-/// The shortest decimal text that reads back as exactly `v` ("0.1", not "0.10000000000000001";
-/// "30", not "3e+01"; "1e-07", not "0.0000001").
-std::string ShortestDecimal(double v) {
-  char buffer[40];
-  for (int precision = 1; precision <= 17; ++precision) {
-    std::snprintf(buffer, sizeof(buffer), "%.*g", precision, v);
-    if (std::strtod(buffer, nullptr) == v) break;
+/// Writes every field of `fields` whose value is not what old files meant by leaving it out.
+template <class O>
+void EmitFields(const O& options, const OptionFields<O>& fields, YAML::Emitter* out) {
+  for (const OptionField<O>& f : fields) {
+    const OptionValue value = f.get(options);
+    if (f.absent_means && value == *f.absent_means) continue;  // files made before the key stay as they were
+    *out << YAML::Key << f.key << YAML::Value << FormatOptionValue(value, f.kind);
   }
-  std::string shortest = buffer;
-  if (std::isfinite(v) && std::abs(v) < 1e16) {  // fixed notation, when it is shorter
-    for (int decimals = 0; decimals <= 17; ++decimals) {
-      std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
-      if (std::strtod(buffer, nullptr) != v) continue;
-      if (std::strlen(buffer) < shortest.size()) shortest = buffer;
-      break;
+}
+
+/// Reads every field of `fields`; a key left out takes what old files meant by leaving it out,
+/// and is an error when the key was always written.
+template <class O>
+void ReadFields(internal::YamlSection& section, const OptionFields<O>& fields, O* options) {
+  for (const OptionField<O>& f : fields) {
+    if (!section.Has(f.key)) {
+      if (!f.absent_means) throw Error(section.Name(f.key) + ": missing key");
+      f.set(options, *f.absent_means);
     }
   }
-  return shortest;
+  internal::ReadOptions(section, fields, options);
 }
 
 std::string MetadataYaml(const TraversabilityMap& map) {
@@ -123,39 +126,10 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "frames_inserted" << YAML::Value << map.frames_inserted();
   out << YAML::Key << "last_timestamp_ns" << YAML::Value << map.last_timestamp_ns();
   out << YAML::Key << "map_options" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "resolution_m" << YAML::Value << num(o.resolution_m);
-  out << YAML::Key << "max_range_m" << YAML::Value << num(o.max_range_m);
-  out << YAML::Key << "occupancy_hit_prob" << YAML::Value << num(o.occupancy_hit_prob);
-  out << YAML::Key << "occupancy_miss_prob" << YAML::Value << num(o.occupancy_miss_prob);
-  out << YAML::Key << "occupancy_clamp_min_prob" << YAML::Value << num(o.occupancy_clamp_min_prob);
-  out << YAML::Key << "occupancy_clamp_max_prob" << YAML::Value << num(o.occupancy_clamp_max_prob);
-  out << YAML::Key << "occupied_threshold_prob" << YAML::Value << num(o.occupied_threshold_prob);
-  out << YAML::Key << "class_hit_log_odds" << YAML::Value << num(o.class_hit_log_odds);
-  out << YAML::Key << "class_miss_log_odds" << YAML::Value << num(o.class_miss_log_odds);
-  out << YAML::Key << "class_free_decay_log_odds" << YAML::Value << num(o.class_free_decay_log_odds);
-  out << YAML::Key << "class_clamp_min" << YAML::Value << num(o.class_clamp_min);
-  out << YAML::Key << "class_clamp_max" << YAML::Value << num(o.class_clamp_max);
-  out << YAML::Key << "free_space_clearance_m" << YAML::Value << num(o.free_space_clearance_m);
-  // Only when not the exact 1, so files of exact-ray maps stay as they were (absent reads as 1).
-  if (o.free_space_ray_cell != 1) out << YAML::Key << "free_space_ray_cell" << YAML::Value << o.free_space_ray_cell;
-  // Only when on, so files of maps made before it stay as they were (absent reads as off).
-  if (o.free_space_obstacle_shortening_per_m2 >= 0.0) {
-    out << YAML::Key << "free_space_obstacle_shortening_per_m2" << YAML::Value
-        << num(o.free_space_obstacle_shortening_per_m2);
-  }
-  // Only when on, so files of maps made before it stay as they were (absent reads as off).
-  if (o.free_space_keeps_traversable) {
-    out << YAML::Key << "free_space_keeps_traversable" << YAML::Value << true;
-  }
+  EmitFields(o, MapOptions::Fields(), &out);
   out << YAML::EndMap;
-  const VehicleOptions& v = m.vehicle;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
-  out << YAML::Key << "max_slope_deg" << YAML::Value << num(v.max_slope_deg);
-  out << YAML::Key << "semi_slope_deg" << YAML::Value << num(v.semi_slope_deg);
-  out << YAML::Key << "max_step_m" << YAML::Value << num(v.max_step_m);
-  out << YAML::Key << "semi_step_m" << YAML::Value << num(v.semi_step_m);
-  out << YAML::Key << "min_camera_height_m" << YAML::Value << num(v.min_camera_height_m);
-  out << YAML::Key << "max_camera_height_m" << YAML::Value << num(v.max_camera_height_m);
+  EmitFields(m.vehicle, VehicleOptions::Fields(), &out);
   out << YAML::EndMap;
   out << YAML::Key << "calibration_summary" << YAML::Value << YAML::DoubleQuoted
       << m.calibration_summary;
@@ -325,37 +299,13 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
   *last_ts = root.Require<std::int64_t>("last_timestamp_ns");
 
   internal::YamlSection o = root.Child("map_options");
-  options->resolution_m = o.Require<double>("resolution_m");
-  options->max_range_m = o.Require<double>("max_range_m");
-  options->occupancy_hit_prob = o.Require<double>("occupancy_hit_prob");
-  options->occupancy_miss_prob = o.Require<double>("occupancy_miss_prob");
-  options->occupancy_clamp_min_prob = o.Require<double>("occupancy_clamp_min_prob");
-  options->occupancy_clamp_max_prob = o.Require<double>("occupancy_clamp_max_prob");
-  options->occupied_threshold_prob = o.Require<double>("occupied_threshold_prob");
-  options->class_hit_log_odds = o.Require<double>("class_hit_log_odds");
-  options->class_miss_log_odds = o.Require<double>("class_miss_log_odds");
-  options->class_free_decay_log_odds = o.Require<double>("class_free_decay_log_odds");
-  options->class_clamp_min = o.Require<double>("class_clamp_min");
-  options->class_clamp_max = o.Require<double>("class_clamp_max");
-  options->free_space_clearance_m = o.Require<double>("free_space_clearance_m");
-  options->free_space_ray_cell = 1;  // files of exact-ray maps do not name it
-  o.Read("free_space_ray_cell", &options->free_space_ray_cell);
-  options->free_space_obstacle_shortening_per_m2 = -1.0;  // off: maps made before it do not name it
-  o.Read("free_space_obstacle_shortening_per_m2", &options->free_space_obstacle_shortening_per_m2);
-  options->free_space_keeps_traversable = false;  // maps made before it do not name it
-  o.Read("free_space_keeps_traversable", &options->free_space_keeps_traversable);
+  ReadFields(o, MapOptions::Fields(), options);
   std::string error;
   if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
 
   internal::YamlSection v = root.Child("vehicle");
-  VehicleOptions& vehicle = metadata->vehicle;
-  vehicle.max_slope_deg = v.Require<double>("max_slope_deg");
-  vehicle.semi_slope_deg = v.Require<double>("semi_slope_deg");
-  vehicle.max_step_m = v.Require<double>("max_step_m");
-  vehicle.semi_step_m = v.Require<double>("semi_step_m");
-  vehicle.min_camera_height_m = v.Require<double>("min_camera_height_m");
-  vehicle.max_camera_height_m = v.Require<double>("max_camera_height_m");
-  if (!vehicle.IsValid(&error)) throw Error(path + ": vehicle." + error);
+  ReadFields(v, VehicleOptions::Fields(), &metadata->vehicle);
+  if (!metadata->vehicle.IsValid(&error)) throw Error(path + ": vehicle." + error);
 
   metadata->calibration_summary = root.Require<std::string>("calibration_summary");
   metadata->sequences = root.Require<std::vector<std::string>>("sequences");

@@ -2,76 +2,83 @@
 
 #include <cmath>
 
+#include "ssta/core/error.h"
+
 namespace ssta {
-namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
+const OptionFields<MapOptions>& MapOptions::Fields() {
+  using O = MapOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("resolution_m", &O::resolution_m, OpenClosed(0.005, 10), "m", "voxel edge"));
+    f.push_back(Real<O>("max_range_m", &O::max_range_m, OpenClosed(0, 1000), "m",
+                        "farther points only clear free space up to this range"));
+    f.push_back(Real<O>("occupancy_hit_prob", &O::occupancy_hit_prob, Open(0.5, 1), "",
+                        "P(occupied) of a voxel a point falls in"));
+    f.push_back(Real<O>("occupancy_miss_prob", &O::occupancy_miss_prob, Open(0, 0.5), "",
+                        "P(occupied) of a voxel a ray passes through"));
+    f.push_back(Real<O>("occupancy_clamp_min_prob", &O::occupancy_clamp_min_prob, Open(0, 0.5), "",
+                        "occupancy log-odds are clamped to [min, max] probability"));
+    f.push_back(Real<O>("occupancy_clamp_max_prob", &O::occupancy_clamp_max_prob, Open(0.5, 1), "", "upper clamp"));
+    f.push_back(Real<O>("occupied_threshold_prob", &O::occupied_threshold_prob, Open(0, 1), "",
+                        "a voxel is occupied at P >= this")
+                    .Require([](const O& o) {
+                      return o.occupied_threshold_prob > o.occupancy_clamp_min_prob &&
+                             o.occupied_threshold_prob < o.occupancy_clamp_max_prob;
+                    }, "must lie strictly between occupancy_clamp_min_prob and occupancy_clamp_max_prob"));
+    f.push_back(Real<O>("class_hit_log_odds", &O::class_hit_log_odds, Above(0), "",
+                        "added to the observed class's log-odds"));
+    f.push_back(Real<O>("class_miss_log_odds", &O::class_miss_log_odds, {-HUGE_VAL, 0, true, false}, "",
+                        "added to the two other classes' log-odds"));
+    f.push_back(Real<O>("class_free_decay_log_odds", &O::class_free_decay_log_odds, AtLeast(0), "",
+                        "a ray through a voxel moves its class log-odds this much towards 0"));
+    f.push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
+    f.push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
+    f.push_back(Real<O>("free_space_clearance_m", &O::free_space_clearance_m, Closed(0, 5), "m",
+                        "rays stop clearing where they come this close (in height) to their end: "
+                        "clearance / sin(elevation) short, at most 2 m (0: off)"));
+    f.push_back(Integer<O>("free_space_ray_cell", &O::free_space_ray_cell, Closed(1, 8), "voxels",
+                           "rays whose ends share a cell this many voxels wide are cast once, to their mean "
+                           "(1: exact; 1, 2, 4 or 8)")
+                    .Require([](const O& o) { return (o.free_space_ray_cell & (o.free_space_ray_cell - 1)) == 0; },
+                             "must be 1, 2, 4 or 8 voxels")
+                    .AbsentMeans(1.0));
+    f.push_back(Real<O>("free_space_obstacle_shortening_per_m2", &O::free_space_obstacle_shortening_per_m2,
+                        {-HUGE_VAL, 1, true, false}, "1/m",
+                        "rays to obstacles stop k r^2 short of their end (r: range), the band of stereo's "
+                        "depth noise, instead of the clearance's; negative: off")
+                    .AbsentMeans(-1.0));
+    f.push_back(Flag<O>("free_space_keeps_traversable", &O::free_space_keeps_traversable,
+                        "rays leave voxels the map holds as traversable as they are (grazing rays beyond a "
+                        "crest would erode seen ground); obstacles and undecided voxels still clear")
+                    .AbsentMeans(false));
+    return f;
+  }();
+  return fields;
 }
 
-bool InOpen(double v, double lo, double hi) { return v > lo && v < hi; }
+bool MapOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
-}  // namespace
 
-bool MapOptions::IsValid(std::string* error) const {
-  if (!(resolution_m > 0.005 && resolution_m <= 10.0)) {
-    return Fail(error, "resolution_m: must be in (0.005, 10] metres");
-  }
-  if (!(max_range_m > 0.0 && max_range_m <= 1000.0)) {
-    return Fail(error, "max_range_m: must be in (0, 1000] metres");
-  }
-  if (!InOpen(occupancy_hit_prob, 0.5, 1.0)) return Fail(error, "occupancy_hit_prob: must be in (0.5, 1)");
-  if (!InOpen(occupancy_miss_prob, 0.0, 0.5)) return Fail(error, "occupancy_miss_prob: must be in (0, 0.5)");
-  if (!InOpen(occupancy_clamp_min_prob, 0.0, 0.5)) {
-    return Fail(error, "occupancy_clamp_min_prob: must be in (0, 0.5)");
-  }
-  if (!InOpen(occupancy_clamp_max_prob, 0.5, 1.0)) {
-    return Fail(error, "occupancy_clamp_max_prob: must be in (0.5, 1)");
-  }
-  if (!InOpen(occupied_threshold_prob, occupancy_clamp_min_prob, occupancy_clamp_max_prob)) {
-    return Fail(error,
-                "occupied_threshold_prob: must lie strictly between occupancy_clamp_min_prob and "
-                "occupancy_clamp_max_prob");
-  }
-  if (!(class_hit_log_odds > 0.0 && std::isfinite(class_hit_log_odds))) {
-    return Fail(error, "class_hit_log_odds: must be a positive number");
-  }
-  if (!(class_miss_log_odds <= 0.0 && std::isfinite(class_miss_log_odds))) {
-    return Fail(error, "class_miss_log_odds: must be zero or negative");
-  }
-  if (!(class_free_decay_log_odds >= 0.0 && std::isfinite(class_free_decay_log_odds))) {
-    return Fail(error, "class_free_decay_log_odds: must be zero or positive");
-  }
-  if (!(class_clamp_min < 0.0 && class_clamp_min > -50.0)) {
-    return Fail(error, "class_clamp_min: must be in (-50, 0)");
-  }
-  if (!(free_space_clearance_m >= 0.0 && free_space_clearance_m <= 5.0)) {
-    return Fail(error, "free_space_clearance_m: must be in [0, 5] m");
-  }
-  if (!(std::isfinite(free_space_obstacle_shortening_per_m2) && free_space_obstacle_shortening_per_m2 <= 1.0)) {
-    return Fail(error, "free_space_obstacle_shortening_per_m2: must be at most 1 per m (negative: off)");
-  }
-  if (!(free_space_ray_cell == 1 || free_space_ray_cell == 2 || free_space_ray_cell == 4 ||
-        free_space_ray_cell == 8)) {
-    return Fail(error, "free_space_ray_cell: must be 1, 2, 4 or 8 voxels");
-  }
-  if (!(class_clamp_max > 0.0 && class_clamp_max < 50.0)) {
-    return Fail(error, "class_clamp_max: must be in (0, 50)");
-  }
-  return true;
+const OptionFields<MappingOptions>& MappingOptions::Fields() {
+  using O = MappingOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    for (const OptionField<MapOptions>& field : MapOptions::Fields()) f.push_back(field.Within(&O::fusion));
+    f.push_back(Integer<O>("pixel_stride", &O::pixel_stride, Closed(1, 64), "",
+                           "insert every n-th pixel in u and v"));
+    f.push_back(Real<O>("min_texture", &O::min_texture, ClosedOpen(0, 128), "grey levels",
+                        "pixels whose left-image standard deviation over the stereo block is lower are not "
+                        "inserted (sky noise); the classification keeps them"));
+    f.push_back(OddOrOff<O>("subpixel_window_px", &O::subpixel_window_px, Closed(1, 31), "px",
+                            "points at the disparity refined to sub-pixel precision over this window; the "
+                            "classification keeps the matcher's. 0: off"));
+    f.push_back(Integer<O>("checkpoint_every_frames", &O::checkpoint_every_frames, AtLeast(0), "frames",
+                           "save the map every n frames while building (0: never)"));
+    return f;
+  }();
+  return fields;
 }
 
-
-bool MappingOptions::IsValid(std::string* error) const {
-  if (!fusion.IsValid(error)) return false;
-  if (pixel_stride < 1 || pixel_stride > 64) return Fail(error, "pixel_stride: must be in [1, 64]");
-  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
-  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
-    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
-  }
-  if (checkpoint_every_frames < 0) return Fail(error, "checkpoint_every_frames: must be >= 0 (0: never)");
-  return true;
-}
+bool MappingOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 }  // namespace ssta

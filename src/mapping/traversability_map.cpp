@@ -621,14 +621,14 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   };
   // Rays to surface points stop short where they graze the surface (free_space_clearance_m);
   // rays to obstacles stop only a depth-noise band short (free_space_obstacle_shortening_per_m2).
-  constexpr double kMaxShortening_m = 2.0;
+  constexpr double kMaxShorteningM = 2.0;
   for (const VoxelAccumulator& acc : hits) {
     const Eigen::Vector3d end = acc.sum_p / acc.points;
     const Eigen::Vector3d d = end - sensor_origin_world;
     const double length = d.norm();
     if (opt.free_space_clearance_m > 0.0 && length > 1e-9) {
       const double sin_elevation = std::max(std::abs(d.z()) / length, 1e-3);
-      double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShortening_m);
+      double shorten = std::min(opt.free_space_clearance_m / sin_elevation, kMaxShorteningM);
       if (EndsOnAnObstacle(acc, opt)) shorten = std::min(shorten, opt.free_space_obstacle_shortening_per_m2 * length * length);
       if (shorten < length) add_ray(sensor_origin_world + d * ((length - shorten) / length));
     } else {

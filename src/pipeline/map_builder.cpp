@@ -41,19 +41,6 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
   return s.str();
 }
 
-/// A resumed map's classes are its vehicle's: frames classed for another vehicle would mix two
-/// verdicts in one voxel, so the config must give the vehicle the map was built for.
-void RequireSameVehicle(const VehicleOptions& map_vehicle, const VehicleOptions& config_vehicle,
-                        const std::string& map_path) {
-  const VehicleKey* k = FirstDifferingKey(map_vehicle, config_vehicle);
-  if (k == nullptr) return;
-  std::ostringstream m;
-  m << map_path << ": the map was built for vehicle." << k->name << " " << map_vehicle.*k->field
-    << ", but the config gives " << config_vehicle.*k->field
-    << " (a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one)";
-  throw Error(m.str());
-}
-
 /// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
 TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
                           const std::string& calibration, bool* continues_sequence) {
@@ -73,7 +60,11 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
       << config.map.fusion.resolution_m << " m in the config (a resumed map keeps its resolution)";
     throw Error(m.str());
   }
-  RequireSameVehicle(map.metadata().vehicle, config.vehicle, options.map_path);
+  // A resumed map's classes are its vehicle's: frames classed for another vehicle would mix two
+  // verdicts in one voxel.
+  RequireSameVehicle(map.metadata().vehicle, options.map_path + ": the map was built for", config.vehicle,
+                     "the config gives", "",
+                     "a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one");
   MapMetadata metadata = map.metadata();
   *continues_sequence = !metadata.sequences.empty() && SameSequenceName(metadata.sequences.back(), sequence_name);
   if (!*continues_sequence) metadata.sequences.push_back(sequence_name);
@@ -91,13 +82,9 @@ std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, con
 }  // namespace
 
 bool BuildMapOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (map_path.empty()) return fail("map: a map file is required");
-  if (max_frames < 0) return fail("max-frames: must not be negative");
-  if (every < 1) return fail("every: must be at least 1");
+  if (map_path.empty()) return Fail(error, "map: a map file is required");
+  if (max_frames < 0) return Fail(error, "max-frames: must not be negative");
+  if (every < 1) return Fail(error, "every: must be at least 1");
   return true;
 }
 

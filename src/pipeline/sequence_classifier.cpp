@@ -57,13 +57,9 @@ void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const 
 
 
 bool ClassifyOptions::IsValid(std::string* error) const {
-  auto fail = [&](const char* m) {
-    if (error) *error = m;
-    return false;
-  };
-  if (out_dir.empty()) return fail("out: an output folder is required");
-  if (max_frames < 0) return fail("max-frames: must not be negative");
-  if (every < 1) return fail("every: must be at least 1");
+  if (out_dir.empty()) return Fail(error, "out: an output folder is required");
+  if (max_frames < 0) return Fail(error, "max-frames: must not be negative");
+  if (every < 1) return Fail(error, "every: must be at least 1");
   return true;
 }
 

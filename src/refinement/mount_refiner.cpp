@@ -12,12 +12,11 @@
 
 #include "refinement/refinement_json.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
 
-constexpr double kDegToRad = 3.14159265358979323846 / 180.0;
-constexpr double kRadToDeg = 1.0 / kDegToRad;
 
 /// Signed distance of one ground point to its frame's plane, over the point's sigma.
 /// Parameters: correction (roll, pitch) [rad], height correction [m], and the frame's plane:
@@ -200,7 +199,7 @@ MountRefinementResult MountRefiner::Solve() const {
                                loss, correction, height, blocks[i].values);
     }
     problem.AddResidualBlock(
-        MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), options_.terrain_tilt_sigma_deg * kDegToRad), nullptr,
+        MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), DegToRad(options_.terrain_tilt_sigma_deg)), nullptr,
         blocks[i].values);
     if (options_.body_height_m >= 0.0) {
       problem.AddResidualBlock(MakePrior<1, 3>(2, Eigen::Matrix<double, 1, 1>(options_.body_height_m),
@@ -209,7 +208,7 @@ MountRefinementResult MountRefiner::Solve() const {
     }
     ordering->AddElementToGroup(blocks[i].values, 0);
   }
-  problem.AddResidualBlock(MakePrior<2, 2>(0, Eigen::Vector2d::Zero(), options_.prior_sigma_deg * kDegToRad), nullptr,
+  problem.AddResidualBlock(MakePrior<2, 2>(0, Eigen::Vector2d::Zero(), DegToRad(options_.prior_sigma_deg)), nullptr,
                            correction);
   problem.AddResidualBlock(MakePrior<1, 1>(0, Eigen::Matrix<double, 1, 1>::Zero(), options_.height_prior_sigma_m),
                            nullptr, height);
@@ -229,8 +228,8 @@ MountRefinementResult MountRefiner::Solve() const {
   result.final_cost = summary.final_cost;
   result.iterations = static_cast<int>(summary.iterations.size());
 
-  result.roll_correction_deg = correction[0] * kRadToDeg;
-  result.pitch_correction_deg = correction[1] * kRadToDeg;
+  result.roll_correction_deg = RadToDeg(correction[0]);
+  result.pitch_correction_deg = RadToDeg(correction[1]);
   result.height_correction_m = options_.estimate_height ? height[0] : 0.0;
   result.body_R_correction = TiltRotation(correction_axes, correction[0], correction[1]);
 
@@ -253,7 +252,7 @@ MountRefinementResult MountRefiner::Solve() const {
     FrameGroundEstimate estimate;
     estimate.timestamp_ns = frame.timestamp_ns;
     estimate.points = static_cast<int>(frame.camera_points.size());
-    estimate.tilt_deg = std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)) * kRadToDeg;
+    estimate.tilt_deg = RadToDeg(std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)));
     result.ground_tilt_rms_deg += estimate.tilt_deg * estimate.tilt_deg;
     estimate.height_m = blocks[i].offset();
     result.frames.push_back(estimate);
@@ -282,8 +281,8 @@ MountRefinementResult MountRefiner::Solve() const {
   }
   double c[4];
   covariance.GetCovarianceBlock(correction, correction, c);
-  result.roll_sigma_deg = std::sqrt(std::max(0.0, c[0])) * kRadToDeg;
-  result.pitch_sigma_deg = std::sqrt(std::max(0.0, c[3])) * kRadToDeg;
+  result.roll_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[0])));
+  result.pitch_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[3])));
   if (options_.estimate_height) {
     double h = 0.0;
     covariance.GetCovarianceBlock(height, height, &h);

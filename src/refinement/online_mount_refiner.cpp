@@ -6,11 +6,11 @@
 
 #include "refinement/refinement_json.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
 
-constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
 /// Index into OnlineRefinementSummary::rejected for a status other than kDetermined.
 int RejectedIndex(RefinementStatus status) {
@@ -27,7 +27,7 @@ constexpr RefinementStatus kRejectedStatuses[4] = {RefinementStatus::kTooFewFram
                                                    RefinementStatus::kTerrainTooRough, RefinementStatus::kFailed};
 
 double AngleDeg(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * kRadToDeg;
+  return RadToDeg(Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle());
 }
 
 }  // namespace

@@ -5,17 +5,6 @@
 #include "ssta/core/error.h"
 
 namespace ssta {
-namespace {
-
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
-
-bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
-
-}  // namespace
-
 GroundReference ParseGroundReference(const std::string& name) {
   if (name == "body") return GroundReference::kBody;
   if (name == "gravity") return GroundReference::kGravity;
@@ -34,35 +23,59 @@ RobustLoss ParseRobustLoss(const std::string& name) {
 
 std::string RobustLossName(RobustLoss loss) { return loss == RobustLoss::kHuber ? "huber" : "cauchy"; }
 
-bool RefinementOptions::IsValid(std::string* error) const {
-  if (points_per_frame < 3) return Fail(error, "points_per_frame: must be at least 3");
-  if (min_points_per_frame < 3 || min_points_per_frame > points_per_frame) {
-    return Fail(error, "min_points_per_frame: must be in [3, points_per_frame]");
-  }
-  if (!Positive(max_range_m)) return Fail(error, "max_range_m: must be positive");
-  if (min_frames < 1) return Fail(error, "min_frames: must be at least 1");
-  if (!Positive(point_sigma_m)) return Fail(error, "point_sigma_m: must be positive");
-  if (!Positive(point_sigma_range_m)) return Fail(error, "point_sigma_range_m: must be positive");
-  if (!Positive(loss_scale)) return Fail(error, "loss_scale: must be positive");
-  if (!Positive(terrain_tilt_sigma_deg) || terrain_tilt_sigma_deg > 45.0) {
-    return Fail(error, "terrain_tilt_sigma_deg: must be in (0, 45] degrees");
-  }
-  if (!Positive(prior_sigma_deg) || prior_sigma_deg > 45.0) {
-    return Fail(error, "prior_sigma_deg: must be in (0, 45] degrees");
-  }
-  if (!(max_sigma_ratio > 0.0 && max_sigma_ratio < 1.0)) return Fail(error, "max_sigma_ratio: must be in (0, 1)");
-  if (!std::isfinite(body_height_m) || body_height_m > 10.0) {
-    return Fail(error, "body_height_m: must be a finite height up to 10 m (negative: unknown)");
-  }
-  if (!Positive(terrain_height_sigma_m)) return Fail(error, "terrain_height_sigma_m: must be positive");
-  if (estimate_height && body_height_m < 0.0) {
-    return Fail(error, "estimate_height: needs body_height_m (the camera height is otherwise unobservable)");
-  }
-  if (!Positive(height_prior_sigma_m)) return Fail(error, "height_prior_sigma_m: must be positive");
-  if (max_iterations < 1) return Fail(error, "max_iterations: must be at least 1");
-  if (window_frames < min_frames) return Fail(error, "window_frames: must be at least min_frames");
-  if (solve_every_frames < 1) return Fail(error, "solve_every_frames: must be at least 1");
-  return true;
+const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
+  using O = RefinementOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Integer<O>("points_per_frame", &O::points_per_frame, AtLeast(3), "points",
+                           "ground points kept per frame after thinning"));
+    f.push_back(Integer<O>("min_points_per_frame", &O::min_points_per_frame, AtLeast(3), "points",
+                           "fewer: the frame is not used")
+                    .Require([](const O& o) { return o.min_points_per_frame <= o.points_per_frame; },
+                             "must be in [3, points_per_frame]"));
+    f.push_back(Real<O>("max_range_m", &O::max_range_m, Above(0), "m", "farther ground points are not used"));
+    f.push_back(Integer<O>("min_frames", &O::min_frames, AtLeast(1), "frames", "fewer usable frames: not determined"));
+    f.push_back(Real<O>("point_sigma_m", &O::point_sigma_m, Above(0), "m",
+                        "1-sigma of a ground point's height near the camera"));
+    f.push_back(Real<O>("point_sigma_range_m", &O::point_sigma_range_m, Above(0), "m",
+                        "beyond this range the point sigma grows with range"));
+    f.push_back(Choice<O>("robust_loss", &O::robust_loss, {RobustLoss::kHuber, RobustLoss::kCauchy}, RobustLossName,
+                          "huber | cauchy"));
+    f.push_back(Real<O>("loss_scale", &O::loss_scale, Above(0), "sigmas", "robust loss scale"));
+    f.push_back(Choice<O>("ground_reference", &O::ground_reference, {GroundReference::kBody, GroundReference::kGravity},
+                          GroundReferenceName,
+                          "body: the ground is parallel to the wheel plane (z-up body) | gravity: the ground "
+                          "is level, its normal the IMU-corrected up"));
+    f.push_back(Real<O>("terrain_tilt_sigma_deg", &O::terrain_tilt_sigma_deg, OpenClosed(0, 45), "deg",
+                        "prior on each frame's ground tilt against the reference"));
+    f.push_back(Real<O>("prior_sigma_deg", &O::prior_sigma_deg, OpenClosed(0, 45), "deg",
+                        "prior on the mount correction (zero mean)"));
+    f.push_back(Real<O>("max_sigma_ratio", &O::max_sigma_ratio, Open(0, 1), "",
+                        "a solve is applied only when its posterior sigma is at most this times the prior's"));
+    f.push_back(Real<O>("body_height_m", &O::body_height_m, {-HUGE_VAL, 10, true, false}, "m",
+                        "body origin above the wheel plane; negative: unknown"));
+    f.push_back(Real<O>("terrain_height_sigma_m", &O::terrain_height_sigma_m, Above(0), "m",
+                        "1-sigma of each frame's ground height about body_height_m"));
+    f.push_back(Flag<O>("estimate_height", &O::estimate_height, "also correct cam0's height (needs body_height_m)")
+                    .Require([](const O& o) { return !o.estimate_height || o.body_height_m >= 0.0; },
+                             "needs body_height_m (the camera height is otherwise unobservable)"));
+    f.push_back(Real<O>("height_prior_sigma_m", &O::height_prior_sigma_m, Above(0), "m",
+                        "prior on the height correction"));
+    f.push_back(Integer<O>("max_iterations", &O::max_iterations, AtLeast(1), "", "solver iterations"));
+    f.push_back(Flag<O>("online", &O::online,
+                        "build-map refines the mount while it fuses (--refine sets it): a determined solve "
+                        "replaces cam0's mount for the later frames"));
+    f.push_back(Integer<O>("window_frames", &O::window_frames, AtLeast(1), "frames",
+                           "online: sliding window of frames with a ground plane")
+                    .Require([](const O& o) { return o.window_frames >= o.min_frames; }, "must be at least min_frames"));
+    f.push_back(Integer<O>("solve_every_frames", &O::solve_every_frames, AtLeast(1), "frames",
+                           "online: solve when the window first holds min_frames, then after every n-th "
+                           "further frame with a ground plane"));
+    return f;
+  }();
+  return fields;
 }
+
+bool RefinementOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 }  // namespace ssta

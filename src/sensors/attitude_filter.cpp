@@ -11,10 +11,6 @@ namespace {
 
 constexpr double kGravity = 9.81;
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 /// The initial window is taken as the attitude at rest; when it looks at rest (slow rotation,
 /// steady |a|), the mean specific force must be gravity. An IMU in g, or with a scale error,
@@ -40,16 +36,28 @@ void CheckGravityAtRest(const Eigen::Vector3d& mean_force, double mean_norm, dou
 
 }  // namespace
 
-bool AttitudeFilterOptions::IsValid(std::string* error) const {
-  if (!(kp >= 0 && kp <= 100)) return Fail(error, "kp: must be in [0, 100] 1/s");
-  if (!(ki >= 0 && ki <= 10)) return Fail(error, "ki: must be in [0, 10] 1/s^2");
-  if (!(accel_gate > 0 && accel_gate <= 1)) return Fail(error, "accel_gate: must be in (0, 1]");
-  if (!(init_window_s > 0 && init_window_s <= 10)) return Fail(error, "init_window_s: must be in (0, 10] s");
-  if (!(max_rest_gravity_error_mps2 > 0 && max_rest_gravity_error_mps2 <= kGravity)) {
-    return Fail(error, "max_rest_gravity_error_mps2: must be in (0, 9.81] m/s^2");
-  }
-  return true;
+const OptionFields<AttitudeFilterOptions>& AttitudeFilterOptions::Fields() {
+  using O = AttitudeFilterOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("kp", &O::kp, Closed(0, 100), "1/s", "pull towards the accelerometer's up"));
+    f.push_back(Real<O>("ki", &O::ki, Closed(0, 10), "1/s^2", "gyro bias integration (time constant kp/ki)"));
+    f.push_back(Real<O>("accel_gate", &O::accel_gate, OpenClosed(0, 1), "",
+                        "the accelerometer is ignored while |a| is off 9.81 by more than this share"));
+    f.push_back(Real<O>("init_window_s", &O::init_window_s, OpenClosed(0, 10), "s",
+                        "accelerometer samples averaged for the initial attitude"));
+    f.push_back(Real<O>("max_rest_gravity_error_mps2", &O::max_rest_gravity_error_mps2, OpenClosed(0, 9.81),
+                        "m/s^2", "an IMU at rest over that window must read 9.81 within this (else its "
+                                 "units or scale are wrong)"));
+    f.push_back(Flag<O>("init_gyro_bias", &O::init_gyro_bias,
+                        "an IMU at rest over that window: its mean gyro rate is the initial gyro bias "
+                        "(else up leans by bias/kp until ki learns it)"));
+    return f;
+  }();
+  return fields;
 }
+
+bool AttitudeFilterOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 GravityTrack::GravityTrack(const std::vector<ImuSample>& imu, const Eigen::Isometry3d& body_T_imu,
                            const AttitudeFilterOptions& options, const std::string& imu_file) {

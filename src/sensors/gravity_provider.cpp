@@ -2,24 +2,33 @@
 
 namespace ssta {
 
-std::string GravitySourceName(GravitySource source) {
-  switch (source) {
-    case GravitySource::kAuto: return "auto";
-    case GravitySource::kImu: return "imu";
-    case GravitySource::kPose: return "pose";
-    case GravitySource::kLevel: return "level";
-    case GravitySource::kFixed: return "fixed";
-  }
-  return "auto";
+
+const OptionFields<GravityOptions>& GravityOptions::Fields() {
+  using O = GravityOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Choice<O>("source", &O::source,
+                          {{GravitySource::kAuto, "auto"},
+                           {GravitySource::kImu, "imu"},
+                           {GravitySource::kPose, "pose"},
+                           {GravitySource::kLevel, "level"},
+                           {GravitySource::kFixed, "fixed"}},
+                          "auto (the IMU, else the pose, else level) | imu | pose | level | fixed"));
+    f.push_back(Vector3<O>("up_camera", &O::up_camera, "",
+                           "for source fixed: up in the cam0 frame (x right, y down, z forward)")
+                    .Require([](const O& o) { return o.up_camera.norm() >= 1e-6; }, "must not be zero"));
+    return f;
+  }();
+  return fields;
 }
 
-bool GravityOptions::IsValid(std::string* error) const {
-  if (!up_camera.allFinite() || up_camera.norm() < 1e-6) {
-    if (error) *error = "up_camera: must be a finite, non-zero vector";
-    return false;
-  }
-  return true;
+std::string GravitySourceName(GravitySource source) {
+  GravityOptions o;
+  o.source = source;
+  return std::get<std::string>(GravityOptions::Fields()[0].get(o));
 }
+
+bool GravityOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 
 GravityProvider::GravityProvider(const Sequence& sequence, const GravityOptions& gravity,

@@ -61,13 +61,21 @@ void CheckSize(const ImageU8& image, const char* which, int width, int height) {
 
 }  // namespace
 
-bool RectifierOptions::IsValid(std::string* error) const {
-  if (!(std::isfinite(alpha) && alpha >= 0.0 && alpha <= 1.0)) {
-    if (error) *error = "alpha: must lie in [0, 1]";
-    return false;
-  }
-  return true;
+const OptionFields<RectifierOptions>& RectifierOptions::Fields() {
+  using O = RectifierOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Flag<O>("crop_to_common_area", &O::crop_to_common_area,
+                        "crop both images to the area valid in both (paper III-A)"));
+    f.push_back(Real<O>("alpha", &O::alpha, Closed(0, 1), "",
+                        "cv::stereoRectify free scaling: 1 keeps every source pixel (wider view, "
+                        "smaller f), 0 only valid pixels (larger f)"));
+    return f;
+  }();
+  return fields;
 }
+
+bool RectifierOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 Rectifier::Rectifier(const StereoCalibration& calibration, const RectifierOptions& options)
     : maps_(std::make_unique<Maps>()) {

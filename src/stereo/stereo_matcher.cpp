@@ -15,10 +15,6 @@
 namespace ssta {
 namespace {
 
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 
 cv::Mat WrapConst(const ImageU8& image) {
   return cv::Mat(image.height(), image.width(), CV_8UC1,
@@ -323,51 +319,73 @@ std::string MatcherTypeName(MatcherType type) {
   return {};
 }
 
-bool StereoMatcherOptions::IsValid(std::string* error) const {
-  const int kMaxDisparity = 1024;  // PCL keeps disparity * 16 in a short
-  if (min_disparity < 0 || min_disparity > kMaxDisparity) {
-    return Fail(error, "min_disparity: must lie in [0, 1024]");
-  }
-  if (num_disparities <= 0 || num_disparities % 16 != 0 ||
-      min_disparity + num_disparities > kMaxDisparity) {
-    return Fail(error, "num_disparities: must be a positive multiple of 16, and "
-                       "min_disparity + num_disparities <= 1024");
-  }
-  const int min_block = algorithm == MatcherType::kBlockMatching ? 5 : 3;
-  if (block_size < min_block || block_size % 2 == 0 || block_size > 51) {
-    return Fail(error, "block_size: must be odd and in [" + std::to_string(min_block) +
-                           ", 51] for " + MatcherTypeName(algorithm));
-  }
-  if (uniqueness_ratio < 0 || uniqueness_ratio > 100) {
-    return Fail(error, "uniqueness_ratio: must lie in [0, 100] (percent)");
-  }
-  if (left_right_max_diff < 0) return Fail(error, "left_right_max_diff: must be >= 0 (pixels)");
-  if (speckle_window_size < 0) return Fail(error, "speckle_window_size: must be >= 0 (0 disables)");
-  if (speckle_range < 0) return Fail(error, "speckle_range: must be >= 0 (pixels)");
-  if (pcl_ratio_filter < 0 || pcl_ratio_filter >= 100) {
-    return Fail(error, "pcl_ratio_filter: must lie in [0, 100) (percent, 0 disables)");
-  }
-  if (pcl_peak_filter < 0) return Fail(error, "pcl_peak_filter: must be >= 0 (0 disables)");
-  if (downscale != 1 && downscale != 2) return Fail(error, "downscale: must be 1 or 2");
-  if (acso_smoothness_weak < 0) return Fail(error, "acso_smoothness_weak: must be >= 0");
-  if (acso_smoothness_strong < acso_smoothness_weak) {
-    return Fail(error, "acso_smoothness_strong: must be >= acso_smoothness_weak");
-  }
-  if (!(std::isfinite(acso_gamma_s) && acso_gamma_s >= 1.0 && acso_gamma_s <= 1000.0 &&
-        acso_gamma_s == std::floor(acso_gamma_s))) {
-    return Fail(error, "acso_gamma_s: must be a whole number in [1, 1000] (PCL takes an int)");
-  }
-  if (!(std::isfinite(acso_gamma_c) && acso_gamma_c >= 1.0 && acso_gamma_c <= 1000.0 &&
-        acso_gamma_c == std::floor(acso_gamma_c))) {
-    return Fail(error, "acso_gamma_c: must be a whole number in [1, 1000] (PCL takes an int)");
-  }
-  if (!(min_texture >= 0 && min_texture < 128)) return Fail(error, "min_texture: must be in [0, 128) grey levels");
-  if (border_margin < 0 || border_margin > 64) return Fail(error, "border_margin: must be in [0, 64] px");
-  if (subpixel_window_px < 0 || subpixel_window_px > 31 || (subpixel_window_px > 0 && subpixel_window_px % 2 == 0)) {
-    return Fail(error, "subpixel_window_px: must be 0 (off) or odd in [1, 31] px");
-  }
-  return true;
+const OptionFields<StereoMatcherOptions>& StereoMatcherOptions::Fields() {
+  using O = StereoMatcherOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Choice<O>("algorithm", &O::algorithm,
+                          {MatcherType::kBlockMatching, MatcherType::kSemiGlobal, MatcherType::kPclBlockBased,
+                           MatcherType::kPclAdaptiveCost},
+                          MatcherTypeName,
+                          "bm (OpenCV StereoBM) | sgbm (OpenCV StereoSGBM) | pcl_bb (PCL block-based, "
+                          "the paper's BB) | pcl_acso (PCL adaptive-cost 2-pass scanline optimisation, "
+                          "the paper's ACSO)"));
+    f.push_back(Integer<O>("min_disparity", &O::min_disparity, Closed(0, 1024), "px", "smallest disparity searched"));
+    f.push_back(Integer<O>("num_disparities", &O::num_disparities, Closed(16, 1024), "px",
+                           "search range, a positive multiple of 16")
+                    .Require([](const O& o) { return o.num_disparities % 16 == 0 && o.min_disparity + o.num_disparities <= 1024; },
+                             "must be a positive multiple of 16, and min_disparity + num_disparities <= 1024"));
+    f.push_back(Integer<O>("block_size", &O::block_size, Closed(3, 51), "px", "odd matching window side (>= 5 for bm)")
+                    .Require([](const O& o) {
+                      return o.block_size % 2 == 1 && (o.algorithm != MatcherType::kBlockMatching || o.block_size >= 5);
+                    }, "must be odd and in [3, 51] (in [5, 51] for bm)"));
+    f.push_back(Choice<O>("sgbm_mode", &O::sgbm_mode,
+                          {SgbmMode::kThreeWay, SgbmMode::kFive, SgbmMode::kHh4, SgbmMode::kHh}, SgbmModeName,
+                          "sgbm only: 3way (fastest) | sgbm (5 directions) | hh4 | hh (8 directions)"));
+    f.push_back(Integer<O>("uniqueness_ratio", &O::uniqueness_ratio, Closed(0, 100), "%",
+                           "the best match must beat the second best by this margin"));
+    f.push_back(Flag<O>("left_right_check", &O::left_right_check, "drop pixels whose right-to-left match disagrees"));
+    f.push_back(Integer<O>("left_right_max_diff", &O::left_right_max_diff, AtLeast(0), "px",
+                           "allowed disagreement of the left-right check"));
+    f.push_back(Integer<O>("speckle_window_size", &O::speckle_window_size, AtLeast(0), "px",
+                           "disparity blobs smaller than this are removed (0: off)"));
+    f.push_back(Integer<O>("speckle_range", &O::speckle_range, AtLeast(0), "px",
+                           "largest disparity step between neighbours of one blob"));
+    f.push_back(Real<O>("min_texture", &O::min_texture, ClosedOpen(0, 128), "grey levels",
+                        "no disparity where the left image's standard deviation over the block is lower "
+                        "(textureless sky, walls); 0: off"));
+    f.push_back(Integer<O>("border_margin", &O::border_margin, Closed(0, 64), "px",
+                           "no disparity this close to the left or right image border, or where the partner "
+                           "lies this close to the right image's left border (0: off)"));
+    f.push_back(OddOrOff<O>("subpixel_window_px", &O::subpixel_window_px, Closed(1, 31), "px",
+                            "sub-pixel refinement of the matcher's disparity over this window (0: off); the "
+                            "map refines its points itself (map.subpixel_window_px)"));
+    f.push_back(Integer<O>("pcl_ratio_filter", &O::pcl_ratio_filter, ClosedOpen(0, 100), "%",
+                           "PCL matchers: ratio filter (0: off)"));
+    f.push_back(Integer<O>("pcl_peak_filter", &O::pcl_peak_filter, AtLeast(0), "", "PCL matchers: peak filter (0: off)"));
+    f.push_back(Flag<O>("pcl_preprocessing", &O::pcl_preprocessing, "PCL matchers: PCL's image pre-processing"));
+    f.push_back(Integer<O>("acso_smoothness_strong", &O::acso_smoothness_strong, AtLeast(0), "",
+                           "pcl_acso: smoothness penalty for jumps over 1 px")
+                    .Require([](const O& o) { return o.acso_smoothness_strong >= o.acso_smoothness_weak; },
+                             "must be >= acso_smoothness_weak"));
+    f.push_back(Integer<O>("acso_smoothness_weak", &O::acso_smoothness_weak, AtLeast(0), "",
+                           "pcl_acso: smoothness penalty for 1 px steps"));
+    f.push_back(Real<O>("acso_gamma_s", &O::acso_gamma_s, Closed(1, 1000), "px",
+                        "pcl_acso: spatial bandwidth of the adaptive weights (a whole number)")
+                    .Require([](const O& o) { return o.acso_gamma_s == std::floor(o.acso_gamma_s); },
+                             "must be a whole number (PCL takes an int)"));
+    f.push_back(Real<O>("acso_gamma_c", &O::acso_gamma_c, Closed(1, 1000), "",
+                        "pcl_acso: grey-level bandwidth of the adaptive weights (a whole number)")
+                    .Require([](const O& o) { return o.acso_gamma_c == std::floor(o.acso_gamma_c); },
+                             "must be a whole number (PCL takes an int)"));
+    f.push_back(Integer<O>("downscale", &O::downscale, Closed(1, 2), "",
+                           "1 | 2: match at half size, the disparity upsampled x2 (about 4x faster SGBM)"));
+    return f;
+  }();
+  return fields;
 }
+
+bool StereoMatcherOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 StereoMatcher::StereoMatcher(const StereoMatcherOptions& options) : options_(options) {
   std::string why;

@@ -7,22 +7,23 @@
 
 namespace ssta {
 
-bool TriangulationOptions::IsValid(std::string* error) const {
-  auto fail = [error](const std::string& message) {
-    if (error) *error = message;
-    return false;
-  };
-  if (!(std::isfinite(min_range_m) && min_range_m >= 0.0)) {
-    return fail("min_range_m: must be a finite number >= 0");
-  }
-  if (!(std::isfinite(max_range_m) && max_range_m > min_range_m)) {
-    std::ostringstream m;  // either key may be the one at fault: both values are named
-    m << "max_range_m: must be finite and greater than min_range_m (max_range_m " << max_range_m
-      << ", min_range_m " << min_range_m << ")";
-    return fail(m.str());
-  }
-  return true;
+const OptionFields<TriangulationOptions>& TriangulationOptions::Fields() {
+  using O = TriangulationOptions;
+  static const OptionFields<O> fields = [] {
+    OptionFields<O> f;
+    f.push_back(Real<O>("min_range_m", &O::min_range_m, AtLeast(0), "m", "nearer points (depth Z) are dropped"));
+    f.push_back(Real<O>("max_range_m", &O::max_range_m, Above(0), "m", "farther points (depth Z) are dropped")
+                    .Require([](const O& o) { return o.max_range_m > o.min_range_m; },
+                             [](const O& o) {
+                               return "must be greater than min_range_m (max_range_m " + ShortestDecimal(o.max_range_m) +
+                                      ", min_range_m " + ShortestDecimal(o.min_range_m) + ")";
+                             }));
+    return f;
+  }();
+  return fields;
 }
+
+bool TriangulationOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 
 Image3f Triangulate(const ImageF& disparity, const RectifiedGeometry& geometry,
                     const TriangulationOptions& options) {

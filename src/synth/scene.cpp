@@ -5,13 +5,12 @@
 #include <limits>
 
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 #include "synth/random.h"
 
 namespace ssta::synth {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// World (x, y) relative to a centre, expressed in a frame rotated by yaw (given as cos, sin).
@@ -240,7 +239,7 @@ void Scene::Finish() {
   for (GroundRamp& r : ramps) {
     r.cos_yaw = std::cos(r.yaw_rad);
     r.sin_yaw = std::sin(r.yaw_rad);
-    r.tan_slope = std::tan(r.slope_deg * kDeg);
+    r.tan_slope = std::tan(DegToRad(r.slope_deg));
   }
   for (Pit& p : pits) {
     p.cos_yaw = std::cos(p.yaw_rad);
@@ -546,7 +545,7 @@ SurfaceHit Scene::CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& 
 }
 
 TravClass Scene::Classify(const SurfaceHit& hit, const VehicleOptions& vehicle) const {
-  const double slope_deg = std::acos(std::clamp(hit.normal_world.z(), -1.0, 1.0)) / kDeg;
+  const double slope_deg = RadToDeg(std::acos(std::clamp(hit.normal_world.z(), -1.0, 1.0)));
   return Worse(vehicle.ClassifySlope(slope_deg), vehicle.ClassifyStep(std::abs(hit.step_m)));
 }
 

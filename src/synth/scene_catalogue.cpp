@@ -9,12 +9,11 @@
 
 #include "ssta/core/error.h"
 #include "ssta/synth/scene.h"
+#include "ssta/core/units.h"
 #include "synth/random.h"
 
 namespace ssta::synth {
 namespace {
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
@@ -207,7 +206,7 @@ Scene MakeForest(std::uint64_t seed) {
 Scene MakeRamp(double slope_deg) {
   Scene s;
   s.ground_material = Material::kConcrete;
-  s.plane_gradient = {std::tan(slope_deg * kDeg), 0.0};
+  s.plane_gradient = {std::tan(DegToRad(slope_deg)), 0.0};
   return s;
 }
 

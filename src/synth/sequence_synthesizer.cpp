@@ -15,6 +15,7 @@
 #include "ssta/synth/scene.h"
 #include "ssta/synth/stereo_renderer.h"
 #include "ssta/synth/vehicle_trajectory.h"
+#include "ssta/core/units.h"
 #include "synth/parallel.h"
 #include "synth/random.h"
 
@@ -23,20 +24,19 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kDeg = 3.14159265358979323846 / 180.0;
 /// Time of the first IMU / pose sample; EuRoC-like magnitude to exercise int64 handling [ns].
 constexpr std::int64_t kBaseNs = 1'600'000'000'000'000'000LL;
 /// The first camera frame comes this long after the first IMU sample [s].
-constexpr double kLeadIn_s = 0.1;
+constexpr double kLeadInS = 0.1;
 /// IMU and pose run on this long after the last camera frame [s].
-constexpr double kLeadOut_s = 0.1;
+constexpr double kLeadOutS = 0.1;
 
 std::string Join(const std::string& a, const std::string& b) { return a + "/" + b; }
 
 /// Body-frame rotation of the mount fault: pitch about body y, then roll about body x.
 Eigen::Matrix3d MountError(const FaultOptions& f) {
-  return (Eigen::AngleAxisd(f.mount_pitch_error_deg * kDeg, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(f.mount_roll_error_deg * kDeg, Eigen::Vector3d::UnitX()))
+  return (Eigen::AngleAxisd(DegToRad(f.mount_pitch_error_deg), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(DegToRad(f.mount_roll_error_deg), Eigen::Vector3d::UnitX()))
       .toRotationMatrix();
 }
 
@@ -248,7 +248,7 @@ std::string SynthSummary::BriefReport() const {
 }
 
 Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& motion) {
-  const double p = rig.pitch_down_deg * kDeg;
+  const double p = DegToRad(rig.pitch_down_deg);
   Eigen::Matrix3d r;
   r.col(0) = Eigen::Vector3d(0, -1, 0);                         // camera x: body right
   r.col(2) = Eigen::Vector3d(std::cos(p), 0, -std::sin(p));     // camera z: forward, pitched down
@@ -311,7 +311,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   std::vector<Eigen::Vector2d> seen;
   double render_ms = 0;
   for (int k = 0; k < o.frames; ++k) {
-    const std::int64_t ns = kBaseNs + std::llround(kLeadIn_s * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
+    const std::int64_t ns = kBaseNs + std::llround(kLeadInS * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
     const double t = static_cast<double>(ns - kBaseNs) * 1e-9;
     const Eigen::Isometry3d world_T_cam0 = trajectory.WorldTBody(t) * body_T_cam0;
     cam_positions.push_back(world_T_cam0.translation());
@@ -348,7 +348,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   WriteTextAtomically(Join(out_dir, "cam1/data.csv"), cam1_csv.str());
 
   // IMU and poses at the IMU rate, covering every frame.
-  const double t_end = kLeadIn_s + (o.frames - 1) / o.rig.rate_hz + kLeadOut_s;
+  const double t_end = kLeadInS + (o.frames - 1) / o.rig.rate_hz + kLeadOutS;
   const int samples = static_cast<int>(std::floor(t_end * o.motion.imu_rate_hz)) + 1;
   Rng imu_noise(o.seed * 6364136223846793005ULL + 23);
   std::ostringstream imu_csv, pose_csv;
@@ -369,8 +369,8 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
     imu_csv << ns << "," << gyro.x() << "," << gyro.y() << "," << gyro.z() << "," << accel.x()
             << "," << accel.y() << "," << accel.z() << "\n";
     const Eigen::Isometry3d pose = WithRollPitchOffset(
-        trajectory.WorldTBody(t), o.faults.pose_drift_roll_deg_per_s * kDeg * t,
-        o.faults.pose_drift_pitch_deg_per_s * kDeg * t);
+        trajectory.WorldTBody(t), DegToRad(o.faults.pose_drift_roll_deg_per_s) * t,
+        DegToRad(o.faults.pose_drift_pitch_deg_per_s) * t);
     Eigen::Quaterniond q(pose.linear());
     q.normalize();
     if (q.w() < 0) q.coeffs() = -q.coeffs();
@@ -382,7 +382,7 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   WriteTextAtomically(Join(out_dir, "imu0/data.csv"), imu_csv.str());
   WriteTextAtomically(Join(out_dir, "pose0/data.csv"), pose_csv.str());
 
-  const double run_m = o.motion.speed_mps * (o.frames - 1) / o.rig.rate_hz + kLeadIn_s * o.motion.speed_mps;
+  const double run_m = o.motion.speed_mps * (o.frames - 1) / o.rig.rate_hz + kLeadInS * o.motion.speed_mps;
   if (run_m > scene.clear_run_m) {
     std::ostringstream w;
     w << std::fixed << std::setprecision(1) << "the path runs " << run_m << " m, past the "

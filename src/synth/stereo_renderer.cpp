@@ -104,7 +104,7 @@ namespace {
 const Eigen::Vector3d kSun = Eigen::Vector3d(-0.2, 0.6, 0.78).normalized();
 constexpr double kAmbient = 0.45;
 constexpr double kSunGain = 0.62;
-constexpr double kShadowRay_m = 60.0;  ///< occluders farther towards the sun are ignored
+constexpr double kShadowRayM = 60.0;  ///< occluders farther towards the sun are ignored
 
 double SkyGrey(const Eigen::Vector3d& d) {
   const double elevation = d.z() / d.norm();
@@ -123,7 +123,7 @@ double ShadeHit(const Scene& scene, const SurfaceHit& hit, const Eigen::Vector3d
       Albedo(hit.material, hit.p_world, footprint_m / std::sqrt(incidence), scene.texture_seed);
   const double sun = std::max(0.0, hit.normal_world.dot(kSun));
   const bool lit = sun > 0 && !(shadows && scene.CastRay(hit.p_world + 2e-3 * hit.normal_world,
-                                                          kSun, kShadowRay_m).hit);
+                                                          kSun, kShadowRayM).hit);
   return albedo * (kAmbient + (lit ? kSunGain * sun : 0.0));
 }
 

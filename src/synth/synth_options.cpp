@@ -4,12 +4,10 @@
 
 #include "ssta/synth/scene.h"
 
+#include "ssta/core/error.h"
+
 namespace ssta::synth {
 namespace {
-bool Fail(std::string* error, const std::string& message) {
-  if (error) *error = message;
-  return false;
-}
 bool Finite(double x) { return std::isfinite(x); }
 }  // namespace
 

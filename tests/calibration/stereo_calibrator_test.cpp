@@ -229,7 +229,7 @@ TEST(StereoCalibratorCli, ConfigRectificationIsWhatTheCheckUses) {
   TempDir other;
   const RunResult bad = CalibrateAll(other, "--config " + (dir / "bad.yaml"));
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(ErrorLine(bad.output).find("bad.yaml: rectification.alpha: must lie in [0, 1]"), std::string::npos)
+  EXPECT_NE(ErrorLine(bad.output).find("bad.yaml: rectification.alpha: must be a number in [0, 1]"), std::string::npos)
       << bad.output;
   EXPECT_FALSE(fs::exists(other / "rig"));
 }

@@ -86,7 +86,7 @@ TEST_F(eval_Cli, ConfigMustNameTheVehicleTheTruthWasClassedFor) {
     EXPECT_EQ(same.output, plain.output);
     const RunResult other = RunSsta(command + " --config " + (dir_ / "steeper.yaml"));
     EXPECT_EQ(other.exit_code, 2);
-    EXPECT_NE(other.output.find("steeper.yaml: vehicle.max_slope_deg is 30, but the truth in"), std::string::npos)
+    EXPECT_NE(other.output.find("steeper.yaml: gives vehicle.max_slope_deg 30, but the truth in"), std::string::npos)
         << other.output;
     EXPECT_NE(other.output.find("was classed for 25 (" + (dir_ / "seq/vehicle.yaml") + ")"), std::string::npos)
         << other.output;
@@ -112,7 +112,7 @@ TEST_F(eval_Cli, LabelsMadeForAnotherVehicleAreNotScored) {
   for (const std::string pred : {"out", "out/labels"}) {
     const RunResult r = RunSsta("eval labels --pred " + (dir_ / pred) + " --gt " + (dir_ / "seq"));
     EXPECT_EQ(r.exit_code, 2) << pred;
-    EXPECT_NE(r.output.find((dir_ / "out/config.yaml") + ": vehicle.max_slope_deg is 20, but the truth"),
+    EXPECT_NE(r.output.find((dir_ / "out/config.yaml") + ": gives vehicle.max_slope_deg 20, but the truth"),
               std::string::npos)
         << r.output;
   }

@@ -216,7 +216,7 @@ TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
     const auto r = RunSsta(command + " --config " + large);
     EXPECT_EQ(r.exit_code, 2) << command;
     EXPECT_EQ(Lines(r.output).size(), 1u) << r.output;
-    EXPECT_NE(r.output.find("large_ugv.yaml: vehicle.max_slope_deg is 30, but"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("large_ugv.yaml: gives vehicle.max_slope_deg 30, but"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("was built for 25"), std::string::npos) << r.output;
   }
   EXPECT_FALSE(fs::exists(dir / "x.csv"));
@@ -231,7 +231,7 @@ TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
   r = RunSsta(query + " --config " + (dir / "step.yaml") + " --config " + (dir / "back.yaml") + " --config " +
               (dir / "step.yaml"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("step.yaml: vehicle.max_step_m is 0.25, but"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("step.yaml: gives vehicle.max_step_m 0.25, but"), std::string::npos) << r.output;
   // A bad value in any section is still an error.
   std::ofstream(dir / "bad.yaml") << "map:\n  resolution_m: -1\n";
   r = RunSsta(query + " --config " + (dir / "bad.yaml"));

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/analysis/vehicle_options.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/image.h"
@@ -117,6 +118,9 @@ struct AnalysisOptions {
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
 
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<AnalysisOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

@@ -1,8 +1,8 @@
 #pragma once
 
-#include <array>
 #include <string>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/classes.h"
 
 namespace ssta {
@@ -22,20 +22,17 @@ struct VehicleOptions {
   TravClass ClassifySlope(double slope_deg) const;
   /// Step class per eq. 5 on the absolute step height [m].
   TravClass ClassifyStep(double step_m) const;
-  /// On failure names the offending key (e.g. "semi_slope_deg: must not exceed max_slope_deg").
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<VehicleOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 
-/// One key of the vehicle section: its YAML name and its field.
-struct VehicleKey {
-  const char* name;
-  double VehicleOptions::*field;
-};
-/// Every key of the vehicle section, in the order of INTERFACES section 4.
-const std::array<VehicleKey, 6>& VehicleKeys();
-/// Whether two values of a vehicle key are the same (relative tolerance 1e-9).
-bool SameVehicleValue(double a, double b);
-/// The first key (VehicleKeys order) whose values differ between `a` and `b`; null when none.
-const VehicleKey* FirstDifferingKey(const VehicleOptions& a, const VehicleOptions& b);
+/// Throws ssta::Error "<a_says> vehicle.<key> <a's value>, but <b_says> <b's value><b_note>;
+/// <advice>" at the first key (Fields order) whose values differ between `a` and `b` (relative tolerance
+/// 1e-9); returns when they are the same vehicle. Classes fused or scored for one vehicle must
+/// not meet another's: every such check reads the same.
+void RequireSameVehicle(const VehicleOptions& a, const std::string& a_says, const VehicleOptions& b,
+                        const std::string& b_says, const std::string& b_note, const std::string& advice);
 
 }  // namespace ssta

@@ -20,6 +20,13 @@ class InternalError : public std::logic_error {
   explicit InternalError(const std::string& message) : std::logic_error(message) {}
 };
 
+/// Sets `*error` (when not null) to `message` and returns false: how every IsValid(std::string*
+/// error) reports the key at fault.
+inline bool Fail(std::string* error, const std::string& message) {
+  if (error) *error = message;
+  return false;
+}
+
 namespace internal {
 [[noreturn]] void FailCheck(const char* condition, const char* file, int line,
                             const std::string& message);

@@ -61,11 +61,11 @@ struct GridEvalSummary {
   ClassGrid truth_grid;      ///< as read (for reports)
   ClassGrid predicted_grid;  ///< as read (for reports)
   /// Where the sequence has poses (SEQ/pose0/data.csv): the vehicle's positions, the file
-  /// and the score by distance from them in bands of kDistanceBand_m (ScoreGridByDistance).
+  /// and the score by distance from them in bands of kDistanceBandM (ScoreGridByDistance).
   std::vector<Eigen::Vector2d> path;
   std::string path_source;
   std::vector<DistanceBand> by_distance;
-  static constexpr double kDistanceBand_m = 2.0;
+  static constexpr double kDistanceBandM = 2.0;
 
   std::string BriefReport() const;
   /// {"kind": "grid", "unit": "cells", "prediction", "truth", "truth_grid": {width, height,

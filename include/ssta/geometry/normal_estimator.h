@@ -3,6 +3,7 @@
 #include <memory>
 #include <string>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/image.h"
 
 namespace ssta {
@@ -82,8 +83,9 @@ struct NormalOptions {
   /// starts its integral rows at the band, and box sums are exact integer differences.
   int threads = 0;
 
-  /// On failure writes a message starting with the offending key (e.g.
-  /// "smoothing_size_px: must be in [3, 201]") to *error when error is not null.
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<NormalOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

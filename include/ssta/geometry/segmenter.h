@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/image.h"
 
 namespace ssta {
@@ -38,8 +39,9 @@ struct SegmenterOptions {
   /// stops that chaining, and lets roughness_deg be loose enough for stereo noise.
   double max_segment_angle_deg = 10.0;
 
-  /// On failure writes a message starting with the offending key (e.g.
-  /// "roughness_deg: must be in (0, 90) degrees") to *error when error is not null.
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<SegmenterOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

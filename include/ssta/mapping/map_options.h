@@ -6,6 +6,7 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/analysis/vehicle_options.h"
 
 namespace ssta {
@@ -69,8 +70,9 @@ struct MapOptions {
   /// stays until frames vote it otherwise. false: every voxel a ray passes takes the miss.
   bool free_space_keeps_traversable = true;
 
-  /// True when every field is in range; otherwise `*error` (when not null) gets a message that
-  /// starts with the key, e.g. "occupancy_hit_prob: must be in (0.5, 1)".
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<MapOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 
@@ -89,6 +91,9 @@ struct MappingOptions {
   /// stereo.subpixel_window_px already refines it, or with a given (oracle) disparity.
   int subpixel_window_px = 7;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<MappingOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

@@ -44,7 +44,10 @@ void ApplyConfigFile(const std::string& path, Config* config);
 /// Defaults overlaid with `path` (ApplyConfigFile).
 Config LoadConfig(const std::string& path);
 
-/// The config as YAML text (every key, as ApplyConfigFile reads it back).
+/// The config as YAML text (every key, as ApplyConfigFile reads it back exactly).
 std::string ConfigToYaml(const Config& config);
+
+/// The same with each key's unit and meaning as a comment (`ssta config`, config/default.yaml).
+std::string ConfigToCommentedYaml(const Config& config);
 
 }  // namespace ssta

@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include "ssta/core/option_fields.h"
+
 namespace ssta {
 
 /// Which direction the ground normal is expected along, in the body frame (YAML
@@ -89,7 +91,9 @@ struct RefinementOptions {
   /// with a usable ground plane [frames].
   int solve_every_frames = 10;
 
-  /// Checks every field; the message starts with the key name ("max_range_m: ...").
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<RefinementOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

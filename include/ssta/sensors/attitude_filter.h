@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/io/sequence.h"
 
 namespace ssta {
@@ -31,6 +32,9 @@ struct AttitudeFilterOptions {
   /// 0.08 rad/s at rest, 4.5 degrees. A start that only rotates about the vertical is not told
   /// apart from rest: the yaw rate is then taken as bias and unlearnt over kp/ki.
   bool init_gyro_bias = true;
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<AttitudeFilterOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/io/sequence.h"
 #include "ssta/sensors/attitude_filter.h"
 
@@ -25,6 +26,9 @@ enum class GravitySource {
 struct GravityOptions {
   GravitySource source = GravitySource::kAuto;
   Eigen::Vector3d up_camera{0.0, -1.0, 0.0};  ///< for source "fixed": up in cam0 (y down)
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<GravityOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

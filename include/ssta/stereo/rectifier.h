@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/image.h"
 #include "ssta/io/camera_calibration.h"
 
@@ -23,7 +24,9 @@ struct RectifierOptions {
   /// (k1 = -0.28): alpha 1 gives f = 313 px and a 645x348 common area (a wider view than alpha
   /// 0's), alpha 0.5 f = 375 px and 752x416, alpha 0 f = 436 px and no crop at all.
   double alpha = 1.0;
-  /// On failure writes a message that starts with the key name and returns false.
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<RectifierOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

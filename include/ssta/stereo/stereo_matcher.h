@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/image.h"
 
 namespace ssta {
@@ -103,8 +104,9 @@ struct StereoMatcherOptions {
   /// docs/performance.md. min_texture applies at full resolution.
   int downscale = 1;
 
-  /// On failure writes a message that starts with the key name (e.g. "num_disparities: ...")
-  /// and returns false.
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<StereoMatcherOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 

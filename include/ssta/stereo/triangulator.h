@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "ssta/core/option_fields.h"
 #include "ssta/core/image.h"
 #include "ssta/stereo/rectifier.h"
 
@@ -11,8 +12,9 @@ namespace ssta {
 struct TriangulationOptions {
   double min_range_m = 0.3;   ///< points nearer than this (depth Z) become NaN [m]
   double max_range_m = 25.0;  ///< points farther than this (depth Z) become NaN [m]
-  /// Requires 0 <= min_range_m < max_range_m, both finite. On failure writes a message that
-  /// starts with the key name and returns false.
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<TriangulationOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
 
