@@ -65,18 +65,18 @@ void RegisterBuildMap(CLI::App& app) {
                 "(frames already in the map are not fused again)");
   cmd->add_flag("--static", args->options.static_platform,
                 "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
-  cmd->add_option("--max-frames", args->options.max_frames, "fuse at most N frames (0: all)");
-  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--max-frames", args->options.frames.max_frames, "fuse at most N frames (0: all)");
+  cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file")->check(OutputFile());
   cmd->add_flag("--refine", args->refine,
                 "refine cam0's mount pitch and roll online from the ground (sets refinement.online; "
                 "docs/mount_calibration.md)");
-  cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
+  cmd->add_flag("--oracle-disparity", args->options.oracles.disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
-  cmd->add_flag("--oracle-labels", args->options.oracle_labels,
+  cmd->add_flag("--oracle-labels", args->options.oracles.labels,
                 "fuse the sequence's gt/labels where they have a verdict instead of the frame's classes "
                 "(synthetic sequences; with --oracle-disparity: the fusion alone)");
-  cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
+  cmd->add_flag("--strict", args->options.frames.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--sequential", args->sequential,
                 "classify and fuse one frame after the other (default: fuse each frame on a second thread while the "
                 "next is classified; the same map)");

@@ -90,8 +90,8 @@ void RegisterCalibrateMount(CLI::App& app) {
   cmd->add_option("--out-cam1", args->out_cam1, "with --out: where the cam1 sensor.yaml goes instead");
   cmd->add_option("--out-dir", args->out_dir, "instead of --out: write DIR/cam0/sensor.yaml and DIR/cam1/sensor.yaml");
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
-  cmd->add_option("--max-frames", args->options.max_frames, "use at most N frames (0: all)");
-  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--max-frames", args->options.frames.max_frames, "use at most N frames (0: all)");
+  cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_option("--ground-reference", args->ground_reference,
                   "body: the ground is parallel to the plane under the wheels (body x-y; a z-up body); "
                   "gravity: the ground is level, its normal is up from the IMU-corrected pose "

@@ -82,12 +82,12 @@ void RegisterClassify(CLI::App& app) {
   }
   cmd->add_option("--out", args->options.out_dir, "output folder")->required()->check(OutputFolder());
   cmd->add_option("--config", args->config, "YAML config (see config/default.yaml); repeatable, later files win; overrides the sequence's vehicle.yaml");
-  cmd->add_option("--max-frames", args->options.max_frames, "classify at most N frames (0: all)");
-  cmd->add_option("--every", args->options.every, "use every N-th frame");
+  cmd->add_option("--max-frames", args->options.frames.max_frames, "classify at most N frames (0: all)");
+  cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png (16 bit, disparity * 256, 0 = none: KITTI's and gt/'s convention) and disparity_colour/<ts>.png");
   cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
-  cmd->add_flag("--strict", args->options.strict, "any frame that cannot be used is an error, not a skip with a reason");
+  cmd->add_flag("--strict", args->options.frames.strict, "any frame that cannot be used is an error, not a skip with a reason");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report");
   cmd->callback([args, cmd] {
     std::string error;

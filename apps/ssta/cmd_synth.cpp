@@ -166,7 +166,7 @@ void RegisterSynth(CLI::App& app) {
     std::string error;
     if (!options->IsValid(&error)) throw Error(NameTheOption(error));
     const bool tty = isatty(fileno(stderr)) != 0;
-    synth::SynthProgress progress;
+    Progress progress;
     if (tty) {
       progress = [](int done, int total) {
         std::cerr << "\rsynth: frame " << done << " / " << total << std::flush;

@@ -1,4 +1,3 @@
-#include "ssta/mapping/frame_points.h"
 #include "ssta/bench/pipeline_bench.h"
 
 #include <sys/resource.h>
@@ -18,11 +17,11 @@
 #include "core/json_writer.h"
 #include "core/ordered_worker.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/frame_points.h"
 #include "ssta/mapping/traversability_map.h"
-#include "ssta/sensors/attitude_filter.h"
-#include "ssta/pipeline/frame_pipeline.h"
-#include "ssta/sensors/gravity_provider.h"
 #include "ssta/pipeline/map_builder.h"
+#include "ssta/pipeline/sequence_run.h"
+#include "ssta/sensors/attitude_filter.h"
 #include "ssta/refinement/ground_evidence.h"
 #include "ssta/refinement/online_mount_refiner.h"
 
@@ -68,6 +67,11 @@ void WriteStats(const SampleStats& s, internal::JsonWriter* j) {
   j->EndObject();
 }
 
+/// The frame's pose as build-map takes it; a frame without one at the origin, levelled by gravity.
+Eigen::Isometry3d PoseOrLevelled(const SequenceRun& run, std::int64_t t) {
+  return run.gravity().WorldTBodyAt(t).value_or(CorrectRollPitch(Eigen::Isometry3d::Identity(), run.gravity().UpInBody(t)));
+}
+
 /// The second, pipelined pass of RunPipelineBench (see there).
 void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup, int measured, BenchReport* report) {
   using Clock = std::chrono::steady_clock;
@@ -77,19 +81,12 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
     Eigen::Isometry3d world_T_body;
     std::int64_t t;
   };
-  FramePipeline pipeline(sequence.calibration(), config);
-  const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
-  Eigen::Isometry3d body_T_rectified = body_T_camera;
-  body_T_rectified.linear() = body_T_camera.linear() * pipeline.geometry().rectified_R_camera.transpose();
+  SequenceRun run(sequence, config, {1, frames, false});
+  const RigChain chain(sequence.calibration().left.body_T_camera, run.geometry());
   std::vector<Input> inputs;
-  for (int k = 0; k < frames; ++k) {
-    const StereoFrame& frame = sequence.frames()[static_cast<std::size_t>(k)];
+  for (const StereoFrame& frame : run.frames()) {
     const std::int64_t t = frame.timestamp_ns;
-    inputs.push_back({ReadGreyImage(frame.left_path), ReadGreyImage(frame.right_path),
-                      gravity.WorldTBodyAt(t).value_or(
-                          CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t))),
-                      t});
+    inputs.push_back({ReadGreyImage(frame.left_path), ReadGreyImage(frame.right_path), PoseOrLevelled(run, t), t});
   }
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
@@ -101,13 +98,11 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
     for (std::size_t k = 0; k < inputs.size(); ++k) {
       const Input& in = inputs[k];
       started[k] = Clock::now();
-      const Eigen::Vector3d up_camera =
-          (body_T_camera.linear().transpose() * (in.world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()))
-              .normalized();
-      auto result = std::make_shared<FrameResult>(pipeline.Process(in.left, in.right, up_camera));
-      const Eigen::Isometry3d world_T_rectified = in.world_T_body * body_T_rectified;
+      const Eigen::Vector3d up_camera = chain.UpInCamera(UpInBody(in.world_T_body));
+      auto result = std::make_shared<FrameResult>(run.pipeline().Process(in.left, in.right, up_camera));
+      const Eigen::Isometry3d world_T_rectified = chain.WorldTRectified(in.world_T_body);
       fusion.Submit([&, k, result, world_T_rectified] {
-        MapPointsOfFrame(*result, world_T_rectified, config.map, pipeline.geometry(), &map_points);
+        MapPointsOfFrame(*result, world_T_rectified, config.map, run.geometry(), &map_points);
         map.InsertFrame(map_points, world_T_rectified.translation(), inputs[k].t);
         finished[k] = Clock::now();
       });
@@ -281,11 +276,9 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   const int measured = options.max_frames > 0 ? std::min(options.max_frames, available - options.warmup_frames)
                                               : available - options.warmup_frames;
 
-  FramePipeline pipeline(sequence.calibration(), config);
-  const GravityProvider gravity(sequence, config.gravity, config.attitude);
+  SequenceRun run(sequence, config, {1, options.warmup_frames + measured, false});
   const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
-  Eigen::Isometry3d body_T_rectified = body_T_camera;
-  body_T_rectified.linear() = body_T_camera.linear() * pipeline.geometry().rectified_R_camera.transpose();
+  const RigChain chain(body_T_camera, run.geometry());
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
   TraversabilityMap map(config.map.fusion, metadata);
@@ -312,26 +305,20 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   // The bench keeps the configured mount; it measures the cost only.
   std::optional<OnlineMountRefiner> refiner;
   const std::size_t refine_row = report.rows.size();
-  const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
   if (config.refinement.online) {
     refiner.emplace(config.refinement, body_T_camera, body_T_camera);
     report.rows.push_back({"refine (online)", {}, {}});
   }
 
   for (int k = 0; k < options.warmup_frames + measured; ++k) {
-    const StereoFrame& frame = sequence.frames()[static_cast<std::size_t>(k)];
+    const StereoFrame& frame = run.frames()[static_cast<std::size_t>(k)];
     const StereoImages images = ReadStereoImages(frame, sequence.calibration());
-    const ImageU8& left = images.left;
-    const ImageU8& right = images.right;
     const std::int64_t t = frame.timestamp_ns;
-    const Eigen::Isometry3d world_T_body =
-        gravity.WorldTBodyAt(t).value_or(CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t)));
-    const Eigen::Vector3d up_camera =
-        (body_T_camera.linear().transpose() * (world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()))
-            .normalized();
+    const Eigen::Isometry3d world_T_body = PoseOrLevelled(run, t);
+    const Eigen::Vector3d up_camera = chain.UpInCamera(UpInBody(world_T_body));
 
     const Timer frame_timer;
-    FrameResult result = pipeline.Process(left, right, up_camera);
+    FrameResult result = run.pipeline().Process(images.left, images.right, up_camera);
     const double frame_wall = frame_timer.WallMs(), frame_cpu = frame_timer.CpuMs();
     result.timestamp_ns = t;
 
@@ -339,8 +326,8 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     std::size_t points_given = 0;
     if (options.with_map) {
       const Timer map_timer;
-      const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
-      MapPointsOfFrame(result, world_T_rectified, config.map, pipeline.geometry(), &points);
+      const Eigen::Isometry3d world_T_rectified = chain.WorldTRectified(world_T_body);
+      MapPointsOfFrame(result, world_T_rectified, config.map, run.geometry(), &points);
       map.InsertFrame(points, world_T_rectified.translation(), t);
       map_wall = map_timer.WallMs();
       map_cpu = map_timer.CpuMs();
@@ -349,8 +336,8 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     double refine_wall = 0, refine_cpu = 0;
     if (refiner) {
       const Timer refine_timer;
-      const Eigen::Vector3d up_body = world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ();
-      refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement));
+      refiner->AddFrame(ExtractGroundEvidence(result, chain.camera_R_rectified(), UpInBody(world_T_body),
+                                              config.refinement));
       refine_wall = refine_timer.WallMs();
       refine_cpu = refine_timer.CpuMs();
     }

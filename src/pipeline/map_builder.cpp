@@ -9,14 +9,10 @@
 #include <sstream>
 
 #include "core/json_escape.h"
-#include "core/run_both.h"
 #include "core/ordered_worker.h"
-#include "ssta/io/image_io.h"
 #include "ssta/mapping/frame_points.h"
 #include "ssta/sensors/gravity_provider.h"
-#include "ssta/pipeline/sequence_classifier.h"
 #include "ssta/refinement/ground_evidence.h"
-#include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
 namespace {
@@ -83,237 +79,243 @@ std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, con
 
 bool BuildMapOptions::IsValid(std::string* error) const {
   if (map_path.empty()) return Fail(error, "map: a map file is required");
-  if (max_frames < 0) return Fail(error, "max-frames: must not be negative");
-  if (every < 1) return Fail(error, "every: must be at least 1");
-  return true;
+  return frames.IsValid(error);
 }
 
-BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
-                         const BuildMapOptions& options, const BuildProgress& progress,
-                         const std::atomic<bool>* stop) {
-  std::string error;
-  if (!options.IsValid(&error)) throw Error(error);
-  if (!config.IsValid(&error)) throw Error("config: " + error);
-  if (!options.static_platform && sequence.poses().empty()) {
-    if (!sequence.pose_path().empty()) {  // the file is there, with a header and no rows
-      throw Error(sequence.pose_path() + ": lists no poses; use --static if the platform stands still");
-    }
-    throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
-                "use --static if the platform stands still");
-  }
-  if (!options.static_platform) {
-    sequence.RequireFramesWithin(sequence.poses().front().timestamp_ns, sequence.poses().back().timestamp_ns,
-                                 sequence.pose_path(), "poses");
-  }
-  FramePipeline pipeline(sequence.calibration(), config);
-  const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  bool same_sequence = false;
-  TraversabilityMap map = OpenMap(options, config, sequence_name,
-                                  CalibrationSummary(sequence.calibration(), pipeline.geometry()), &same_sequence);
-  // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
-  const bool continues_this_sequence = options.resume && map.frames_inserted() > 0 && same_sequence;
-  const std::int64_t fused_up_to = map.last_timestamp_ns();
+namespace {
 
-  // cam0's mount: the configured one, or the online refinement's once a solve is applied.
-  const Eigen::Isometry3d body_T_camera_configured = sequence.calibration().left.body_T_camera;
-  const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
-  std::optional<OnlineMountRefiner> refiner;
-  bool resumed_mount = false;  // starts from the mount a resumed map recorded
-  if (config.refinement.online) {
-    const std::optional<Eigen::Isometry3d> recorded = RecordedMount(map, body_T_camera_configured);
-    resumed_mount = recorded.has_value();
-    refiner.emplace(config.refinement, body_T_camera_configured, recorded.value_or(body_T_camera_configured));
+/// One build-map run: the frames of a sequence classified and fused into a map, in frame order.
+/// Everything that touches the map or the summary runs as a job on `fusion_`, so the map and
+/// the summary are those of the sequential loop; pipelined, the fusion of frame k overlaps the
+/// classification of frame k+1. The refiner and the mount in use stay on the calling thread:
+/// each job gets its pose by value.
+class MapBuilder {
+ public:
+  MapBuilder(const Sequence& sequence, const std::string& sequence_name, const Config& config,
+             const BuildMapOptions& options, const Progress& progress, const std::atomic<bool>* stop)
+      : config_(config),
+        options_(options),
+        progress_(progress),
+        stop_(stop),
+        run_(RequirePoses(sequence, options), config, options.frames, options.oracles),
+        chain_(sequence.calibration().left.body_T_camera, run_.geometry()),
+        map_(OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), run_.geometry()),
+                     &same_sequence_)),
+        fusion_(options.pipelined ? 1 : 0) {
+    // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
+    continues_this_sequence_ = options.resume && map_.frames_inserted() > 0 && same_sequence_;
+    fused_up_to_ = map_.last_timestamp_ns();
+    StartRefinement();
+    summary_.frames_listed = run_.frames_listed();
+    summary_.gravity = run_.gravity().Describe();
+    summary_.skipped = run_.sequence_skips();
   }
-  Eigen::Isometry3d body_T_camera = refiner ? refiner->body_T_camera() : body_T_camera_configured;
-  // world_T_rectified = world_T_body * body_T_cam0 * cam0_T_rectified.
-  auto rectified_in_body = [&] {
-    Eigen::Isometry3d body_T_rectified = body_T_camera;
-    body_T_rectified.linear() = body_T_camera.linear() * camera_R_rectified;
-    return body_T_rectified;
-  };
-  Eigen::Isometry3d body_T_rectified = rectified_in_body();
 
-  const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
-  BuildMapSummary summary;
-  summary.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
-  summary.gravity = gravity.Describe();
-  summary.skipped = sequence.skipped();
-  // Strict mode stops at the first unusable frame, once: the per-frame handlers below turn
-  // errors into skips, so they let this one through (it is still an ssta::Error for the CLI).
-  struct StrictStop : Error {
-    using Error::Error;
-  };
-  // The map file is written only once this run has fused a frame: a run that fuses nothing
-  // (every frame skipped, or a strict stop at the first) leaves the file as it was.
-  auto save_if_fused = [&] {
-    if (summary.frames_used > 0) map.Save(options.map_path);
-  };
-  auto fail_if_strict = [&](std::int64_t t, const std::string& reason) {
-    if (!options.strict) return;
-    save_if_fused();  // nothing fused so far is lost
-    throw StrictStop(sequence.root() + ": frame " + std::to_string(t) + ": " + reason +
-                     " (strict: no frame may be skipped)");
-  };
-  if (!summary.skipped.empty()) fail_if_strict(summary.skipped.front().timestamp_ns, summary.skipped.front().reason);
-  // Everything that touches the map or the summary runs as a job on `fusion`, in frame order,
-  // so the map and the summary are those of the sequential loop; with options.pipelined the
-  // fusion of frame k overlaps the classification of frame k+1. The refiner and the mount in
-  // use stay on this thread: each job gets its pose by value. Declared after them: its
-  // destructor finishes the queued jobs before they go.
-  internal::OrderedWorker fusion(options.pipelined ? 1 : 0);
-  // The points of the frame being fused, kept from frame to frame (~5 MB at VGA; the fusion
-  // jobs run one at a time).
-  std::vector<ClassifiedPoint> map_points;
-  // A frame that cannot be used: an error in strict mode, else a skip with its reason. On the
-  // fusion thread (it touches the summary); `skip` queues it from this one.
-  auto record_skip = [&](std::int64_t t, const std::string& reason) {
-    fail_if_strict(t, reason);
-    summary.skipped.push_back({t, reason});
-  };
-  auto skip = [&](std::int64_t t, const std::string& reason) {
-    fusion.Submit([&, t, reason] { record_skip(t, reason); });
-  };
-  // One frame through the pipeline with the mount in use (gravity in the camera).
-  auto process = [&](const StereoFrame& frame, const Eigen::Vector3d& up_body) {
-    const StereoImages images = ReadStereoImages(frame, sequence.calibration());
-    const Eigen::Vector3d up_camera = (body_T_camera.linear().transpose() * up_body).normalized();
-    auto result = std::make_shared<FrameResult>(
-        options.oracle_disparity ? pipeline.ProcessWithDisparity(images.left, images.right,
-                                                                 ReadTrueDisparity(sequence, frame.timestamp_ns), up_camera)
-                                 : pipeline.Process(images.left, images.right, up_camera));
-    result->timestamp_ns = frame.timestamp_ns;
-    if (options.oracle_labels) {
-      ApplyTrueLabels(sequence, frame.timestamp_ns, pipeline.geometry(), &result->analysis.labels);
+  BuildMapSummary Run() {
+    const auto start = std::chrono::steady_clock::now();
+    const int total = static_cast<int>(run_.frames().size());
+    int done = 0;
+    for (const StereoFrame& frame : run_.frames()) {
+      if (stop_ && stop_->load()) {
+        summary_.interrupted = true;
+        break;
+      }
+      if (continues_this_sequence_ && frame.timestamp_ns <= fused_up_to_) {
+        ++summary_.frames_already_in_map;
+      } else {
+        ProcessFrame(frame);
+      }
+      ++done;
+      if (config_.map.checkpoint_every_frames > 0 && done % config_.map.checkpoint_every_frames == 0) {
+        fusion_.Submit([this] { SaveIfFused(); });
+      }
+      if (progress_) progress_(done, total);
     }
-    return result;
-  };
-  auto fuse = [&](std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body) {
-    const Eigen::Isometry3d world_T_rectified = world_T_body * body_T_rectified;
-    fusion.Submit([&, result, world_T_rectified] {
-      const std::int64_t t = result->timestamp_ns;
-      InsertStats stats;
-      try {
-        MapPointsOfFrame(*result, world_T_rectified, config.map, pipeline.geometry(), &map_points);
-        stats = map.InsertFrame(map_points, world_T_rectified.translation(), t);
-      } catch (const Error& e) {
-        record_skip(t, e.what());
-        return;
-      }
-      if (!stats.inserted) {
-        record_skip(t, "map rejected the frame: " + stats.reason);
-        return;
-      }
-      ++summary.frames_used;
-      summary.points_inserted += stats.points_hit;
-      if (!result->analysis.quality.passed) summary.quality_failed.push_back({t, result->analysis.quality.reason});
-    });
-  };
-  // The frame's ground evidence to the refiner; an applied solve serves the frames after it.
-  auto refine = [&](const FrameResult& result, const Eigen::Vector3d& up_body) {
-    if (!refiner->AddFrame(ExtractGroundEvidence(result, camera_R_rectified, up_body, config.refinement))) return;
-    body_T_camera = refiner->body_T_camera();
-    body_T_rectified = rectified_in_body();
-    const RefinedMount mount{body_T_camera_configured, body_T_camera};
-    fusion.Submit([&, mount] {
-      MapMetadata metadata = map.metadata();
-      metadata.refined_mount = mount;
-      map.set_metadata(metadata);
-    });
-  };
-  // Warm-up: until the first solve is applied (at most window_frames frames), frames give
-  // evidence but are not fused; then they are processed again with the refined mount and fused,
-  // so the map holds no frame seen through the configured mount when refinement succeeds. A
-  // start mount recorded by a resumed map needs no warm-up.
+    FuseHeldFrames();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
+    fusion_.Drain();
+    Finish(start);
+    return summary_;
+  }
+
+ private:
+  /// The frames of frames past the warm-up are fused as they come; during the warm-up of the
+  /// online refinement they are held (see FuseHeldFrames).
   struct HeldFrame {
     StereoFrame frame;
     Eigen::Isometry3d world_T_body;
   };
-  std::vector<HeldFrame> held;
-  bool warming_up = refiner && !resumed_mount;
-  int reprocessed = 0;
-  auto fuse_held = [&] {
-    warming_up = false;
-    for (const HeldFrame& h : held) {
-      try {
-        fuse(process(h.frame, h.world_T_body.linear().transpose() * Eigen::Vector3d::UnitZ()), h.world_T_body);
-        ++reprocessed;
-      } catch (const StrictStop&) {
-        throw;
-      } catch (const Error& e) {
-        skip(h.frame.timestamp_ns, e.what());
+
+  static const Sequence& RequirePoses(const Sequence& sequence, const BuildMapOptions& options) {
+    std::string error;
+    if (!options.IsValid(&error)) throw Error(error);
+    if (options.static_platform) return sequence;
+    if (sequence.poses().empty()) {
+      if (!sequence.pose_path().empty()) {  // the file is there, with a header and no rows
+        throw Error(sequence.pose_path() + ": lists no poses; use --static if the platform stands still");
       }
+      throw Error(sequence.root() + ": the sequence has no poses (pose0/ or state_groundtruth_estimate0/); "
+                  "use --static if the platform stands still");
     }
-    held.clear();
-  };
-  const auto start = std::chrono::steady_clock::now();
-  int done = 0, already_in_map = 0;
-  for (const StereoFrame& frame : todo) {
-    if (stop && stop->load()) {
-      summary.interrupted = true;
-      break;
-    }
+    sequence.RequireFramesWithin(sequence.poses().front().timestamp_ns, sequence.poses().back().timestamp_ns,
+                                 sequence.pose_path(), "poses");
+    return sequence;
+  }
+
+  /// cam0's mount: the configured one, or the online refinement's once a solve is applied. A
+  /// resumed map that recorded a refined mount for this same configured one starts from it and
+  /// needs no warm-up.
+  void StartRefinement() {
+    if (!config_.refinement.online) return;
+    const Eigen::Isometry3d configured = chain_.body_T_camera();
+    const std::optional<Eigen::Isometry3d> recorded = RecordedMount(map_, configured);
+    refiner_.emplace(config_.refinement, configured, recorded.value_or(configured));
+    chain_.set_body_T_camera(refiner_->body_T_camera());
+    warming_up_ = !recorded.has_value();
+  }
+
+  /// Poses, classifies and fuses (or holds) one frame; a frame that cannot be used is skipped
+  /// with its reason, or stops a strict run.
+  void ProcessFrame(const StereoFrame& frame) {
     const std::int64_t t = frame.timestamp_ns;
-    if (continues_this_sequence && t <= fused_up_to) {
-      ++already_in_map;
-      ++done;
-      if (progress) progress(done, static_cast<int>(todo.size()));
-      continue;
-    }
-    std::optional<Eigen::Isometry3d> world_T_body;
-    std::string no_attitude;  // a frame the IMU in use does not cover: skipped
     try {
-      if (options.static_platform) {
-        world_T_body = CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity.UpInBody(t));
-      } else {
-        world_T_body = gravity.WorldTBodyAt(t);
-      }
-    } catch (const Error& e) {
-      no_attitude = e.what();
-    }
-    if (!no_attitude.empty()) {
-      skip(t, no_attitude);
-    } else if (!world_T_body) {
-      skip(t, "no pose: " + sequence.NoPoseReason(t));
-    } else {
-      try {
-        const Eigen::Vector3d up_body = (world_T_body->linear().transpose() * Eigen::Vector3d::UnitZ()).normalized();
-        const std::shared_ptr<FrameResult> result = process(frame, up_body);
-        if (warming_up) {
-          held.push_back({frame, *world_T_body});
-          refine(*result, up_body);
-          if (refiner->summary().applied > 0 || static_cast<int>(held.size()) >= config.refinement.window_frames) {
-            fuse_held();
-          }
-        } else {
-          fuse(result, *world_T_body);
-          if (refiner) refine(*result, up_body);
+      const Eigen::Isometry3d world_T_body = run_.WorldTBody(t, options_.static_platform);
+      const Eigen::Vector3d up_body = UpInBody(world_T_body);
+      auto result = std::make_shared<FrameResult>(run_.Classify(frame, chain_.UpInCamera(up_body)));
+      if (warming_up_) {
+        held_.push_back({frame, world_T_body});
+        Refine(*result, up_body);
+        if (refiner_->summary().applied > 0 || static_cast<int>(held_.size()) >= config_.refinement.window_frames) {
+          FuseHeldFrames();
         }
+      } else {
+        Fuse(result, world_T_body);
+        if (refiner_) Refine(*result, up_body);
+      }
+    } catch (const StrictStop&) {
+      throw;
+    } catch (const Error& e) {
+      Skip(t, e.what());
+    }
+  }
+
+  /// Queues the fusion of `result` seen from `world_T_body` through the mount in use now.
+  void Fuse(std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body) {
+    const Eigen::Isometry3d world_T_rectified = chain_.WorldTRectified(world_T_body);
+    fusion_.Submit([this, result, world_T_rectified] {
+      const std::int64_t t = result->timestamp_ns;
+      InsertStats stats;
+      try {
+        MapPointsOfFrame(*result, world_T_rectified, config_.map, run_.geometry(), &map_points_);
+        stats = map_.InsertFrame(map_points_, world_T_rectified.translation(), t);
+      } catch (const Error& e) {
+        RecordSkip(t, e.what());
+        return;
+      }
+      if (!stats.inserted) {
+        RecordSkip(t, "map rejected the frame: " + stats.reason);
+        return;
+      }
+      ++summary_.frames_used;
+      summary_.points_inserted += stats.points_hit;
+      if (!result->analysis.quality.passed) summary_.quality_failed.push_back({t, result->analysis.quality.reason});
+    });
+  }
+
+  /// The frame's ground evidence to the refiner; an applied solve serves the frames after it
+  /// and is recorded in the map's metadata.
+  void Refine(const FrameResult& result, const Eigen::Vector3d& up_body) {
+    if (!refiner_->AddFrame(ExtractGroundEvidence(result, chain_.camera_R_rectified(), up_body, config_.refinement))) {
+      return;
+    }
+    const RefinedMount mount{run_.sequence().calibration().left.body_T_camera, refiner_->body_T_camera()};
+    chain_.set_body_T_camera(mount.refined);
+    fusion_.Submit([this, mount] {
+      MapMetadata metadata = map_.metadata();
+      metadata.refined_mount = mount;
+      map_.set_metadata(metadata);
+    });
+  }
+
+  /// Ends the warm-up: the frames held until the first solve (at most window_frames) are
+  /// processed again with the mount in use and fused, so the map holds no frame seen through
+  /// the configured mount when the refinement succeeds.
+  void FuseHeldFrames() {
+    warming_up_ = false;
+    for (const HeldFrame& h : held_) {
+      try {
+        const Eigen::Vector3d up_body = UpInBody(h.world_T_body);
+        Fuse(std::make_shared<FrameResult>(run_.Classify(h.frame, chain_.UpInCamera(up_body))), h.world_T_body);
+        ++reprocessed_;
       } catch (const StrictStop&) {
         throw;
       } catch (const Error& e) {
-        skip(t, e.what());
+        Skip(h.frame.timestamp_ns, e.what());
       }
     }
-    ++done;
-    if (config.map.checkpoint_every_frames > 0 && done % config.map.checkpoint_every_frames == 0) {
-      fusion.Submit([&] { save_if_fused(); });
+    held_.clear();
+  }
+
+  /// A frame that cannot be used, queued behind the frames before it.
+  void Skip(std::int64_t t, const std::string& reason) {
+    fusion_.Submit([this, t, reason] { RecordSkip(t, reason); });
+  }
+
+  /// On the fusion thread: an error in strict mode (nothing fused so far is lost), else a skip.
+  void RecordSkip(std::int64_t t, const std::string& reason) {
+    try {
+      run_.RequireNotStrict(t, reason);
+    } catch (const StrictStop&) {
+      SaveIfFused();
+      throw;
     }
-    if (progress) progress(done, static_cast<int>(todo.size()));
+    summary_.skipped.push_back({t, reason});
   }
-  fuse_held();  // a sequence (or run) shorter than the warm-up: fused with the mount in use
-  fusion.Drain();
-  summary.frames_already_in_map = already_in_map;
-  save_if_fused();
-  summary.map_nodes = map.NumNodes();
-  std::error_code no_file;
-  const std::uintmax_t bytes = std::filesystem::file_size(options.map_path, no_file);
-  summary.map_file_bytes = no_file ? 0 : static_cast<std::size_t>(bytes);
-  summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (refiner) {
-    summary.refinement = refiner->summary();
-    summary.refinement->frames_reprocessed = reprocessed;
+
+  /// The map file is written only once this run has fused a frame: a run that fuses nothing
+  /// (every frame skipped, or a strict stop at the first) leaves the file as it was.
+  void SaveIfFused() {
+    if (summary_.frames_used > 0) map_.Save(options_.map_path);
   }
-  return summary;
+
+  void Finish(std::chrono::steady_clock::time_point start) {
+    SaveIfFused();
+    summary_.map_nodes = map_.NumNodes();
+    std::error_code no_file;
+    const std::uintmax_t bytes = std::filesystem::file_size(options_.map_path, no_file);
+    summary_.map_file_bytes = no_file ? 0 : static_cast<std::size_t>(bytes);
+    summary_.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (refiner_) {
+      summary_.refinement = refiner_->summary();
+      summary_.refinement->frames_reprocessed = reprocessed_;
+    }
+  }
+
+  const Config& config_;
+  const BuildMapOptions& options_;
+  const Progress& progress_;
+  const std::atomic<bool>* stop_;
+  SequenceRun run_;
+  RigChain chain_;
+  bool same_sequence_ = false;
+  TraversabilityMap map_;
+  bool continues_this_sequence_ = false;
+  std::int64_t fused_up_to_ = 0;
+  std::optional<OnlineMountRefiner> refiner_;
+  bool warming_up_ = false;
+  std::vector<HeldFrame> held_;
+  int reprocessed_ = 0;
+  BuildMapSummary summary_;
+  /// The points of the frame being fused, kept from frame to frame (the jobs run one at a time).
+  std::vector<ClassifiedPoint> map_points_;
+  /// Declared last: its destructor finishes the queued jobs before the members they use go.
+  internal::OrderedWorker fusion_;
+};
+
+}  // namespace
+
+BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
+                         const BuildMapOptions& options, const Progress& progress, const std::atomic<bool>* stop) {
+  return MapBuilder(sequence, sequence_name, config, options, progress, stop).Run();
 }
 
 std::string BuildMapSummary::BriefReport() const {

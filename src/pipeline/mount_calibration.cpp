@@ -5,71 +5,57 @@
 
 #include "refinement/refinement_json.h"
 #include "ssta/core/error.h"
-#include "ssta/io/image_io.h"
-#include "ssta/pipeline/frame_pipeline.h"
-#include "ssta/sensors/gravity_provider.h"
+#include "ssta/pipeline/sequence_run.h"
 
 namespace ssta {
 
 bool MountCalibrationOptions::IsValid(std::string* error) const {
-  if (every < 1) {
-    if (error) *error = "every: must be at least 1";
-    return false;
-  }
-  if (max_frames < 0) {
-    if (error) *error = "max-frames: must not be negative";
-    return false;
-  }
+  if (!frames.IsValid(error)) return false;
   std::string inner;
-  if (!refinement.IsValid(&inner)) {
-    if (error) *error = "refinement." + inner;
-    return false;
-  }
+  if (!refinement.IsValid(&inner)) return Fail(error, "refinement." + inner);
   return true;
 }
 
 MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, const MountCalibrationOptions& options,
-                                const std::function<void(int done, int total)>& progress) {
+                                const Progress& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
-  if (!config.IsValid(&error)) throw Error("config: " + error);
+  SequenceRun run(sequence, config, options.frames);
   const StereoCalibration& rig = sequence.calibration();
-  FramePipeline pipeline(rig, config);
-  const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  const Eigen::Matrix3d camera_R_rectified = pipeline.geometry().rectified_R_camera.transpose();
+  const RigChain chain(rig.left.body_T_camera, run.geometry());
   MountRefiner refiner(options.refinement, rig.left.body_T_camera);
 
   MountCalibration out;
-  out.frames_listed = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
-  out.skipped = sequence.skipped();
-  const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
+  out.frames_listed = run.frames_listed();
+  out.skipped = run.sequence_skips();
   const auto start = std::chrono::steady_clock::now();
-  for (std::size_t i = 0; i < todo.size(); ++i) {
-    const std::int64_t t = todo[i].timestamp_ns;
+  int done = 0;
+  for (const StereoFrame& frame : run.frames()) {
+    const std::int64_t t = frame.timestamp_ns;
     try {
-      const StereoImages images = ReadStereoImages(todo[i], sequence.calibration());
-      const ImageU8& left = images.left;
-      const ImageU8& right = images.right;
       // Gravity through the configured (uncorrected) mount: it only steers the choice of the
       // ground segment, whose points are what the refinement uses.
-      FrameResult frame = pipeline.Process(left, right, gravity.UpInCamera(t));
-      frame.timestamp_ns = t;
+      const FrameResult result = run.Classify(frame, run.gravity().UpInCamera(t));
       ++out.frames_processed;
-      GroundEvidence evidence = ExtractGroundEvidence(frame, camera_R_rectified, gravity.UpInBody(t), options.refinement);
+      GroundEvidence evidence =
+          ExtractGroundEvidence(result, chain.camera_R_rectified(), run.gravity().UpInBody(t), options.refinement);
       if (evidence.usable) {
         refiner.AddFrame(std::move(evidence));
       } else {
         out.skipped.push_back({t, evidence.reason});
       }
+    } catch (const StrictStop&) {
+      throw;
     } catch (const Error& e) {
+      run.RequireNotStrict(t, e.what());
       out.skipped.push_back({t, e.what()});
     }
-    if (progress) progress(static_cast<int>(i + 1), static_cast<int>(todo.size()));
+    if (progress) progress(++done, static_cast<int>(run.frames().size()));
   }
   out.pipeline_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (refiner.NumFrames() == 0) {
     std::ostringstream m;
-    m << sequence.root() << ": no frame has a usable ground plane (" << todo.size() << " tried)";
+    m << sequence.root() << ": no frame has a usable ground plane (" << run.frames().size() << " tried)";
     if (!out.skipped.empty()) m << "; first: " << out.skipped.front().reason;
     throw Error(m.str());
   }

@@ -9,7 +9,6 @@
 #include "ssta/io/file_util.h"
 #include "ssta/io/ground_truth.h"
 #include "ssta/io/image_io.h"
-#include "ssta/sensors/gravity_provider.h"
 #include "ssta/pipeline/frame_report.h"
 
 namespace ssta {
@@ -35,87 +34,51 @@ void Scale(double k, StageTimings* t) {
 
 }  // namespace
 
-void ApplyTrueLabels(const Sequence& sequence, std::int64_t timestamp_ns, const RectifiedGeometry& geometry,
-                     ImageU8* labels) {
-  const std::string path = TruthFramePath(sequence, "labels", timestamp_ns);
-  const ImageU8 truth = ReadTrueLabels(sequence, timestamp_ns);
-  if (truth.width() != geometry.full_width || truth.height() != geometry.full_height) {
-    throw Error(path + ": the true labels are " + std::to_string(truth.width()) + "x" +
-                std::to_string(truth.height()) + ", the frames are " + std::to_string(geometry.full_width) + "x" +
-                std::to_string(geometry.full_height));
-  }
-  SSTA_CHECK(labels->width() == geometry.crop_width && labels->height() == geometry.crop_height,
-             "ApplyTrueLabels: the labels are not of the common area's size");
-  for (int v = 0; v < labels->height(); ++v) {
-    const std::uint8_t* t = truth.row(v + geometry.crop_v0) + geometry.crop_u0;
-    std::uint8_t* out = labels->row(v);
-    for (int u = 0; u < labels->width(); ++u) {
-      if (t[u] >= 1 && t[u] <= 3) out[u] = t[u];
-    }
-  }
-}
-
-
 bool ClassifyOptions::IsValid(std::string* error) const {
   if (out_dir.empty()) return Fail(error, "out: an output folder is required");
-  if (max_frames < 0) return Fail(error, "max-frames: must not be negative");
-  if (every < 1) return Fail(error, "every: must be at least 1");
-  return true;
+  return frames.IsValid(error);
 }
 
-ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
-                                 const ClassifyOptions& options, const ProgressCallback& progress) {
+ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config, const ClassifyOptions& options,
+                                 const Progress& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
-  FramePipeline pipeline(sequence.calibration(), config);
-  const GravityProvider gravity(sequence, config.gravity, config.attitude);
-  // The frames of an earlier, longer run would stay beside this one's and be scored.
-  const int stale_files_removed = RemoveFrameOutputs(options.out_dir);
-  WriteRunConfig(config, options.out_dir);  // creates out_dir
-
-  const std::vector<StereoFrame> todo = SelectFrames(sequence.frames(), options.every, options.max_frames);
-
+  SequenceRun run(sequence, config, options.frames, Oracles{options.oracle_disparity, false});
   ClassifySummary summary;
-  summary.stale_files_removed = stale_files_removed;
-  summary.frames_total = static_cast<int>(sequence.frames().size() + sequence.skipped().size());
-  summary.skipped = sequence.skipped();
-  if (options.strict && !summary.skipped.empty()) {
-    throw Error(sequence.root() + ": frame " + std::to_string(summary.skipped.front().timestamp_ns) + ": " +
-                summary.skipped.front().reason + " (strict: no frame may be skipped)");
-  }
+  // The frames of an earlier, longer run would stay beside this one's and be scored.
+  summary.stale_files_removed = RemoveFrameOutputs(options.out_dir);
+  WriteRunConfig(config, options.out_dir);  // creates out_dir
+  summary.frames_total = run.frames_listed();
+  summary.skipped = run.sequence_skips();
   const auto start = std::chrono::steady_clock::now();
   int done = 0;
-  for (const StereoFrame& frame : todo) {
-    const std::string name = std::to_string(frame.timestamp_ns);
+  for (const StereoFrame& frame : run.frames()) {
     try {
-      const StereoImages images = ReadStereoImages(frame, sequence.calibration());
-      const ImageU8& left = images.left;
-      const ImageU8& right = images.right;
-      const Eigen::Vector3d up = gravity.UpInCamera(frame.timestamp_ns);
-      FrameResult result = options.oracle_disparity
-                               ? pipeline.ProcessWithDisparity(left, right, ReadTrueDisparity(sequence, frame.timestamp_ns), up)
-                               : pipeline.Process(left, right, up);
-      result.timestamp_ns = frame.timestamp_ns;
-      WriteFrameOutputs(result, options.out_dir, name, options.write_disparity);
-      ++summary.frames_classified;
-      Accumulate(result.timings, &summary.mean_timings);
-      for (std::size_t i = 0; i < result.labels.size(); ++i) {
-        if (result.labels[i] < 5) ++summary.class_pixels[result.labels[i]];
-      }
-      if (!result.analysis.quality.passed) {
-        summary.quality_failed.push_back({frame.timestamp_ns, result.analysis.quality.reason});
-      }
+      const FrameResult result = run.Classify(frame, run.gravity().UpInCamera(frame.timestamp_ns));
+      WriteFrameOutputs(result, options.out_dir, std::to_string(frame.timestamp_ns), options.write_disparity);
+      summary.Add(result);
+    } catch (const StrictStop&) {
+      throw;
     } catch (const Error& e) {
       // A frame whose images cannot be read or have the wrong size is skipped, not fatal.
-      if (options.strict) throw Error(std::string(e.what()) + " (strict: no frame may be skipped)");
+      run.RequireNotStrict(frame.timestamp_ns, e.what());
       summary.skipped.push_back({frame.timestamp_ns, e.what()});
     }
-    if (progress) progress(++done, static_cast<int>(todo.size()));
+    if (progress) progress(++done, static_cast<int>(run.frames().size()));
   }
   summary.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (summary.frames_classified > 0) Scale(1.0 / summary.frames_classified, &summary.mean_timings);
   WriteTextAtomically(options.out_dir + "/summary.json", summary.Json());
   return summary;
+}
+
+void ClassifySummary::Add(const FrameResult& frame) {
+  ++frames_classified;
+  Accumulate(frame.timings, &mean_timings);
+  for (std::size_t i = 0; i < frame.labels.size(); ++i) {
+    if (frame.labels[i] < 5) ++class_pixels[frame.labels[i]];
+  }
+  if (!frame.analysis.quality.passed) quality_failed.push_back({frame.timestamp_ns, frame.analysis.quality.reason});
 }
 
 std::string ClassifySummary::BriefReport() const {

@@ -261,7 +261,7 @@ Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& moti
 }
 
 SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& out_dir,
-                                    const SynthProgress& progress) {
+                                    const Progress& progress) {
   std::string error;
   if (!o.IsValid(&error)) throw Error(error);
 

@@ -50,7 +50,7 @@ ConfusionMatrix ClassifyAndScore(const std::string& seq_dir, const std::string& 
   const Sequence seq = Sequence::Open(seq_dir);
   ClassifyOptions options;
   options.out_dir = out_dir;
-  options.every = every;
+  options.frames.every = every;
   ClassifySequence(seq, config, options);
   LabelEvalOptions eval;  // the frames not classified are left out; with every frame, none is
   if (every > 1) eval.missing_prediction = MissingPrediction::kSkip;

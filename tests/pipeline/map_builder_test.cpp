@@ -375,7 +375,7 @@ TEST(BuildMap, PipelinedStrictRunStopsAtTheFirstUnusableFrameLikeTheSequentialOn
   for (const bool pipelined : {false, true}) {
     BuildMapOptions options;
     options.static_platform = true;
-    options.strict = true;
+    options.frames.strict = true;
     options.pipelined = pipelined;
     options.map_path = dir / (pipelined ? "p.ot" : "s.ot");
     try {
@@ -395,13 +395,13 @@ TEST(BuildMap, ResumeRefusesAnotherResolutionOrVehicleAndLeavesTheMapAsItWas) {
   testing::TempDir dir;
   BuildMapOptions options;
   options.static_platform = true;
-  options.max_frames = 1;
+  options.frames.max_frames = 1;
   options.map_path = dir / "m.ot";
   BuildMap(Sequence::Open(kEuroc), "s", EurocConfig(), options);
   const std::string before = FileBytes(options.map_path);
   ASSERT_GT(before.size(), 1000u);
   options.resume = true;
-  options.max_frames = 0;
+  options.frames.max_frames = 0;
   Config other_resolution = EurocConfig();
   other_resolution.map.fusion.resolution_m = 0.05;
   Config other_vehicle = EurocConfig();
@@ -447,7 +447,7 @@ TEST(BuildMap, ARunThatFusesNoFrameLeavesAnExistingMapAsItWas) {
   }
   // Strict: the first frame stops the run before anything is fused.
   options.resume = false;
-  options.strict = true;
+  options.frames.strict = true;
   EXPECT_THROW(BuildMap(Sequence::Open(seq), "bad", config, options), Error);
   EXPECT_TRUE(FileBytes(options.map_path) == before);
   EXPECT_EQ(TraversabilityMap::Load(options.map_path).metadata().sequences, std::vector<std::string>{"s"});
@@ -474,7 +474,7 @@ TEST(BuildMap, OracleDisparityPutsARampAtItsTrueHeightAndSkipsAFrameWithoutTruth
 
   BuildMapOptions options;
   options.map_path = dir / "m.ot";
-  options.oracle_disparity = true;
+  options.oracles.disparity = true;
   const BuildMapSummary summary = BuildMap(Sequence::Open(seq), "ramp", Config{}, options);
   EXPECT_EQ(summary.frames_used, 2);
   ASSERT_EQ(summary.skipped.size(), 1u);
@@ -498,7 +498,7 @@ TEST(BuildMap, OracleDisparityPutsARampAtItsTrueHeightAndSkipsAFrameWithoutTruth
   EXPECT_EQ(off_plane, 0);
   EXPECT_EQ(not_traversable, 0);
 
-  options.strict = true;  // strict: the frame without truth is an error that names its file
+  options.frames.strict = true;  // strict: the frame without truth is an error that names its file
   options.map_path = dir / "strict.ot";
   try {
     BuildMap(Sequence::Open(seq), "ramp", Config{}, options);
@@ -526,9 +526,9 @@ TEST(BuildMap, OracleLabelsLeaveTheFusionsOwnErrorsAndNameAFrameWithoutThem) {
     return std::make_pair(summary, EvaluateExportedGrid(dir / name, seq).matrix.Accuracy());
   };
   BuildMapOptions oracle;
-  oracle.oracle_disparity = true;
+  oracle.oracles.disparity = true;
   const double disparity_only = grid_accuracy(oracle, "d").second;
-  oracle.oracle_labels = true;
+  oracle.oracles.labels = true;
   const auto [summary, both] = grid_accuracy(oracle, "dl");
   EXPECT_EQ(summary.frames_used, 12);
   RecordProperty("oracle_disparity", std::to_string(disparity_only));
@@ -545,7 +545,7 @@ TEST(BuildMap, OracleLabelsLeaveTheFusionsOwnErrorsAndNameAFrameWithoutThem) {
   ASSERT_EQ(truths.size(), 12u);
   fs::remove(truths[1]);
   WriteImage(ImageU8(32, 24, 1), truths[3].string());
-  oracle.max_frames = 4;
+  oracle.frames.max_frames = 4;
   const BuildMapSummary damaged = grid_accuracy(oracle, "damaged").first;
   EXPECT_EQ(damaged.frames_used, 2);
   ASSERT_EQ(damaged.skipped.size(), 2u);

@@ -99,7 +99,7 @@ TEST_F(MountCalibrationTest, ErrorFreeSequenceNeedsNoCorrection) {
 
 TEST_F(MountCalibrationTest, NoUsableGroundPlaneIsAnError) {
   MountCalibrationOptions options;
-  options.max_frames = 3;
+  options.frames.max_frames = 3;
   options.refinement.max_range_m = 0.3;  // every ground point is farther than this
   try {
     CalibrateMount(Sequence::Open(Faulty()), Config{}, options);
@@ -114,13 +114,13 @@ TEST_F(MountCalibrationTest, NoUsableGroundPlaneIsAnError) {
 TEST_F(MountCalibrationTest, TooFewFramesAndTightPriorAreReportedAndNotApplied) {
   const Sequence sequence = Sequence::Open(Faulty());
   MountCalibrationOptions few;
-  few.max_frames = 2;
+  few.frames.max_frames = 2;
   const MountCalibration a = CalibrateMount(sequence, Config{}, few);
   EXPECT_EQ(a.refinement.status, RefinementStatus::kTooFewFrames);
   EXPECT_TRUE(a.refined.left.body_T_camera.isApprox(sequence.calibration().left.body_T_camera));
 
   MountCalibrationOptions tight;
-  tight.max_frames = 6;
+  tight.frames.max_frames = 6;
   tight.refinement.min_frames = 3;
   tight.refinement.prior_sigma_deg = 0.02;
   const MountCalibration b = CalibrateMount(sequence, Config{}, tight);

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "ssta/core/image.h"
+#include "ssta/core/progress.h"
 #include "ssta/eval/confusion_matrix.h"
 
 namespace ssta {
@@ -42,7 +43,7 @@ struct LabelEvalOptions {
 
   /// Called after each truth frame with the number done and the total; may be empty. Lets a
   /// command line show progress; called on the calling thread.
-  std::function<void(int done, int total)> progress;
+  Progress progress;
   /// How many of the worst frames (lowest accuracy) BriefReport lists; >= 0.
   int worst_frames_listed = 5;
 

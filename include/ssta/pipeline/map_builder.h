@@ -12,7 +12,9 @@
 #include "ssta/mapping/map_types.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/config.h"
+#include "ssta/core/progress.h"
 #include "ssta/pipeline/frame_pipeline.h"
+#include "ssta/pipeline/sequence_run.h"
 #include "ssta/refinement/online_mount_refiner.h"
 
 namespace ssta {
@@ -24,22 +26,16 @@ struct BuildMapOptions {
   /// The platform stands still and the sequence has no poses: every frame is taken at the
   /// origin, levelled by gravity (IMU, else a level body), yaw 0.
   bool static_platform = false;
-  int max_frames = 0;          ///< 0: all frames
-  int every = 1;               ///< use every n-th frame
-  /// Any frame that cannot be used (no pose, unreadable image, ...) is an error instead of a
-  /// skip with a reason; the map keeps what was fused before it.
-  bool strict = false;
+  /// Which frames to fuse; with `strict` a frame that cannot be used (no pose, unreadable
+  /// image, ...) is an error, and the map keeps what was fused before it.
+  FrameSelection frames;
   /// Fuse frame k into the map on a second thread while frame k+1 is classified (one frame
   /// waits at most). The map and the summary are the same as without; only the time differs.
   bool pipelined = true;
-  /// Use each frame's true disparity (gt/disparity/<ts>.png of a synthetic sequence) instead of
-  /// stereo matching: measures the analysis and the fusion apart from the matcher. A frame
-  /// without one is skipped with a reason (an error with `strict`).
-  bool oracle_disparity = false;
-  /// Fuse each frame's true labels (gt/labels/<ts>.png) where the truth has a verdict, the
-  /// frame's own elsewhere. With oracle_disparity it measures the fusion alone; with the
-  /// matcher, what the matcher's geometry costs the map. A frame without them is skipped.
-  bool oracle_labels = false;
+  /// The true disparity measures the analysis and the fusion apart from the matcher; the true
+  /// labels with it the fusion alone, with the matcher what the matcher's geometry costs the
+  /// map. A frame without its truth is skipped with a reason (an error with `strict`).
+  Oracles oracles;
   bool IsValid(std::string* error) const;
 };
 
@@ -64,9 +60,6 @@ struct BuildMapSummary {
   std::string Json() const;
 };
 
-/// Called after each frame: (frames done, frames to do).
-using BuildProgress = std::function<void(int done, int total)>;
-
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
 /// pitch corrected by the IMU attitude filter where there is an IMU (GravityProvider); frames
@@ -84,7 +77,7 @@ using BuildProgress = std::function<void(int done, int total)>;
 /// or killed), frames up to the map's last fused timestamp are already in it and are not fused
 /// again; another sequence is fused whole.
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
-                         const BuildMapOptions& options, const BuildProgress& progress = {},
+                         const BuildMapOptions& options, const Progress& progress = {},
                          const std::atomic<bool>* stop = nullptr);
 
 }  // namespace ssta

@@ -6,7 +6,9 @@
 
 #include "ssta/io/camera_calibration.h"
 #include "ssta/io/sequence.h"
+#include "ssta/core/progress.h"
 #include "ssta/pipeline/config.h"
+#include "ssta/pipeline/sequence_run.h"
 #include "ssta/refinement/mount_refiner.h"
 
 namespace ssta {
@@ -14,8 +16,7 @@ namespace ssta {
 /// Which frames of a sequence the offline calibration runs over.
 struct MountCalibrationOptions {
   RefinementOptions refinement;
-  int every = 1;       ///< use every n-th frame
-  int max_frames = 0;  ///< at most this many frames (0: all)
+  FrameSelection frames;  ///< which frames, and whether one that cannot be used is an error
 
   /// Checks the fields; the message starts with the key name.
   bool IsValid(std::string* error) const;
@@ -45,6 +46,6 @@ struct MountCalibration {
 /// plane (the message says why the first frames were skipped). Too few frames or a result not
 /// better determined than its prior are statuses in the result, not exceptions.
 MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, const MountCalibrationOptions& options,
-                                const std::function<void(int done, int total)>& progress = {});
+                                const Progress& progress = {});
 
 }  // namespace ssta

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/progress.h"
 #include "ssta/synth/synth_options.h"
 
 namespace ssta::synth {
@@ -29,9 +30,6 @@ struct SynthSummary {
   std::string BriefReport() const;
 };
 
-/// Called after each rendered frame with (frames done, frames total).
-using SynthProgress = std::function<void(int done, int total)>;
-
 /// The true mount of cam0 in the body frame for a rig (camera x right, y down, z forward;
 /// pitched down by `pitch_down_deg`; optical centre `camera_forward_m` ahead of, `baseline/2`
 /// left of and `camera_height_m - body_height_m` above the body origin).
@@ -49,6 +47,6 @@ Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& moti
 /// only (cam0, gt/labels and gt/disparity keep them).
 /// Throws ssta::Error on invalid options (message names the option) or when it cannot write.
 SynthSummary WriteSyntheticSequence(const SynthOptions& options, const std::string& out_dir,
-                                    const SynthProgress& progress = {});
+                                    const Progress& progress = {});
 
 }  // namespace ssta::synth

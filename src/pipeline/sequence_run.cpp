@@ -1,0 +1,98 @@
+#include "ssta/pipeline/sequence_run.h"
+
+#include "ssta/io/ground_truth.h"
+#include "ssta/sensors/attitude_filter.h"
+
+namespace ssta {
+namespace {
+
+/// The frame's true labels over its own, where the truth has a verdict (1-3): 255 (sky,
+/// occlusions, the band on class boundaries) keeps the frame's.
+void ApplyTrueLabels(const Sequence& sequence, std::int64_t t, const RectifiedGeometry& g, ImageU8* labels) {
+  const ImageU8 truth = ReadTrueLabels(sequence, t);
+  if (truth.width() != g.full_width || truth.height() != g.full_height) {
+    throw Error(TruthFramePath(sequence, "labels", t) + ": the true labels are " + std::to_string(truth.width()) + "x" +
+                std::to_string(truth.height()) + ", the frames are " + std::to_string(g.full_width) + "x" +
+                std::to_string(g.full_height));
+  }
+  SSTA_CHECK(labels->width() == g.crop_width && labels->height() == g.crop_height,
+             "ApplyTrueLabels: the labels are not of the common area's size");
+  for (int v = 0; v < labels->height(); ++v) {
+    const std::uint8_t* from = truth.row(v + g.crop_v0) + g.crop_u0;
+    std::uint8_t* out = labels->row(v);
+    for (int u = 0; u < labels->width(); ++u) {
+      if (from[u] >= 1 && from[u] <= 3) out[u] = from[u];
+    }
+  }
+}
+
+Config Validated(const Config& config) {
+  std::string error;
+  if (!config.IsValid(&error)) throw Error("config: " + error);
+  return config;
+}
+
+}  // namespace
+
+bool FrameSelection::IsValid(std::string* error) const {
+  if (max_frames < 0) return Fail(error, "max-frames: must not be negative");
+  if (every < 1) return Fail(error, "every: must be at least 1");
+  return true;
+}
+
+RigChain::RigChain(const Eigen::Isometry3d& body_T_camera, const RectifiedGeometry& geometry)
+    : camera_R_rectified_(geometry.rectified_R_camera.transpose()) {
+  set_body_T_camera(body_T_camera);
+}
+
+void RigChain::set_body_T_camera(const Eigen::Isometry3d& body_T_camera) {
+  body_T_camera_ = body_T_camera;
+  body_T_rectified_ = body_T_camera;
+  body_T_rectified_.linear() = body_T_camera.linear() * camera_R_rectified_;
+}
+
+SequenceRun::SequenceRun(const Sequence& sequence, const Config& config, const FrameSelection& selection,
+                         const Oracles& oracles)
+    : sequence_(sequence),
+      selection_(selection),
+      oracles_(oracles),
+      pipeline_(sequence.calibration(), Validated(config)),
+      gravity_(sequence, config.gravity, config.attitude) {
+  std::string error;
+  if (!selection.IsValid(&error)) throw Error(error);
+  frames_ = SelectFrames(sequence.frames(), selection.every, selection.max_frames);
+  if (!sequence.skipped().empty()) {
+    RequireNotStrict(sequence.skipped().front().timestamp_ns, sequence.skipped().front().reason);
+  }
+}
+
+int SequenceRun::frames_listed() const {
+  return static_cast<int>(sequence_.frames().size() + sequence_.skipped().size());
+}
+
+Eigen::Isometry3d SequenceRun::WorldTBody(std::int64_t t, bool static_platform) const {
+  if (static_platform) return CorrectRollPitch(Eigen::Isometry3d::Identity(), gravity_.UpInBody(t));
+  const std::optional<Eigen::Isometry3d> pose = gravity_.WorldTBodyAt(t);
+  if (!pose) throw Error("no pose: " + sequence_.NoPoseReason(t));
+  return *pose;
+}
+
+FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera) {
+  const StereoImages images = ReadStereoImages(frame, sequence_.calibration());
+  FrameResult result =
+      oracles_.disparity
+          ? pipeline_.ProcessWithDisparity(images.left, images.right,
+                                           ReadTrueDisparity(sequence_, frame.timestamp_ns), up_camera)
+          : pipeline_.Process(images.left, images.right, up_camera);
+  result.timestamp_ns = frame.timestamp_ns;
+  if (oracles_.labels) ApplyTrueLabels(sequence_, frame.timestamp_ns, geometry(), &result.analysis.labels);
+  return result;
+}
+
+void SequenceRun::RequireNotStrict(std::int64_t t, const std::string& reason) const {
+  if (!selection_.strict) return;
+  throw StrictStop(sequence_.root() + ": frame " + std::to_string(t) + ": " + reason +
+                   " (strict: no frame may be skipped)");
+}
+
+}  // namespace ssta
