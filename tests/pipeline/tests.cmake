@@ -1,12 +1,7 @@
 ssta_add_test(pipeline_test
-  ${CMAKE_CURRENT_LIST_DIR}/bad_input_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/bench_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/cli_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/config_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/end_to_end_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/fault_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_pipeline_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/golden_output_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_builder_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mount_calibration_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/online_refinement_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/real_data_test.cpp)

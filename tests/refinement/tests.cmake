@@ -1,3 +1,2 @@
 ssta_add_test(refinement_test
-  ${CMAKE_CURRENT_LIST_DIR}/mount_refiner_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/mount_calibration_test.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/mount_refiner_test.cpp)

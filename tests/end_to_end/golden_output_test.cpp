@@ -3,7 +3,7 @@
 // kept in tests/data/golden/yard20.txt. A change that is meant to leave behaviour as it is
 // (a refactoring, a speed-up) must pass unchanged; a change that is meant to alter the outputs
 // updates the file in the same commit:
-//   SSTA_UPDATE_GOLDEN=1 build/tests/pipeline_test --gtest_filter='GoldenOutput.*'
+//   SSTA_UPDATE_GOLDEN=1 build/tests/end_to_end_test --gtest_filter='GoldenOutput.*'
 
 #include <cstdint>
 #include <cstdlib>

@@ -1,0 +1,1 @@
+ssta_add_test(bench_test ${CMAKE_CURRENT_LIST_DIR}/bench_test.cpp)
