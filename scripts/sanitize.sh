@@ -30,11 +30,13 @@ case "$mode" in
   thread)
     build_dir=${BUILD_DIR:-build-tsan}
     cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSTA_SANITIZE_THREAD=ON -DSSTA_BUILD_TESTS=ON
-    cmake --build "$build_dir" -j "$jobs" --target ssta_cli pipeline_test mapping_test stereo_test
+    cmake --build "$build_dir" -j "$jobs" --target ssta_cli pipeline_test cli_test sensors_test mapping_test stereo_test
     cd "$build_dir"
     # GDAL (loaded by OpenCV's image codecs) takes its own locks in an order TSan flags: suppressed.
     export TSAN_OPTIONS="halt_on_error=1 suppressions=$PWD/../tests/tsan.supp"
-    ./tests/pipeline_test --gtest_filter='BuildMap.*:Cli.*:OnlineRefinement*:FramePipeline.*:GravityTrack.*'
+    ./tests/pipeline_test --gtest_filter='BuildMap.*:OnlineRefinement*:FramePipeline.*'
+    ./tests/cli_test --gtest_filter='Cli.*'
+    ./tests/sensors_test --gtest_filter='GravityTrack.*'
     ./tests/mapping_test
     ./tests/stereo_test --gtest_filter='*Concurrent*'
     ;;
