@@ -51,62 +51,68 @@ enum class StepReference {
 StepReference ParseStepReference(const std::string& name);
 std::string StepReferenceName(StepReference reference);
 
-/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E).
+/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E). One struct
+/// for the whole stage; its fields come in the order the stage uses them: the paper's analysis
+/// (AnalyzeSurfaces), the rules AnalyzeSurfaces adds to it, then each label refinement
+/// (label_refinements.h) in the order FrameAnalyzer runs them. The YAML keys and their order in
+/// written files follow Fields(), not this order.
 struct AnalysisOptions {
-  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
-  /// is in a worse slope class takes that class (RefineByPixelSlope). On smooth terrain a
-  /// hillside has no segment boundary, and one PCA slope for the whole segment averages its
-  /// steep flank away. false: the paper, one verdict per segment.
-  bool pixel_slopes = true;
-  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
-  /// segment [px, odd]; 1: the pixel's own normal.
-  int pixel_slope_window_px = 31;
-  /// How steps are measured; see StepReference.
-  StepReference step_reference = StepReference::kReachableLarge;
+  // The paper's analysis (AnalyzeSurfaces).
+
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
   /// their own in the paper.
   double inliers_min_ratio = 0.02;
-  /// What small segments get; see SmallSegmentPolicy.
-  SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
-  /// Fewest points for the slope of a small segment to count [points].
-  int min_plane_points = 30;
   /// Quality check of the dominant ground plane: least share of the frame's depth pixels that
   /// must lie on it, and the largest RMS point-to-plane distance [m].
   double min_ground_share = 0.08;
   double max_ground_rms_m = 0.08;
-  /// Ground consistency in disparity space (RefineByGroundDisparity) [px]: a point whose
-  /// disparity lies within this of the dominant ground plane's disparity on the same pixel ray
-  /// is on the ground within stereo noise. Disparity noise does not grow with range, so the test
-  /// holds as well at 10 m as at 2 m, where slopes of noisy far patches do not. 0: off.
+
+  // AnalyzeSurfaces beyond the paper: steps by reachability, verdicts for small segments.
+
+  /// How steps are measured; see StepReference.
+  StepReference step_reference = StepReference::kReachableLarge;
+  /// What small segments get; see SmallSegmentPolicy.
+  SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
+  /// Fewest points for the slope of a small segment to count [points].
+  int min_plane_points = 30;
+
+  // Refinement 1, per-pixel slopes (RefineByPixelSlope).
+
+  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
+  /// is in a worse slope class takes that class. On smooth terrain a hillside has no segment
+  /// boundary, and one PCA slope for the whole segment averages its steep flank away. false:
+  /// the paper, one verdict per segment.
+  bool pixel_slopes = true;
+  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
+  /// segment [px, odd]; 1: the pixel's own normal.
+  int pixel_slope_window_px = 31;
+
+  // Refinement 2, ground consistency (RefineByGroundDisparity); refinement 6 uses the tolerance.
+
+  /// A point whose disparity lies within this of the dominant ground plane's disparity on the
+  /// same pixel ray is on the ground within stereo noise [px]. Disparity noise does not grow
+  /// with range, so the test holds as well at 10 m as at 2 m, where slopes of noisy far patches
+  /// do not. 0: off.
   double ground_tolerance_px = 1.0;
   /// Least share of a small segment's points that must be ground-consistent for the segment to
   /// be taken as ground (traversable), (0, 1].
   double ground_consistent_share = 0.9;
-  /// Fragments on a neighbour's plane (RefineByFragmentPlanes) [px]: a small segment whose
-  /// points lie within this of the plane of an adjacent large segment, in disparity along their
-  /// pixel rays, is a piece of that surface that stereo noise broke off. 0: off.
+
+  // Refinement 3, fragments on a neighbour's plane (RefineByFragmentPlanes).
+
+  /// A small segment whose points lie within this of the plane of an adjacent large segment, in
+  /// disparity along their pixel rays, is a piece of that surface that stereo noise broke off
+  /// [px]. 0: off.
   double fragment_tolerance_px = 1.5;
   /// Least share of a small segment's points that must lie that close, (0, 1].
   double fragment_consistent_share = 0.9;
   /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
   /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
   int fragment_host_min_points = 1000;
-  /// Undecided pixels amid a consensus (FillUndecidedByConsensus): the half side of the square
-  /// window around an undecided pixel [px]; 0: off.
-  int undecided_fill_radius_px = 4;
-  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
-  double undecided_fill_share = 0.9;
-  /// Undecided pixels that no consensus fills (FillUndecidedByHeight): true, each takes the step
-  /// class of its own point's height above the dominant ground plane where that is drivable
-  /// (traversable, or semi-traversable above the plane); other points stay undecided.
-  bool undecided_height_fill = true;
-  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
-  /// levels] are labelled unknown (0) once the analysis is done (FramePipeline): the sky, blank
-  /// walls, where the matcher's disparity is a guess. The analysis still uses their points.
-  /// 0: off.
-  double label_min_texture = 0.0;
-  /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
-  /// fitted along each image column [px, odd, >= 3]; 0: off.
+
+  // Refinement 4, thin vertical faces from the disparity (RefineByDisparityFaces).
+
+  /// Rows of the disparity fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 11;
   /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
   /// varies from column to column while curbs and steps run across many; 1: each column alone.
@@ -116,6 +122,27 @@ struct AnalysisOptions {
   double face_grow_tolerance_px = 0.25;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
+
+  // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).
+
+  /// The half side of the square window around an undecided pixel [px]; 0: off.
+  int undecided_fill_radius_px = 4;
+  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
+  double undecided_fill_share = 0.9;
+
+  // Refinement 6, undecided pixels by their own height (FillUndecidedByHeight).
+
+  /// true: undecided pixels that no consensus fills each take the step class of their own
+  /// point's height above the dominant ground plane where that is drivable (traversable, or
+  /// semi-traversable above the plane); other points stay undecided.
+  bool undecided_height_fill = true;
+
+  // After the analysis (FramePipeline).
+
+  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
+  /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
+  /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
+  double label_min_texture = 0.0;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<AnalysisOptions>& Fields();
