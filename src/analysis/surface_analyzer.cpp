@@ -1,3 +1,19 @@
+// The paper's Superpixel Surface Traversability Analysis (section III-E) of one segmented frame,
+// AnalyzeSurfaces, step by step in the paper's order:
+//   eq. 1   4-connected segmentation by normals: not here, Segmenter (src/geometry/segmenter.cpp)
+//   PCA     mean, covariance and PCA plane per segment: SegmentMoments, PlaneAccumulator::Fit,
+//           FitSegment
+//   eq. 2   gravity in the camera frame: the input up_camera (GravityProvider in src/sensors/,
+//           rotated into the rectified frame by FramePipeline)
+//   eq. 3   slope of a segment's normal against up, and its slope class: FitSegment
+//   eq. 4   inliers_min: AnalyzeSurfaces; FitSegment marks the segments below it small
+//   ground  dominant ground plane: FindGroundPlane; point-cloud quality check: CheckQuality
+//   eq. 5   step, the distance of a segment's centroid to the ground plane: MeasureStep
+//   class   the worse of a segment's slope and step classes: DecideVerdict; per pixel: PixelLabels
+// Beyond the paper, AnalyzeSurfaces also measures steps by reachability (StepReference,
+// reachable_steps.cpp) and gives small segments verdicts (SmallSegmentPolicy, DecideVerdict).
+// The label refinements that follow it are declared in label_refinements.h.
+
 #include "ssta/analysis/surface_analyzer.h"
 
 #include <algorithm>
@@ -5,107 +21,15 @@
 #include <iomanip>
 #include <limits>
 #include <sstream>
-#include <unordered_map>
-#include <utility>
 
 #include <Eigen/Eigenvalues>
 
+#include "analysis/reachable_steps.h"
 #include "analysis/reason_format.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
 
 namespace ssta {
-namespace {
-
-using internal::FormatNumber;
-
-std::string ClassReason(const SegmentResult& s) {
-  std::ostringstream r;
-  r << std::fixed << std::setprecision(1) << "slope " << s.slope_deg << " deg ("
-    << ClassName(s.slope_class) << ")";
-  if (std::isfinite(s.step_m)) {
-    r << std::setprecision(3) << ", step " << s.step_m << " m (" << ClassName(s.step_class) << ")";
-  }
-  return r.str();
-}
-
-/// Step classes by reachability from the ground segment (StepReference::kReachable): returns
-/// the class per segment (traversable / semi / non-traversable) and, in `jump_m`, the mean
-/// boundary height jump of the crossing that reached it [m] (0 for the ground, NaN unreached).
-std::vector<TravClass> ReachableStepClasses(const Image3f& cloud, const ImageI32& ids,
-                                            const std::vector<SegmentResult>& segments, int ground_id,
-                                            const Eigen::Vector3d& up, const VehicleOptions& vehicle,
-                                            std::vector<double>* jump_m) {
-  struct Edge {
-    int n = 0, within_semi = 0, within_max = 0;
-    double sum = 0.0;
-  };
-  std::unordered_map<std::uint64_t, Edge> edges;
-  const Eigen::Vector3f up_f = up.cast<float>();
-  auto add = [&](std::size_t i, std::size_t j) {
-    const int a = ids[i], b = ids[j];
-    if (a < 0 || b < 0 || a == b || !IsFinite(cloud[i]) || !IsFinite(cloud[j])) return;
-    const double dh = std::abs((cloud[i] - cloud[j]).dot(up_f));
-    const std::uint64_t key =
-        (static_cast<std::uint64_t>(std::min(a, b)) << 32) | static_cast<std::uint32_t>(std::max(a, b));
-    Edge& e = edges[key];
-    ++e.n;
-    e.within_semi += dh <= vehicle.semi_step_m;
-    e.within_max += dh <= vehicle.max_step_m;
-    e.sum += dh;
-  };
-  const int w = cloud.width(), h = cloud.height();
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      if (u + 1 < w) add(i, i + 1);
-      if (v + 1 < h) add(i, i + w);
-    }
-  }
-  // Adjacency: the neighbour, the crossing's class by its median jump, and its mean jump.
-  struct Link {
-    int to;
-    int step_class;
-    double mean_jump;
-  };
-  std::vector<std::vector<Link>> links(segments.size());
-  for (const auto& [key, e] : edges) {
-    const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
-    const int c = 2 * e.within_semi >= e.n ? 1 : (2 * e.within_max >= e.n ? 2 : 3);
-    links[a].push_back({b, c, e.sum / e.n});
-    links[b].push_back({a, c, e.sum / e.n});
-  }
-  // Breadth-first from the ground, first over traversable crossings and segments only, then
-  // also over semi-traversable ones: a segment's class is the first level that reaches it.
-  std::vector<int> level(segments.size(), 0);  // 0: not reached
-  jump_m->assign(segments.size(), std::numeric_limits<double>::quiet_NaN());
-  level[ground_id] = 1;
-  (*jump_m)[ground_id] = 0.0;
-  for (int L = 1; L <= 2; ++L) {
-    std::vector<int> queue;
-    for (std::size_t s = 0; s < segments.size(); ++s) {
-      if (level[s] != 0) queue.push_back(static_cast<int>(s));
-    }
-    for (std::size_t q = 0; q < queue.size(); ++q) {
-      const SegmentResult& from = segments[queue[q]];
-      // Only a segment a vehicle can drive on leads on to its neighbours.
-      if (!from.has_plane || static_cast<int>(from.slope_class) > L) continue;
-      for (const Link& link : links[queue[q]]) {
-        if (level[link.to] != 0 || link.step_class > L) continue;
-        level[link.to] = L;
-        (*jump_m)[link.to] = link.mean_jump;
-        queue.push_back(link.to);
-      }
-    }
-  }
-  std::vector<TravClass> reach(segments.size(), TravClass::kNonTraversable);
-  for (std::size_t s = 0; s < segments.size(); ++s) {
-    if (level[s] != 0) reach[s] = static_cast<TravClass>(level[s]);
-  }
-  return reach;
-}
-
-}  // namespace
 
 StepReference ParseStepReference(const std::string& name) {
   if (name == "dominant_plane") return StepReference::kDominantPlane;
@@ -233,6 +157,177 @@ PlaneFit PlaneAccumulator::Fit() const {
   return fit;
 }
 
+namespace {
+
+using internal::FormatNumber;
+
+std::string ClassReason(const SegmentResult& s) {
+  std::ostringstream r;
+  r << std::fixed << std::setprecision(1) << "slope " << s.slope_deg << " deg ("
+    << ClassName(s.slope_class) << ")";
+  if (std::isfinite(s.step_m)) {
+    r << std::setprecision(3) << ", step " << s.step_m << " m (" << ClassName(s.step_class) << ")";
+  }
+  return r.str();
+}
+
+/// Each segment's point moments, from one pass over the pixels, and the frame's depth pixels.
+struct FrameMoments {
+  std::vector<PlaneAccumulator> segments;  ///< per segment id
+  int depth_pixels = 0;                    ///< pixels with a valid point
+};
+
+FrameMoments SegmentMoments(const Image3f& cloud, const ImageI32& segment_ids, int num_segments) {
+  FrameMoments moments;
+  moments.segments.resize(num_segments);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3f& p = cloud[i];
+    if (!IsFinite(p)) continue;
+    ++moments.depth_pixels;
+    const int id = segment_ids[i];
+    if (id >= 0) {
+      SSTA_CHECK(id < num_segments, "segment id out of range");
+      moments.segments[id].Add(p.cast<double>());
+    }
+  }
+  return moments;
+}
+
+/// Segment `id` from its moments: small below inliers_min (eq. 4); with 3 points or more its
+/// PCA plane, the normal oriented to the up side, and its slope against up with the slope
+/// class (eq. 3). The step is NaN until MeasureStep.
+SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_min, const Eigen::Vector3d& up_camera,
+                         const VehicleOptions& vehicle) {
+  SegmentResult s;
+  s.id = id;
+  s.inliers = moments.count();
+  s.small = s.inliers < inliers_min;
+  s.step_m = std::numeric_limits<double>::quiet_NaN();
+  if (s.inliers == 0) return s;
+  s.centroid = moments.Mean();
+  if (s.inliers < 3) {
+    s.reason = "too few points for a plane";
+    return s;
+  }
+  const PlaneFit fit = moments.Fit();
+  s.has_plane = true;
+  s.centroid = fit.centroid;
+  s.normal = fit.normal.dot(up_camera) < 0 ? -fit.normal : fit.normal;
+  s.plane << s.normal, -s.normal.dot(s.centroid);
+  s.rms_m = fit.rms_m;
+  s.slope_deg = RadToDeg(std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)));
+  s.slope_class = vehicle.ClassifySlope(s.slope_deg);
+  return s;
+}
+
+/// The dominant ground plane: the largest traversable, large-enough segment below the camera.
+GroundPlane FindGroundPlane(const std::vector<SegmentResult>& segments, int depth_pixels) {
+  GroundPlane ground;
+  for (const SegmentResult& s : segments) {
+    if (!s.has_plane || s.small || s.slope_class != TravClass::kTraversable) continue;
+    const double camera_height = s.plane(3);  // signed distance of the camera origin
+    if (camera_height <= 0) continue;         // the plane is above the camera
+    if (!ground.found || s.inliers > segments[ground.segment_id].inliers) {
+      ground.found = true;
+      ground.segment_id = s.id;
+    }
+  }
+  if (!ground.found) return ground;
+  const SegmentResult& g = segments[ground.segment_id];
+  ground.plane = g.plane;
+  ground.camera_height_m = g.plane(3);
+  ground.rms_m = g.rms_m;
+  ground.share = depth_pixels > 0 ? static_cast<double>(g.inliers) / depth_pixels : 0.0;
+  return ground;
+}
+
+/// The point-cloud quality check on the dominant ground plane: a plausible camera height above
+/// it, a small RMS and a large enough share of the depth pixels.
+QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehicle, const AnalysisOptions& options) {
+  QualityCheck quality;
+  if (!ground.found) {
+    quality.reason = "no dominant ground plane (no large traversable segment below the camera)";
+  } else if (ground.camera_height_m < vehicle.min_camera_height_m ||
+             ground.camera_height_m > vehicle.max_camera_height_m) {
+    quality.reason = FormatNumber("implausible camera height", ground.camera_height_m, 2, " m") +
+                     FormatNumber(" above the ground plane (vehicle expects", vehicle.min_camera_height_m, 2, "") +
+                     FormatNumber(" to", vehicle.max_camera_height_m, 2, " m)");
+  } else if (ground.rms_m > options.max_ground_rms_m) {
+    quality.reason = FormatNumber("ground plane too rough: RMS", ground.rms_m, 3, " m") +
+                     FormatNumber(" > max_ground_rms_m", options.max_ground_rms_m, 3, "");
+  } else if (ground.share < options.min_ground_share) {
+    quality.reason = FormatNumber("ground plane too small: share", ground.share, 3, "") +
+                     FormatNumber(" < min_ground_share", options.min_ground_share, 3, "");
+  } else {
+    quality.passed = true;
+  }
+  return quality;
+}
+
+/// The step of a segment and its class: the distance of its centroid to the ground plane
+/// (eq. 5) or, where step_reference asks for it and `reach` is set, its reachable class.
+void MeasureStep(const GroundPlane& ground, const internal::ReachableSteps& reach, const VehicleOptions& vehicle,
+                 StepReference step_reference, SegmentResult* segment) {
+  SegmentResult& s = *segment;
+  s.ground = s.id == ground.segment_id;
+  s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
+  s.step_class = vehicle.ClassifyStep(s.step_m);
+  const bool by_reach = !reach.step_class.empty() && (step_reference == StepReference::kReachable ||
+                                                      (!s.small && s.step_class == TravClass::kNonTraversable));
+  if (by_reach) {
+    s.step_class = reach.step_class[s.id];
+    // Reached: the jump of the crossing that reached it; unreached: eq. 5's distance.
+    if (std::isfinite(reach.jump_m[s.id])) s.step_m = reach.jump_m[s.id];
+  }
+}
+
+/// A segment's verdict and its reason: the worse of its slope and step classes; a small segment
+/// as small_segments says.
+void DecideVerdict(int inliers_min, const AnalysisOptions& options, SegmentResult* segment) {
+  SegmentResult& s = *segment;
+  if (!s.has_plane) {
+    // One or two points: no slope, but their height above the ground still tells an obstacle.
+    const bool obstacle =
+        options.small_segments != SmallSegmentPolicy::kPaper && s.step_class == TravClass::kNonTraversable;
+    s.verdict = obstacle ? TravClass::kNonTraversable : TravClass::kUndecided;
+    if (obstacle) s.reason = "small segment, obstacle: step " + std::to_string(s.step_m) + " m";
+    return;
+  }
+  const TravClass worst = Worse(s.slope_class, s.step_class);
+  const bool planar = s.inliers >= options.min_plane_points;  // its slope can be trusted
+  const SmallSegmentPolicy policy = options.small_segments;
+  if (!s.small) {
+    s.verdict = worst;
+    s.reason = ClassReason(s);
+  } else if (policy == SmallSegmentPolicy::kAll && planar) {
+    s.verdict = worst;
+    s.reason = "small segment: " + ClassReason(s);
+  } else if (policy != SmallSegmentPolicy::kPaper &&
+             (s.step_class == TravClass::kNonTraversable ||
+              (planar && s.slope_class == TravClass::kNonTraversable))) {
+    s.verdict = TravClass::kNonTraversable;
+    s.reason = "small segment, obstacle: " + ClassReason(s);
+  } else {
+    s.verdict = TravClass::kUndecided;
+    s.reason = "small segment (" + std::to_string(s.inliers) + " < " + std::to_string(inliers_min) + " px)";
+  }
+}
+
+/// Class per pixel: unknown without a point, undecided without a segment, else its segment's
+/// verdict.
+ImageU8 PixelLabels(const Image3f& cloud, const ImageI32& segment_ids, const std::vector<SegmentResult>& segments) {
+  ImageU8 labels(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (!IsFinite(cloud[i])) continue;
+    const int id = segment_ids[i];
+    const TravClass c = id >= 0 ? segments[id].verdict : TravClass::kUndecided;
+    labels[i] = static_cast<std::uint8_t>(c);
+  }
+  return labels;
+}
+
+}  // namespace
+
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                                const AnalysisOptions& options) {
@@ -246,143 +341,33 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
       std::ceil(options.inliers_min_ratio * cloud.width() * cloud.height()));
   result.min_plane_points = options.min_plane_points;
 
-  // Moments per segment in one pass over the pixels.
-  std::vector<PlaneAccumulator> moments(num_segments);
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3f& p = cloud[i];
-    if (!IsFinite(p)) continue;
-    ++result.depth_pixels;
-    const int id = segment_ids[i];
-    if (id >= 0) {
-      SSTA_CHECK(id < num_segments, "segment id out of range");
-      moments[id].Add(p.cast<double>());
-    }
-  }
-
-  // Plane, slope and slope class per segment (eq. 3).
-  result.segments.resize(num_segments);
+  const FrameMoments moments = SegmentMoments(cloud, segment_ids, num_segments);
+  result.depth_pixels = moments.depth_pixels;
+  result.segments.reserve(num_segments);
   for (int id = 0; id < num_segments; ++id) {
-    SegmentResult& s = result.segments[id];
-    s.id = id;
-    s.inliers = moments[id].count();
-    s.small = s.inliers < result.inliers_min;
-    s.step_m = std::numeric_limits<double>::quiet_NaN();
-    if (s.inliers == 0) continue;
-    s.centroid = moments[id].Mean();
-    if (s.inliers < 3) {
-      s.reason = "too few points for a plane";
-      continue;
-    }
-    const PlaneFit fit = moments[id].Fit();
-    s.has_plane = true;
-    s.centroid = fit.centroid;
-    s.normal = fit.normal.dot(up_camera) < 0 ? -fit.normal : fit.normal;
-    s.plane << s.normal, -s.normal.dot(s.centroid);
-    s.rms_m = fit.rms_m;
-    s.slope_deg = RadToDeg(std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)));
-    s.slope_class = vehicle.ClassifySlope(s.slope_deg);
+    result.segments.push_back(FitSegment(id, moments.segments[id], result.inliers_min, up_camera, vehicle));
   }
 
-  // Dominant ground plane: the largest traversable, large-enough segment below the camera.
-  GroundPlane& ground = result.ground;
-  for (const SegmentResult& s : result.segments) {
-    if (!s.has_plane || s.small || s.slope_class != TravClass::kTraversable) continue;
-    const double camera_height = s.plane(3);  // signed distance of the camera origin
-    if (camera_height <= 0) continue;         // the plane is above the camera
-    if (!ground.found || s.inliers > result.segments[ground.segment_id].inliers) {
-      ground.found = true;
-      ground.segment_id = s.id;
-    }
-  }
+  result.ground = FindGroundPlane(result.segments, result.depth_pixels);
+  result.quality = CheckQuality(result.ground, vehicle, options);
 
-  QualityCheck& quality = result.quality;
-  if (!ground.found) {
-    quality.reason = "no dominant ground plane (no large traversable segment below the camera)";
-  } else {
-    const SegmentResult& g = result.segments[ground.segment_id];
-    ground.plane = g.plane;
-    ground.camera_height_m = g.plane(3);
-    ground.rms_m = g.rms_m;
-    ground.share = result.depth_pixels > 0 ? static_cast<double>(g.inliers) / result.depth_pixels : 0.0;
-    if (ground.camera_height_m < vehicle.min_camera_height_m ||
-        ground.camera_height_m > vehicle.max_camera_height_m) {
-      quality.reason = FormatNumber("implausible camera height", ground.camera_height_m, 2, " m") +
-                       FormatNumber(" above the ground plane (vehicle expects", vehicle.min_camera_height_m, 2, "") +
-                       FormatNumber(" to", vehicle.max_camera_height_m, 2, " m)");
-    } else if (ground.rms_m > options.max_ground_rms_m) {
-      quality.reason = FormatNumber("ground plane too rough: RMS", ground.rms_m, 3, " m") +
-                       FormatNumber(" > max_ground_rms_m", options.max_ground_rms_m, 3, "");
-    } else if (ground.share < options.min_ground_share) {
-      quality.reason = FormatNumber("ground plane too small: share", ground.share, 3, "") +
-                       FormatNumber(" < min_ground_share", options.min_ground_share, 3, "");
-    } else {
-      quality.passed = true;
-    }
+  internal::ReachableSteps reach;
+  if (result.quality.passed && options.step_reference != StepReference::kDominantPlane) {
+    reach = internal::ReachableStepClasses(cloud, segment_ids, result.segments, result.ground.segment_id, up_camera,
+                                           vehicle);
   }
-
-  std::vector<TravClass> reach;
-  std::vector<double> reach_jump_m;
-  if (quality.passed && options.step_reference != StepReference::kDominantPlane) {
-    reach = ReachableStepClasses(cloud, segment_ids, result.segments, ground.segment_id, up_camera, vehicle,
-                                 &reach_jump_m);
-  }
-
-  // Step to the ground plane (eq. 5) and the verdict per segment.
   for (SegmentResult& s : result.segments) {
     if (s.inliers == 0) continue;
-    if (!quality.passed) {
+    if (!result.quality.passed) {
       s.verdict = TravClass::kUndecided;
       s.reason = "frame failed the quality check";
       continue;
     }
-    s.ground = s.id == ground.segment_id;
-    s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
-    s.step_class = vehicle.ClassifyStep(s.step_m);
-    const bool by_reach =
-        !reach.empty() && (options.step_reference == StepReference::kReachable ||
-                           (!s.small && s.step_class == TravClass::kNonTraversable));
-    if (by_reach) {
-      s.step_class = reach[s.id];
-      // Reached: the jump of the crossing that reached it; unreached: eq. 5's distance.
-      if (std::isfinite(reach_jump_m[s.id])) s.step_m = reach_jump_m[s.id];
-    }
-    if (!s.has_plane) {
-      // One or two points: no slope, but their height above the ground still tells an obstacle.
-      const bool obstacle =
-          options.small_segments != SmallSegmentPolicy::kPaper && s.step_class == TravClass::kNonTraversable;
-      s.verdict = obstacle ? TravClass::kNonTraversable : TravClass::kUndecided;
-      if (obstacle) s.reason = "small segment, obstacle: step " + std::to_string(s.step_m) + " m";
-      continue;
-    }
-    const TravClass worst = Worse(s.slope_class, s.step_class);
-    const bool planar = s.inliers >= options.min_plane_points;  // its slope can be trusted
-    const SmallSegmentPolicy policy = options.small_segments;
-    if (!s.small) {
-      s.verdict = worst;
-      s.reason = ClassReason(s);
-    } else if (policy == SmallSegmentPolicy::kAll && planar) {
-      s.verdict = worst;
-      s.reason = "small segment: " + ClassReason(s);
-    } else if (policy != SmallSegmentPolicy::kPaper &&
-               (s.step_class == TravClass::kNonTraversable ||
-                (planar && s.slope_class == TravClass::kNonTraversable))) {
-      s.verdict = TravClass::kNonTraversable;
-      s.reason = "small segment, obstacle: " + ClassReason(s);
-    } else {
-      s.verdict = TravClass::kUndecided;
-      s.reason = "small segment (" + std::to_string(s.inliers) + " < " +
-                 std::to_string(result.inliers_min) + " px)";
-    }
+    MeasureStep(result.ground, reach, vehicle, options.step_reference, &s);
+    DecideVerdict(result.inliers_min, options, &s);
   }
 
-  // Per-pixel labels.
-  result.labels = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (!IsFinite(cloud[i])) continue;
-    const int id = segment_ids[i];
-    const TravClass c = id >= 0 ? result.segments[id].verdict : TravClass::kUndecided;
-    result.labels[i] = static_cast<std::uint8_t>(c);
-  }
+  result.labels = PixelLabels(cloud, segment_ids, result.segments);
   return result;
 }
 

@@ -1,5 +1,10 @@
 #pragma once
 
+// The paper's Superpixel Surface Traversability Analysis of one segmented frame (section III-E):
+// AnalyzeSurfaces with its options and results. Which function implements which equation is
+// listed at the top of src/analysis/surface_analyzer.cpp. The label refinements FrameAnalyzer
+// runs after it are in label_refinements.h.
+
 #include <string>
 #include <vector>
 
@@ -206,10 +211,11 @@ struct AnalysisResult {
 ///
 /// `cloud`: organized points in the (rectified) camera frame, NaN invalid. `segment_ids`: per
 /// pixel segment id in [0, num_segments) or -1, same size as the cloud. `up_camera`: unit
-/// vector opposite to gravity, in the same camera frame. Per segment: mean and covariance,
-/// PCA normal, slope vs up (eq. 3), dominant ground plane, quality check, step (eq. 5); a
-/// segment's class is the worse of its slope and step classes. When the quality check fails,
-/// every depth pixel is undecided and the reason is reported. Thread-safe (pure function).
+/// vector opposite to gravity (eq. 2's g_c), in the same camera frame. Per segment: mean and
+/// covariance, PCA normal, slope vs up (eq. 3), inliers_min (eq. 4), dominant ground plane,
+/// quality check, step (eq. 5); a segment's class is the worse of its slope and step classes.
+/// When the quality check fails, every depth pixel is undecided and the reason is reported.
+/// Thread-safe (pure function).
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                                const AnalysisOptions& options);
