@@ -1,6 +1,8 @@
 #include "ssta/analysis/frame_analysis.h"
 
 #include "core/run_both.h"
+#include "ssta/analysis/label_refinements.h"
+#include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/error.h"
 #include "ssta/stereo/stereo_matcher.h"
 

@@ -4,8 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <iomanip>
+#include <deque>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
@@ -113,7 +117,9 @@ Eigen::Matrix3d TiltRotation(const Eigen::Matrix<double, 3, 2>& axes, double a, 
 struct FramePlane {
   double values[3] = {0.0, 0.0, 0.0};
   double* tilt() { return values; }
+  const double* tilt() const { return values; }
   double& offset() { return values[2]; }
+  double offset() const { return values[2]; }
 };
 
 double Median(std::vector<double> values) {
@@ -121,6 +127,185 @@ double Median(std::vector<double> values) {
   const auto middle = values.begin() + values.size() / 2;
   std::nth_element(values.begin(), middle, values.end());
   return *middle;
+}
+
+/// The least-squares problem over a window and its unknowns, where Ceres reads and writes them
+/// (the problem keeps pointers to them: a MountProblem stays where it was built).
+struct MountProblem {
+  ceres::Problem problem;
+  std::shared_ptr<ceres::ParameterBlockOrdering> ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  Eigen::Matrix<double, 3, 2> correction_axes;
+  // Ceres orders the blocks of an elimination group by address, and that order is the order of
+  // the reduced system's arithmetic: the height correction comes before the correction.
+  double height[1] = {0.0};           // height correction [m]
+  double correction[2] = {0.0, 0.0};  // about correction_axes: roll, pitch [rad]
+  std::vector<FramePlane> blocks;     // one per frame of the window
+};
+
+/// The correction tilts about two axes perpendicular to the window's mean reference normal
+/// (body x and y for the body reference): rotation about the ground normal is unobservable.
+Eigen::Matrix<double, 3, 2> CorrectionAxes(const std::deque<GroundEvidence>& window, GroundReference reference) {
+  Eigen::Vector3d mean_up = Eigen::Vector3d::Zero();
+  for (const GroundEvidence& f : window) mean_up += ReferenceNormal(f, reference);
+  return TiltAxes(mean_up.normalized());
+}
+
+/// One frame's part of the problem: a residual per ground point under the shared `loss`, the
+/// priors on its plane `block` (tilt, and height when body_height_m is known), and the block in
+/// the Schur elimination group. The plane starts through the points' mean along the reference
+/// normal.
+void AddFrame(const GroundEvidence& frame, const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera,
+              ceres::LossFunction* loss, FramePlane* block, MountProblem* mount) {
+  const Eigen::Matrix3d body_R_camera = body_T_camera.linear();
+  const Eigen::Vector3d body_t_camera = body_T_camera.translation();
+  ceres::Problem& problem = mount->problem;
+  const Eigen::Vector3d n_ref = ReferenceNormal(frame, options.ground_reference);
+  const Eigen::Matrix<double, 3, 2> tilt_axes = TiltAxes(n_ref);
+  // Start each plane through the points' mean along the reference normal.
+  double mean = 0.0;
+  for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
+  block->offset() = -mean / static_cast<double>(frame.camera_points.size());
+  for (const Eigen::Vector3d& p : frame.camera_points) {
+    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
+                                 new GroundPointResidual(body_R_camera * p, body_t_camera, mount->correction_axes,
+                                                         n_ref, tilt_axes, PointSigma(p, options))),
+                             loss, mount->correction, mount->height, block->values);
+  }
+  problem.AddResidualBlock(MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), DegToRad(options.terrain_tilt_sigma_deg)),
+                           nullptr, block->values);
+  if (options.body_height_m >= 0.0) {
+    problem.AddResidualBlock(MakePrior<1, 3>(2, Eigen::Matrix<double, 1, 1>(options.body_height_m),
+                                             options.terrain_height_sigma_m),
+                             nullptr, block->values);
+  }
+  mount->ordering->AddElementToGroup(block->values, 0);
+}
+
+/// The whole problem: every frame's points and plane, then the priors on the correction and the
+/// height correction (held constant unless estimate_height). Frame planes are eliminated first.
+void BuildProblem(const std::deque<GroundEvidence>& window, const RefinementOptions& options,
+                  const Eigen::Isometry3d& body_T_camera, MountProblem* mount) {
+  mount->correction_axes = CorrectionAxes(window, options.ground_reference);
+  mount->blocks.resize(window.size());
+  // One loss shared by every point residual; the problem deletes it once.
+  ceres::LossFunction* loss = options.robust_loss == RobustLoss::kHuber
+                                  ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.loss_scale))
+                                  : new ceres::CauchyLoss(options.loss_scale);
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    AddFrame(window[i], options, body_T_camera, loss, &mount->blocks[i], mount);
+  }
+  ceres::Problem& problem = mount->problem;
+  problem.AddResidualBlock(MakePrior<2, 2>(0, Eigen::Vector2d::Zero(), DegToRad(options.prior_sigma_deg)), nullptr,
+                           mount->correction);
+  problem.AddResidualBlock(MakePrior<1, 1>(0, Eigen::Matrix<double, 1, 1>::Zero(), options.height_prior_sigma_m),
+                           nullptr, mount->height);
+  if (!options.estimate_height) problem.SetParameterBlockConstant(mount->height);
+  mount->ordering->AddElementToGroup(mount->correction, 1);
+  mount->ordering->AddElementToGroup(mount->height, 1);
+}
+
+ceres::Solver::Summary RunSolver(const RefinementOptions& options, MountProblem* mount) {
+  ceres::Solver::Options solver_options;
+  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
+  solver_options.linear_solver_ordering = mount->ordering;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.num_threads = 1;
+  solver_options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver_options, &mount->problem, &summary);
+  return summary;
+}
+
+/// Per-frame planes and robust statistics at the solution [m], into `result` (whose
+/// body_R_correction is the solved one): each point's distance to its frame's plane, the
+/// outliers beyond the loss scale, each frame's tilt and height, their RMS and median.
+void MeasureFit(const std::deque<GroundEvidence>& window, const RefinementOptions& options,
+                const Eigen::Isometry3d& body_T_camera, const MountProblem& mount, MountRefinementResult* result) {
+  const Eigen::Matrix3d body_R_camera = body_T_camera.linear();
+  const Eigen::Vector3d body_t_camera = body_T_camera.translation();
+  std::vector<double> distances;
+  distances.reserve(result->points_used);
+  double sum_sq = 0.0;
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    const GroundEvidence& frame = window[i];
+    const FramePlane& block = mount.blocks[i];
+    const Eigen::Vector3d n_ref = ReferenceNormal(frame, options.ground_reference);
+    const Eigen::Vector3d n = TiltRotation(TiltAxes(n_ref), block.tilt()[0], block.tilt()[1]) * n_ref;
+    for (const Eigen::Vector3d& p : frame.camera_points) {
+      const Eigen::Vector3d p_body =
+          result->body_R_correction * (body_R_camera * p) + body_t_camera + Eigen::Vector3d(0, 0, mount.height[0]);
+      const double d = std::abs(n.dot(p_body) + block.offset());
+      distances.push_back(d);
+      sum_sq += d * d;
+      if (d > options.loss_scale * PointSigma(p, options)) ++result->outlier_points;
+    }
+    FrameGroundEstimate estimate;
+    estimate.timestamp_ns = frame.timestamp_ns;
+    estimate.points = static_cast<int>(frame.camera_points.size());
+    estimate.tilt_deg = RadToDeg(std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)));
+    result->ground_tilt_rms_deg += estimate.tilt_deg * estimate.tilt_deg;
+    estimate.height_m = block.offset();
+    result->frames.push_back(estimate);
+  }
+  result->ground_tilt_rms_deg = std::sqrt(result->ground_tilt_rms_deg / static_cast<double>(window.size()));
+  if (!distances.empty()) {
+    result->residual_rms_m = std::sqrt(sum_sq / static_cast<double>(distances.size()));
+    result->residual_median_m = Median(distances);
+  }
+}
+
+/// Posterior 1-sigma of the correction (and of the height correction when estimated) into
+/// `result`; false when the covariance cannot be computed (rank deficient).
+bool ComputeSigmas(const RefinementOptions& options, MountProblem* mount, MountRefinementResult* result) {
+  ceres::Covariance::Options covariance_options;
+  covariance_options.num_threads = 1;
+  ceres::Covariance covariance(covariance_options);
+  const double* correction = mount->correction;
+  const double* height = mount->height;
+  std::vector<std::pair<const double*, const double*>> wanted = {{correction, correction}};
+  if (options.estimate_height) wanted.emplace_back(height, height);
+  if (!covariance.Compute(wanted, &mount->problem)) return false;
+  double c[4];
+  covariance.GetCovarianceBlock(correction, correction, c);
+  result->roll_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[0])));
+  result->pitch_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[3])));
+  if (options.estimate_height) {
+    double h = 0.0;
+    covariance.GetCovarianceBlock(height, height, &h);
+    result->height_sigma_m = std::sqrt(std::max(0.0, h));
+  }
+  return true;
+}
+
+/// Whether a solved correction is applied: its status and the sentence that says why.
+struct Verdict {
+  RefinementStatus status;
+  std::string message;
+};
+
+/// A solution with its sigmas is applied unless it is not better determined than its prior or
+/// the frames' ground planes scatter more than the terrain model allows.
+Verdict JudgeSolution(const RefinementOptions& options, const MountRefinementResult& result) {
+  // The prior first: a correction a tight prior holds at zero shows up as tilted frames too.
+  const double limit_deg = options.max_sigma_ratio * options.prior_sigma_deg;
+  if (std::max(result.pitch_sigma_deg, result.roll_sigma_deg) > limit_deg) {
+    std::ostringstream m;
+    m << std::setprecision(3) << "not better determined than its prior: posterior sigma pitch "
+      << result.pitch_sigma_deg << " deg, roll " << result.roll_sigma_deg << " deg vs prior " << options.prior_sigma_deg
+      << " deg (applied only below " << limit_deg << " deg); the configured mount is kept";
+    return {RefinementStatus::kNotBetterThanPrior, m.str()};
+  }
+  // Two tilt angles per frame, each N(0, sigma^2) under the model: RMS tilt ~ sqrt(2) sigma.
+  const double tilt_limit_deg = std::sqrt(2.0) * options.terrain_tilt_sigma_deg;
+  if (result.ground_tilt_rms_deg > tilt_limit_deg) {
+    std::ostringstream m;
+    m << std::setprecision(3) << "the ground is not flat enough: the frames' ground planes tilt by "
+      << result.ground_tilt_rms_deg << " deg RMS about the reference, more than terrain_tilt_sigma_deg allows ("
+      << tilt_limit_deg << " deg); the configured mount is kept (drive on flatter ground)";
+    return {RefinementStatus::kTerrainTooRough, m.str()};
+  }
+  return {RefinementStatus::kDetermined,
+          "mount correction determined from " + std::to_string(result.frames_used) + " frames"};
 }
 
 }  // namespace
@@ -166,102 +351,17 @@ MountRefinementResult MountRefiner::Solve() const {
     return result;
   }
 
-  const Eigen::Matrix3d body_R_camera = body_T_camera_.linear();
-  const Eigen::Vector3d body_t_camera = body_T_camera_.translation();
-  // The correction tilts about two axes perpendicular to the window's mean reference normal
-  // (body x and y for the body reference): rotation about the ground normal is unobservable.
-  Eigen::Vector3d mean_up = Eigen::Vector3d::Zero();
-  for (const GroundEvidence& f : window_) mean_up += ReferenceNormal(f, options_.ground_reference);
-  const Eigen::Matrix<double, 3, 2> correction_axes = TiltAxes(mean_up.normalized());
-  double correction[2] = {0.0, 0.0};  // about correction_axes: roll, pitch [rad]
-  double height[1] = {0.0};
-  std::vector<FramePlane> blocks(window_.size());
-
-  ceres::Problem problem;
-  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
-  const double loss_scale = options_.loss_scale;
-  // One loss shared by every point residual; the problem deletes it once.
-  ceres::LossFunction* loss = options_.robust_loss == RobustLoss::kHuber
-                                  ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(loss_scale))
-                                  : new ceres::CauchyLoss(loss_scale);
-  for (std::size_t i = 0; i < window_.size(); ++i) {
-    const GroundEvidence& frame = window_[i];
-    const Eigen::Vector3d n_ref = ReferenceNormal(frame, options_.ground_reference);
-    const Eigen::Matrix<double, 3, 2> tilt_axes = TiltAxes(n_ref);
-    // Start each plane through the points' mean along the reference normal.
-    double mean = 0.0;
-    for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
-    blocks[i].offset() = -mean / static_cast<double>(frame.camera_points.size());
-    for (const Eigen::Vector3d& p : frame.camera_points) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
-                                   new GroundPointResidual(body_R_camera * p, body_t_camera, correction_axes,
-                                                           n_ref, tilt_axes, PointSigma(p, options_))),
-                               loss, correction, height, blocks[i].values);
-    }
-    problem.AddResidualBlock(
-        MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), DegToRad(options_.terrain_tilt_sigma_deg)), nullptr,
-        blocks[i].values);
-    if (options_.body_height_m >= 0.0) {
-      problem.AddResidualBlock(MakePrior<1, 3>(2, Eigen::Matrix<double, 1, 1>(options_.body_height_m),
-                                               options_.terrain_height_sigma_m),
-                               nullptr, blocks[i].values);
-    }
-    ordering->AddElementToGroup(blocks[i].values, 0);
-  }
-  problem.AddResidualBlock(MakePrior<2, 2>(0, Eigen::Vector2d::Zero(), DegToRad(options_.prior_sigma_deg)), nullptr,
-                           correction);
-  problem.AddResidualBlock(MakePrior<1, 1>(0, Eigen::Matrix<double, 1, 1>::Zero(), options_.height_prior_sigma_m),
-                           nullptr, height);
-  if (!options_.estimate_height) problem.SetParameterBlockConstant(height);
-  ordering->AddElementToGroup(correction, 1);
-  ordering->AddElementToGroup(height, 1);
-
-  ceres::Solver::Options solver_options;
-  solver_options.linear_solver_type = ceres::DENSE_SCHUR;
-  solver_options.linear_solver_ordering = ordering;
-  solver_options.max_num_iterations = options_.max_iterations;
-  solver_options.num_threads = 1;
-  solver_options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(solver_options, &problem, &summary);
+  MountProblem mount;
+  BuildProblem(window_, options_, body_T_camera_, &mount);
+  const ceres::Solver::Summary summary = RunSolver(options_, &mount);
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
   result.iterations = static_cast<int>(summary.iterations.size());
-
-  result.roll_correction_deg = RadToDeg(correction[0]);
-  result.pitch_correction_deg = RadToDeg(correction[1]);
-  result.height_correction_m = options_.estimate_height ? height[0] : 0.0;
-  result.body_R_correction = TiltRotation(correction_axes, correction[0], correction[1]);
-
-  // Per-frame planes and robust statistics at the solution [m].
-  std::vector<double> distances;
-  distances.reserve(result.points_used);
-  double sum_sq = 0.0;
-  for (std::size_t i = 0; i < window_.size(); ++i) {
-    const GroundEvidence& frame = window_[i];
-    const Eigen::Vector3d n_ref = ReferenceNormal(frame, options_.ground_reference);
-    const Eigen::Vector3d n = TiltRotation(TiltAxes(n_ref), blocks[i].tilt()[0], blocks[i].tilt()[1]) * n_ref;
-    for (const Eigen::Vector3d& p : frame.camera_points) {
-      const Eigen::Vector3d p_body =
-          result.body_R_correction * (body_R_camera * p) + body_t_camera + Eigen::Vector3d(0, 0, height[0]);
-      const double d = std::abs(n.dot(p_body) + blocks[i].offset());
-      distances.push_back(d);
-      sum_sq += d * d;
-      if (d > loss_scale * PointSigma(p, options_)) ++result.outlier_points;
-    }
-    FrameGroundEstimate estimate;
-    estimate.timestamp_ns = frame.timestamp_ns;
-    estimate.points = static_cast<int>(frame.camera_points.size());
-    estimate.tilt_deg = RadToDeg(std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)));
-    result.ground_tilt_rms_deg += estimate.tilt_deg * estimate.tilt_deg;
-    estimate.height_m = blocks[i].offset();
-    result.frames.push_back(estimate);
-  }
-  result.ground_tilt_rms_deg = std::sqrt(result.ground_tilt_rms_deg / static_cast<double>(window_.size()));
-  if (!distances.empty()) {
-    result.residual_rms_m = std::sqrt(sum_sq / static_cast<double>(distances.size()));
-    result.residual_median_m = Median(distances);
-  }
+  result.roll_correction_deg = RadToDeg(mount.correction[0]);
+  result.pitch_correction_deg = RadToDeg(mount.correction[1]);
+  result.height_correction_m = options_.estimate_height ? mount.height[0] : 0.0;
+  result.body_R_correction = TiltRotation(mount.correction_axes, mount.correction[0], mount.correction[1]);
+  MeasureFit(window_, options_, body_T_camera_, mount, &result);
 
   auto finish = [&](RefinementStatus status, const std::string& message) {
     result.status = status;
@@ -270,47 +370,17 @@ MountRefinementResult MountRefiner::Solve() const {
     return result;
   };
   if (!summary.IsSolutionUsable()) return finish(RefinementStatus::kFailed, "solver failed: " + summary.message);
-
-  ceres::Covariance::Options covariance_options;
-  covariance_options.num_threads = 1;
-  ceres::Covariance covariance(covariance_options);
-  std::vector<std::pair<const double*, const double*>> wanted = {{correction, correction}};
-  if (options_.estimate_height) wanted.emplace_back(height, height);
-  if (!covariance.Compute(wanted, &problem)) {
+  if (!ComputeSigmas(options_, &mount, &result)) {
     return finish(RefinementStatus::kFailed, "the covariance of the correction could not be computed (rank deficient)");
   }
-  double c[4];
-  covariance.GetCovarianceBlock(correction, correction, c);
-  result.roll_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[0])));
-  result.pitch_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[3])));
-  if (options_.estimate_height) {
-    double h = 0.0;
-    covariance.GetCovarianceBlock(height, height, &h);
-    result.height_sigma_m = std::sqrt(std::max(0.0, h));
+  const Verdict verdict = JudgeSolution(options_, result);
+  if (verdict.status == RefinementStatus::kDetermined) {
+    const Eigen::Matrix3d body_R_camera = body_T_camera_.linear();
+    const Eigen::Vector3d body_t_camera = body_T_camera_.translation();
+    result.body_T_camera_refined.linear() = result.body_R_correction * body_R_camera;
+    result.body_T_camera_refined.translation() = body_t_camera + Eigen::Vector3d(0, 0, result.height_correction_m);
   }
-
-  // The prior first: a correction a tight prior holds at zero shows up as tilted frames too.
-  const double limit_deg = options_.max_sigma_ratio * options_.prior_sigma_deg;
-  if (std::max(result.pitch_sigma_deg, result.roll_sigma_deg) > limit_deg) {
-    std::ostringstream m;
-    m << std::setprecision(3) << "not better determined than its prior: posterior sigma pitch "
-      << result.pitch_sigma_deg << " deg, roll " << result.roll_sigma_deg << " deg vs prior " << options_.prior_sigma_deg
-      << " deg (applied only below " << limit_deg << " deg); the configured mount is kept";
-    return finish(RefinementStatus::kNotBetterThanPrior, m.str());
-  }
-  // Two tilt angles per frame, each N(0, sigma^2) under the model: RMS tilt ~ sqrt(2) sigma.
-  const double tilt_limit_deg = std::sqrt(2.0) * options_.terrain_tilt_sigma_deg;
-  if (result.ground_tilt_rms_deg > tilt_limit_deg) {
-    std::ostringstream m;
-    m << std::setprecision(3) << "the ground is not flat enough: the frames' ground planes tilt by "
-      << result.ground_tilt_rms_deg << " deg RMS about the reference, more than terrain_tilt_sigma_deg allows ("
-      << tilt_limit_deg << " deg); the configured mount is kept (drive on flatter ground)";
-    return finish(RefinementStatus::kTerrainTooRough, m.str());
-  }
-  result.body_T_camera_refined.linear() = result.body_R_correction * body_R_camera;
-  result.body_T_camera_refined.translation() = body_t_camera + Eigen::Vector3d(0, 0, result.height_correction_m);
-  return finish(RefinementStatus::kDetermined, "mount correction determined from " +
-                                                   std::to_string(result.frames_used) + " frames");
+  return finish(verdict.status, verdict.message);
 }
 
 std::string MountRefinementResult::BriefReport() const {

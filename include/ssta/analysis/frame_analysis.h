@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 
+#include "ssta/analysis/label_refinements.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/image.h"
 #include "ssta/stereo/rectifier.h"
@@ -20,8 +21,9 @@ struct FrameAnalysisInput {
   Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< unit up in the rectified cam0 frame
 };
 
-/// The analysis of one frame after segmentation: the paper's SSTA (AnalyzeSurfaces, eq. 2-5)
-/// followed by the label refinements the analysis options turn on, in this order:
+/// The analysis of one frame after segmentation: the paper's SSTA (AnalyzeSurfaces, eq. 2-5;
+/// surface_analyzer.h) followed by the label refinements the analysis options turn on
+/// (label_refinements.h), in this order:
 ///   1. per-pixel slopes (RefineByPixelSlope),
 ///   2. ground consistency (RefineByGroundDisparity),
 ///   3. fragments on a neighbour's plane (RefineByFragmentPlanes),

@@ -1,7 +1,11 @@
 #pragma once
 
+// The paper's Superpixel Surface Traversability Analysis of one segmented frame (section III-E):
+// AnalyzeSurfaces with its options and results. Which function implements which equation is
+// listed at the top of src/analysis/surface_analyzer.cpp. The label refinements FrameAnalyzer
+// runs after it are in label_refinements.h.
+
 #include <string>
-#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -52,62 +56,68 @@ enum class StepReference {
 StepReference ParseStepReference(const std::string& name);
 std::string StepReferenceName(StepReference reference);
 
-/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E).
+/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E). One struct
+/// for the whole stage; its fields come in the order the stage uses them: the paper's analysis
+/// (AnalyzeSurfaces), the rules AnalyzeSurfaces adds to it, then each label refinement
+/// (label_refinements.h) in the order FrameAnalyzer runs them. The YAML keys and their order in
+/// written files follow Fields(), not this order.
 struct AnalysisOptions {
-  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
-  /// is in a worse slope class takes that class (RefineByPixelSlope). On smooth terrain a
-  /// hillside has no segment boundary, and one PCA slope for the whole segment averages its
-  /// steep flank away. false: the paper, one verdict per segment.
-  bool pixel_slopes = true;
-  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
-  /// segment [px, odd]; 1: the pixel's own normal.
-  int pixel_slope_window_px = 31;
-  /// How steps are measured; see StepReference.
-  StepReference step_reference = StepReference::kReachableLarge;
+  // The paper's analysis (AnalyzeSurfaces).
+
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
   /// their own in the paper.
   double inliers_min_ratio = 0.02;
-  /// What small segments get; see SmallSegmentPolicy.
-  SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
-  /// Fewest points for the slope of a small segment to count [points].
-  int min_plane_points = 30;
   /// Quality check of the dominant ground plane: least share of the frame's depth pixels that
   /// must lie on it, and the largest RMS point-to-plane distance [m].
   double min_ground_share = 0.08;
   double max_ground_rms_m = 0.08;
-  /// Ground consistency in disparity space (RefineByGroundDisparity) [px]: a point whose
-  /// disparity lies within this of the dominant ground plane's disparity on the same pixel ray
-  /// is on the ground within stereo noise. Disparity noise does not grow with range, so the test
-  /// holds as well at 10 m as at 2 m, where slopes of noisy far patches do not. 0: off.
+
+  // AnalyzeSurfaces beyond the paper: steps by reachability, verdicts for small segments.
+
+  /// How steps are measured; see StepReference.
+  StepReference step_reference = StepReference::kReachableLarge;
+  /// What small segments get; see SmallSegmentPolicy.
+  SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
+  /// Fewest points for the slope of a small segment to count [points].
+  int min_plane_points = 30;
+
+  // Refinement 1, per-pixel slopes (RefineByPixelSlope).
+
+  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
+  /// is in a worse slope class takes that class. On smooth terrain a hillside has no segment
+  /// boundary, and one PCA slope for the whole segment averages its steep flank away. false:
+  /// the paper, one verdict per segment.
+  bool pixel_slopes = true;
+  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
+  /// segment [px, odd]; 1: the pixel's own normal.
+  int pixel_slope_window_px = 31;
+
+  // Refinement 2, ground consistency (RefineByGroundDisparity); refinement 6 uses the tolerance.
+
+  /// A point whose disparity lies within this of the dominant ground plane's disparity on the
+  /// same pixel ray is on the ground within stereo noise [px]. Disparity noise does not grow
+  /// with range, so the test holds as well at 10 m as at 2 m, where slopes of noisy far patches
+  /// do not. 0: off.
   double ground_tolerance_px = 1.0;
   /// Least share of a small segment's points that must be ground-consistent for the segment to
   /// be taken as ground (traversable), (0, 1].
   double ground_consistent_share = 0.9;
-  /// Fragments on a neighbour's plane (RefineByFragmentPlanes) [px]: a small segment whose
-  /// points lie within this of the plane of an adjacent large segment, in disparity along their
-  /// pixel rays, is a piece of that surface that stereo noise broke off. 0: off.
+
+  // Refinement 3, fragments on a neighbour's plane (RefineByFragmentPlanes).
+
+  /// A small segment whose points lie within this of the plane of an adjacent large segment, in
+  /// disparity along their pixel rays, is a piece of that surface that stereo noise broke off
+  /// [px]. 0: off.
   double fragment_tolerance_px = 1.5;
   /// Least share of a small segment's points that must lie that close, (0, 1].
   double fragment_consistent_share = 0.9;
   /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
   /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
   int fragment_host_min_points = 1000;
-  /// Undecided pixels amid a consensus (FillUndecidedByConsensus): the half side of the square
-  /// window around an undecided pixel [px]; 0: off.
-  int undecided_fill_radius_px = 4;
-  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
-  double undecided_fill_share = 0.9;
-  /// Undecided pixels that no consensus fills (FillUndecidedByHeight): true, each takes the step
-  /// class of its own point's height above the dominant ground plane where that is drivable
-  /// (traversable, or semi-traversable above the plane); other points stay undecided.
-  bool undecided_height_fill = true;
-  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
-  /// levels] are labelled unknown (0) once the analysis is done (FramePipeline): the sky, blank
-  /// walls, where the matcher's disparity is a guess. The analysis still uses their points.
-  /// 0: off.
-  double label_min_texture = 0.0;
-  /// Thin vertical faces from the disparity (RefineByDisparityFaces): rows of the disparity
-  /// fitted along each image column [px, odd, >= 3]; 0: off.
+
+  // Refinement 4, thin vertical faces from the disparity (RefineByDisparityFaces).
+
+  /// Rows of the disparity fitted along each image column [px, odd, >= 3]; 0: off.
   int face_window_px = 11;
   /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
   /// varies from column to column while curbs and steps run across many; 1: each column alone.
@@ -117,6 +127,27 @@ struct AnalysisOptions {
   double face_grow_tolerance_px = 0.25;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
+
+  // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).
+
+  /// The half side of the square window around an undecided pixel [px]; 0: off.
+  int undecided_fill_radius_px = 4;
+  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
+  double undecided_fill_share = 0.9;
+
+  // Refinement 6, undecided pixels by their own height (FillUndecidedByHeight).
+
+  /// true: undecided pixels that no consensus fills each take the step class of their own
+  /// point's height above the dominant ground plane where that is drivable (traversable, or
+  /// semi-traversable above the plane); other points stay undecided.
+  bool undecided_height_fill = true;
+
+  // After the analysis (FramePipeline).
+
+  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
+  /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
+  /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
+  double label_min_texture = 0.0;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<AnalysisOptions>& Fields();
@@ -180,118 +211,14 @@ struct AnalysisResult {
 ///
 /// `cloud`: organized points in the (rectified) camera frame, NaN invalid. `segment_ids`: per
 /// pixel segment id in [0, num_segments) or -1, same size as the cloud. `up_camera`: unit
-/// vector opposite to gravity, in the same camera frame. Per segment: mean and covariance,
-/// PCA normal, slope vs up (eq. 3), dominant ground plane, quality check, step (eq. 5); a
-/// segment's class is the worse of its slope and step classes. When the quality check fails,
-/// every depth pixel is undecided and the reason is reported. Thread-safe (pure function).
+/// vector opposite to gravity (eq. 2's g_c), in the same camera frame. Per segment: mean and
+/// covariance, PCA normal, slope vs up (eq. 3), inliers_min (eq. 4), dominant ground plane,
+/// quality check, step (eq. 5); a segment's class is the worse of its slope and step classes.
+/// When the quality check fails, every depth pixel is undecided and the reason is reported.
+/// Thread-safe (pure function).
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                                const AnalysisOptions& options);
-
-/// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
-/// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
-/// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
-/// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
-/// its own segment (`segment_ids`, required then): per-pixel normals of stereo points carry a few
-/// degrees of noise, and where the true slope is near a threshold the classes flicker.
-void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
-
-/// RefineByPixelSlope in two steps, so that the costly one can run beside AnalyzeSurfaces:
-/// PixelSlopeClasses reads the normals and segment ids only and writes, per pixel, the class its
-/// (window-averaged) slope would force on a traversable or semi-traversable label (0: none,
-/// 2: semi-traversable, 3: non-traversable); ApplyPixelSlopeClasses then changes the labels.
-/// The two in turn give exactly RefineByPixelSlope's labels.
-void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                       const ImageI32* segment_ids, int window_px, ImageU8* slope_classes);
-void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels);
-
-/// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
-/// dominant ground plane that passed the quality check, else does nothing). A point is
-/// ground-consistent when |d - d_ground| <= ground_tolerance_px, with d = focal_times_baseline / Z
-/// its disparity and d_ground the disparity of the ground plane along the same pixel ray. A small
-/// segment (below inliers_min) that is not traversable and has at least ground_consistent_share
-/// of its points consistent becomes traversable: far from the camera, stereo noise breaks the
-/// ground into small fragments whose own planes tilt at random, while their disparities stay on
-/// the ground's. Large segments keep their verdicts: their planes are well determined.
-/// Updates result->labels and the verdicts and reasons of the segments it changes.
-/// `focal_times_baseline`: f * b of the rectified pair [px * m].
-void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                             const AnalysisOptions& options, AnalysisResult* result);
-
-/// Undecided pixels amid a consensus (AnalysisOptions::undecided_fill_radius_px > 0): an
-/// undecided pixel (4) takes the class (1..3) that at least undecided_fill_share of the decided
-/// pixels in the (2 r + 1)^2 window around it hold. Tiny segments along obstacle outlines and
-/// in far ground get no verdict of their own (too few points for a plane); where everything
-/// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
-/// edge against the ground), they stay undecided. One pass on the labels as they were.
-void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
-
-/// Undecided pixels by their own height (AnalysisOptions::undecided_height_fill; needs a frame
-/// that passed the quality check, else does nothing). Pixels without a normal (the smoothing
-/// window broke on a depth edge) and segments of a few points get no verdict, and where an
-/// obstacle's edge meets the ground no consensus fills them: the 3-5 rows on top of a curb, the
-/// strip between a face and the ground. Each undecided pixel (4) with a point p takes
-/// traversable when p lies within ground_tolerance_px of the dominant plane in disparity (the
-/// test of RefineByGroundDisparity), else the step class of its height |n . p + D| when that is
-/// traversable, or semi-traversable above the plane. Other points stay undecided: a lone point is
-/// not called an obstacle, since next to a depth edge the matcher smears the farther surface's
-/// disparity into the nearer one (at a drop-off's brink such points lie far below the plane);
-/// and below the plane, what the camera sees of a shallow hole is mostly its far wall (a face),
-/// where above it the top of a curb or a step faces the camera as much as its front does.
-/// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
-void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
-                           const AnalysisOptions& options, AnalysisResult* result);
-
-/// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
-/// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
-/// becomes non-traversable. The disparity is fitted by a line over face_window_px rows around the
-/// pixel (a window with an invalid pixel or a jump over 0.5 px between rows is skipped); with d
-/// and d' = dd/dv from the fit, the surface's tangent along the column is
-/// (0, 1, 0) - (u - cu, v - cv, f) * d' / d (X = ray * b / d, differentiated), and its angle to
-/// the plane normal to `up_camera` is the slope tested. On level ground d' is b/h px per row
-/// (h: camera height) at every range; on a face towards the camera d is constant. Faces a few
-/// pixels tall (the front of a curb or a step) vanish in the normals' smoothing windows, which
-/// are 31 px wide; eleven rows of disparity keep them. Each pixel takes the mean d' over the mean
-/// d of the clean windows (no invalid pixel, no jump) of the face_columns_px columns around it:
-/// pooling columns cuts the noise of d' that hides faces of 5 cm. A face shorter than the window
-/// is flagged only where the window is centred on it; from each pixel steeper than 70 deg, the
-/// rows within the window whose disparity equals the face's (within face_grow_tolerance_px,
-/// the window's mean) join it.
-/// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
-/// focal length and principal point [px].
-void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                            const AnalysisOptions& options, ImageU8* labels);
-
-/// RefineByDisparityFaces in two steps, so that the costly one can run beside the label steps
-/// before it: FindDisparityFaces reads the disparity only and marks, per pixel, what the test
-/// would make of a traversable, semi-traversable or undecided pixel there; ApplyDisparityFaces
-/// then changes the labels as RefineByDisparityFaces does. Find then Apply on the same labels
-/// gives exactly RefineByDisparityFaces' result.
-struct DisparityFaces {
-  ImageU8 marks;  ///< 0: no face; 1: on a face; 2: on a face and steep enough to grow it
-  std::vector<std::pair<int, float>> seeds;  ///< pixels marked 2 (raster order): index, face disparity
-};
-void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                        const AnalysisOptions& options, DisparityFaces* faces);
-void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
-                         ImageU8* labels);
-
-/// Fragments (AnalysisOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
-/// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
-/// small segments whose own planes tilt at random and whose centroids may stand off the dominant
-/// plane: as obstacles (small_segments: all) they paint ramps and far ground non-traversable.
-/// A small segment takes the verdict of the host it touches (4-connected) whose plane holds the
-/// most of its points within fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the
-/// test of RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share
-/// of them. A host is a segment with a plane not through the camera, at least
-/// fragment_host_min_points points and more than twice the fragment's. A host that is itself a
-/// fragment of a larger host passes that one's verdict on: a fragment takes the verdict at the
-/// end of its chain of hosts, whatever the order of the segment ids.
-/// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
-/// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
-void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                            const AnalysisOptions& options, AnalysisResult* result);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.

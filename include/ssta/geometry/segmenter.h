@@ -84,6 +84,13 @@ class Segmenter {
   const SegmenterOptions& options() const { return options_; }
 
  private:
+  struct JoinTest;  // the join test of one Compute call
+  void JoinNeighbours(const Image3f& normals, const ImageF* disparity);  // pass 1: union-find
+  void TestRowJoins(const JoinTest& test, int v, int width);
+  void JoinRow(const Image3f& normals, const JoinTest& test, int v);
+  int NumberSegments(std::int32_t num_pixels);  // pass 2: ids and sizes
+  void ListPixels(int num_segments);            // offsets and pixel_indices
+
   SegmenterOptions options_;
   Segmentation result_;
   std::vector<std::int32_t> parent_;

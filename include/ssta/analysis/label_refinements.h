@@ -1,0 +1,131 @@
+#pragma once
+
+// The label refinements FrameAnalyzer runs after the paper's analysis (AnalyzeSurfaces,
+// surface_analyzer.h), each turned on by its fields of AnalysisOptions. They change the labels,
+// and some the verdicts of segments, where the paper's one plane per segment errs on stereo data:
+//   1. per-pixel slopes          RefineByPixelSlope       src/analysis/pixel_slopes.cpp
+//   2. ground consistency        RefineByGroundDisparity  src/analysis/label_refinements.cpp
+//   3. fragments                 RefineByFragmentPlanes   src/analysis/label_refinements.cpp
+//   4. thin faces                RefineByDisparityFaces   src/analysis/disparity_faces.cpp
+//   5. fill by consensus         FillUndecidedByConsensus src/analysis/label_refinements.cpp
+//   6. fill by height            FillUndecidedByHeight    src/analysis/label_refinements.cpp
+// Refinements 1 and 4 also come in two steps each (find, then apply) so that their costly part
+// can run beside the steps before them.
+
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/image.h"
+
+namespace ssta {
+
+/// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
+/// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
+/// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
+/// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
+/// its own segment (`segment_ids`, required then): per-pixel normals of stereo points carry a few
+/// degrees of noise, and where the true slope is near a threshold the classes flicker.
+void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
+
+/// RefineByPixelSlope in two steps, so that the costly one can run beside AnalyzeSurfaces:
+/// PixelSlopeClasses reads the normals and segment ids only and writes, per pixel, the class its
+/// (window-averaged) slope would force on a traversable or semi-traversable label (0: none,
+/// 2: semi-traversable, 3: non-traversable); ApplyPixelSlopeClasses then changes the labels.
+/// The two in turn give exactly RefineByPixelSlope's labels.
+void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                       const ImageI32* segment_ids, int window_px, ImageU8* slope_classes);
+void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels);
+
+/// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
+/// dominant ground plane that passed the quality check, else does nothing). A point is
+/// ground-consistent when |d - d_ground| <= ground_tolerance_px, with d = focal_times_baseline / Z
+/// its disparity and d_ground the disparity of the ground plane along the same pixel ray. A small
+/// segment (below inliers_min) that is not traversable and has at least ground_consistent_share
+/// of its points consistent becomes traversable: far from the camera, stereo noise breaks the
+/// ground into small fragments whose own planes tilt at random, while their disparities stay on
+/// the ground's. Large segments keep their verdicts: their planes are well determined.
+/// Updates result->labels and the verdicts and reasons of the segments it changes.
+/// `focal_times_baseline`: f * b of the rectified pair [px * m].
+void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                             const AnalysisOptions& options, AnalysisResult* result);
+
+/// Fragments (AnalysisOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
+/// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
+/// small segments whose own planes tilt at random and whose centroids may stand off the dominant
+/// plane: as obstacles (small_segments: all) they paint ramps and far ground non-traversable.
+/// A small segment takes the verdict of the host it touches (4-connected) whose plane holds the
+/// most of its points within fragment_tolerance_px in disparity (|fb (n . p + D) / (Z D)|, the
+/// test of RefineByGroundDisparity on that plane), if that is at least fragment_consistent_share
+/// of them. A host is a segment with a plane not through the camera, at least
+/// fragment_host_min_points points and more than twice the fragment's. A host that is itself a
+/// fragment of a larger host passes that one's verdict on: a fragment takes the verdict at the
+/// end of its chain of hosts, whatever the order of the segment ids.
+/// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
+/// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
+void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                            const AnalysisOptions& options, AnalysisResult* result);
+
+/// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
+/// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
+/// becomes non-traversable. The disparity is fitted by a line over face_window_px rows around the
+/// pixel (a window with an invalid pixel or a jump over 0.5 px between rows is skipped); with d
+/// and d' = dd/dv from the fit, the surface's tangent along the column is
+/// (0, 1, 0) - (u - cu, v - cv, f) * d' / d (X = ray * b / d, differentiated), and its angle to
+/// the plane normal to `up_camera` is the slope tested. On level ground d' is b/h px per row
+/// (h: camera height) at every range; on a face towards the camera d is constant. Faces a few
+/// pixels tall (the front of a curb or a step) vanish in the normals' smoothing windows, which
+/// are 31 px wide; eleven rows of disparity keep them. Each pixel takes the mean d' over the mean
+/// d of the clean windows (no invalid pixel, no jump) of the face_columns_px columns around it:
+/// pooling columns cuts the noise of d' that hides faces of 5 cm. A face shorter than the window
+/// is flagged only where the window is centred on it; from each pixel steeper than 70 deg, the
+/// rows within the window whose disparity equals the face's (within face_grow_tolerance_px,
+/// the window's mean) join it.
+/// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
+/// focal length and principal point [px].
+void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                            const AnalysisOptions& options, ImageU8* labels);
+
+/// RefineByDisparityFaces in two steps, so that the costly one can run beside the label steps
+/// before it: FindDisparityFaces reads the disparity only and marks, per pixel, what the test
+/// would make of a traversable, semi-traversable or undecided pixel there; ApplyDisparityFaces
+/// then changes the labels as RefineByDisparityFaces does. Find then Apply on the same labels
+/// gives exactly RefineByDisparityFaces' result.
+struct DisparityFaces {
+  ImageU8 marks;  ///< 0: no face; 1: on a face; 2: on a face and steep enough to grow it
+  std::vector<std::pair<int, float>> seeds;  ///< pixels marked 2 (raster order): index, face disparity
+};
+void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                        const AnalysisOptions& options, DisparityFaces* faces);
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+                         ImageU8* labels);
+
+/// Undecided pixels amid a consensus (AnalysisOptions::undecided_fill_radius_px > 0): an
+/// undecided pixel (4) takes the class (1..3) that at least undecided_fill_share of the decided
+/// pixels in the (2 r + 1)^2 window around it hold. Tiny segments along obstacle outlines and
+/// in far ground get no verdict of their own (too few points for a plane); where everything
+/// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
+/// edge against the ground), they stay undecided. One pass on the labels as they were.
+void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
+
+/// Undecided pixels by their own height (AnalysisOptions::undecided_height_fill; needs a frame
+/// that passed the quality check, else does nothing). Pixels without a normal (the smoothing
+/// window broke on a depth edge) and segments of a few points get no verdict, and where an
+/// obstacle's edge meets the ground no consensus fills them: the 3-5 rows on top of a curb, the
+/// strip between a face and the ground. Each undecided pixel (4) with a point p takes
+/// traversable when p lies within ground_tolerance_px of the dominant plane in disparity (the
+/// test of RefineByGroundDisparity), else the step class of its height |n . p + D| when that is
+/// traversable, or semi-traversable above the plane. Other points stay undecided: a lone point is
+/// not called an obstacle, since next to a depth edge the matcher smears the farther surface's
+/// disparity into the nearer one (at a drop-off's brink such points lie far below the plane);
+/// and below the plane, what the camera sees of a shallow hole is mostly its far wall (a face),
+/// where above it the top of a curb or a step faces the camera as much as its front does.
+/// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
+void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
+                           const AnalysisOptions& options, AnalysisResult* result);
+
+}  // namespace ssta

@@ -1,0 +1,177 @@
+// Refinement 4 of label_refinements.h: thin vertical faces from the disparity
+// (RefineByDisparityFaces and its two steps).
+
+#include "ssta/analysis/label_refinements.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "ssta/core/error.h"
+#include "ssta/core/units.h"
+
+namespace ssta {
+
+void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                            const AnalysisOptions& options, ImageU8* labels) {
+  if (options.face_window_px == 0) return;
+  SSTA_CHECK(disparity.width() == labels->width() && disparity.height() == labels->height(),
+             "RefineByDisparityFaces: disparity and labels differ in size");
+  thread_local DisparityFaces faces;
+  FindDisparityFaces(disparity, f, cu, cv, up_camera, options, &faces);
+  ApplyDisparityFaces(faces, disparity, options, labels);
+}
+
+void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
+                        const AnalysisOptions& options, DisparityFaces* faces) {
+  faces->seeds.clear();
+  if (faces->marks.width() != disparity.width() || faces->marks.height() != disparity.height()) {
+    faces->marks = ImageU8(disparity.width(), disparity.height(), 0);
+  } else {
+    faces->marks.Fill(0);
+  }
+  if (options.face_window_px == 0) return;
+  SSTA_CHECK(options.face_window_px >= 3 && options.face_window_px % 2 == 1,
+             "RefineByDisparityFaces: face_window_px must be odd and at least 3");
+  SSTA_CHECK(options.face_columns_px >= 1 && options.face_columns_px % 2 == 1,
+             "RefineByDisparityFaces: face_columns_px must be odd and at least 1");
+  SSTA_CHECK(f > 0, "RefineByDisparityFaces: focal length must be positive");
+  constexpr float kMaxRowJumpPx = 0.5f;  // a larger step between rows is a depth edge, not a face
+  const int w = disparity.width(), h = disparity.height(), k = options.face_window_px / 2;
+  const int r = options.face_columns_px / 2;
+  if (h < 2 * k + 1) return;
+  const Eigen::Vector3d up = up_camera.normalized();
+  const double sin_min = std::sin(DegToRad(options.face_min_slope_deg));
+  const double sin2_min = sin_min * sin_min;
+  double sum_jj = 0.0;
+  for (int j = -k; j <= k; ++j) sum_jj += static_cast<double>(j) * j;
+  // Per column, slid down the rows: s1 = sum of d over the window, s2 = sum of j * d (j the row
+  // offset from the centre), and how many rows of the window are invalid or jump from the row
+  // above (a jump into the window's first row does not count). Invalid rows add 0 to the sums.
+  thread_local std::vector<double> s1, s2;
+  thread_local std::vector<int> bad;
+  // Per row, prefix sums over the columns of s1 and s2, and the first and last column of each
+  // run of clean columns whose window means step by at most kMaxRowJumpPx from one to the next
+  // (one surface): each pixel pools the fits of up to face_columns_px columns of its run.
+  thread_local std::vector<double> p1, p2;
+  thread_local std::vector<int> run_first, run_last;
+  s1.assign(w, 0.0);
+  s2.assign(w, 0.0);
+  bad.assign(w, 0);
+  p1.assign(w + 1, 0.0);
+  p2.assign(w + 1, 0.0);
+  run_first.assign(w, 0);
+  run_last.assign(w, 0);
+  const double jump_sum = kMaxRowJumpPx * (2 * k + 1);  // the step limit on s1 = n * mean
+  // Invalid disparities (NaN, <= 0) count 0 in the sums and 1 in `bad`; a jump from the row
+  // above counts 1 in `bad` unless the row is the window's first.
+  auto add_row = [&](int row, double weight_j, int sign, bool count_jump) {
+    const float* d = disparity.row(row);
+    const float* above = disparity.row(row > 0 ? row - 1 : row);
+    for (int u = 0; u < w; ++u) {
+      const bool ok = d[u] > 0.0f;
+      const double x = ok ? static_cast<double>(d[u]) : 0.0;
+      s1[u] += sign * x;
+      s2[u] += sign * weight_j * x;
+      bad[u] += sign * ((!ok) + (count_jump && std::abs(d[u] - above[u]) > kMaxRowJumpPx));
+    }
+  };
+  for (int j = -k; j <= k; ++j) add_row(k + j, j, +1, j > -k);
+  // Per pixel, with q = (dd/dv) / d from the fit and y = v - cv, the tangent along the column is
+  // t = (-(u - cu) q, 1 - y q, -f q): its rise along up is up_y - q A(u) with
+  // A(u) = (u - cu) up_x + y up_y + f up_z, and |t|^2 = q^2 ((u - cu)^2 + y^2 + f^2) - 2 y q + 1.
+  const double n = 2 * k + 1;
+  // Pixels rising steeper than kGrowSeedSlopeDeg are surely on a face: their window's mean
+  // disparity (the face's, constant along the column) is kept to grow the face along the column.
+  constexpr double kGrowSeedSlopeDeg = 70.0;
+  const bool grow = options.face_grow_tolerance_px > 0;
+  const double sin_seed = std::sin(DegToRad(kGrowSeedSlopeDeg)), sin2_seed = sin_seed * sin_seed;
+  std::vector<std::pair<int, float>>& seeds = faces->seeds;
+  auto joins = [&](int a, int b) { return bad[a] == 0 && bad[b] == 0 && std::abs(s1[a] - s1[b]) <= jump_sum; };
+  for (int v = k;; ++v) {
+    std::uint8_t* out = faces->marks.row(v);
+    const double y = v - cv;
+    const double a0 = -cu * up.x() + y * up.y() + f * up.z(), b0 = y * y + f * f;
+    for (int u = 0; u < w; ++u) {
+      p1[u + 1] = p1[u] + s1[u];
+      p2[u + 1] = p2[u] + s2[u];
+      run_first[u] = u > 0 && joins(u - 1, u) ? run_first[u - 1] : u;
+    }
+    for (int u = w - 1; u >= 0; --u) run_last[u] = u + 1 < w && joins(u, u + 1) ? run_last[u + 1] : u;
+    for (int u = 0; u < w; ++u) {
+      if (bad[u] != 0) continue;
+      const int lo = std::max(u - r, run_first[u]), hi = std::min(u + r, run_last[u]) + 1;
+      // The pooled slope over the mean disparity: q = mean(d') / mean(d) of those columns.
+      const double q = (p2[hi] - p2[lo]) * n / (sum_jj * (p1[hi] - p1[lo]));
+      const double du = u - cu;
+      const double rise = up.y() - q * (a0 + u * up.x());
+      const double norm2 = q * q * (du * du + b0) - 2.0 * y * q + 1.0;
+      if (rise * rise > sin2_min * norm2) {
+        out[u] = 1;
+        if (grow && rise * rise > sin2_seed * norm2) {
+          out[u] = 2;
+          seeds.push_back({v * w + u, static_cast<float>(s1[u] / n)});
+        }
+      }
+    }
+    if (v + k + 1 >= h) break;
+    // Slide the window one row down: row v - k leaves, row v + k + 1 enters; every remaining
+    // row's offset j falls by one, so s2 loses the new s1 once.
+    const float* leave = disparity.row(v - k);
+    const float* leave_next = disparity.row(v - k + 1);
+    const float* enter = disparity.row(v + k + 1);
+    const float* enter_above = disparity.row(v + k);
+    for (int u = 0; u < w; ++u) {
+      const bool ok_out = leave[u] > 0.0f, ok_in = enter[u] > 0.0f;
+      const double out_d = ok_out ? static_cast<double>(leave[u]) : 0.0;
+      const double in_d = ok_in ? static_cast<double>(enter[u]) : 0.0;
+      s1[u] += in_d - out_d;
+      s2[u] += k * out_d + (k + 1) * in_d - s1[u];
+      bad[u] += (!ok_in) + (std::abs(enter[u] - enter_above[u]) > kMaxRowJumpPx) - (!ok_out) -
+                (std::abs(leave_next[u] - leave[u]) > kMaxRowJumpPx);
+    }
+  }
+}
+
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+                         ImageU8* labels) {
+  if (options.face_window_px == 0) return;
+  SSTA_CHECK(faces.marks.width() == labels->width() && faces.marks.height() == labels->height() &&
+                 disparity.width() == labels->width() && disparity.height() == labels->height(),
+             "ApplyDisparityFaces: faces, disparity and labels differ in size");
+  const int w = labels->width(), h = labels->height(), k = options.face_window_px / 2;
+  // Traversable, semi-traversable and undecided pixels on a face become non-traversable; those
+  // steep enough seed the growth, in raster order (the order of faces.seeds).
+  thread_local std::vector<std::pair<int, float>> seeds;
+  seeds.clear();
+  std::size_t next_seed = 0;
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    const std::uint8_t mark = faces.marks[i];
+    if (mark == 0) continue;
+    std::uint8_t& c = (*labels)[i];
+    const bool drivable = c == 1 || c == 2 || c == 4;
+    if (drivable) c = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+    if (mark == 2) {
+      if (drivable) seeds.push_back(faces.seeds[next_seed]);
+      ++next_seed;
+    }
+  }
+  // A face a few rows tall is flagged only where the window is centred on it (its rows near the
+  // ground and the top straddle them): the rows within the window's reach whose disparity is
+  // the face's, within face_grow_tolerance_px, join it.
+  for (const auto& [index, face_d] : seeds) {
+    const int v = index / w, u = index % w;
+    for (int vv = std::max(0, v - k); vv <= std::min(h - 1, v + k); ++vv) {
+      std::uint8_t& c = (*labels)(vv, u);
+      if (c != 1 && c != 2 && c != 4) continue;
+      const float d = disparity(vv, u);
+      if (d > 0.0f && std::abs(d - face_d) <= options.face_grow_tolerance_px) {
+        c = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+      }
+    }
+  }
+}
+
+}  // namespace ssta
