@@ -13,6 +13,7 @@
 
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 
@@ -65,6 +66,144 @@ bool Known(const CellInfo& cell) {
   return cell.observed || (c >= 1 && c <= 3);
 }
 
+/// The centres (x, y in W [m]) of the map columns whose centres lie inside the footprint
+/// rectangle of `q` (edges included, to 1e-9 m), or the rectangle's centre when none does.
+/// Throws ssta::Error when the rectangle reaches beyond the map's addressable area or spans
+/// more than 10^7 columns.
+std::vector<Eigen::Vector2d> FootprintColumns(const TravOcTree& tree, const FootprintQuery& q) {
+  const double c = std::cos(q.yaw), s = std::sin(q.yaw);
+  const double half_l = 0.5 * q.length_m, half_w = 0.5 * q.width_m;
+  const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
+  const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
+
+  std::vector<Eigen::Vector2d> columns;
+  octomap::OcTreeKey lo, hi;
+  if (!tree.CoordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, &lo) ||
+      !tree.CoordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, &hi)) {
+    throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
+                std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
+  }
+  constexpr double kMaxColumns = 1e7;  // ~160 MB of columns, 316 x 316 m at 0.1 m
+  if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
+    throw Error("footprint query: the rectangle spans more than 10^7 map columns");
+  }
+  for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
+    for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
+      const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
+      const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
+      const double dx = cx - q.x, dy = cy - q.y;
+      const double along = c * dx + s * dy, across = -s * dx + c * dy;
+      // 1e-9 m: an edge on a column centre counts whatever rounding cos and sin of yaw give.
+      constexpr double kEdge = 1e-9;
+      if (std::abs(along) <= half_l + kEdge && std::abs(across) <= half_w + kEdge) columns.emplace_back(cx, cy);
+    }
+  }
+  if (columns.empty()) columns.emplace_back(q.x, q.y);
+  return columns;
+}
+
+/// A point where a path query reads across the path: its position, its direction of travel
+/// (unit) and its distance along the path [m].
+struct Station {
+  Eigen::Vector2d p;
+  Eigen::Vector2d dir;
+  double s;
+};
+
+/// Throws ssta::Error when `samples` path samples, each reading the cells across `width_m`
+/// (one every `resolution_m`, at least one), are too many. Caps: 10^7 cells read (as a
+/// footprint's columns), 10^6 samples kept (~260 MB of them).
+void CheckPathSize(double samples, double width_m, double resolution_m) {
+  constexpr double kMaxCells = 1e7, kMaxSamples = 1e6;
+  if (samples * (width_m / resolution_m + 1.0) > kMaxCells) {
+    throw Error("path query: the path and its width span more than 10^7 samples");
+  }
+  if (samples > kMaxSamples) throw Error("path query: the path spans more than 10^6 samples (resolution / 2 apart)");
+}
+
+/// Appends the stations of the lateral line turning about `at` from direction `from` by
+/// `angle` [rad], `s_at` along the path. The line sweeps a sector of the disc of radius
+/// width_m / 2: stations at `at` whose lateral ends lie at most `spacing` apart along the arc
+/// (`from` itself included, the end direction not); none when width_m is 0.
+void AppendTurn(const Eigen::Vector2d& at, const Eigen::Vector2d& from, double angle, double s_at,
+                double width_m, double spacing, std::vector<Station>* stations) {
+  if (width_m <= 0.0) return;
+  const int n = static_cast<int>(std::ceil(std::abs(angle) * 0.5 * width_m / spacing));
+  for (int k = 0; k < n; ++k) {
+    const double a = angle * k / n;
+    const Eigen::Vector2d dir(std::cos(a) * from.x() - std::sin(a) * from.y(),
+                              std::sin(a) * from.x() + std::cos(a) * from.y());
+    stations->push_back({at, dir, s_at});
+  }
+}
+
+/// The stations of a path query along `polyline` (at least one vertex): every `spacing` [m]
+/// along each segment, the turn at each vertex between two segments, and the last vertex.
+/// `*length_m`: the polyline's length.
+std::vector<Station> PathStations(const std::vector<Eigen::Vector2d>& polyline, double width_m,
+                                  double spacing, double* length_m) {
+  std::vector<Station> stations;
+  double s = 0.0;
+  Eigen::Vector2d last_dir(1.0, 0.0);
+  bool moved = false;
+  for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {
+    const Eigen::Vector2d a = polyline[i], b = polyline[i + 1];
+    const double len = (b - a).norm();
+    if (len <= 0.0) continue;
+    const Eigen::Vector2d dir = (b - a) / len;
+    // At a vertex the vehicle turns: the outside of the turn is swept too.
+    if (moved) {
+      AppendTurn(a, last_dir, std::atan2(last_dir.x() * dir.y() - last_dir.y() * dir.x(), last_dir.dot(dir)), s,
+                 width_m, spacing, &stations);
+    }
+    last_dir = dir;
+    moved = true;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
+    for (int k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / n;
+      stations.push_back({a + t * (b - a), last_dir, s + t * len});
+    }
+    s += len;
+  }
+  if (!moved) {
+    // One point (or only repeated ones): no heading, so any: the disc of the half width.
+    AppendTurn(polyline.back(), last_dir, kPi, s, width_m, spacing, &stations);
+  }
+  stations.push_back({polyline.back(), last_dir, s});
+  *length_m = s;
+  return stations;
+}
+
+/// The path sample at `station`: the worst class and the max cost among the `lateral` cells
+/// across `width_m` (perpendicular to the direction of travel) that `read(x, y)` gives.
+template <typename Read>
+PathSample SampleAcross(const Station& station, double width_m, int lateral, const Read& read) {
+  PathSample sample;
+  sample.point = station.p;
+  sample.distance_m = station.s;
+  const Eigen::Vector2d normal(-station.dir.y(), station.dir.x());
+  int observed = 0;
+  bool have_cell = false;
+  for (int j = 0; j < lateral; ++j) {
+    const double offset = lateral == 1 ? 0.0 : -0.5 * width_m + j * width_m / (lateral - 1);
+    const Eigen::Vector2d q = station.p + offset * normal;
+    const CellInfo cell = read(q.x(), q.y());
+    if (j == lateral / 2 && !have_cell) sample.cell = cell;
+    if (!Known(cell)) continue;
+    ++observed;
+    if (Severity(cell.cls) > Severity(sample.cls)) {
+      sample.cls = cell.cls;
+      sample.cell = cell;
+      have_cell = true;
+    }
+    if (std::isfinite(cell.cost)) {
+      sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
+    }
+  }
+  sample.fraction_observed = static_cast<double>(observed) / lateral;
+  return sample;
+}
+
 }  // namespace
 
 CellInfo TraversabilityMap::CellAt(const Eigen::Vector3d& p_world) const {
@@ -101,35 +240,7 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
         q.width_m >= 0.0 && std::isfinite(q.length_m) && std::isfinite(q.width_m))) {
     throw Error("footprint query: x, y, yaw must be finite and length_m, width_m >= 0");
   }
-  const TravOcTree& tree = *impl_->tree;
-  const double c = std::cos(q.yaw), s = std::sin(q.yaw);
-  const double half_l = 0.5 * q.length_m, half_w = 0.5 * q.width_m;
-  const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
-  const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
-
-  std::vector<Eigen::Vector2d> columns;
-  octomap::OcTreeKey lo, hi;
-  if (!tree.CoordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, &lo) ||
-      !tree.CoordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, &hi)) {
-    throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
-                std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
-  }
-  constexpr double kMaxColumns = 1e7;  // ~160 MB of columns, 316 x 316 m at 0.1 m
-  if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
-    throw Error("footprint query: the rectangle spans more than 10^7 map columns");
-  }
-  for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
-    for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
-      const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
-      const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
-      const double dx = cx - q.x, dy = cy - q.y;
-      const double along = c * dx + s * dy, across = -s * dx + c * dy;
-      // 1e-9 m: an edge on a column centre counts whatever rounding cos and sin of yaw give.
-      constexpr double kEdge = 1e-9;
-      if (std::abs(along) <= half_l + kEdge && std::abs(across) <= half_w + kEdge) columns.emplace_back(cx, cy);
-    }
-  }
-  if (columns.empty()) columns.emplace_back(q.x, q.y);
+  const std::vector<Eigen::Vector2d> columns = FootprintColumns(*impl_->tree, q);
 
   FootprintResult result;
   double cost_sum = 0.0;
@@ -162,92 +273,17 @@ PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& poly
   const double spacing = 0.5 * res;
   double total_length = 0.0;
   for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) total_length += (polyline_world[i + 1] - polyline_world[i]).norm();
-  // Caps: 10^7 cells read (as a footprint's columns), 10^6 samples kept (~260 MB of them).
-  constexpr double kMaxCells = 1e7, kMaxSamples = 1e6;
-  auto check_size = [&](double samples) {
-    if (samples * (width_m / res + 1.0) > kMaxCells) {
-      throw Error("path query: the path and its width span more than 10^7 samples");
-    }
-    if (samples > kMaxSamples) throw Error("path query: the path spans more than 10^6 samples (resolution / 2 apart)");
-  };
-  check_size(total_length / spacing + 1.0);
-
-  // Sample points with their direction of travel.
-  struct Station {
-    Eigen::Vector2d p;
-    Eigen::Vector2d dir;
-    double s;
-  };
-  std::vector<Station> stations;
-  // The lateral line turning about a point from direction `from` by `angle` [rad] sweeps a
-  // sector of the disc of the half width: stations at the point, their lateral ends at most
-  // `spacing` apart along the arc (`from` itself included, the end direction not).
-  auto turn = [&](const Eigen::Vector2d& at, const Eigen::Vector2d& from, double angle, double s_at) {
-    if (width_m <= 0.0) return;
-    const int n = static_cast<int>(std::ceil(std::abs(angle) * 0.5 * width_m / spacing));
-    for (int k = 0; k < n; ++k) {
-      const double a = angle * k / n;
-      const Eigen::Vector2d dir(std::cos(a) * from.x() - std::sin(a) * from.y(),
-                                std::sin(a) * from.x() + std::cos(a) * from.y());
-      stations.push_back({at, dir, s_at});
-    }
-  };
-  double s = 0.0;
-  Eigen::Vector2d last_dir(1.0, 0.0);
-  bool moved = false;
-  for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) {
-    const Eigen::Vector2d a = polyline_world[i], b = polyline_world[i + 1];
-    const double len = (b - a).norm();
-    if (len <= 0.0) continue;
-    const Eigen::Vector2d dir = (b - a) / len;
-    // At a vertex the vehicle turns: the outside of the turn is swept too.
-    if (moved) turn(a, last_dir, std::atan2(last_dir.x() * dir.y() - last_dir.y() * dir.x(), last_dir.dot(dir)), s);
-    last_dir = dir;
-    moved = true;
-    const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
-    for (int k = 0; k < n; ++k) {
-      const double t = static_cast<double>(k) / n;
-      stations.push_back({a + t * (b - a), last_dir, s + t * len});
-    }
-    s += len;
-  }
-  if (!moved) {
-    // One point (or only repeated ones): no heading, so any: the disc of the half width.
-    constexpr double kHalfTurn = 3.14159265358979323846;
-    turn(polyline_world.back(), last_dir, kHalfTurn, s);
-  }
-  stations.push_back({polyline_world.back(), last_dir, s});
-  check_size(static_cast<double>(stations.size()));  // with the turns' samples
+  CheckPathSize(total_length / spacing + 1.0, width_m, res);
+  PathResult result;
+  const std::vector<Station> stations = PathStations(polyline_world, width_m, spacing, &result.length_m);
+  CheckPathSize(static_cast<double>(stations.size()), width_m, res);  // with the turns' samples
 
   const int lateral = width_m > 0.0 ? static_cast<int>(std::ceil(width_m / res)) + 1 : 1;
-  PathResult result;
-  result.length_m = s;
+  auto read = [&](double x, double y) { return surface ? surface(x, y) : TopSurfaceAt(x, y); };
   double cost_sum = 0.0, observed_sum = 0.0;
   int cost_count = 0;
-  for (const Station& st : stations) {
-    PathSample sample;
-    sample.point = st.p;
-    sample.distance_m = st.s;
-    const Eigen::Vector2d normal(-st.dir.y(), st.dir.x());
-    int observed = 0;
-    bool have_cell = false;
-    for (int j = 0; j < lateral; ++j) {
-      const double offset = lateral == 1 ? 0.0 : -0.5 * width_m + j * width_m / (lateral - 1);
-      const Eigen::Vector2d q = st.p + offset * normal;
-      const CellInfo cell = surface ? surface(q.x(), q.y()) : TopSurfaceAt(q.x(), q.y());
-      if (j == lateral / 2 && !have_cell) sample.cell = cell;
-      if (!Known(cell)) continue;
-      ++observed;
-      if (Severity(cell.cls) > Severity(sample.cls)) {
-        sample.cls = cell.cls;
-        sample.cell = cell;
-        have_cell = true;
-      }
-      if (std::isfinite(cell.cost)) {
-        sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
-      }
-    }
-    sample.fraction_observed = static_cast<double>(observed) / lateral;
+  for (const Station& station : stations) {
+    PathSample sample = SampleAcross(station, width_m, lateral, read);
     observed_sum += sample.fraction_observed;
     if (std::isfinite(sample.cost)) {
       cost_sum += sample.cost;
