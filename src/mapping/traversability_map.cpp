@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/run_both.h"
+#include "mapping/free_space_walk.h"
 #include "mapping/map_impl.h"
 #include "mapping/voxel_containers.h"
 #include "ssta/core/error.h"
@@ -20,8 +20,7 @@
 
 namespace ssta {
 
-using internal::CodeSet;
-using internal::FreeBitmap;
+using internal::FreeSpaceWalk;
 using internal::SortByCode;
 using internal::TravNode;
 using internal::TravOcTree;
@@ -60,64 +59,6 @@ struct FarAccumulator {
   Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
   std::uint32_t points = 0;
 };
-
-/// Calls visit(key) with the key (int[3]) of exactly the voxels OcTreeBaseImpl::computeRayKeys
-/// (origin, end) puts in its KeyRay, in the same order: the same Amanatides-Woo walk written
-/// out with the same types and arithmetic (keys wrap around at 16 bits like OcTreeKey's).
-/// `key_origin`, `key_end`: the checked keys of origin and end.
-template <typename Visit>
-void WalkRay(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
-             const octomap::OcTreeKey& key_origin, const octomap::OcTreeKey& key_end, Visit&& visit) {
-  if (key_origin == key_end) return;
-  int key[3] = {key_origin[0], key_origin[1], key_origin[2]};
-  const int last[3] = {key_end[0], key_end[1], key_end[2]};
-  visit(key);
-
-  octomap::point3d direction = (end - origin);
-  const float length = static_cast<float>(direction.norm());
-  direction /= length;
-  const double resolution = tree.getResolution();
-  int step[3];
-  double t_max[3];
-  double t_delta[3];
-  for (unsigned i = 0; i < 3; ++i) {
-    if (direction(i) > 0.0) {
-      step[i] = 1;
-    } else if (direction(i) < 0.0) {
-      step[i] = -1;
-    } else {
-      step[i] = 0;
-    }
-    if (step[i] != 0) {
-      double voxel_border = tree.keyToCoord(key_origin[i]);
-      voxel_border += static_cast<float>(step[i] * resolution * 0.5);
-      t_max[i] = (voxel_border - origin(i)) / direction(i);
-      t_delta[i] = resolution / std::fabs(direction(i));
-    } else {
-      t_max[i] = std::numeric_limits<double>::max();
-      t_delta[i] = std::numeric_limits<double>::max();
-    }
-  }
-  // The step, without a branch on the axis (which a ray's voxels alternate unpredictably):
-  // the axis is computeRayKeys' choice, x if t_max x < y and x < z, else y if y < z, else z,
-  // and adding 0 leaves a t_max as it was.
-  double t0 = t_max[0], t1 = t_max[1], t2 = t_max[2];
-  for (;;) {
-    const bool x_before_y = t0 < t1;
-    const bool before_z = (x_before_y ? t0 : t1) < t2;
-    const bool sx = x_before_y && before_z, sy = !x_before_y && before_z, sz = !before_z;
-    key[0] = (key[0] + (sx ? step[0] : 0)) & 0xFFFF;
-    key[1] = (key[1] + (sy ? step[1] : 0)) & 0xFFFF;
-    key[2] = (key[2] + (sz ? step[2] : 0)) & 0xFFFF;
-    t0 += sx ? t_delta[0] : 0.0;
-    t1 += sy ? t_delta[1] : 0.0;
-    t2 += sz ? t_delta[2] : 0.0;
-    if (key[0] == last[0] && key[1] == last[1] && key[2] == last[2]) return;
-    // computeRayKeys: min(t_max) > length; the t are never NaN, so: all of them are.
-    if ((t0 > length) & (t1 > length) & (t2 > length)) return;
-    visit(key);
-  }
-}
 
 /// `norm > max_range` decided from the squared norm without the square root where the answer
 /// is clear (the root is correctly rounded, so only a squared norm within a relative 1e-9 of
@@ -175,11 +116,7 @@ struct InsertScratch {
   std::vector<octomap::OcTreeKey> ray_end_keys;
   VoxelIndex ray_cells;  ///< free_space_ray_cell > 1: cell -> group
   std::vector<std::pair<Eigen::Vector3d, std::uint32_t>> ray_groups;  ///< sum of ends, count
-  // The rays are walked in two halves side by side, each into its own bitmap and overflow set,
-  // then merged: a set of voxels, so the same for any split.
-  FreeBitmap free_bitmap, free_bitmap_2;
-  bool free_bitmap_clean = true;  ///< false while bits may be set (an exception could leave some)
-  CodeSet free_overflow, free_overflow_2;  ///< free voxels outside the bitmap's box
+  FreeSpaceWalk free_space;  ///< the voxels the rays pass
   std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>> voxels, voxels_sort;
   std::vector<std::uint64_t> codes;
 };
@@ -359,72 +296,14 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
     ray_end_keys.clear();
     for (const auto& [sum, count] : groups) add_ray(sum / count);
   }
-  octomap::OcTreeKey key_origin;
-  const bool origin_ok = tree.coordToKeyChecked(origin, key_origin);  // the float origin's key
-  CodeSet& overflow = scratch.free_overflow;
-  overflow.Clear();
-  scratch.free_overflow_2.Clear();
-  FreeBitmap& bitmap = scratch.free_bitmap;
-  if (!scratch.free_bitmap_clean) {
-    bitmap.ClearAll();
-    scratch.free_bitmap_2.ClearAll();
-  }
-  scratch.free_bitmap_clean = false;
-  bool use_bitmap = false;
-  if (origin_ok) {
-    // The box of the rays' end voxels, one voxel wider (a walk may overshoot by one in float).
-    std::array<int, 3> lo{}, hi{};
-    for (int i = 0; i < 3; ++i) lo[i] = hi[i] = key_origin[i];
-    for (const octomap::OcTreeKey& k : ray_end_keys) {
-      for (int i = 0; i < 3; ++i) {
-        lo[i] = std::min(lo[i], static_cast<int>(k[i]));
-        hi[i] = std::max(hi[i], static_cast<int>(k[i]));
-      }
-    }
-    for (int i = 0; i < 3; ++i) {
-      lo[i] = std::max(lo[i] - 1, 0);
-      hi[i] = std::min(hi[i] + 1, 0xFFFF);
-    }
-    use_bitmap = bitmap.Reset(lo, hi);
-    if (use_bitmap) scratch.free_bitmap_2.Reset(lo, hi);
-    auto walk = [&](std::size_t first, std::size_t end, FreeBitmap* marks, CodeSet* outside) {
-      for (std::size_t r = first; r < end; ++r) {
-        if (use_bitmap) {
-          WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
-            if (!marks->Set(k)) outside->Insert(TravOcTree::MortonCode(octomap::OcTreeKey(
-                                    static_cast<octomap::key_type>(k[0]), static_cast<octomap::key_type>(k[1]),
-                                    static_cast<octomap::key_type>(k[2]))));
-          });
-        } else {
-          WalkRay(tree, origin, ray_ends[r], key_origin, ray_end_keys[r], [&](const int* k) {
-            outside->Insert(TravOcTree::MortonCode(octomap::OcTreeKey(static_cast<octomap::key_type>(k[0]),
-                                                                     static_cast<octomap::key_type>(k[1]),
-                                                                     static_cast<octomap::key_type>(k[2]))));
-          });
-        }
-      }
-    };
-    const std::size_t half = ray_ends.size() / 2;
-    internal::RunBoth([&] { walk(0, half, &bitmap, &overflow); },
-                      [&] { walk(half, ray_ends.size(), &scratch.free_bitmap_2, &scratch.free_overflow_2); });
-    if (use_bitmap) bitmap.TakeBitsOf(&scratch.free_bitmap_2);
-    scratch.free_overflow_2.ForEach([&](std::uint64_t code) { overflow.Insert(code); });
-  }
+  scratch.free_space.Walk(tree, origin, ray_ends, ray_end_keys);
 
   // 3. Updates: every voxel of the frame (free or hit, disjoint) once, in one pass over the
   // tree in Z-order; the result equals updating them one by one.
   std::vector<std::pair<std::uint64_t, const VoxelAccumulator*>>& voxels = scratch.voxels;
   voxels.clear();
-  auto add_free = [&](std::uint64_t code) {
-    const VoxelIndex::Entry* e = index.Find(code);
-    if (e == nullptr || e->hit < 0) voxels.emplace_back(code, nullptr);
-  };
-  if (use_bitmap) {
-    for (const octomap::OcTreeKey& key : scratch.hit_keys) bitmap.Unset(key);  // hits win
-    bitmap.Drain([&](std::uint64_t code) { voxels.emplace_back(code, nullptr); });
-  }
-  scratch.free_bitmap_clean = true;
-  overflow.ForEach(add_free);
+  scratch.free_space.TakeFreeVoxels(scratch.hit_keys, index,
+                                    [&](std::uint64_t code) { voxels.emplace_back(code, nullptr); });
   stats.voxels_freed = voxels.size();
   for (std::size_t h = 0; h < hits.size(); ++h) {
     voxels.emplace_back(scratch.hit_codes[h], &hits[h]);
