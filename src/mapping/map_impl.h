@@ -14,7 +14,7 @@
 namespace ssta {
 
 namespace internal {
-struct InsertScratch;  // InsertFrame's working buffers (traversability_map.cpp)
+struct InsertScratch;  // InsertFrame's working buffers (frame_fusion.cpp)
 }  // namespace internal
 
 struct TraversabilityMap::Impl {
