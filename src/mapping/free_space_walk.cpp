@@ -115,7 +115,8 @@ void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
   RayBox(key_origin, end_keys, &lo, &hi);
   use_bitmap_ = bitmap_.Reset(lo, hi);
   if (use_bitmap_) bitmap_2_.Reset(lo, hi);
-  // Rays [first, last) into `marks`, or into `outside` where they leave its box.
+  // Rays [first, last) into `marks`, or into `outside` where they leave its box (all of them
+  // without a bitmap).
   auto walk = [&](std::size_t first, std::size_t last, FreeBitmap* marks, CodeSet* outside) {
     for (std::size_t r = first; r < last; ++r) {
       if (use_bitmap_) {

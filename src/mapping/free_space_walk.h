@@ -11,8 +11,8 @@
 namespace ssta::internal {
 
 /// The set of voxels that one frame's rays pass, each once: one bit per voxel of the box the
-/// rays span (FreeBitmap), and a CodeSet of Morton codes for the voxels outside it (rare: a
-/// walk overshooting in float), or for all of them when the box is too large for a bitmap.
+/// rays span (FreeBitmap), and a CodeSet of Morton codes for the voxels outside it (rare), or
+/// for all of them when the box is too large for a bitmap.
 /// The rays are walked in two halves side by side, each into its own bitmap and set, then
 /// merged: a set of voxels, so the same for any split. Kept from frame to frame, so that a
 /// frame allocates nothing once its buffers have grown.
@@ -20,8 +20,7 @@ class FreeSpaceWalk {
  public:
   /// Collects the voxels that the rays from `origin` to each of `ends` (keys `end_keys`,
   /// checked) pass: exactly those OcTreeBaseImpl::computeRayKeys gives (the end voxel
-  /// excluded). None when `origin` lies outside the map. Follows TakeFreeVoxels of the
-  /// previous frame.
+  /// excluded). None when `origin` lies outside the map. Once per frame, then TakeFreeVoxels.
   void Walk(const TravOcTree& tree, const octomap::point3d& origin,
             const std::vector<octomap::point3d>& ends, const std::vector<octomap::OcTreeKey>& end_keys);
 
