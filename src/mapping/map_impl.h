@@ -14,7 +14,7 @@
 namespace ssta {
 
 namespace internal {
-struct InsertScratch;  // InsertFrame's working buffers (traversability_map.cpp)
+struct InsertScratch;  // InsertFrame's working buffers (frame_fusion.cpp)
 }  // namespace internal
 
 struct TraversabilityMap::Impl {
@@ -34,9 +34,23 @@ namespace internal {
 /// A tree configured with the sensor model of `options` (precondition: options valid).
 std::unique_ptr<TravOcTree> MakeTree(const MapOptions& options);
 
-/// Cell description of `node` (null: unobserved) at the full-resolution voxel `key`.
+/// Cell description of `node` (null: unobserved) at the full-resolution voxel `key`
+/// (cell_description.cpp).
 CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, const TravNode* node,
                       const octomap::OcTreeKey& key);
+
+/// Whether `node` is occupied: its occupancy at or above the tree's threshold.
+inline bool NodeOccupied(const TravOcTree& tree, const TravNode& node) {
+  return node.getLogOdds() >= tree.getOccupancyThresLog();
+}
+
+/// Centre [m] of the voxels with key `k` along one axis.
+inline double KeyCenter(const TravOcTree& tree, octomap::key_type k) { return tree.keyToCoord(k); }
+
+/// Centre of the voxel `key` in W [m].
+inline Eigen::Vector3d KeyCenter(const TravOcTree& tree, const octomap::OcTreeKey& key) {
+  return {tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key[2])};
+}
 
 struct TraversabilityMapAccess {
   static const TravOcTree& Tree(const TraversabilityMap& map) { return *map.impl_->tree; }

@@ -1,0 +1,82 @@
+// What a voxel says: its class, class probability and cost (the formulas in the class comment
+// of TraversabilityMap).
+
+#include "ssta/mapping/traversability_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "mapping/map_impl.h"
+
+namespace ssta {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double Clamp01(double v) { return std::min(1.0, std::max(0.0, v)); }
+
+/// How far `value` lies into the band (semi, max]: 0 at or below semi, 1 at or above max.
+double BandFraction(double value, double semi, double max) {
+  if (!std::isfinite(value)) return 0.0;
+  if (max > semi) return Clamp01((value - semi) / (max - semi));
+  return value > semi ? 1.0 : 0.0;
+}
+
+}  // namespace
+
+namespace internal {
+
+CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, const TravNode* node,
+                      const octomap::OcTreeKey& key) {
+  CellInfo cell;
+  cell.center = KeyCenter(tree, key);
+  if (node == nullptr) return cell;
+  cell.observed = true;
+  cell.occupancy = octomap::probability(node->getLogOdds());
+  cell.occupied = NodeOccupied(tree, *node);
+  cell.observations = node->observations;
+  cell.last_seen_ns = node->last_seen_ns;
+  if (node->observations > 0) {
+    cell.slope_deg = node->slope_deg;
+    cell.step_m = node->step_m;
+    cell.max_step_m = node->max_step_m;
+  }
+  if (!cell.occupied) return cell;  // free space has no class
+
+  const auto& l = node->class_log_odds;
+  const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
+  if (!has_evidence) {
+    cell.cls = TravClass::kUndecided;
+    return cell;
+  }
+  int best = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (l[k] >= l[best]) best = k;  // ties to the worse class
+  }
+  double denominator = 0.0;
+  for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
+  cell.cls = static_cast<TravClass>(best + 1);
+  cell.probability = std::exp(static_cast<double>(l[best])) / denominator;
+  cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m);
+  return cell;
+}
+
+}  // namespace internal
+
+double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m) const {
+  const VehicleOptions& v = impl_->metadata.vehicle;
+  switch (cls) {
+    case TravClass::kTraversable: return 0.0;
+    case TravClass::kNonTraversable: return 1.0;
+    case TravClass::kSemiTraversable: {
+      const double f = std::max(BandFraction(slope_deg, v.semi_slope_deg, v.max_slope_deg),
+                                BandFraction(std::abs(step_m), v.semi_step_m, v.max_step_m));
+      return 0.25 + 0.5 * f;
+    }
+    default: return kNaN;
+  }
+}
+
+}  // namespace ssta

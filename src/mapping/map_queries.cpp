@@ -1,0 +1,395 @@
+// The map's queries: single cells, column tops, footprints, paths, grid projections and the
+// occupied voxels as a whole.
+
+#include "ssta/mapping/traversability_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "mapping/map_impl.h"
+#include "ssta/core/error.h"
+#include "ssta/core/units.h"
+
+namespace ssta {
+
+using internal::KeyCenter;
+using internal::NodeOccupied;
+using internal::TravNode;
+using internal::TravOcTree;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+/// The highest occupied voxel of column (kx, ky) below `node`, which covers z keys
+/// [z_base, z_base + 2^(16 - depth)). Inner occupancy is the max over the children, so a
+/// subtree whose root is not occupied holds no occupied voxel and is skipped.
+const TravNode* FindTopOccupied(const TravOcTree& tree, const TravNode* node, unsigned depth,
+                                octomap::key_type kx, octomap::key_type ky, unsigned z_base,
+                                octomap::key_type* kz) {
+  const unsigned tree_depth = tree.getTreeDepth();
+  if (!NodeOccupied(tree, *node)) return nullptr;
+  if (!tree.nodeHasChildren(node)) {
+    *kz = static_cast<octomap::key_type>(z_base + (1u << (tree_depth - depth)) - 1u);
+    return node;
+  }
+  const unsigned bit = tree_depth - 1 - depth;
+  const unsigned xy = ((kx >> bit) & 1u) | (((ky >> bit) & 1u) << 1);
+  for (const unsigned zb : {1u, 0u}) {
+    const unsigned pos = xy | (zb << 2);
+    if (!tree.nodeChildExists(node, pos)) continue;
+    const TravNode* found = FindTopOccupied(tree, tree.getNodeChild(node, pos), depth + 1, kx, ky,
+                                            z_base + (zb << bit), kz);
+    if (found != nullptr) return found;
+  }
+  return nullptr;
+}
+
+int Severity(TravClass c) {
+  switch (c) {
+    case TravClass::kTraversable: return 1;
+    case TravClass::kSemiTraversable: return 2;
+    case TravClass::kNonTraversable: return 3;
+    default: return 0;
+  }
+}
+
+/// A cell the footprint and path queries count: an observed surface, or (from a surface source
+/// such as ExportedSurface) an unobserved cell that was given a class, as a filled hole.
+bool Known(const CellInfo& cell) {
+  const int c = static_cast<int>(cell.cls);
+  return cell.observed || (c >= 1 && c <= 3);
+}
+
+/// The centres (x, y in W [m]) of the map columns whose centres lie inside the footprint
+/// rectangle of `q` (edges included, to 1e-9 m), or the rectangle's centre when none does.
+/// Throws ssta::Error when the rectangle reaches beyond the map's addressable area or spans
+/// more than 10^7 columns.
+std::vector<Eigen::Vector2d> FootprintColumns(const TravOcTree& tree, const FootprintQuery& q) {
+  const double c = std::cos(q.yaw), s = std::sin(q.yaw);
+  const double half_l = 0.5 * q.length_m, half_w = 0.5 * q.width_m;
+  const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
+  const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
+
+  std::vector<Eigen::Vector2d> columns;
+  octomap::OcTreeKey lo, hi;
+  if (!tree.CoordToKeyChecked(q.x - extent_x, q.y - extent_y, 0.0, &lo) ||
+      !tree.CoordToKeyChecked(q.x + extent_x, q.y + extent_y, 0.0, &hi)) {
+    throw Error("footprint query: the rectangle reaches beyond the map's addressable area (+-" +
+                std::to_string(static_cast<long>(tree.getResolution() * 32768.0)) + " m)");
+  }
+  constexpr double kMaxColumns = 1e7;  // ~160 MB of columns, 316 x 316 m at 0.1 m
+  if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
+    throw Error("footprint query: the rectangle spans more than 10^7 map columns");
+  }
+  for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
+    for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
+      const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
+      const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
+      const double dx = cx - q.x, dy = cy - q.y;
+      const double along = c * dx + s * dy, across = -s * dx + c * dy;
+      // 1e-9 m: an edge on a column centre counts whatever rounding cos and sin of yaw give.
+      constexpr double kEdge = 1e-9;
+      if (std::abs(along) <= half_l + kEdge && std::abs(across) <= half_w + kEdge) columns.emplace_back(cx, cy);
+    }
+  }
+  if (columns.empty()) columns.emplace_back(q.x, q.y);
+  return columns;
+}
+
+/// A point where a path query reads across the path: its position, its direction of travel
+/// (unit) and its distance along the path [m].
+struct Station {
+  Eigen::Vector2d p;
+  Eigen::Vector2d dir;
+  double s;
+};
+
+/// Throws ssta::Error when `samples` path samples, each reading the cells across `width_m`
+/// (one every `resolution_m`, at least one), are too many. Caps: 10^7 cells read (as a
+/// footprint's columns), 10^6 samples kept (~260 MB of them).
+void CheckPathSize(double samples, double width_m, double resolution_m) {
+  constexpr double kMaxCells = 1e7, kMaxSamples = 1e6;
+  if (samples * (width_m / resolution_m + 1.0) > kMaxCells) {
+    throw Error("path query: the path and its width span more than 10^7 samples");
+  }
+  if (samples > kMaxSamples) throw Error("path query: the path spans more than 10^6 samples (resolution / 2 apart)");
+}
+
+/// Appends the stations of the lateral line turning about `at` from direction `from` by
+/// `angle` [rad], `s_at` along the path. The line sweeps a sector of the disc of radius
+/// width_m / 2: stations at `at` whose lateral ends lie at most `spacing` apart along the arc
+/// (`from` itself included, the end direction not); none when width_m is 0.
+void AppendTurn(const Eigen::Vector2d& at, const Eigen::Vector2d& from, double angle, double s_at,
+                double width_m, double spacing, std::vector<Station>* stations) {
+  if (width_m <= 0.0) return;
+  const int n = static_cast<int>(std::ceil(std::abs(angle) * 0.5 * width_m / spacing));
+  for (int k = 0; k < n; ++k) {
+    const double a = angle * k / n;
+    const Eigen::Vector2d dir(std::cos(a) * from.x() - std::sin(a) * from.y(),
+                              std::sin(a) * from.x() + std::cos(a) * from.y());
+    stations->push_back({at, dir, s_at});
+  }
+}
+
+/// The stations of a path query along `polyline` (at least one vertex): every `spacing` [m]
+/// along each segment, the turn at each vertex between two segments, and the last vertex.
+/// `*length_m`: the polyline's length.
+std::vector<Station> PathStations(const std::vector<Eigen::Vector2d>& polyline, double width_m,
+                                  double spacing, double* length_m) {
+  std::vector<Station> stations;
+  double s = 0.0;
+  Eigen::Vector2d last_dir(1.0, 0.0);
+  bool moved = false;
+  for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {
+    const Eigen::Vector2d a = polyline[i], b = polyline[i + 1];
+    const double len = (b - a).norm();
+    if (len <= 0.0) continue;
+    const Eigen::Vector2d dir = (b - a) / len;
+    // At a vertex the vehicle turns: the outside of the turn is swept too.
+    if (moved) {
+      AppendTurn(a, last_dir, std::atan2(last_dir.x() * dir.y() - last_dir.y() * dir.x(), last_dir.dot(dir)), s,
+                 width_m, spacing, &stations);
+    }
+    last_dir = dir;
+    moved = true;
+    const int n = std::max(1, static_cast<int>(std::ceil(len / spacing)));
+    for (int k = 0; k < n; ++k) {
+      const double t = static_cast<double>(k) / n;
+      stations.push_back({a + t * (b - a), last_dir, s + t * len});
+    }
+    s += len;
+  }
+  if (!moved) {
+    // One point (or only repeated ones): no heading, so any: the disc of the half width.
+    AppendTurn(polyline.back(), last_dir, kPi, s, width_m, spacing, &stations);
+  }
+  stations.push_back({polyline.back(), last_dir, s});
+  *length_m = s;
+  return stations;
+}
+
+/// The path sample at `station`: the worst class and the max cost among the `lateral` cells
+/// across `width_m` (perpendicular to the direction of travel) that `read(x, y)` gives.
+template <typename Read>
+PathSample SampleAcross(const Station& station, double width_m, int lateral, const Read& read) {
+  PathSample sample;
+  sample.point = station.p;
+  sample.distance_m = station.s;
+  const Eigen::Vector2d normal(-station.dir.y(), station.dir.x());
+  int observed = 0;
+  bool have_cell = false;
+  for (int j = 0; j < lateral; ++j) {
+    const double offset = lateral == 1 ? 0.0 : -0.5 * width_m + j * width_m / (lateral - 1);
+    const Eigen::Vector2d q = station.p + offset * normal;
+    const CellInfo cell = read(q.x(), q.y());
+    if (j == lateral / 2 && !have_cell) sample.cell = cell;
+    if (!Known(cell)) continue;
+    ++observed;
+    if (Severity(cell.cls) > Severity(sample.cls)) {
+      sample.cls = cell.cls;
+      sample.cell = cell;
+      have_cell = true;
+    }
+    if (std::isfinite(cell.cost)) {
+      sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
+    }
+  }
+  sample.fraction_observed = static_cast<double>(observed) / lateral;
+  return sample;
+}
+
+}  // namespace
+
+CellInfo TraversabilityMap::CellAt(const Eigen::Vector3d& p_world) const {
+  const TravOcTree& tree = *impl_->tree;
+  octomap::OcTreeKey key;
+  if (!p_world.allFinite() || !tree.CoordToKeyChecked(p_world.x(), p_world.y(), p_world.z(), &key)) {
+    CellInfo cell;
+    cell.center = p_world;
+    return cell;
+  }
+  return internal::DescribeCell(*this, tree, tree.search(key), key);
+}
+
+CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
+  const TravOcTree& tree = *impl_->tree;
+  octomap::OcTreeKey key;
+  CellInfo unobserved;
+  if (!std::isfinite(x) || !std::isfinite(y) || !tree.CoordToKeyChecked(x, y, 0.0, &key)) {
+    unobserved.center = {x, y, kNaN};
+    return unobserved;
+  }
+  unobserved.center = {KeyCenter(tree, key[0]), KeyCenter(tree, key[1]), kNaN};
+  const TravNode* root = tree.getRoot();
+  if (root == nullptr) return unobserved;
+  octomap::key_type kz = 0;
+  const TravNode* node = FindTopOccupied(tree, root, 0, key[0], key[1], 0, &kz);
+  if (node == nullptr) return unobserved;
+  key[2] = kz;
+  return internal::DescribeCell(*this, tree, node, key);
+}
+
+FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const SurfaceSource& surface) const {
+  if (!(std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.yaw) && q.length_m >= 0.0 &&
+        q.width_m >= 0.0 && std::isfinite(q.length_m) && std::isfinite(q.width_m))) {
+    throw Error("footprint query: x, y, yaw must be finite and length_m, width_m >= 0");
+  }
+  const std::vector<Eigen::Vector2d> columns = FootprintColumns(*impl_->tree, q);
+
+  FootprintResult result;
+  double cost_sum = 0.0;
+  int cost_count = 0;
+  for (const Eigen::Vector2d& col : columns) {
+    const CellInfo cell = surface ? surface(col.x(), col.y()) : TopSurfaceAt(col.x(), col.y());
+    ++result.cells;
+    if (!Known(cell)) continue;
+    ++result.observed_cells;
+    if (Severity(cell.cls) > Severity(result.worst)) result.worst = cell.cls;
+    if (std::isfinite(cell.cost)) {
+      cost_sum += cell.cost;
+      ++cost_count;
+      result.max_cost = std::isnan(result.max_cost) ? cell.cost : std::max(result.max_cost, cell.cost);
+    }
+  }
+  if (cost_count > 0) result.mean_cost = cost_sum / cost_count;
+  result.fraction_observed = static_cast<double>(result.observed_cells) / result.cells;
+  return result;
+}
+
+PathResult TraversabilityMap::QueryPath(const std::vector<Eigen::Vector2d>& polyline_world, double width_m,
+                                        const SurfaceSource& surface) const {
+  if (polyline_world.empty()) throw Error("path query: the polyline has no vertices");
+  if (!(width_m >= 0.0 && std::isfinite(width_m))) throw Error("path query: width_m must be >= 0");
+  for (const auto& v : polyline_world) {
+    if (!v.allFinite()) throw Error("path query: polyline vertices must be finite");
+  }
+  const double res = impl_->options.resolution_m;
+  const double spacing = 0.5 * res;
+  double total_length = 0.0;
+  for (std::size_t i = 0; i + 1 < polyline_world.size(); ++i) total_length += (polyline_world[i + 1] - polyline_world[i]).norm();
+  CheckPathSize(total_length / spacing + 1.0, width_m, res);
+  PathResult result;
+  const std::vector<Station> stations = PathStations(polyline_world, width_m, spacing, &result.length_m);
+  CheckPathSize(static_cast<double>(stations.size()), width_m, res);  // with the turns' samples
+
+  const int lateral = width_m > 0.0 ? static_cast<int>(std::ceil(width_m / res)) + 1 : 1;
+  auto read = [&](double x, double y) { return surface ? surface(x, y) : TopSurfaceAt(x, y); };
+  double cost_sum = 0.0, observed_sum = 0.0;
+  int cost_count = 0;
+  for (const Station& station : stations) {
+    PathSample sample = SampleAcross(station, width_m, lateral, read);
+    observed_sum += sample.fraction_observed;
+    if (std::isfinite(sample.cost)) {
+      cost_sum += sample.cost;
+      ++cost_count;
+    }
+    if (Severity(sample.cls) > Severity(result.worst)) result.worst = sample.cls;
+    if (sample.cls == TravClass::kNonTraversable && !result.blocked) {
+      result.blocked = true;
+      result.first_non_traversable = sample.point;
+      result.first_non_traversable_distance_m = sample.distance_m;
+    }
+    result.samples.push_back(std::move(sample));
+  }
+  if (cost_count > 0) result.mean_cost = cost_sum / cost_count;
+  result.fraction_observed = observed_sum / static_cast<double>(result.samples.size());
+  return result;
+}
+
+GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
+                                          double resolution_m) const {
+  if (!(resolution_m > 0.0 && std::isfinite(resolution_m))) {
+    throw Error("grid projection: resolution must be positive");
+  }
+  if (region.isEmpty() || !region.min().allFinite() || !region.max().allFinite() ||
+      !(region.sizes().array() > 0.0).all()) {
+    throw Error("grid projection: the region is empty");
+  }
+  const Eigen::Vector2d cells = (region.sizes() / resolution_m).array() - 1e-9;
+  const double w = std::max(1.0, std::ceil(cells.x()));
+  const double h = std::max(1.0, std::ceil(cells.y()));
+  if (w * h > static_cast<double>(1 << 26)) {  // 17 bytes a pixel: ~1.1 GB (819 m square at 0.1 m)
+    throw Error("grid projection: more than 2^26 pixels; use a coarser resolution or a smaller region");
+  }
+  GridProjection grid;
+  grid.origin = region.min();
+  grid.resolution_m = resolution_m;
+  const int width = static_cast<int>(w), height = static_cast<int>(h);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  grid.classes = ImageU8(width, height, 0);
+  grid.cost = ImageF(width, height, nan);
+  grid.height_m = ImageF(width, height, nan);
+  grid.slope_deg = ImageF(width, height, nan);
+  grid.step_m = ImageF(width, height, nan);
+  // A pixel coarser than the map's columns takes the worst of the columns whose centres it
+  // holds (a planner must not read an obstacle's pixel as free); at the map's resolution or
+  // finer, the column under the pixel's centre.
+  const double map_res = impl_->options.resolution_m;
+  const bool coarse = resolution_m > map_res * (1.0 + 1e-9);
+  auto worst_in_pixel = [&](int v, int u) {
+    const Eigen::Vector2d c = grid.PixelCenter(v, u);
+    if (!coarse) return TopSurfaceAt(c.x(), c.y());
+    const Eigen::Vector2d lo = c.array() - 0.5 * resolution_m, hi = c.array() + 0.5 * resolution_m;
+    CellInfo worst;  // unobserved until a column is; a coarser pixel holds at least one centre
+    // Column centres sit at (k + 0.5) * map_res: those in [lo, hi).
+    for (double x = (std::ceil(lo.x() / map_res - 0.5) + 0.5) * map_res; x < hi.x(); x += map_res) {
+      for (double y = (std::ceil(lo.y() / map_res - 0.5) + 0.5) * map_res; y < hi.y(); y += map_res) {
+        const CellInfo cell = TopSurfaceAt(x, y);
+        if (cell.observed && (!worst.observed || Severity(cell.cls) > Severity(worst.cls))) worst = cell;
+      }
+    }
+    return worst;
+  };
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const CellInfo cell = worst_in_pixel(v, u);
+      if (!cell.observed) continue;
+      grid.classes(v, u) = static_cast<std::uint8_t>(cell.cls);
+      grid.cost(v, u) = static_cast<float>(cell.cost);
+      grid.height_m(v, u) = static_cast<float>(cell.center.z());
+      grid.slope_deg(v, u) = static_cast<float>(cell.slope_deg);
+      grid.step_m(v, u) = static_cast<float>(cell.step_m);
+    }
+  }
+  return grid;
+}
+
+std::vector<CellInfo> TraversabilityMap::SurfaceCells() const {
+  const TravOcTree& tree = *impl_->tree;
+  const double res = tree.getResolution();
+  std::vector<CellInfo> cells;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!NodeOccupied(tree, *it)) continue;
+    const double half = 0.5 * it.getSize();
+    octomap::OcTreeKey base;
+    if (!tree.coordToKeyChecked(it.getX() - half + 0.5 * res, it.getY() - half + 0.5 * res,
+                                it.getZ() - half + 0.5 * res, base)) {
+      continue;
+    }
+    internal::ForEachVoxelOfLeaf(base, tree.getTreeDepth(), it.getDepth(), [&](const octomap::OcTreeKey& key) {
+      cells.push_back(internal::DescribeCell(*this, tree, &*it, key));
+    });
+  }
+  return cells;
+}
+
+Eigen::AlignedBox3d TraversabilityMap::SurfaceBounds() const {
+  const TravOcTree& tree = *impl_->tree;
+  Eigen::AlignedBox3d box;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!NodeOccupied(tree, *it)) continue;
+    const Eigen::Vector3d c(it.getX(), it.getY(), it.getZ());
+    const Eigen::Vector3d half = Eigen::Vector3d::Constant(0.5 * it.getSize());
+    box.extend(c - half);
+    box.extend(c + half);
+  }
+  return box;
+}
+
+}  // namespace ssta
