@@ -80,7 +80,7 @@ Dataset Render(const std::string& name, const synth::RigOptions& rig, const Conf
   o.vehicle = config.vehicle;
   const synth::Scene scene = synth::MakeScene("yard", o.seed, o.ramp_slope_deg);
   const synth::VehicleTrajectory trajectory(scene, o.motion);
-  const synth::StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
+  const synth::StereoRenderer renderer(scene, o.rig, o.render, nullptr, o.seed);
   const Eigen::Isometry3d body_T_cam0 = synth::TrueBodyTCam0(o.rig, o.motion);
 
   Dataset d;

@@ -96,7 +96,7 @@ void RegisterSynth(CLI::App& app) {
       "default speed and rate. Longer runs are written with a warning.\n"
       "Labels are 255 (don't care) for sky, beyond 12 m (--max-label-range), pixels hidden from cam1 and a 1 px\n"
       "band on class boundaries; vertical faces are non-traversable.");
-  cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp")
+  cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp | random (terrain, rig and light drawn from --seed)")
       ->capture_default_str();
   cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required()->check(OutputFolder());
   cmd->add_option("--frames", options->frames, "number of stereo frames")->capture_default_str();
@@ -160,8 +160,27 @@ void RegisterSynth(CLI::App& app) {
                   "point (0.1), or 0-based frame indices (3,7,12)");
   cmd->add_option("--textureless-patches", f.textureless_patches,
                   "number of flat untextured discs on the ground ahead");
-  cmd->callback([options, out_dir, drop_frames, config_files] {
+  cmd->callback([cmd, options, out_dir, drop_frames, config_files] {
     ParseDropFrames(*drop_frames, &options->faults);
+    if (options->scene == "random") {
+      // The rig and the light are drawn from the seed too; options given on the command line win.
+      synth::SynthOptions drawn = *options;
+      synth::DrawRandomRig(options->seed, &drawn);
+      const auto keep = [&](const char* flag, auto* value, auto drawn_value) {
+        if (cmd->count(flag) == 0) *value = drawn_value;
+      };
+      keep("--width", &options->rig.width, drawn.rig.width);
+      keep("--height", &options->rig.height, drawn.rig.height);
+      keep("--focal", &options->rig.focal_px, drawn.rig.focal_px);
+      keep("--baseline", &options->rig.baseline_m, drawn.rig.baseline_m);
+      keep("--camera-height", &options->rig.camera_height_m, drawn.rig.camera_height_m);
+      keep("--camera-pitch-deg", &options->rig.pitch_down_deg, drawn.rig.pitch_down_deg);
+      keep("--noise", &options->render.sensor_noise_grey, drawn.render.sensor_noise_grey);
+      options->render.sun_direction = drawn.render.sun_direction;
+      options->render.sun_gain = drawn.render.sun_gain;
+      options->render.ambient = drawn.render.ambient;
+      options->render.sky_grey = drawn.render.sky_grey;
+    }
     if (!config_files->empty()) options->vehicle = LoadLayeredConfig(nullptr, *config_files).vehicle;
     std::string error;
     if (!options->IsValid(&error)) throw Error(NameTheOption(error));

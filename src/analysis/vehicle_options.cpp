@@ -49,6 +49,10 @@ const OptionFields<VehicleOptions>& VehicleOptions::Fields() {
                                return "must not exceed max_step_m (semi_step_m " + ShortestDecimal(o.semi_step_m) +
                                       ", max_step_m " + ShortestDecimal(o.max_step_m) + ")";
                              }));
+    f.push_back(Real<O>("step_radius_m", &O::step_radius_m, OpenClosed(0, 5), "m",
+                        "a point is judged by the height jumps within this horizontal distance of it: "
+                        "level ground is traversable at any height, the band around a jump is not")
+                    .AbsentMeans(0.2));
     f.push_back(Real<O>("min_camera_height_m", &O::min_camera_height_m, ClosedOpen(0, 100), "m",
                         "plausible camera height above the ground plane: a frame whose ground plane "
                         "lies outside [min, max] fails the quality check"));

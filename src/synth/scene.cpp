@@ -544,9 +544,5 @@ SurfaceHit Scene::CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& 
   return hit;
 }
 
-TravClass Scene::Classify(const SurfaceHit& hit, const VehicleOptions& vehicle) const {
-  const double slope_deg = RadToDeg(std::acos(std::clamp(hit.normal_world.z(), -1.0, 1.0)));
-  return Worse(vehicle.ClassifySlope(slope_deg), vehicle.ClassifyStep(std::abs(hit.step_m)));
-}
 
 }  // namespace ssta::synth

@@ -95,43 +95,42 @@ void CollectSeenPoints(const StereoFrame& frame, const Eigen::Isometry3d& world_
   }
 }
 
-/// World grid of classes over the area the cameras could label, map_server style. Cells that no
-/// labelled pixel of any frame saw are 255 (don't care): a map cannot know them.
-void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eigen::Vector3d>& cams,
+/// The world area the truth covers: every camera position, grown by the label range, out to
+/// whole cells of the truth grid (`cell` [m]).
+Eigen::AlignedBox2d TruthRegion(const std::vector<Eigen::Vector3d>& cams, double reach, double cell) {
+  Eigen::AlignedBox2d box;
+  for (const Eigen::Vector3d& c : cams) box.extend(c.head<2>());
+  box.min() = ((box.min().array() - reach) / cell).floor() * cell;
+  box.max() = ((box.max().array() + reach) / cell).ceil() * cell;
+  return box;
+}
+
+/// World grid of classes over the area the cameras could label, map_server style: each cell
+/// takes the worst true class of 3x3 samples of the top surface in it. Cells that no labelled
+/// pixel of any frame saw are 255 (don't care): a map cannot know them.
+void WriteGrid(const TerrainTruth& truth, const SynthOptions& o, const Eigen::AlignedBox2d& region,
                const std::vector<Eigen::Vector2d>& seen, const std::string& gt_dir) {
-  double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-  for (const Eigen::Vector3d& c : cams) {
-    x0 = std::min(x0, c.x());
-    y0 = std::min(y0, c.y());
-    x1 = std::max(x1, c.x());
-    y1 = std::max(y1, c.y());
-  }
-  const double reach = o.render.max_label_range_m;
   const double r = o.grid_resolution_m;
-  x0 = std::floor((x0 - reach) / r) * r;
-  y0 = std::floor((y0 - reach) / r) * r;
-  const int w = static_cast<int>(std::ceil((x1 + reach - x0) / r));
-  const int h = static_cast<int>(std::ceil((y1 + reach - y0) / r));
+  const double x0 = region.min().x(), y0 = region.min().y();
+  const int w = static_cast<int>(std::lround(region.sizes().x() / r));
+  const int h = static_cast<int>(std::lround(region.sizes().y() / r));
   ImageU8 grid(w, h, 0);
   constexpr int kSub = 3;
   ParallelFor(h, o.render.threads, [&](int row) {
     for (int col = 0; col < w; ++col) {
       const double cx = x0 + col * r, cy = y0 + (h - 1 - row) * r;  // lower-left corner
-      TravClass worst = TravClass::kTraversable;
-      double z_lo = 1e300, z_hi = -1e300;
+      std::uint8_t worst = static_cast<std::uint8_t>(TravClass::kTraversable);
       for (int j = 0; j < kSub; ++j) {
         for (int i = 0; i < kSub; ++i) {
-          const double x = cx + (i + 0.5) * r / kSub, y = cy + (j + 0.5) * r / kSub;
-          const Eigen::Vector3d origin(x, y, scene.BaseHeight(x, y) + 50.0);
-          const SurfaceHit hit = scene.CastRay(origin, -Eigen::Vector3d::UnitZ(), 200.0);
-          if (!hit.hit) continue;
-          worst = Worse(worst, scene.Classify(hit, o.vehicle));
-          z_lo = std::min(z_lo, hit.p_world.z());
-          z_hi = std::max(z_hi, hit.p_world.z());
+          const std::uint8_t c = truth.ClassAt(cx + (i + 0.5) * r / kSub, cy + (j + 0.5) * r / kSub);
+          if (c == TerrainTruth::kDontCare) {
+            worst = c;
+          } else if (worst != TerrainTruth::kDontCare) {
+            worst = static_cast<std::uint8_t>(Worse(static_cast<TravClass>(worst), static_cast<TravClass>(c)));
+          }
         }
       }
-      if (z_hi >= z_lo) worst = Worse(worst, o.vehicle.ClassifyStep(z_hi - z_lo));
-      grid(row, col) = static_cast<std::uint8_t>(worst);
+      grid(row, col) = worst;
     }
   });
   ImageU8 seen_mask(w, h, 0);
@@ -147,8 +146,8 @@ void WriteGrid(const Scene& scene, const SynthOptions& o, const std::vector<Eige
   std::ostringstream yaml;
   yaml << std::setprecision(10);
   yaml << "# Ground-truth world grid of classes (ids of INTERFACES section 3); row 0 = largest y.\n"
-       << "# A cell takes the worst class of 3x3 samples of the top surface and of the height\n"
-       << "# range inside it (a step within the cell). Cells no camera saw are 255 (don't care).\n"
+       << "# A cell takes the worst true class of 3x3 samples of the top surface in it (the class of a\n"
+       << "# point: docs/interfaces.md, section 3). Cells no camera saw are 255 (don't care).\n"
        << "image: grid_classes.png\n"
        << "resolution: " << r << "\n"
        << "origin: [" << x0 << ", " << y0 << ", 0.0]\n";
@@ -216,12 +215,13 @@ void WriteFaultsYaml(const SynthOptions& o, const Scene& scene, const Eigen::Iso
 std::string VehicleYaml(const VehicleOptions& v) {
   std::ostringstream out;
   out << std::setprecision(10);
-  out << "# Vehicle thresholds used for this sequence's ground truth (INTERFACES section 4).\n"
+  out << "# Vehicle thresholds used for this sequence's ground truth (docs/interfaces.md, section 4).\n"
       << "vehicle:\n"
       << "  max_slope_deg: " << v.max_slope_deg << "\n"
       << "  semi_slope_deg: " << v.semi_slope_deg << "\n"
       << "  max_step_m: " << v.max_step_m << "\n"
-      << "  semi_step_m: " << v.semi_step_m << "\n";
+      << "  semi_step_m: " << v.semi_step_m << "\n"
+      << "  step_radius_m: " << v.step_radius_m << "\n";
   return out.str();
 }
 
@@ -268,10 +268,21 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   Scene scene = MakeScene(o.scene, o.seed, o.ramp_slope_deg);
   if (o.faults.textureless_patches > 0) AddTexturelessPatches(&scene, o.faults.textureless_patches, o.seed);
   const VehicleTrajectory trajectory(scene, o.motion);
-  const StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
+  const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
+  std::vector<std::int64_t> stamps;
+  std::vector<Eigen::Isometry3d> cam0_poses;
+  std::vector<Eigen::Vector3d> cam_positions;
+  for (int k = 0; k < o.frames; ++k) {
+    const std::int64_t ns = kBaseNs + std::llround(kLeadInS * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
+    stamps.push_back(ns);
+    cam0_poses.push_back(trajectory.WorldTBody(static_cast<double>(ns - kBaseNs) * 1e-9) * body_T_cam0);
+    cam_positions.push_back(cam0_poses.back().translation());
+  }
+  const Eigen::AlignedBox2d region = TruthRegion(cam_positions, o.render.max_label_range_m, o.grid_resolution_m);
+  const TerrainTruth truth(scene, o.vehicle, region, o.render.threads);
+  const StereoRenderer renderer(scene, o.rig, o.render, &truth, o.seed);
 
   SynthSummary summary;
-  const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
   const Eigen::Isometry3d body_T_cam1 = body_T_cam0 * Eigen::Translation3d(o.rig.baseline_m, 0, 0);
   summary.body_T_cam0 = body_T_cam0;
   const Eigen::Matrix3d r_err = MountError(o.faults);
@@ -307,14 +318,11 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   std::ostringstream cam0_csv, cam1_csv;
   cam0_csv << "#timestamp [ns],filename\n";
   cam1_csv << "#timestamp [ns],filename\n";
-  std::vector<Eigen::Vector3d> cam_positions;
   std::vector<Eigen::Vector2d> seen;
   double render_ms = 0;
   for (int k = 0; k < o.frames; ++k) {
-    const std::int64_t ns = kBaseNs + std::llround(kLeadInS * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
-    const double t = static_cast<double>(ns - kBaseNs) * 1e-9;
-    const Eigen::Isometry3d world_T_cam0 = trajectory.WorldTBody(t) * body_T_cam0;
-    cam_positions.push_back(world_T_cam0.translation());
+    const std::int64_t ns = stamps[static_cast<std::size_t>(k)];
+    const Eigen::Isometry3d& world_T_cam0 = cam0_poses[static_cast<std::size_t>(k)];
     const auto start = std::chrono::steady_clock::now();
     const StereoFrame frame = renderer.Render(world_T_cam0, k);
     render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -390,7 +398,13 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
       << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
     summary.warning = w.str();
   }
-  WriteGrid(scene, o, cam_positions, seen, Join(out_dir, "gt"));
+  WriteGrid(truth, o, region, seen, Join(out_dir, "gt"));
+  std::ostringstream rig;
+  rig << std::setprecision(10) << "# The rig and scene ssta synth rendered (for reports; the calibration is cam0/, cam1/).\n"
+      << "scene: " << o.scene << "\nseed: " << o.seed << "\nwidth: " << o.rig.width << "\nheight: " << o.rig.height
+      << "\nfocal_px: " << o.rig.focal_px << "\nbaseline_m: " << o.rig.baseline_m
+      << "\ncamera_height_m: " << o.rig.camera_height_m << "\npitch_down_deg: " << o.rig.pitch_down_deg << "\n";
+  WriteTextAtomically(Join(out_dir, "gt/rig.yaml"), rig.str());
   WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
                   Join(out_dir, "gt/faults.yaml"));
   return summary;

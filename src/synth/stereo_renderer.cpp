@@ -84,8 +84,8 @@ double Albedo(Material material, const Eigen::Vector3d& p_world, double footprin
 }
 
 StereoRenderer::StereoRenderer(const Scene& scene, const RigOptions& rig, const RenderOptions& render,
-                               const VehicleOptions& vehicle, std::uint64_t seed)
-    : scene_(scene), rig_(rig), render_(render), vehicle_(vehicle), seed_(seed) {}
+                               const TerrainTruth* truth, std::uint64_t seed)
+    : scene_(scene), rig_(rig), render_(render), truth_(truth), seed_(seed) {}
 
 CameraCalibration StereoRenderer::Intrinsics() const {
   CameraCalibration c;
@@ -100,31 +100,28 @@ CameraCalibration StereoRenderer::Intrinsics() const {
 
 namespace {
 
-/// Towards the sun: high on the left and a little behind, so shadows fall to the right.
-const Eigen::Vector3d kSun = Eigen::Vector3d(-0.2, 0.6, 0.78).normalized();
-constexpr double kAmbient = 0.45;
-constexpr double kSunGain = 0.62;
 constexpr double kShadowRayM = 60.0;  ///< occluders farther towards the sun are ignored
 
-double SkyGrey(const Eigen::Vector3d& d) {
+double SkyGrey(const Eigen::Vector3d& d, const RenderOptions& render) {
   const double elevation = d.z() / d.norm();
-  return 185.0 + 50.0 * std::clamp(elevation, 0.0, 1.0);
+  return render.sky_grey + 50.0 * std::clamp(elevation, 0.0, 1.0);
 }
 
 /// Grey value of a hit seen along `d`: textured albedo times ambient plus sun (Lambert), the
 /// sun blocked when `shadows` and the way to it is not free.
-double ShadeHit(const Scene& scene, const SurfaceHit& hit, const Eigen::Vector3d& d,
-                double footprint_m, bool shadows) {
+double ShadeHit(const Scene& scene, const SurfaceHit& hit, const Eigen::Vector3d& d, double footprint_m,
+                const RenderOptions& render) {
   // A pixel's footprint stretches by 1 / incidence along the view direction but not across
   // it; the geometric mean keeps detail along image rows (what stereo matches) at grazing
   // angles while still limiting aliasing down the columns.
   const double incidence = std::max(0.05, std::abs(hit.normal_world.dot(d)) / d.norm());
   const double albedo =
       Albedo(hit.material, hit.p_world, footprint_m / std::sqrt(incidence), scene.texture_seed);
-  const double sun = std::max(0.0, hit.normal_world.dot(kSun));
-  const bool lit = sun > 0 && !(shadows && scene.CastRay(hit.p_world + 2e-3 * hit.normal_world,
-                                                          kSun, kShadowRayM).hit);
-  return albedo * (kAmbient + (lit ? kSunGain * sun : 0.0));
+  const Eigen::Vector3d towards_sun = render.sun_direction.normalized();
+  const double sun = std::max(0.0, hit.normal_world.dot(towards_sun));
+  const bool lit = sun > 0 && !(render.shadows && scene.CastRay(hit.p_world + 2e-3 * hit.normal_world,
+                                                                 towards_sun, kShadowRayM).hit);
+  return albedo * (render.ambient + (lit ? render.sun_gain * sun : 0.0));
 }
 
 }  // namespace
@@ -135,8 +132,8 @@ double StereoRenderer::Shade(const Eigen::Isometry3d& world_T_camera, double u, 
       world_T_camera.linear() * Eigen::Vector3d((u - cu) / rig_.focal_px, (v - cv) / rig_.focal_px, 1);
   const double t_max = render_.max_ray_m / d.norm();
   const SurfaceHit hit = scene_.CastRay(world_T_camera.translation(), d, t_max);
-  if (!hit.hit) return SkyGrey(d);
-  return ShadeHit(scene_, hit, d, hit.t / rig_.focal_px, render_.shadows);
+  if (!hit.hit) return SkyGrey(d, render_);
+  return ShadeHit(scene_, hit, d, hit.t / rig_.focal_px, render_);
 }
 
 StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int frame_index) const {
@@ -177,7 +174,7 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
           }
           grey /= ss * ss;
         } else {
-          grey = hit.hit ? ShadeHit(scene_, hit, d, hit.t / f, render_.shadows) : SkyGrey(d);
+          grey = hit.hit ? ShadeHit(scene_, hit, d, hit.t / f, render_) : SkyGrey(d, render_);
         }
         grey += render_.sensor_noise_grey * noise.Gaussian();
         image(v, u) = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));
@@ -188,9 +185,7 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
         }
         out.depth(v, u) = static_cast<float>(hit.t);
         out.disparity(v, u) = static_cast<float>(f * rig_.baseline_m / hit.t);
-        if (hit.t * d.norm() <= render_.max_label_range_m) {
-          raw_class(v, u) = static_cast<std::uint8_t>(scene_.Classify(hit, vehicle_));
-        }
+        if (truth_ != nullptr && hit.t * d.norm() <= render_.max_label_range_m) raw_class(v, u) = truth_->ClassOf(hit);
       }
     });
   }

@@ -3,6 +3,8 @@
 #include <cmath>
 
 #include "ssta/synth/scene.h"
+#include "ssta/core/units.h"
+#include "synth/random.h"
 
 #include "ssta/core/error.h"
 
@@ -44,7 +46,44 @@ bool RenderOptions::IsValid(std::string* error) const {
     return Fail(error, "boundary_band_px: must be in [0, 10] px");
   }
   if (threads < 0 || threads > 256) return Fail(error, "threads: must be in [0, 256] (0 = all)");
+  if (!(sun_direction.allFinite() && sun_direction.z() > 0)) {
+    return Fail(error, "sun_direction: must point above the horizon");
+  }
+  if (!(sun_gain >= 0 && sun_gain <= 2 && ambient >= 0 && ambient <= 2)) {
+    return Fail(error, "sun_gain, ambient: must be in [0, 2]");
+  }
+  if (!(sky_grey >= 0 && sky_grey <= 205)) return Fail(error, "sky_grey: must be in [0, 205] grey levels");
   return true;
+}
+
+void DrawRandomRig(std::uint64_t seed, SynthOptions* o) {
+  Rng rng(seed * 0x9e3779b97f4a7c15ULL + 29);
+  const std::pair<int, int> sizes[] = {{640, 480}, {752, 480}, {800, 600}, {1024, 576}, {1241, 376}};
+  for (;;) {
+    RigOptions rig = o->rig;
+    const auto [w, h] = sizes[static_cast<int>(rng.Uniform(0, 5))];
+    rig.width = w;
+    rig.height = h;
+    rig.focal_px = rng.Uniform(350, 800);
+    rig.baseline_m = rng.Uniform(0.10, 0.50);
+    rig.camera_height_m = rng.Uniform(0.5, 1.6);
+    rig.pitch_down_deg = rng.Uniform(5, 25);
+    const double hfov_deg = RadToDeg(2 * std::atan(0.5 * w / rig.focal_px));
+    // The nearest level ground in view, at the bottom row.
+    const double p = DegToRad(rig.pitch_down_deg), y_bottom = 0.5 * (h - 1) / rig.focal_px;
+    const double d_max = rig.focal_px * rig.baseline_m * (y_bottom * std::cos(p) + std::sin(p)) / rig.camera_height_m;
+    if (hfov_deg < 40 || hfov_deg > 110 || d_max > 0.2 * w) continue;
+    o->rig = rig;
+    break;
+  }
+  RenderOptions& r = o->render;
+  const double elevation = DegToRad(rng.Uniform(20, 75)), azimuth = rng.Uniform(0, 2 * kPi);
+  r.sun_direction = Eigen::Vector3d(std::cos(elevation) * std::cos(azimuth), std::cos(elevation) * std::sin(azimuth),
+                                    std::sin(elevation));
+  r.sun_gain = rng.Uniform(0.3, 0.8);
+  r.ambient = rng.Uniform(0.3, 0.6);
+  r.sky_grey = rng.Uniform(140, 205);
+  r.sensor_noise_grey = rng.Uniform(0.5, 3.0);
 }
 
 bool MotionOptions::IsValid(std::string* error) const {
@@ -101,7 +140,7 @@ bool FaultOptions::IsValid(std::string* error) const {
 bool SynthOptions::IsValid(std::string* error) const {
   bool known = false;
   for (const std::string& n : SceneNames()) known = known || n == scene;
-  if (!known) return Fail(error, "scene: unknown scene '" + scene + "' (yard, hills, dropoff, forest, ramp)");
+  if (!known) return Fail(error, "scene: unknown scene '" + scene + "' (yard, hills, dropoff, forest, ramp, random)");
   if (frames < 1 || frames > 100000) return Fail(error, "frames: must be in [1, 100000]");
   if (!(ramp_slope_deg >= 0 && ramp_slope_deg < 60)) {
     return Fail(error, "ramp_slope_deg: must be in [0, 60) degrees");

@@ -20,6 +20,8 @@
 #include "ssta/io/image_io.h"
 #include "ssta/synth/scene.h"
 #include "ssta/synth/sequence_synthesizer.h"
+#include "ssta/synth/terrain_truth.h"
+#include "ssta/core/units.h"
 #include "ssta/synth/vehicle_trajectory.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
@@ -101,34 +103,20 @@ Scene BoxAndPitWorld() {
   return s;
 }
 
-TEST(SynthScene, BoxTopIsAStepAndItsFaceIsAWall) {
+TEST(SynthScene, RaysMeetTheBoxTopItsFaceAndThePitsFarWall) {
   const Scene s = BoxAndPitWorld();
-  const VehicleOptions vehicle;
   const SurfaceHit top = s.CastRay({5.1, 0.2, 3.0}, {0, 0, -1}, 10);
   ASSERT_TRUE(top.hit);
   EXPECT_NEAR(top.p_world.z(), 0.15, 1e-9);
   EXPECT_NEAR(top.step_m, 0.15, 1e-9);
-  EXPECT_EQ(s.Classify(top, vehicle), TravClass::kSemiTraversable);
   const SurfaceHit face = s.CastRay({0.0, 0.1, 0.1}, {1, 0, 0}, 10);
   ASSERT_TRUE(face.hit);
   EXPECT_NEAR(face.t, 4.5, 1e-9);
   EXPECT_NEAR(face.normal_world.x(), -1.0, 1e-9);
-  EXPECT_EQ(s.Classify(face, vehicle), TravClass::kNonTraversable);
-  const SurfaceHit ground = s.CastRay({0.0, 0.0, 1.0}, {1, 0, -1}, 10);
-  ASSERT_TRUE(ground.hit);
-  EXPECT_NEAR(ground.p_world.x(), 1.0, 1e-6);
-  EXPECT_NEAR(ground.p_world.z(), 0.0, 1e-6);
-  EXPECT_EQ(s.Classify(ground, vehicle), TravClass::kTraversable);
-}
-
-TEST(SynthScene, PitFloorAndFarWallAreNegativeObstacles) {
-  const Scene s = BoxAndPitWorld();
-  const VehicleOptions vehicle;
   const SurfaceHit floor = s.CastRay({10.2, 0.3, 2.0}, {0, 0, -1}, 10);
   ASSERT_TRUE(floor.hit);
   EXPECT_NEAR(floor.p_world.z(), -0.4, 1e-6);
   EXPECT_NEAR(floor.step_m, -0.4, 1e-9);
-  EXPECT_EQ(s.Classify(floor, vehicle), TravClass::kNonTraversable);
   // A ray grazing into the pit meets its far wall (x = 11) from inside, facing back.
   const SurfaceHit wall = s.CastRay({9.2, 0.0, 0.1}, {1, 0, -0.2}, 10);
   ASSERT_TRUE(wall.hit);
@@ -136,7 +124,99 @@ TEST(SynthScene, PitFloorAndFarWallAreNegativeObstacles) {
   EXPECT_NEAR(wall.p_world.x(), 11.0, 1e-5);
   EXPECT_NEAR(wall.p_world.z(), 0.1 - 0.2 * 1.8, 1e-5);
   EXPECT_NEAR(wall.normal_world.x(), -1.0, 1e-9);
-  EXPECT_EQ(s.Classify(wall, vehicle), TravClass::kNonTraversable);
+}
+
+// The class rule (docs/interfaces.md, section 3) on analytic worlds, with the default vehicle:
+// slope 15 / 25 deg, step 0.1 / 0.2 m, step radius 0.2 m.
+constexpr std::uint8_t kTrav = 1, kSemi = 2, kNon = 3;
+
+Obstacle Box(double x, double y, double half_x, double half_y, double height) {
+  Obstacle b;
+  b.shape = Obstacle::Shape::kBox;
+  b.x = x;
+  b.y = y;
+  b.a = half_x;
+  b.b = half_y;
+  b.z_min = -0.5;
+  b.z_max = height;
+  return b;
+}
+
+TerrainTruth TruthOf(const Scene& s, const VehicleOptions& vehicle = {}) {
+  return TerrainTruth(s, vehicle, Eigen::AlignedBox2d(Eigen::Vector2d(-5, -5), Eigen::Vector2d(15, 5)));
+}
+
+TEST(TerrainTruth, ATerraceIsLevelGroundInsideAndABandOfStepAroundItsEdge) {
+  Scene s;
+  s.obstacles.push_back(Box(5, 0, 1.5, 1.5, 0.4));  // 3 x 3 m, 0.4 m high: edges at x = 3.5, 6.5
+  s.Finish();
+  const TerrainTruth t = TruthOf(s);
+  EXPECT_EQ(t.ClassAt(5.0, 0.0), kTrav);    // the middle of the terrace, 0.4 m up
+  EXPECT_EQ(t.ClassAt(3.6, 0.0), kNon);     // on top, 0.1 m from the edge
+  EXPECT_EQ(t.ClassAt(3.4, 0.0), kNon);     // at its foot, 0.1 m from the face
+  EXPECT_EQ(t.ClassAt(3.0, 0.0), kTrav);    // 0.5 m from it
+  EXPECT_NEAR(t.StepAt(3.45, 0.0), 0.4, 1e-6);
+  EXPECT_NEAR(t.StepAt(5.0, 0.0), 0.0, 1e-6);
+  EXPECT_EQ(t.ClassAt(3.0 + 0.5 + 0.2 + 2 * t.resolution_m(), 0.0), kTrav);  // just beyond the band
+}
+
+TEST(TerrainTruth, ADropOffsFloorIsTraversableAwayFromItsLipAndFoot) {
+  Scene s;
+  s.pits.push_back({15.0, 0.0, 0.0, 10.0, 10.0, 1.0});  // the ground ends at x = 5, 1 m down
+  s.Finish();
+  const TerrainTruth t = TruthOf(s);
+  EXPECT_EQ(t.ClassAt(4.0, 0.0), kTrav);   // before the lip
+  EXPECT_EQ(t.ClassAt(4.9, 0.0), kNon);    // the lip
+  EXPECT_EQ(t.ClassAt(5.1, 0.0), kNon);    // the foot, 1 m below
+  EXPECT_EQ(t.ClassAt(6.0, 0.0), kTrav);   // the lower level's floor
+  EXPECT_NEAR(t.StepAt(6.0, 0.0), 0.0, 1e-6);
+}
+
+TEST(TerrainTruth, AFiveCentimetreCurbAndItsFaceAreTraversable) {
+  Scene s;
+  s.obstacles.push_back(Box(5, 0, 0.15, 1.0, 0.05));
+  s.Finish();
+  const TerrainTruth t = TruthOf(s);
+  EXPECT_EQ(t.ClassAt(5.0, 0.0), kTrav);
+  EXPECT_EQ(t.ClassAt(4.9, 0.0), kTrav);
+  const SurfaceHit face = s.CastRay({0.0, 0.0, 0.02}, {1, 0, 0}, 10);
+  ASSERT_TRUE(face.hit);
+  EXPECT_NEAR(face.p_world.x(), 4.85, 1e-9);
+  EXPECT_EQ(t.ClassOf(face), kTrav);  // a face is as bad as the jump it spans
+  // The same face on a 0.15 m curb spans a semi-traversable jump.
+  Scene higher;
+  higher.obstacles.push_back(Box(5, 0, 0.15, 1.0, 0.15));
+  higher.Finish();
+  EXPECT_EQ(TruthOf(higher).ClassOf(higher.CastRay({0.0, 0.0, 0.05}, {1, 0, 0}, 10)), kSemi);
+}
+
+TEST(TerrainTruth, ANarrowTallRockIsNonTraversableWholeAndSoIsTheGroundAroundIt) {
+  Scene s;
+  Obstacle rock;
+  rock.shape = Obstacle::Shape::kEllipsoid;
+  rock.x = 5;
+  rock.a = rock.b = 0.15;  // narrower than twice the step radius
+  rock.c = 0.3;
+  rock.z_min = -0.3;
+  rock.z_max = 0.3;
+  s.obstacles.push_back(rock);
+  s.Finish();
+  const TerrainTruth t = TruthOf(s);
+  EXPECT_EQ(t.ClassAt(5.0, 0.0), kNon);   // its top
+  EXPECT_EQ(t.ClassAt(5.25, 0.0), kNon);  // the ground within 0.2 m of it
+  EXPECT_EQ(t.ClassAt(5.5, 0.0), kTrav);  // 0.35 m from it
+}
+
+TEST(TerrainTruth, ARampsFlankIsJudgedBySlopeAndItsPlateauIsLevelGround) {
+  Scene s;
+  s.ramps.push_back({5.0, 0.0, 0.0, 1.5, 1.5, 0.6, 20.0});  // 20 deg flanks up to a 3 x 3 m top
+  s.Finish();
+  const TerrainTruth t = TruthOf(s);
+  const double foot = 5.0 - 1.5 - 0.6 / std::tan(DegToRad(20.0));
+  EXPECT_EQ(t.ClassAt(foot + 0.8, 0.0), kSemi);  // on the flank: 20 deg, no step
+  EXPECT_LT(t.StepAt(foot + 0.8, 0.0), 0.01);
+  EXPECT_EQ(t.ClassAt(5.0, 0.0), kTrav);         // the plateau, 0.6 m up
+  EXPECT_EQ(t.ClassAt(foot - 0.5, 0.0), kTrav);  // the ground before it
 }
 
 TEST(SynthGroundTruth, WarpingRightImageWithGtDisparityReproducesLeft) {
@@ -331,8 +411,11 @@ TEST(SynthGroundTruth, YardGridClassesAtKnownPlaces) {
   EXPECT_EQ(class_at(0.0, 0.0), TravClass::kTraversable);           // the start
   EXPECT_EQ(class_at(4.0, 2.0), TravClass::kTraversable);           // top of the 0.05 m curb
   EXPECT_EQ(class_at(4.5, -1.8), TravClass::kSemiTraversable);      // top of the 0.15 m curb
-  EXPECT_EQ(class_at(12.5, 4.2), TravClass::kNonTraversable);       // top of the 0.30 m step
-  EXPECT_EQ(class_at(8.0, -0.6), TravClass::kNonTraversable);       // the crate
+  EXPECT_EQ(class_at(12.5, 4.2), TravClass::kTraversable);          // middle of the 0.30 m terrace
+  EXPECT_EQ(class_at(12.5, 4.2 + 1.0 - 0.05), TravClass::kNonTraversable);  // its edge
+  EXPECT_EQ(class_at(12.5, 4.2 + 1.0 + 0.05), TravClass::kNonTraversable);  // the ground at its foot
+  EXPECT_EQ(class_at(8.0, -0.6), TravClass::kTraversable);          // the middle of the crate's top
+  EXPECT_EQ(class_at(8.0 + 0.25, -0.6), TravClass::kNonTraversable);  // near its edge
   EXPECT_EQ(class_at(8.0, 4.6 - 0.6 - 0.6), TravClass::kTraversable);  // 8 deg ramp flank
   EXPECT_EQ(class_at(8.0, 4.6), TravClass::kTraversable);           // its flat top
 }

@@ -11,8 +11,11 @@ namespace ssta {
 struct VehicleOptions {
   double max_slope_deg = 25.0;   ///< steeper than this: non-traversable [deg]
   double semi_slope_deg = 15.0;  ///< steeper than this (up to max): semi-traversable [deg]
-  double max_step_m = 0.20;      ///< step to the ground plane above this: non-traversable [m]
-  double semi_step_m = 0.10;     ///< step above this (up to max): semi-traversable [m]
+  double max_step_m = 0.20;      ///< a height jump above this: non-traversable [m]
+  double semi_step_m = 0.10;     ///< a height jump above this (up to max): semi-traversable [m]
+  /// A surface point is judged by the height jumps within this horizontal distance of it
+  /// (docs/interfaces.md, section 3) [m].
+  double step_radius_m = 0.20;
   /// Plausible height of the left camera above the dominant ground plane [m]; a frame whose
   /// ground plane lies outside this band fails the quality check.
   double min_camera_height_m = 0.2;

@@ -114,10 +114,6 @@ class Scene {
   SurfaceHit CastRay(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
                      double t_max) const;
 
-  /// Ground-truth class of a hit (INTERFACES section 3): slope of the true normal against
-  /// world up and |step| above the base ground, the worse of the two. Precondition: hit.hit.
-  TravClass Classify(const SurfaceHit& hit, const VehicleOptions& vehicle) const;
-
   /// Precomputes bounds (obstacle spheres, ground height range, slope bound). Call after edits.
   void Finish();
 

@@ -4,11 +4,11 @@
 
 #include <Eigen/Geometry>
 
-#include "ssta/analysis/vehicle_options.h"
 #include "ssta/core/image.h"
 #include "ssta/io/camera_calibration.h"
 #include "ssta/synth/scene.h"
 #include "ssta/synth/synth_options.h"
+#include "ssta/synth/terrain_truth.h"
 
 namespace ssta::synth {
 
@@ -16,7 +16,7 @@ namespace ssta::synth {
 struct StereoFrame {
   ImageU8 left;         ///< cam0 grey image
   ImageU8 right;        ///< cam1 grey image
-  ImageU8 labels;       ///< class ids (INTERFACES section 3), 255 = don't care
+  ImageU8 labels;       ///< true class ids (TerrainTruth), 255 = don't care
   ImageF disparity;     ///< true disparity u_left - u_right [px], 0 where the sky is seen
   ImageF depth;         ///< cam0 z depth [m], 0 where the sky is seen
   ImageU8 occluded;     ///< 1 where the left pixel's surface point is hidden in cam1
@@ -29,9 +29,10 @@ struct StereoFrame {
 /// const and spreads image rows over RenderOptions::threads threads.
 class StereoRenderer {
  public:
-  /// Precondition: the options are valid; `scene` outlives the renderer.
-  StereoRenderer(const Scene& scene, const RigOptions& rig, const RenderOptions& render,
-                 const VehicleOptions& vehicle, std::uint64_t seed);
+  /// Precondition: the options are valid; `scene` and `truth` outlive the renderer. Without a
+  /// truth (null) every label is 255.
+  StereoRenderer(const Scene& scene, const RigOptions& rig, const RenderOptions& render, const TerrainTruth* truth,
+                 std::uint64_t seed);
 
   /// Renders the pair seen by cam0 at `world_T_cam0` (cam1 is `baseline_m` along cam0 x).
   /// `frame_index` seeds the sensor noise.
@@ -47,7 +48,7 @@ class StereoRenderer {
   const Scene& scene_;
   RigOptions rig_;
   RenderOptions render_;
-  VehicleOptions vehicle_;
+  const TerrainTruth* truth_;
   std::uint64_t seed_;
 };
 

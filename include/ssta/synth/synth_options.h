@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "ssta/analysis/vehicle_options.h"
 
 namespace ssta::synth {
@@ -29,12 +31,18 @@ struct RigOptions {
 struct RenderOptions {
   int supersample = 1;            ///< rays per pixel side (1 = none, 2 = 2x2 anti-aliasing)
   double sensor_noise_grey = 1.5; ///< std dev of the additive Gaussian pixel noise [grey levels]
-  /// Labels beyond this range from cam0 are 255 (don't care) [m]: the map's default max_range_m,
-  /// and about where the default rig's depth noise (0.5 m at 10 m) stops resolving a 0.2 m step.
-  double max_label_range_m = 12.0;
+  /// Labels beyond this range from cam0 are 255 (don't care), and the truth grid reaches this
+  /// far around the path [m].
+  double max_label_range_m = 20.0;
   double max_ray_m = 120.0;       ///< rays that hit nothing within this distance see the sky [m]
   int boundary_band_px = 1;       ///< labels within this many px of a class change become 255
   bool shadows = true;            ///< cast sun shadows (about 5-20 % more render time)
+  /// Towards the sun in the world (z up; normalised when used): high on the left and a little
+  /// behind by default, so shadows fall to the right.
+  Eigen::Vector3d sun_direction{-0.2, 0.6, 0.78};
+  double sun_gain = 0.62;         ///< sunlight on a surface facing the sun, times its albedo
+  double ambient = 0.45;          ///< light from the sky everywhere, times the albedo
+  double sky_grey = 185.0;        ///< grey of the sky at the horizon; it brightens by 50 to the zenith
   int threads = 0;                ///< render threads (0 = all hardware threads); same bytes for any
 
   bool IsValid(std::string* error) const;
@@ -72,6 +80,14 @@ struct FaultOptions {
 
   bool IsValid(std::string* error) const;
 };
+
+/// A rig and lighting drawn from `seed` within real ranges, for the `random` scene: image sizes
+/// from VGA to KITTI's, focal length 350 to 800 px (horizontal field of view 40 to 110 deg),
+/// baseline 0.10 to 0.50 m, camera 0.5 to 1.6 m up and pitched 5 to 25 deg down, with the
+/// nearest ground disparity within 20 % of the image width (a rig designed for its range); sun,
+/// sky, ambient light and sensor noise. Replaces `o->rig` (but its rate) and the lighting of
+/// `o->render`.
+void DrawRandomRig(std::uint64_t seed, struct SynthOptions* o);
 
 /// Everything `ssta synth` needs. A given (options, seed) always produces the same bytes.
 struct SynthOptions {
