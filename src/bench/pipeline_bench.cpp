@@ -90,7 +90,8 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
   }
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
-  TraversabilityMap map(config.map.fusion, metadata);
+  TraversabilityMap map(config.map.FusionFor(run.geometry().f * run.geometry().baseline_m, config.stereo.disparity_sigma_px),
+                        metadata);
   std::vector<Clock::time_point> started(inputs.size()), finished(inputs.size());
   std::vector<ClassifiedPoint> map_points;  // reused as build-map does (one fusion job at a time)
   {
@@ -281,7 +282,8 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   const RigChain chain(body_T_camera, run.geometry());
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
-  TraversabilityMap map(config.map.fusion, metadata);
+  TraversabilityMap map(config.map.FusionFor(run.geometry().f * run.geometry().baseline_m, config.stereo.disparity_sigma_px),
+                        metadata);
   std::vector<ClassifiedPoint> points;  // the map points of the frame, reused as build-map does
 
   BenchReport report;

@@ -67,16 +67,29 @@ const OptionFields<MappingOptions>& MappingOptions::Fields() {
     f.push_back(Integer<O>("pixel_stride", &O::pixel_stride, Closed(1, 64), "",
                            "insert every n-th pixel in u and v"));
     f.push_back(Real<O>("min_texture", &O::min_texture, ClosedOpen(0, 128), "grey levels",
-                        "pixels whose left-image standard deviation over the stereo block is lower are not "
-                        "inserted (sky noise); the classification keeps them"));
+                        "pixels above the horizon whose left-image standard deviation over the stereo block "
+                        "is lower are not inserted (the sky's noise matches)"));
     f.push_back(OddOrOff<O>("subpixel_window_px", &O::subpixel_window_px, Closed(1, 31), "px",
                             "points at the disparity refined to sub-pixel precision over this window; the "
                             "classification keeps the matcher's. 0: off"));
+    f.push_back(Flag<O>("auto_range", &O::auto_range,
+                        "the range follows the rig: the depth at which its stereo depth noise reaches "
+                        "range_depth_sigma_m replaces max_range_m"));
+    f.push_back(Real<O>("range_depth_sigma_m", &O::range_depth_sigma_m, OpenClosed(0, 10), "m",
+                        "the depth noise (1-sigma) at the auto range"));
     f.push_back(Integer<O>("checkpoint_every_frames", &O::checkpoint_every_frames, AtLeast(0), "frames",
                            "save the map every n frames while building (0: never)"));
     return f;
   }();
   return fields;
+}
+
+MapOptions MappingOptions::FusionFor(double focal_times_baseline, double disparity_sigma_px) const {
+  MapOptions o = fusion;
+  if (auto_range && focal_times_baseline > 0 && disparity_sigma_px > 0) {
+    o.max_range_m = std::min(1000.0, std::sqrt(range_depth_sigma_m * focal_times_baseline / disparity_sigma_px));
+  }
+  return o;
 }
 
 bool MappingOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }

@@ -34,18 +34,46 @@ Config Validated(const Config& config) {
   return config;
 }
 
+/// The stereo options with the search range resolved for the rig.
+StereoMatcherOptions MatcherOptionsFor(const Config& config, const RectifiedGeometry& geometry,
+                                       const Eigen::Isometry3d& body_T_camera) {
+  StereoMatcherOptions o = config.stereo;
+  if (o.auto_num_disparities) {
+    const int room = 1024 - o.min_disparity;
+    o.num_disparities = std::min(room / 16 * 16, AutoNumDisparities(geometry, body_T_camera, o.num_disparities));
+  }
+  return o;
+}
+
 }  // namespace
 
 struct FramePipeline::Stages {
   Stages(const StereoCalibration& calibration, const Config& config)
-      : rectifier(calibration, config.rectification), matcher(config.stereo), normals(config.normals),
-        segmenter(config.segmentation), analyzer(config.vehicle, config.analysis) {}
+      : rectifier(calibration, config.rectification),
+        matcher(MatcherOptionsFor(config, rectifier.geometry(), calibration.left.body_T_camera)),
+        normals(config.normals),
+        segmenter(config.segmentation), analyzer(config.vehicle, config.analysis, config.stereo.disparity_sigma_px) {}
   Rectifier rectifier;
   StereoMatcher matcher;
   NormalEstimator normals;
   Segmenter segmenter;
   FrameAnalyzer analyzer;
 };
+
+int AutoNumDisparities(const RectifiedGeometry& g, const Eigen::Isometry3d& body_T_camera, int fallback) {
+  const double height = body_T_camera.translation().z();
+  if (!(height >= 0.1)) return fallback;
+  const Eigen::Matrix3d body_R_rectified = body_T_camera.linear() * g.rectified_R_camera.transpose();
+  double largest = 0.0;
+  for (const double u : {0.0, 0.5 * (g.crop_width - 1), static_cast<double>(g.crop_width - 1)}) {
+    // The ray through the bottom row (z = 1 in the rectified frame: its parameter is the depth).
+    const Eigen::Vector3d ray = body_R_rectified * Eigen::Vector3d((u - g.cu) / g.f, (g.crop_height - 1 - g.cv) / g.f, 1.0);
+    if (ray.z() < 0) largest = std::max(largest, g.f * g.baseline_m * -ray.z() / height);
+  }
+  if (largest <= 0) return fallback;
+  const int needed = static_cast<int>(std::ceil(1.1 * largest / 16.0)) * 16;
+  return std::max(fallback, std::min(needed, std::max(16, g.crop_width / 2 / 16 * 16)));
+}
 
 FramePipeline::FramePipeline(const StereoCalibration& calibration, const Config& config)
     : config_(Validated(config)), calibration_(calibration),
@@ -105,8 +133,8 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   if (config_.analysis.label_min_texture > 0.0) {
     // The same test as the map's min_texture, on the full rectified image (the block reaches
     // past the common area's border as the matcher's does).
-    const ImageU8 textured =
-        TexturedPixels(pair.left_full, g, config_.stereo.block_size, config_.analysis.label_min_texture);
+    const ImageU8 textured = SupportedPixels(pair.left_full, g, config_.stereo.block_size,
+                                             config_.analysis.label_min_texture, out.up_rectified);
     ImageU8& labels = out.analysis.labels;
     for (std::size_t i = 0; i < labels.size(); ++i) {
       if (textured[i] == 0) labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
@@ -123,6 +151,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.left_rectified = std::move(pair.left_full);
   out.texture_block_px = config_.stereo.block_size;
   out.labels_min_texture = config_.analysis.label_min_texture;
+  out.depth_noise_per_m2 = config_.stereo.disparity_sigma_px / (g.f * g.baseline_m);
   // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
   // per-frame path; the classification keeps the matcher's disparity.
   if (disparity == nullptr && config_.map.subpixel_window_px > 0 && config_.stereo.subpixel_window_px == 0) {

@@ -39,14 +39,16 @@ std::string CalibrationSummary(const StereoCalibration& c, const RectifiedGeomet
 
 /// `*continues_sequence`: the resumed map's last sequence is this one (an interrupted run of it).
 TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, const std::string& sequence_name,
-                          const std::string& calibration, bool* continues_sequence) {
+                          const RectifiedGeometry& geometry, const std::string& calibration,
+                          bool* continues_sequence) {
   *continues_sequence = false;
   if (!options.resume) {
     MapMetadata metadata;
     metadata.vehicle = config.vehicle;
     metadata.calibration_summary = calibration;
     metadata.sequences = {sequence_name};
-    return TraversabilityMap(config.map.fusion, metadata);
+    return TraversabilityMap(config.map.FusionFor(geometry.f * geometry.baseline_m, config.stereo.disparity_sigma_px),
+                             metadata);
   }
   TraversabilityMap map = TraversabilityMap::Load(options.map_path);
   const double resolution = map.options().resolution_m;
@@ -99,7 +101,8 @@ class MapBuilder {
         stop_(stop),
         run_(RequirePoses(sequence, options), config, options.frames, options.oracles),
         chain_(sequence.calibration().left.body_T_camera, run_.geometry()),
-        map_(OpenMap(options, config, sequence_name, CalibrationSummary(sequence.calibration(), run_.geometry()),
+        map_(OpenMap(options, config, sequence_name, run_.geometry(),
+                     CalibrationSummary(sequence.calibration(), run_.geometry()),
                      &same_sequence_)),
         fusion_(options.pipelined ? 1 : 0) {
     // Continuing an interrupted run of this sequence: what the map holds is not fused twice.

@@ -335,6 +335,13 @@ const OptionFields<StereoMatcherOptions>& StereoMatcherOptions::Fields() {
                            "search range, a positive multiple of 16")
                     .Require([](const O& o) { return o.num_disparities % 16 == 0 && o.min_disparity + o.num_disparities <= 1024; },
                              "must be a positive multiple of 16, and min_disparity + num_disparities <= 1024"));
+    f.push_back(Flag<O>("auto_num_disparities", &O::auto_num_disparities,
+                        "widen the search range to the largest disparity of level ground in view of the rig "
+                        "(from cam0's mount height and pitch, the focal length and the baseline)"));
+    f.push_back(Real<O>("disparity_sigma_px", &O::disparity_sigma_px, Closed(0.01, 10), "px",
+                        "1-sigma disparity noise of the matcher: the stereo noise model (a point at depth Z "
+                        "has a depth sigma of Z^2 sigma_d / (f b)) behind the map's range, its height fusion "
+                        "and the ground plane's quality check"));
     f.push_back(Integer<O>("block_size", &O::block_size, Closed(3, 51), "px", "odd matching window side (>= 5 for bm)")
                     .Require([](const O& o) {
                       return o.block_size % 2 == 1 && (o.algorithm != MatcherType::kBlockMatching || o.block_size >= 5);

@@ -91,6 +91,16 @@ struct MappingOptions {
   /// stereo.subpixel_window_px already refines it, or with a given (oracle) disparity.
   int subpixel_window_px = 7;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
+  /// The map's range follows the rig: fusion.max_range_m becomes the depth at which the stereo
+  /// depth noise reaches range_depth_sigma_m (FusionFor). false: fusion.max_range_m as given.
+  bool auto_range = true;
+  double range_depth_sigma_m = 2.0;  ///< [m] the depth noise (1-sigma) at the auto range
+
+  /// The fusion options for a rig of `focal_times_baseline` [px m] whose matcher's disparity
+  /// noise is `disparity_sigma_px`: with auto_range, max_range_m = sqrt(range_depth_sigma_m *
+  /// f b / sigma_d), the depth where Z^2 sigma_d / (f b) reaches range_depth_sigma_m (20 m for
+  /// f b = 50 px m and 0.25 px), at most 1000 m.
+  MapOptions FusionFor(double focal_times_baseline, double disparity_sigma_px) const;
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<MappingOptions>& Fields();
   /// The first field out of its range, as "key: requirement" in `*error`.

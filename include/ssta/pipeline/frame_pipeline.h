@@ -13,6 +13,14 @@
 
 namespace ssta {
 
+/// The disparity search range a rig needs: the largest disparity of level ground seen at the
+/// bottom row of the rectified common area, with cam0's mount (`body_T_camera`) taken to stand
+/// its height above the ground (the body origin on the ground), plus 10 %, rounded up to a
+/// multiple of 16 and at most half the image width. `fallback` when the mount does not tell a
+/// height (cam0 less than 0.1 m above the body origin) or no bottom ray meets the ground; never
+/// less than `fallback`.
+int AutoNumDisparities(const RectifiedGeometry& geometry, const Eigen::Isometry3d& body_T_camera, int fallback);
+
 /// The paper's per-frame chain: rectify + crop, stereo matching, triangulation, integral-image
 /// normals, normal segmentation, SSTA. Not thread-safe: Process() reuses internal buffers;
 /// use one pipeline per thread.

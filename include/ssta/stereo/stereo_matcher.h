@@ -54,6 +54,14 @@ struct StereoMatcherOptions {
   MatcherType algorithm = MatcherType::kSemiGlobal;
   int min_disparity = 0;       ///< smallest disparity searched [px], >= 0
   int num_disparities = 64;    ///< search range [px], a positive multiple of 16
+  /// A pipeline (FramePipeline) widens num_disparities to the largest disparity of level ground
+  /// in view of its rig, from cam0's mount and the rectified focal length and baseline
+  /// (AutoNumDisparities); the matcher itself uses num_disparities as it is.
+  bool auto_num_disparities = true;
+  /// [px] 1-sigma of the disparity the matcher delivers on textured surfaces: the stereo noise
+  /// model. A point at depth Z has a depth sigma of Z^2 sigma_d / (f b); the map's range, its
+  /// height fusion and the ground plane's quality check follow from it.
+  double disparity_sigma_px = 0.25;
   int block_size = 9;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
                                ///< pcl_acso the length of the aggregation column
   SgbmMode sgbm_mode = SgbmMode::kThreeWay;  ///< sgbm only: cost aggregation directions
