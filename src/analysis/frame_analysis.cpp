@@ -10,8 +10,8 @@ namespace ssta {
 
 using internal::RunBoth;
 
-FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options)
-    : vehicle_(vehicle), options_(options) {
+FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px)
+    : vehicle_(vehicle), options_(options), disparity_sigma_px_(disparity_sigma_px) {
   std::string error;
   if (!vehicle_.IsValid(&error)) throw Error("vehicle." + error);
   if (!options_.IsValid(&error)) throw Error("analysis." + error);
@@ -34,7 +34,8 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   // The slope classes are computed before the quality check is known: on a frame that fails it
   // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
   AnalysisResult a;
-  RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options); },
+  const DepthNoise noise{disparity_sigma_px_ / focal_times_baseline};
+  RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options, noise); },
           [&] {
             if (options.pixel_slopes) {
               PixelSlopeClasses(*in.normals, up, vehicle_, &segment_ids, options.pixel_slope_window_px,
@@ -46,6 +47,9 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
         if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes_, &a.labels);
         RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
         RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
+        if (options.step_reference == StepReference::kLocal && a.quality.passed) {
+          RefineByLocalSteps(cloud, *in.normals, up, vehicle_, noise, &a.labels);
+        }
       },
       [&] {
         // Only for a frame that passed the quality check (known from here on): on the others
@@ -57,7 +61,10 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   if (a.quality.passed) {
     ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);  // nothing when the test is off
     FillUndecidedByConsensus(options, &a.labels);
-    FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
+    // Heights above the dominant plane are eq. 5's steps: the local rule has its own.
+    if (options.step_reference != StepReference::kLocal) {
+      FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
+    }
   }
   return a;
 }
@@ -65,6 +72,19 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {
   return TextureMask(left_rectified, geometry.crop_u0, geometry.crop_v0, geometry.crop_width, geometry.crop_height,
                      block, min_std);
+}
+
+ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g, int block, double min_std,
+                        const Eigen::Vector3d& up_rectified) {
+  ImageU8 supported = TexturedPixels(left_rectified, g, block, min_std);
+  for (int v = 0; v < g.crop_height; ++v) {
+    std::uint8_t* row = supported.row(v);
+    for (int u = 0; u < g.crop_width; ++u) {
+      const Eigen::Vector3d ray((u - g.cu) / g.f, (v - g.cv) / g.f, 1.0);
+      if (ray.dot(up_rectified) < 0.0) row[u] = 1;
+    }
+  }
+  return supported;
 }
 
 }  // namespace ssta

@@ -35,7 +35,8 @@ StepReference ParseStepReference(const std::string& name) {
   if (name == "dominant_plane") return StepReference::kDominantPlane;
   if (name == "reachable") return StepReference::kReachable;
   if (name == "reachable_large") return StepReference::kReachableLarge;
-  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable, reachable_large)");
+  if (name == "local") return StepReference::kLocal;
+  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable, reachable_large, local)");
 }
 
 std::string StepReferenceName(StepReference reference) {
@@ -44,6 +45,8 @@ std::string StepReferenceName(StepReference reference) {
       return "reachable";
     case StepReference::kReachableLarge:
       return "reachable_large";
+    case StepReference::kLocal:
+      return "local";
     case StepReference::kDominantPlane:
       break;
   }
@@ -79,11 +82,14 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
                            "that normal is the mean over a box this wide within the pixel's segment; 1: its own")
                     .Require([](const O& o) { return o.pixel_slope_window_px % 2 == 1; }, "must be odd"));
     f.push_back(Choice<O>("step_reference", &O::step_reference,
-                          {StepReference::kDominantPlane, StepReference::kReachable, StepReference::kReachableLarge},
+                          {StepReference::kDominantPlane, StepReference::kReachable, StepReference::kReachableLarge,
+                           StepReference::kLocal},
                           StepReferenceName,
                           "dominant_plane: centroid distance to the ground plane (eq. 5) | reachable: class "
                           "of the best way from the ground across segment boundaries | reachable_large: "
-                          "eq. 5, but a large segment that eq. 5 calls non-traversable takes its reachable class"));
+                          "eq. 5, but a large segment that eq. 5 calls non-traversable takes its reachable class | "
+                          "local: the largest height jump within step_radius_m of each point (the class rule "
+                          "of docs/interfaces.md, section 3)"));
     f.push_back(Choice<O>("small_segments", &O::small_segments,
                           {SmallSegmentPolicy::kPaper, SmallSegmentPolicy::kObstacles, SmallSegmentPolicy::kAll},
                           SmallSegmentPolicyName,
@@ -118,8 +124,9 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
                         "an undecided pixel left then takes the step class of its own height above the "
                         "ground plane where that is drivable"));
     f.push_back(Real<O>("label_min_texture", &O::label_min_texture, ClosedOpen(0, 128), "grey levels",
-                        "pixels whose left-image standard deviation over the stereo block is lower are "
-                        "labelled unknown (sky, blank walls); 0: off"));
+                        "pixels above the horizon whose left-image standard deviation over the stereo block "
+                        "is lower are labelled unknown: the sky, where matching finds noise (below the "
+                        "horizon a blank surface is a surface); 0: off"));
     f.push_back(OddOrOff<O>("face_window_px", &O::face_window_px, Closed(3, 63), "px",
                             "thin vertical faces (a curb's front): the disparity fitted along the image column "
                             "over this many rows gives the surface's rise along the column; 0: off"));
@@ -221,7 +228,9 @@ SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_mi
 }
 
 /// The dominant ground plane: the largest traversable, large-enough segment below the camera.
-GroundPlane FindGroundPlane(const std::vector<SegmentResult>& segments, int depth_pixels) {
+GroundPlane FindGroundPlane(const std::vector<SegmentResult>& segments, const FrameMoments& moments,
+                            const DepthNoise& noise) {
+  const int depth_pixels = moments.depth_pixels;
   GroundPlane ground;
   for (const SegmentResult& s : segments) {
     if (!s.has_plane || s.small || s.slope_class != TravClass::kTraversable) continue;
@@ -237,12 +246,64 @@ GroundPlane FindGroundPlane(const std::vector<SegmentResult>& segments, int dept
   ground.plane = g.plane;
   ground.camera_height_m = g.plane(3);
   ground.rms_m = g.rms_m;
+  // Across a plane h below the camera, a point at depth Z errs by k Z^2 |n . p| / Z = k Z h.
+  ground.noise_rms_m =
+      noise.per_m2 * ground.camera_height_m * std::sqrt(moments.segments[ground.segment_id].MeanSquaredZ());
   ground.share = depth_pixels > 0 ? static_cast<double>(g.inliers) / depth_pixels : 0.0;
   return ground;
 }
 
+/// The scatter of the ground segment's points about the smooth quadratic surface that fits them
+/// best, in the plane's own frame (heights above the plane as a quadratic of the two in-plane
+/// coordinates), as a robust standard deviation: 1.4826 times the median absolute residual.
+/// Unlike the plane's RMS, it leaves out the gentle bend of rolling ground (a plane through a
+/// hillside's curve misses it by decimetres) and the few mismatched points that a plane's RMS
+/// squares, and keeps what the quality check is for: the scatter of the ground's points.
+double QuadraticRms(const Image3f& cloud, const ImageI32& segment_ids, const GroundPlane& ground) {
+  const Eigen::Vector3d n = ground.plane.head<3>();
+  const Eigen::Vector3d a = n.unitOrthogonal(), b = n.cross(a);
+  using Vector6 = Eigen::Matrix<double, 6, 1>;
+  Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
+  Vector6 rhs = Vector6::Zero();
+  int count = 0;
+  // Every third pixel in raster order: the statistics need a few thousand points, not all (and
+  // a stride of 3 does not alias with a pattern of rows and columns, as one of 2 x 2 would).
+  std::vector<std::size_t> pixels;
+  for (std::size_t i = 0; i < cloud.size(); i += 3) {
+    if (segment_ids[i] == ground.segment_id) pixels.push_back(i);
+  }
+  for (const std::size_t i : pixels) {
+    const Eigen::Vector3d p = cloud[i].cast<double>();
+    const double x = a.dot(p), y = b.dot(p), h = n.dot(p) + ground.plane(3);
+    Vector6 row;
+    row << 1.0, x, y, x * x, x * y, y * y;
+    normal.selfadjointView<Eigen::Lower>().rankUpdate(row);
+    rhs += h * row;
+    ++count;
+  }
+  if (count < 12) return ground.rms_m;
+  const Eigen::Matrix<double, 6, 6> full = normal.selfadjointView<Eigen::Lower>();
+  const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> solver(full);
+  if (solver.info() != Eigen::Success) return ground.rms_m;
+  const Vector6 coefficients = solver.solve(rhs);
+  if (!coefficients.allFinite()) return ground.rms_m;
+  std::vector<float> residuals;
+  residuals.reserve(static_cast<std::size_t>(count));
+  for (const std::size_t i : pixels) {
+    const Eigen::Vector3d p = cloud[i].cast<double>();
+    const double x = a.dot(p), y = b.dot(p), h = n.dot(p) + ground.plane(3);
+    Vector6 row;
+    row << 1.0, x, y, x * x, x * y, y * y;
+    residuals.push_back(static_cast<float>(std::abs(h - coefficients.dot(row))));
+  }
+  auto middle = residuals.begin() + static_cast<std::ptrdiff_t>(residuals.size() / 2);
+  std::nth_element(residuals.begin(), middle, residuals.end());
+  return 1.4826 * *middle;
+}
+
 /// The point-cloud quality check on the dominant ground plane: a plausible camera height above
-/// it, a small RMS and a large enough share of the depth pixels.
+/// it, a small roughness beyond the stereo noise expected at its range (the RMS with the noise's
+/// share taken out in quadrature), and a large enough share of the depth pixels.
 QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehicle, const AnalysisOptions& options) {
   QualityCheck quality;
   if (!ground.found) {
@@ -252,8 +313,11 @@ QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehic
     quality.reason = FormatNumber("implausible camera height", ground.camera_height_m, 2, " m") +
                      FormatNumber(" above the ground plane (vehicle expects", vehicle.min_camera_height_m, 2, "") +
                      FormatNumber(" to", vehicle.max_camera_height_m, 2, " m)");
-  } else if (ground.rms_m > options.max_ground_rms_m) {
+  } else if (GroundRoughness(ground) > options.max_ground_rms_m) {
     quality.reason = FormatNumber("ground plane too rough: RMS", ground.rms_m, 3, " m") +
+                     FormatNumber(" (about a smooth surface", std::min(ground.rms_m, ground.smooth_rms_m), 3, " m)") +
+                     FormatNumber(", of which stereo noise", ground.noise_rms_m, 3, " m") +
+                     FormatNumber(": roughness", GroundRoughness(ground), 3, " m") +
                      FormatNumber(" > max_ground_rms_m", options.max_ground_rms_m, 3, "");
   } else if (ground.share < options.min_ground_share) {
     quality.reason = FormatNumber("ground plane too small: share", ground.share, 3, "") +
@@ -271,6 +335,10 @@ void MeasureStep(const GroundPlane& ground, const internal::ReachableSteps& reac
   SegmentResult& s = *segment;
   s.ground = s.id == ground.segment_id;
   s.step_m = s.ground ? 0.0 : std::abs(ground.plane.head<3>().dot(s.centroid) + ground.plane(3));
+  if (step_reference == StepReference::kLocal) {  // the pixels' own steps come later (RefineByLocalSteps)
+    s.step_class = TravClass::kTraversable;
+    return;
+  }
   s.step_class = vehicle.ClassifyStep(s.step_m);
   const bool by_reach = !reach.step_class.empty() && (step_reference == StepReference::kReachable ||
                                                       (!s.small && s.step_class == TravClass::kNonTraversable));
@@ -328,9 +396,14 @@ ImageU8 PixelLabels(const Image3f& cloud, const ImageI32& segment_ids, const std
 
 }  // namespace
 
+double GroundRoughness(const GroundPlane& ground) {
+  const double rms = std::min(ground.rms_m, ground.smooth_rms_m);
+  return std::sqrt(std::max(0.0, rms * rms - ground.noise_rms_m * ground.noise_rms_m));
+}
+
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                               const AnalysisOptions& options) {
+                               const AnalysisOptions& options, const DepthNoise& noise) {
   SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height(),
              "cloud and segment ids differ in size");
   SSTA_CHECK(std::abs(up_camera.norm() - 1.0) < 1e-6, "up_camera must be a unit vector");
@@ -348,7 +421,12 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     result.segments.push_back(FitSegment(id, moments.segments[id], result.inliers_min, up_camera, vehicle));
   }
 
-  result.ground = FindGroundPlane(result.segments, result.depth_pixels);
+  result.ground = FindGroundPlane(result.segments, moments, noise);
+  // The smooth surface's scatter only matters when the plane's does not pass on its own.
+  result.ground.smooth_rms_m = result.ground.rms_m;
+  if (result.ground.found && GroundRoughness(result.ground) > options.max_ground_rms_m) {
+    result.ground.smooth_rms_m = QuadraticRms(cloud, segment_ids, result.ground);
+  }
   result.quality = CheckQuality(result.ground, vehicle, options);
 
   internal::ReachableSteps reach;

@@ -53,8 +53,9 @@ class AnalyticWorld {
     num_segments_ = std::max(num_segments_, id + 1);
   }
 
-  AnalysisResult Analyze(const VehicleOptions& vehicle = {}, AnalysisOptions options = PlanesOnly()) const {
-    return AnalyzeSurfaces(cloud_, ids_, num_segments_, kUp, vehicle, options);
+  AnalysisResult Analyze(const VehicleOptions& vehicle = {}, AnalysisOptions options = PlanesOnly(),
+                         const DepthNoise& noise = {}) const {
+    return AnalyzeSurfaces(cloud_, ids_, num_segments_, kUp, vehicle, options, noise);
   }
 
   static inline const Eigen::Vector3d kUp{0, -1, 0};

@@ -617,5 +617,54 @@ TEST(FillUndecidedByHeight, DrivableHeightsTakeTheirStepClassHigherPointsStayUnd
   EXPECT_EQ(label(failed, 20, 10), TravClass::kUndecided);
 }
 
+
+// Local steps on analytic worlds: a floor 1 m below the camera with a box on it, seen from above
+// (the world is painted straight into the cloud; the normals are the surfaces' own).
+struct StepWorld {
+  StepWorld(int width, int height) : cloud(width, height, NanVector3f()), normals(width, height, NanVector3f()),
+                                     labels(width, height, 1) {}
+  /// A level patch at `height_m` below the camera over x in [x0, x1), z in [z0, z1), 1 cm spacing.
+  void Level(double x0, double x1, double z0, double z1, double height_m) {
+    for (int v = 0; v < cloud.height(); ++v) {
+      for (int u = 0; u < cloud.width(); ++u) {
+        const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
+        if (x < x0 || x >= x1 || z < z0 || z >= z1) continue;
+        cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(height_m), static_cast<float>(z));
+        normals(v, u) = Eigen::Vector3f(0, -1, 0);
+      }
+    }
+  }
+  Image3f cloud, normals;
+  ImageU8 labels;
+};
+
+std::uint8_t LabelAt(const StepWorld& w, double x, double z) {
+  return w.labels(static_cast<int>(std::lround((z - 1.0) / 0.01)), static_cast<int>(std::lround((x + 1.0) / 0.01)));
+}
+
+TEST(RefineByLocalSteps, LevelGroundStaysTraversableAtAnyHeight) {
+  StepWorld w(200, 200);
+  w.Level(-1, 1, 1, 3, 1.0);
+  RefineByLocalSteps(w.cloud, w.normals, {0, -1, 0}, VehicleOptions{}, DepthNoise{}, &w.labels);
+  for (std::size_t i = 0; i < w.labels.size(); ++i) ASSERT_EQ(w.labels[i], 1) << i;
+  StepWorld low(200, 200);
+  low.Level(-1, 1, 1, 3, 2.5);  // the floor of a drop-off, 1.5 m lower
+  RefineByLocalSteps(low.cloud, low.normals, {0, -1, 0}, VehicleOptions{}, DepthNoise{}, &low.labels);
+  for (std::size_t i = 0; i < low.labels.size(); ++i) ASSERT_EQ(low.labels[i], 1) << i;
+}
+
+TEST(RefineByLocalSteps, TheBandAroundAJumpTakesItsStepClassOnBothSides) {
+  for (const auto& [jump, expected] : {std::pair{0.05, 1}, {0.15, 2}, {0.3, 3}}) {
+    SCOPED_TRACE(jump);
+    StepWorld w(200, 200);
+    w.Level(-1, 1, 1, 2, 1.0);          // the floor up to z = 2
+    w.Level(-1, 1, 2, 3, 1.0 - jump);   // a terrace beyond it, `jump` higher
+    RefineByLocalSteps(w.cloud, w.normals, {0, -1, 0}, VehicleOptions{}, DepthNoise{}, &w.labels);
+    EXPECT_EQ(LabelAt(w, 0.0, 1.95), expected);  // at the foot
+    EXPECT_EQ(LabelAt(w, 0.0, 2.05), expected);  // on the edge
+    EXPECT_EQ(LabelAt(w, 0.0, 1.5), 1);          // 0.5 m before it
+    EXPECT_EQ(LabelAt(w, 0.0, 2.6), 1);          // the terrace's level top
+  }
+}
 }  // namespace
 }  // namespace ssta

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -142,11 +144,51 @@ TEST(SurfaceAnalyzer, QualityCheckRejectsARoughGround) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 100);
   for (int v = 0; v < 100; ++v) {
-    for (int u = 0; u < 100; ++u) w.cloud_(v, u).y() += ((u + v) % 2 ? 0.15f : -0.15f);
+    for (int u = 0; u < 100; ++u) w.cloud_(v, u).y() += ((u + v) % 2 ? 0.25f : -0.25f);
   }
   const AnalysisResult r = w.Analyze();
   EXPECT_FALSE(r.quality.passed);
   EXPECT_NE(r.quality.reason.find("too rough"), std::string::npos) << r.quality.reason;
+}
+
+// Rolling ground: a floor that sags 0.6 m in the middle of its 10 m depth (never steeper than 14
+// degrees) misses its best plane by 0.18 m RMS, yet its points lie on a smooth surface: the check
+// takes the bend out.
+TEST(SurfaceAnalyzer, QualityCheckPassesASmoothlyBendingGround) {
+  AnalyticWorld w(100, 100);
+  w.Paint(0, 0, 100, 0, 100, {-5.0, 1.0, 2.0}, {1, 0, 0}, {0, 0, 1}, 0.1);
+  for (int v = 0; v < 100; ++v) {
+    const float t = v / 100.0f;
+    for (int u = 0; u < 100; ++u) w.cloud_(v, u).y() -= 2.4f * (t * t - t);
+  }
+  const AnalysisResult r = w.Analyze();
+  EXPECT_GT(r.ground.rms_m, PlanesOnly().max_ground_rms_m);
+  EXPECT_TRUE(r.quality.passed) << r.quality.reason;
+  EXPECT_LT(r.ground.smooth_rms_m, 0.005);
+}
+
+// Far ground scattered by stereo noise alone: the depth noise expected at its range explains its
+// RMS, so the frame passes; without a noise model the same scatter fails.
+TEST(SurfaceAnalyzer, QualityCheckJudgesRoughnessBeyondTheStereoNoiseAtItsRange) {
+  AnalyticWorld w(100, 100);
+  w.Paint(0, 0, 100, 0, 100, {-5.0, 1.0, 10.0}, {1, 0, 0}, {0, 0, 1}, 0.1);  // 10 to 20 m ahead
+  std::mt19937 rng(3);
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  const DepthNoise noise{0.01};  // 1 cm at 1 m: 1 m of depth at 10 m
+  for (int v = 0; v < 100; ++v) {
+    for (int u = 0; u < 100; ++u) {
+      Eigen::Vector3f& p = w.cloud_(v, u);
+      p *= 1.0f + static_cast<float>(noise.SigmaAt(p.z())) / p.z() * unit(rng);  // along the ray
+    }
+  }
+  AnalysisOptions options = PlanesOnly();
+  options.max_ground_rms_m = 0.08;  // below the scatter the noise gives these points
+  const AnalysisResult with = w.Analyze({}, options, noise);
+  EXPECT_GT(with.ground.noise_rms_m, options.max_ground_rms_m);
+  EXPECT_TRUE(with.quality.passed) << with.quality.reason;
+  const AnalysisResult without = w.Analyze({}, options);
+  EXPECT_FALSE(without.quality.passed);
+  EXPECT_NE(without.quality.reason.find("too rough"), std::string::npos) << without.quality.reason;
 }
 
 TEST(SurfaceAnalyzer, PixelsWithoutDepthAreUnknownAndUnsegmentedAreUndecided) {

@@ -165,17 +165,17 @@ TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {
             count(on, ground_v0, ground_v1, [](std::uint8_t c) { return c == 1; }));
 }
 
-// FrameAnalyzer runs the costly parts of the pixel-slope and face steps beside the plane, ground
-// and fragment steps and applies them at their places: its labels must be those of the steps run
-// one after the other, on a rendered yard frame where both steps change labels, with the
-// shipped options and with unwindowed slopes and no face test.
+// FrameAnalyzer runs the costly parts of the pixel-slope and face steps beside the plane, ground,
+// fragment and local-step steps and applies them at their places: its labels must be those of
+// the steps run one after the other, on a rendered yard frame where the steps change labels, with
+// the face test on, with the shipped options, and with unwindowed slopes.
 TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
   synth::SynthOptions o;
   const Config shipped;
   o.vehicle = shipped.vehicle;
   const synth::Scene scene = synth::MakeScene("yard", o.seed, o.ramp_slope_deg);
   const synth::VehicleTrajectory trajectory(scene, o.motion);
-  const synth::StereoRenderer renderer(scene, o.rig, o.render, o.vehicle, o.seed);
+  const synth::StereoRenderer renderer(scene, o.rig, o.render, nullptr, o.seed);
   const Eigen::Isometry3d body_T_cam0 = synth::TrueBodyTCam0(o.rig, o.motion);
   StereoCalibration rig{renderer.Intrinsics(), renderer.Intrinsics()};
   rig.left.body_T_camera = body_T_cam0;
@@ -189,21 +189,24 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
   const RectifiedGeometry& g = pipeline.geometry();
   const Image3f normals = EstimateNormals(r.cloud, shipped.normals);
   const double fb = g.f * g.baseline_m;
-  ASSERT_GT(shipped.analysis.face_window_px, 0);
   ASSERT_TRUE(shipped.analysis.pixel_slopes);
   ASSERT_GT(shipped.analysis.pixel_slope_window_px, 1);
+  ASSERT_EQ(shipped.analysis.step_reference, StepReference::kLocal);
+  Config faces = shipped;  // every step of the chain on
+  faces.analysis.face_window_px = 11;
 
   Config plain = shipped;
   plain.analysis.pixel_slope_window_px = 1;
   plain.analysis.face_window_px = 0;
-  for (const Config& config : {shipped, plain}) {
-    SCOPED_TRACE(config.analysis.face_window_px > 0 ? "shipped" : "unwindowed slopes, no face test");
-    const AnalysisResult concurrent = FrameAnalyzer(config.vehicle, config.analysis)
+  const DepthNoise noise{shipped.stereo.disparity_sigma_px / fb};
+  for (const Config& config : {faces, shipped, plain}) {
+    SCOPED_TRACE(config.analysis.face_window_px > 0 ? "with the face test" : "shipped");
+    const AnalysisResult concurrent = FrameAnalyzer(config.vehicle, config.analysis, config.stereo.disparity_sigma_px)
                                           .Analyze({&g, &r.disparity, &r.cloud, &normals, &r.segment_ids,
                                                     r.num_segments, r.up_rectified});
 
     AnalysisResult a = AnalyzeSurfaces(r.cloud, r.segment_ids, r.num_segments, r.up_rectified, config.vehicle,
-                                       config.analysis);
+                                       config.analysis, noise);
     ASSERT_TRUE(a.quality.passed);
     const ImageU8 before_slopes = a.labels;
     RefineByPixelSlope(normals, r.up_rectified, config.vehicle, &a.labels, &r.segment_ids,
@@ -213,6 +216,11 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
     EXPECT_GT(slope_changes, 100);  // the slope step matters on this frame
     RefineByGroundDisparity(r.cloud, r.segment_ids, fb, config.analysis, &a);
     RefineByFragmentPlanes(r.cloud, r.segment_ids, fb, config.analysis, &a);
+    const ImageU8 before_steps = a.labels;
+    RefineByLocalSteps(r.cloud, normals, r.up_rectified, config.vehicle, noise, &a.labels);
+    int step_changes = 0;
+    for (std::size_t i = 0; i < a.labels.size(); ++i) step_changes += a.labels[i] != before_steps[i];
+    EXPECT_GT(step_changes, 100);  // the local steps matter (the crate's band, the curbs)
     const ImageU8 before_faces = a.labels;
     RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
     int face_changes = 0;
@@ -221,7 +229,6 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
       EXPECT_GT(face_changes, 100);  // the face test matters too
     }
     FillUndecidedByConsensus(config.analysis, &a.labels);
-    FillUndecidedByHeight(r.cloud, fb, config.vehicle, config.analysis, &a);
 
     ASSERT_EQ(concurrent.labels.size(), a.labels.size());
     int differ = 0;

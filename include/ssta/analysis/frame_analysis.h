@@ -39,7 +39,9 @@ struct FrameAnalysisInput {
 class FrameAnalyzer {
  public:
   /// Throws ssta::Error naming the key when `vehicle` or `options` is invalid.
-  FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options);
+  /// `disparity_sigma_px` (stereo.disparity_sigma_px) is the matcher's noise, from which each
+  /// frame's depth noise follows with its focal length and baseline.
+  FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px = 0.25);
 
   /// Precondition: every input is set and of the cloud's size.
   AnalysisResult Analyze(const FrameAnalysisInput& input);
@@ -47,6 +49,7 @@ class FrameAnalyzer {
  private:
   VehicleOptions vehicle_;
   AnalysisOptions options_;
+  double disparity_sigma_px_;
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
 };
@@ -56,5 +59,12 @@ class FrameAnalyzer {
 /// `block` x `block` window around the pixel (clipped at the image border) is at least
 /// `min_std`; 0 elsewhere. Sky and other blank areas, where matching finds noise.
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std);
+
+/// 1 where a pixel of the common area has a disparity its surroundings support: texture
+/// (TexturedPixels) or, without it, a ray that points below the horizon (`up_rectified`: up in
+/// the rectified cam0 frame), where a blank surface is a surface (far ground loses its texture
+/// with range); 0 above the horizon without texture: the sky, where matching finds noise.
+ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
+                        const Eigen::Vector3d& up_rectified);
 
 }  // namespace ssta

@@ -35,6 +35,9 @@ struct FrameResult {
   /// [grey levels] Labels are 0 where the texture is below this (analysis.label_min_texture;
   /// 0: no mask was applied).
   double labels_min_texture = 0.0;
+  /// The frame's stereo depth noise: a point at depth Z errs by this times Z^2 along its ray
+  /// (disparity sigma / (f b)) [1/m]; 0: unknown.
+  double depth_noise_per_m2 = 0.0;
   Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< up in the rectified cam0 frame
   StageTimings timings;
 };

@@ -6,6 +6,7 @@
 //   1. per-pixel slopes          RefineByPixelSlope       src/analysis/pixel_slopes.cpp
 //   2. ground consistency        RefineByGroundDisparity  src/analysis/label_refinements.cpp
 //   3. fragments                 RefineByFragmentPlanes   src/analysis/label_refinements.cpp
+//   3b. local steps              RefineByLocalSteps       src/analysis/local_steps.cpp
 //   4. thin faces                RefineByDisparityFaces   src/analysis/disparity_faces.cpp
 //   5. fill by consensus         FillUndecidedByConsensus src/analysis/label_refinements.cpp
 //   6. fill by height            FillUndecidedByHeight    src/analysis/label_refinements.cpp
@@ -127,5 +128,21 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 /// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
                            const AnalysisOptions& options, AnalysisResult* result);
+
+/// Local steps (AnalysisOptions::step_reference "local"): the step of the rule of
+/// docs/interfaces.md, section 3, measured on the frame's own points below the camera (above it
+/// lies nothing the wheels meet, and the sky's false matches lie there). The points go into a grid
+/// of horizontal cells (half the step radius wide, in the frame levelled by `up_camera`), each
+/// with its mean height, the vertical noise of its points (`noise`: k Z |up . p| for a point at
+/// depth Z) and the local gradient of its mean normal (level for a face steeper than
+/// max_slope_deg, which is judged by the jump it spans). A cell's step is the largest height
+/// difference, beyond that gradient and one sigma of noise on either side, between the cells
+/// within vehicle.step_radius_m of it. Each pixel labelled 1-3 takes the worse of its label and
+/// its cell's step class; an undecided pixel within the radius of a jump above max_step_m
+/// becomes non-traversable. A point whose depth error along its ray (k Z |p|) exceeds the step
+/// radius cannot tell which side of a jump it lies on: its label stays as it was. All images
+/// share the cloud's size.
+void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
+                        const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* labels);
 
 }  // namespace ssta

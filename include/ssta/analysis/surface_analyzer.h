@@ -52,6 +52,11 @@ enum class StepReference {
   /// neighbours on a few noisy pairs that can read as no jump, and a step in the semi band
   /// (0.1-0.2 m by default) is within the noise of those jumps.
   kReachableLarge,
+  /// "local": the rule of docs/interfaces.md, section 3: a pixel's step is the largest height
+  /// jump within vehicle.step_radius_m of its point, on a height grid of the frame's points
+  /// (RefineByLocalSteps); the segments get no step class of their own. Level ground is
+  /// traversable at any height: a terrace's top, the floor below a drop-off.
+  kLocal,
 };
 StepReference ParseStepReference(const std::string& name);
 std::string StepReferenceName(StepReference reference);
@@ -70,12 +75,12 @@ struct AnalysisOptions {
   /// Quality check of the dominant ground plane: least share of the frame's depth pixels that
   /// must lie on it, and the largest RMS point-to-plane distance [m].
   double min_ground_share = 0.08;
-  double max_ground_rms_m = 0.08;
+  double max_ground_rms_m = 0.15;
 
   // AnalyzeSurfaces beyond the paper: steps by reachability, verdicts for small segments.
 
   /// How steps are measured; see StepReference.
-  StepReference step_reference = StepReference::kReachableLarge;
+  StepReference step_reference = StepReference::kLocal;
   /// What small segments get; see SmallSegmentPolicy.
   SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
   /// Fewest points for the slope of a small segment to count [points].
@@ -118,7 +123,7 @@ struct AnalysisOptions {
   // Refinement 4, thin vertical faces from the disparity (RefineByDisparityFaces).
 
   /// Rows of the disparity fitted along each image column [px, odd, >= 3]; 0: off.
-  int face_window_px = 11;
+  int face_window_px = 0;
   /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
   /// varies from column to column while curbs and steps run across many; 1: each column alone.
   int face_columns_px = 17;
@@ -147,7 +152,7 @@ struct AnalysisOptions {
   /// Pixels whose left-image standard deviation over the stereo block is below this [grey
   /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
   /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
-  double label_min_texture = 0.0;
+  double label_min_texture = 2.0;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<AnalysisOptions>& Fields();
@@ -187,7 +192,22 @@ struct GroundPlane {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< n . p + D = 0, n pointing up
   double camera_height_m = 0.0;  ///< camera origin above the plane [m]
   double rms_m = 0.0;            ///< RMS of its inliers to the plane [m]
+  /// RMS distance to the plane that the stereo depth noise alone gives its inliers [m]: a point
+  /// at depth Z errs by k Z^2 along its ray (DepthNoise), k Z h across a plane h below the
+  /// camera. 0 without a noise model.
+  double noise_rms_m = 0.0;
+  /// Robust scatter (1.4826 x the median absolute residual) of its inliers about the best
+  /// quadratic surface: the bend of rolling ground and a few mismatches left out [m]; the
+  /// plane's RMS where no such fit is possible.
+  double smooth_rms_m = 0.0;
   double share = 0.0;            ///< its inliers / the frame's depth pixels
+};
+
+/// The stereo depth noise of a frame's points: a point at depth Z has a depth sigma of
+/// per_m2 * Z^2, per_m2 = disparity sigma / (f b) [1/m]. 0: no noise model.
+struct DepthNoise {
+  double per_m2 = 0.0;
+  double SigmaAt(double depth_m) const { return per_m2 * depth_m * depth_m; }
 };
 
 /// Verdict of the point-cloud quality check on the ground plane.
@@ -215,10 +235,15 @@ struct AnalysisResult {
 /// covariance, PCA normal, slope vs up (eq. 3), inliers_min (eq. 4), dominant ground plane,
 /// quality check, step (eq. 5); a segment's class is the worse of its slope and step classes.
 /// When the quality check fails, every depth pixel is undecided and the reason is reported.
+/// The check judges the ground plane's roughness beyond the depth `noise` expected at its range.
 /// Thread-safe (pure function).
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                               const AnalysisOptions& options);
+                               const AnalysisOptions& options, const DepthNoise& noise = {});
+
+/// The ground's roughness beyond its smooth bend and the stereo noise: sqrt(r^2 - noise_rms^2)
+/// with r the smaller of rms_m and smooth_rms_m, 0 when the noise explains all of it [m].
+double GroundRoughness(const GroundPlane& ground);
 
 /// A plane fitted by PCA to a set of points: centroid, unit normal (smallest eigenvector),
 /// RMS distance. Exposed for tests and for the map.
@@ -245,6 +270,8 @@ class PlaneAccumulator {
     zz_ += p.z() * p.z();
   }
   int count() const { return count_; }
+  /// Mean squared z (the depth of camera-frame points). Precondition: count() >= 1.
+  double MeanSquaredZ() const { return zz_ / count_; }
   /// Mean point. Precondition: count() >= 1.
   Eigen::Vector3d Mean() const;
   /// Precondition: count() >= 3.
