@@ -38,6 +38,14 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
   cell.occupied = NodeOccupied(tree, *node);
   cell.observations = node->observations;
   cell.last_seen_ns = node->last_seen_ns;
+  const double resolution = tree.getResolution();
+  if (node->surface_weight > 0.0f) {
+    cell.surface_z_m = node->surface_z;
+    cell.height_sigma_m = std::max(0.002, 1.0 / std::sqrt(static_cast<double>(node->surface_weight)));
+  } else {
+    cell.surface_z_m = cell.center.z();
+    cell.height_sigma_m = resolution / std::sqrt(12.0);  // somewhere in the voxel
+  }
   if (node->observations > 0) {
     cell.slope_deg = node->slope_deg;
     cell.step_m = node->step_m;
@@ -59,6 +67,7 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
   for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
   cell.cls = static_cast<TravClass>(best + 1);
   cell.probability = std::exp(static_cast<double>(l[best])) / denominator;
+  cell.confidence = cell.probability;
   cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m);
   return cell;
 }

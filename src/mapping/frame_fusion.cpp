@@ -33,11 +33,21 @@ struct VoxelAccumulator {
   double max_abs_step = -1.0;  // < 0: none
   double height_sum = 0.0;
   std::uint32_t height_count = 0;
+  double surface_z_sum = 0.0;    // world z of the points that carry a height sigma
+  double surface_var_sum = 0.0;  // their height variances
+  double surface_xy_var_sum = 0.0;  // their horizontal variances
+  std::uint32_t surface_count = 0;
 
   /// Adds `point`, whose position in double is `p`.
   void Add(const ClassifiedPoint& point, const Eigen::Vector3d& p) {
     sum_p += p;
     ++points;
+    if (std::isfinite(point.height_sigma_m)) {
+      surface_z_sum += p.z();
+      surface_var_sum += static_cast<double>(point.height_sigma_m) * point.height_sigma_m;
+      surface_xy_var_sum += static_cast<double>(point.horizontal_sigma_m) * point.horizontal_sigma_m;
+      ++surface_count;
+    }
     if (std::isfinite(point.height_m)) {
       height_sum += point.height_m;
       ++height_count;
@@ -329,12 +339,26 @@ inline void FrameFusion::UpdateFree(TravNode* node) const {
   if (options_.free_space_keeps_traversable && HeldAsTraversable(*node)) return;
   tree_.integrateMiss(node);
   for (float& l : node->class_log_odds) l = DecayTowardsZero(l, options_.class_free_decay_log_odds);
+  node->surface_weight *= 0.5f;  // a surface seen through loses its say to the next one seen
 }
 
 inline void FrameFusion::UpdateHit(const VoxelAccumulator& acc, std::int64_t timestamp_ns, TravNode* node) const {
   const MapOptions& opt = options_;
   tree_.integrateHit(node);
   node->last_seen_ns = timestamp_ns;
+  if (acc.surface_count > 0) {
+    // One measurement per frame: the points of a frame in one voxel share their errors (the
+    // matcher's window spans them), so they count once, with their mean variance.
+    const double z = acc.surface_z_sum / acc.surface_count;
+    const double weight = acc.surface_count / acc.surface_var_sum;
+    const float xy_sigma = static_cast<float>(std::sqrt(acc.surface_xy_var_sum / acc.surface_count));
+    if (node->surface_weight == 0.0f || xy_sigma < node->surface_xy_sigma_m) node->surface_xy_sigma_m = xy_sigma;
+    const double total = node->surface_weight + weight;
+    node->surface_z = static_cast<float>((node->surface_weight * node->surface_z + weight * z) / total);
+    // Frames that see a voxel from alike ranges share the matcher's bias there: together they
+    // are worth a few views, not all of them, so the weight stops at four of this frame's.
+    node->surface_weight = static_cast<float>(std::min(total, std::max<double>(node->surface_weight, 4.0 * weight)));
+  }
   const int winner = MajorityClassIndex(acc.votes);
   if (winner < 0) return;
   for (int k = 0; k < 3; ++k) {

@@ -1,5 +1,7 @@
 #include "ssta/mapping/frame_points.h"
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <utility>
 
@@ -9,6 +11,24 @@
 #include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
+namespace {
+
+/// 1-sigma of the height at a map column of a point `q` (rectified camera frame, depth q.z())
+/// whose depth errs by `per_m2` q.z()^2: its error along its ray, seen vertically, and its
+/// horizontal part through the surface's slope (at most 45 degrees: a face's height is its
+/// own), at least 5 mm.
+float HeightSigma(const Eigen::Vector3f& q, const Eigen::Matrix3f& world_R_rectified, double per_m2,
+                  float slope_deg, float* horizontal_sigma) {
+  const float along = static_cast<float>(per_m2) * q.z() * q.norm();  // k Z^2 |q| / Z
+  const Eigen::Vector3f ray = world_R_rectified * q.normalized();
+  const float vertical = along * std::abs(ray.z());
+  const float horizontal = along * std::sqrt(std::max(0.0f, 1.0f - ray.z() * ray.z()));
+  *horizontal_sigma = horizontal;
+  const float gradient = std::isfinite(slope_deg) ? std::tan(std::min(slope_deg, 45.0f) * 0.0174532925f) : 0.0f;
+  return std::max(0.005f, std::hypot(vertical, gradient * horizontal));
+}
+
+}  // namespace
 
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
@@ -33,6 +53,7 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
     segment_values[i] = {s.has_plane ? static_cast<float>(s.slope_deg) : kNaN, static_cast<float>(s.step_m)};
   }
   const bool has_ground = frame.analysis.ground.found && frame.analysis.quality.passed;
+  const auto segment_slope = [&](int id) { return id >= 0 ? segment_values[static_cast<std::size_t>(id)].first : kNaN; };
   const Eigen::Vector4f ground = frame.analysis.ground.plane.cast<float>();
   points->clear();
   points->reserve(cloud.size() / (stride * stride) + 1);
@@ -53,6 +74,10 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
       }
       out.world_p = transform * q;
       if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
+      if (frame.depth_noise_per_m2 > 0) {
+        out.height_sigma_m = HeightSigma(q, transform.linear(), frame.depth_noise_per_m2,
+                                         segment_slope(frame.segment_ids(v, u)), &out.horizontal_sigma_m);
+      }
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
       if (id >= 0) {
@@ -97,7 +122,10 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
                                 kMapSubpixelSteps, &refined, &frame.segment_ids);
       },
       [&] {
-        if (mask) keep = TexturedPixels(frame.left_rectified, geometry, frame.texture_block_px, options.min_texture);
+        if (mask) {
+          keep = SupportedPixels(frame.left_rectified, geometry, frame.texture_block_px, options.min_texture,
+                                 frame.up_rectified);
+        }
       });
   ClassifiedPointsInWorld(frame, world_T_rectified, options.pixel_stride, mask ? &keep : nullptr, points,
                           refine ? &refined : nullptr);

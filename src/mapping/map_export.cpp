@@ -176,7 +176,7 @@ std::string QueryCsvRow(const CellInfo& cell) {
   row += std::to_string(static_cast<int>(cell.cls)) + ',';
   row += Format("%.4f", cell.cost) + ',' + Format("%.4f", cell.probability) + ',';
   row += Format("%.2f", cell.slope_deg) + ',' + Format("%.3f", cell.step_m) + ',';
-  row += std::to_string(cell.observations);
+  row += std::to_string(cell.observations) + ',' + Format("%.4f", cell.confidence);
   return row;
 }
 

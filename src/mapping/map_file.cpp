@@ -254,8 +254,10 @@ void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std
     in.read(&children, 1);
     if (!in) throw Error(corrupt + "the node stream ends inside node " + std::to_string(nodes) + ")");
     ++nodes;
-    const float values[] = {node.getValue(), node.class_log_odds[0], node.class_log_odds[1],
-                            node.class_log_odds[2], node.slope_deg, node.step_m, node.max_step_m};
+    const float values[] = {node.getValue(),   node.class_log_odds[0], node.class_log_odds[1],
+                            node.class_log_odds[2], node.slope_deg, node.step_m,
+                            node.max_step_m,   node.surface_z,      node.surface_weight,
+                            node.surface_xy_sigma_m};
     for (const float v : values) {
       if (!std::isfinite(v)) throw Error(corrupt + "node " + std::to_string(nodes - 1) + " holds NaN or infinity)");
     }
@@ -280,7 +282,7 @@ void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std
   }
 }
 
-void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* options,
+void ReadMetadata(const std::string& yaml, const std::string& path, int* format, MapOptions* options,
                   MapMetadata* metadata, std::uint64_t* frames, std::int64_t* last_ts,
                   std::string* software_version) {
   internal::YamlSection root(internal::ParseYaml(yaml, path), path, "");
@@ -294,6 +296,7 @@ void ReadMetadata(const std::string& yaml, const std::string& path, MapOptions* 
                 "); use a newer ssta");
   }
   if (version < 1) throw Error(root.Name("format_version") + ": must be >= 1");
+  *format = version;
   *software_version = root.Require<std::string>("software_version");
   *frames = root.Require<std::uint64_t>("frames_inserted");
   *last_ts = root.Require<std::int64_t>("last_timestamp_ns");
@@ -369,7 +372,8 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
 
   auto impl = std::make_unique<TraversabilityMap::Impl>();
   // The metadata (and with it the format version) is read before the node stream is trusted.
-  ReadMetadata(header.metadata_yaml, path, &impl->options, &impl->metadata,
+  int format = kMapFormatVersion;
+  ReadMetadata(header.metadata_yaml, path, &format, &impl->options, &impl->metadata,
                &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version);
   const std::size_t data_end = VerifyTrailer(bytes, path);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
@@ -379,6 +383,7 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
   }
 
   impl->tree = internal::MakeTree(impl->options);
+  const internal::ScopedNodeFormat node_format(format);  // the node layout of this file's format
   if (header.size > 0) {
     CheckNodeStream(bytes.data() + header.data_begin, bytes.data() + data_end, impl->tree->getTreeDepth(),
                     header.size, path);

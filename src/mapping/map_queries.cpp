@@ -14,6 +14,7 @@
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
+#include "ssta/mapping/surface_judgement.h"
 
 namespace ssta {
 
@@ -50,6 +51,84 @@ const TravNode* FindTopOccupied(const TravOcTree& tree, const TravNode* node, un
   return nullptr;
 }
 
+/// The highest occupied voxel of the column of `key` (x and y), its z written into `key`;
+/// null when the column holds none.
+const TravNode* ColumnTop(const TravOcTree& tree, octomap::OcTreeKey* key) {
+  const TravNode* root = tree.getRoot();
+  if (root == nullptr) return nullptr;
+  octomap::key_type kz = 0;
+  const TravNode* node = FindTopOccupied(tree, root, 0, (*key)[0], (*key)[1], 0, &kz);
+  if (node != nullptr) (*key)[2] = kz;
+  return node;
+}
+
+/// The fused surface of the columns whose centres lie within the step radius of `key`'s column
+/// and that hold a fused height.
+std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m) {
+  const double res = tree.getResolution();
+  const int reach = static_cast<int>(std::floor(radius_m / res + 1e-9));
+  std::vector<SurfaceSample> samples;
+  for (int dj = -reach; dj <= reach; ++dj) {
+    for (int di = -reach; di <= reach; ++di) {
+      if ((di * di + dj * dj) * res * res > radius_m * radius_m + 1e-12) continue;
+      const int kx = key[0] + di, ky = key[1] + dj;
+      if (kx < 0 || ky < 0 || kx > 0xFFFF || ky > 0xFFFF) continue;
+      octomap::OcTreeKey k(static_cast<octomap::key_type>(kx), static_cast<octomap::key_type>(ky), 0);
+      const TravNode* node = ColumnTop(tree, &k);
+      // Only measured heights with their uncertainty (a map of points without height sigmas
+      // has none): a voxel's centre is no surface height.
+      if (node == nullptr || node->surface_weight <= 0.0f) continue;
+      SurfaceSample s;
+      s.xy = Eigen::Vector2d(KeyCenter(tree, k[0]), KeyCenter(tree, k[1]));
+      s.height_m = node->surface_z;
+      s.sigma_m = std::max(0.002, 1.0 / std::sqrt(static_cast<double>(node->surface_weight)));
+      s.xy_sigma_m = node->surface_xy_sigma_m;
+      samples.push_back(s);
+    }
+  }
+  return samples;
+}
+
+/// A column's class from the frames' evidence and the fused surface around it: the posterior
+/// of the three classes with the frames' class probabilities (softmax of the log-odds; even
+/// without evidence) as the prior and the surface's verdict (JudgeSurface) as the likelihood.
+/// The slope and step become the surface's where it has a verdict.
+void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
+                      CellInfo* cell) {
+  const TravNode* node = tree.search(key);
+  if (node == nullptr || !NodeOccupied(tree, *node)) return;
+  const VehicleOptions& vehicle = map.metadata().vehicle;
+  const SurfaceVerdict surface =
+      JudgeSurface(cell->center.head<2>(), SurfaceAround(tree, key, vehicle.step_radius_m), tree.getResolution(), vehicle);
+  const auto& l = node->class_log_odds;
+  const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
+  if (!surface.determined && !has_evidence) return;  // undecided: nothing to judge by
+  std::array<double, 3> posterior{};
+  double total = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double frames = has_evidence ? std::exp(static_cast<double>(l[k])) : 1.0;
+    posterior[k] = frames * (surface.determined ? surface.probability[k] : 1.0);
+    total += posterior[k];
+  }
+  if (!(total > 0.0)) return;
+  int best = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (posterior[k] >= posterior[best]) best = k;  // ties to the worse class
+  }
+  cell->cls = static_cast<TravClass>(best + 1);
+  cell->confidence = posterior[best] / total;
+  if (has_evidence) {
+    double denominator = 0.0;
+    for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
+    cell->probability = std::exp(static_cast<double>(l[best])) / denominator;
+  }
+  if (surface.determined) {
+    cell->slope_deg = surface.slope_deg;
+    cell->step_m = surface.step_m;
+  }
+  cell->cost = map.Cost(cell->cls, cell->slope_deg, cell->step_m);
+}
+
 int Severity(TravClass c) {
   switch (c) {
     case TravClass::kTraversable: return 1;
@@ -66,8 +145,9 @@ bool Known(const CellInfo& cell) {
   return cell.observed || (c >= 1 && c <= 3);
 }
 
-/// The centres (x, y in W [m]) of the map columns whose centres lie inside the footprint
-/// rectangle of `q` (edges included, to 1e-9 m), or the rectangle's centre when none does.
+/// The centres (x, y in W [m]) of the map columns the footprint rectangle of `q` touches: whose
+/// squares share more than 1e-9 m of area-width with it (separating axes: the world's x and y,
+/// the rectangle's length and width), so an obstacle under any part of the footprint counts.
 /// Throws ssta::Error when the rectangle reaches beyond the map's addressable area or spans
 /// more than 10^7 columns.
 std::vector<Eigen::Vector2d> FootprintColumns(const TravOcTree& tree, const FootprintQuery& q) {
@@ -87,15 +167,21 @@ std::vector<Eigen::Vector2d> FootprintColumns(const TravOcTree& tree, const Foot
   if ((static_cast<double>(hi[0]) - lo[0] + 1.0) * (static_cast<double>(hi[1]) - lo[1] + 1.0) > kMaxColumns) {
     throw Error("footprint query: the rectangle spans more than 10^7 map columns");
   }
+  const double half_cell = 0.5 * tree.getResolution();
+  // Half the square's extent along the rectangle's own axes (a square turned by yaw).
+  const double cell_along = half_cell * (std::abs(c) + std::abs(s));
+  constexpr double kOverlap = 1e-9;  // a column that only meets the rectangle's edge is not under it
   for (unsigned kx = lo[0]; kx <= hi[0]; ++kx) {
     for (unsigned ky = lo[1]; ky <= hi[1]; ++ky) {
       const double cx = KeyCenter(tree, static_cast<octomap::key_type>(kx));
       const double cy = KeyCenter(tree, static_cast<octomap::key_type>(ky));
       const double dx = cx - q.x, dy = cy - q.y;
       const double along = c * dx + s * dy, across = -s * dx + c * dy;
-      // 1e-9 m: an edge on a column centre counts whatever rounding cos and sin of yaw give.
-      constexpr double kEdge = 1e-9;
-      if (std::abs(along) <= half_l + kEdge && std::abs(across) <= half_w + kEdge) columns.emplace_back(cx, cy);
+      const bool apart = std::abs(dx) >= extent_x + half_cell - kOverlap ||
+                         std::abs(dy) >= extent_y + half_cell - kOverlap ||
+                         std::abs(along) >= half_l + cell_along - kOverlap ||
+                         std::abs(across) >= half_w + cell_along - kOverlap;
+      if (!apart) columns.emplace_back(cx, cy);
     }
   }
   if (columns.empty()) columns.emplace_back(q.x, q.y);
@@ -226,13 +312,11 @@ CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
     return unobserved;
   }
   unobserved.center = {KeyCenter(tree, key[0]), KeyCenter(tree, key[1]), kNaN};
-  const TravNode* root = tree.getRoot();
-  if (root == nullptr) return unobserved;
-  octomap::key_type kz = 0;
-  const TravNode* node = FindTopOccupied(tree, root, 0, key[0], key[1], 0, &kz);
+  const TravNode* node = ColumnTop(tree, &key);
   if (node == nullptr) return unobserved;
-  key[2] = kz;
-  return internal::DescribeCell(*this, tree, node, key);
+  CellInfo cell = internal::DescribeCell(*this, tree, node, key);
+  JudgeFromSurface(*this, tree, key, &cell);
+  return cell;
 }
 
 FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const SurfaceSource& surface) const {

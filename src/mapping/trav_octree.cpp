@@ -1,5 +1,7 @@
 #include "mapping/trav_octree.h"
 
+#include "ssta/mapping/traversability_map.h"
+
 #include <cstring>
 #include <istream>
 #include <ostream>
@@ -19,7 +21,13 @@ void ReadRaw(std::istream& s, T* v) {
 
 bool SameBits(float a, float b) { return std::memcmp(&a, &b, sizeof(float)) == 0; }
 
+/// The map file format whose node layout readData reads on this thread.
+thread_local int node_format = kMapFormatVersion;
+
 }  // namespace
+
+ScopedNodeFormat::ScopedNodeFormat(int format) : previous_(node_format) { node_format = format; }
+ScopedNodeFormat::~ScopedNodeFormat() { node_format = previous_; }
 
 TravNode::TravNode(const TravNode& rhs) : octomap::OcTreeNode() {
   copyData(rhs);
@@ -39,7 +47,9 @@ bool TravNode::operator==(const TravNode& rhs) const {
          SameBits(class_log_odds[1], rhs.class_log_odds[1]) &&
          SameBits(class_log_odds[2], rhs.class_log_odds[2]) && SameBits(slope_deg, rhs.slope_deg) &&
          SameBits(step_m, rhs.step_m) && SameBits(max_step_m, rhs.max_step_m) &&
-         observations == rhs.observations && last_seen_ns == rhs.last_seen_ns;
+         observations == rhs.observations && last_seen_ns == rhs.last_seen_ns &&
+         SameBits(surface_z, rhs.surface_z) && SameBits(surface_weight, rhs.surface_weight) &&
+         SameBits(surface_xy_sigma_m, rhs.surface_xy_sigma_m);
 }
 
 void TravNode::copyData(const TravNode& from) {
@@ -50,6 +60,9 @@ void TravNode::copyData(const TravNode& from) {
   max_step_m = from.max_step_m;
   observations = from.observations;
   last_seen_ns = from.last_seen_ns;
+  surface_z = from.surface_z;
+  surface_weight = from.surface_weight;
+  surface_xy_sigma_m = from.surface_xy_sigma_m;
 }
 
 std::istream& TravNode::readData(std::istream& s) {
@@ -60,6 +73,13 @@ std::istream& TravNode::readData(std::istream& s) {
   ReadRaw(s, &max_step_m);
   ReadRaw(s, &observations);
   ReadRaw(s, &last_seen_ns);
+  if (node_format >= 2) {
+    ReadRaw(s, &surface_z);
+    ReadRaw(s, &surface_weight);
+    ReadRaw(s, &surface_xy_sigma_m);
+  } else {
+    surface_z = surface_weight = surface_xy_sigma_m = 0.0f;
+  }
   return s;
 }
 
@@ -71,6 +91,9 @@ std::ostream& TravNode::writeData(std::ostream& s) const {
   WriteRaw(s, max_step_m);
   WriteRaw(s, observations);
   WriteRaw(s, last_seen_ns);
+  WriteRaw(s, surface_z);
+  WriteRaw(s, surface_weight);
+  WriteRaw(s, surface_xy_sigma_m);
   return s;
 }
 

@@ -37,7 +37,9 @@ class TravNode : public octomap::OcTreeNode {
   void copyData(const TravNode& from);
 
   /// Binary payload I/O for .ot files: value, L1..L3, slope, step, max step (float32),
-  /// observations (uint32), last_seen_ns (int64), native byte order like OctoMap's own.
+  /// observations (uint32), last_seen_ns (int64), then (format 2 on) surface_z,
+  /// surface_weight and surface_xy_sigma_m (float32); native byte order like OctoMap's own. readData reads the layout of
+  /// the format ScopedNodeFormat names (the current one by default).
   std::istream& readData(std::istream& s);
   std::ostream& writeData(std::ostream& s) const;
 
@@ -48,6 +50,27 @@ class TravNode : public octomap::OcTreeNode {
   float max_step_m = 0.0f;  ///< largest |step| [m]
   std::uint32_t observations = 0;  ///< frames that gave a class verdict
   std::int64_t last_seen_ns = 0;   ///< last frame that hit the voxel [ns]
+  /// The fused height of the surface in this voxel [m, world z]: the inverse-variance weighted
+  /// mean of the frames' heights of their points in it.
+  float surface_z = 0.0f;
+  /// The sum of those frames' inverse height variances [1/m^2]; 0: no height fused.
+  float surface_weight = 0.0f;
+  /// The horizontal 1-sigma of the best-placed frame's points in this voxel [m]: how far off
+  /// its column the fused height may belong (range noise smears far surfaces sideways).
+  float surface_xy_sigma_m = 0.0f;
+};
+
+/// The map file format whose node layout TravNode::readData reads on this thread while it lives
+/// (a map file's metadata names its format before its nodes are read).
+class ScopedNodeFormat {
+ public:
+  explicit ScopedNodeFormat(int format);
+  ~ScopedNodeFormat();
+  ScopedNodeFormat(const ScopedNodeFormat&) = delete;
+  ScopedNodeFormat& operator=(const ScopedNodeFormat&) = delete;
+
+ private:
+  int previous_;
 };
 
 /// Tree type "SstaTravOcTree", registered with OctoMap's factory so AbstractOcTree::read can

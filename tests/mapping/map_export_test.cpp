@@ -245,12 +245,20 @@ TraversabilityMap FloorWithPatchAndBox(bool hole) {
   return map;
 }
 
-TEST(MapExport, GridExportJudgesStepsByTheLocalGroundByDefault) {
+/// The export with the steps against the local ground on (1 m), as the maps of frames classed
+/// by eq. 5 want it.
+GridExportOptions LocalGround() {
+  GridExportOptions options;
+  options.local_ground_radius_m = 1.0;
+  return options;
+}
+
+TEST(MapExport, GridExportJudgesStepsByTheLocalGroundWhenAsked) {
   // The export calls the patch traversable, not the box top.
   const TraversabilityMap map = FloorWithPatchAndBox(false);
   const TempDir dir;
   GridExportChanges changes;
-  const GridProjection judged = ExportGrid(map, dir / "judged", GridExportOptions{}, &changes);
+  const GridProjection judged = ExportGrid(map, dir / "judged", LocalGround(), &changes);
   EXPECT_EQ(changes.judged_by_local_ground, 9);  // the patch
   GridExportOptions off;
   off.local_ground_radius_m = 0.0;
@@ -287,7 +295,7 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
   const TraversabilityMap map = FloorWithPatchAndBox(true);
   const TempDir dir;
   for (const double resolution : {0.0, 0.2}) {  // the map's (one column per pixel), and coarser
-    GridExportOptions options;
+    GridExportOptions options = LocalGround();
     options.resolution_m = resolution;
     GridExportChanges changes;
     const GridProjection grid = ExportGrid(map, dir / "grid", options, &changes);
@@ -311,14 +319,14 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
       EXPECT_EQ(filled, 1);
     }
   }
-  const CellInfo patch = TopSurfaceAsExported(map, testing::C(6), testing::C(6));
+  const CellInfo patch = TopSurfaceAsExported(map, testing::C(6), testing::C(6), LocalGround());
   EXPECT_TRUE(patch.observed);
   EXPECT_EQ(patch.cls, TravClass::kTraversable);
   EXPECT_EQ(patch.cost, 0.0);
   EXPECT_NEAR(patch.center.z(), testing::C(0), 1e-9);
   // The map's evidence there was for non-traversable: no probability for the export's class.
   EXPECT_TRUE(std::isnan(patch.probability));
-  const CellInfo floor = TopSurfaceAsExported(map, testing::C(2), testing::C(2));  // kept as it is
+  const CellInfo floor = TopSurfaceAsExported(map, testing::C(2), testing::C(2), LocalGround());  // kept as it is
   EXPECT_EQ(floor.cls, TravClass::kTraversable);
   EXPECT_EQ(floor.probability, map.TopSurfaceAt(testing::C(2), testing::C(2)).probability);
   EXPECT_GT(floor.probability, 0.5);
@@ -343,7 +351,7 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
   const FootprintQuery on_patch{testing::C(6), testing::C(6), 0.0, 0.3, 0.3};
   const Eigen::AlignedBox2d patch_box(Eigen::Vector2d(0.45, 0.45), Eigen::Vector2d(0.75, 0.75));
   const FootprintResult observed = map.QueryFootprint(on_patch);
-  const FootprintResult exported = map.QueryFootprint(on_patch, ExportedSurface(map, patch_box));
+  const FootprintResult exported = map.QueryFootprint(on_patch, ExportedSurface(map, patch_box, LocalGround()));
   EXPECT_EQ(observed.worst, TravClass::kNonTraversable);
   EXPECT_EQ(observed.cells, 9);
   EXPECT_EQ(exported.worst, TravClass::kTraversable);
@@ -354,20 +362,21 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
   const Eigen::AlignedBox2d hole_box(Eigen::Vector2d(1.2, 1.2), Eigen::Vector2d(1.3, 1.3));
   EXPECT_EQ(map.QueryFootprint(on_hole).observed_cells, 0);
   EXPECT_EQ(map.QueryFootprint(on_hole).worst, TravClass::kUnknown);
-  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box)).observed_cells, 1);
-  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box)).worst, TravClass::kTraversable);
+  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box, LocalGround())).observed_cells, 1);
+  EXPECT_EQ(map.QueryFootprint(on_hole, ExportedSurface(map, hole_box, LocalGround())).worst, TravClass::kTraversable);
   // A path along the patch's middle row is blocked as observed, clear as exported; one through
   // the box is blocked either way, at the box's edge.
   const std::vector<Eigen::Vector2d> across_patch{{testing::C(0), testing::C(6)}, {testing::C(15), testing::C(6)}};
   const Eigen::AlignedBox2d path_box(Eigen::Vector2d(0.0, 0.6), Eigen::Vector2d(1.6, 0.7));
   EXPECT_TRUE(map.QueryPath(across_patch, 0.0).blocked);
-  EXPECT_FALSE(map.QueryPath(across_patch, 0.0, ExportedSurface(map, path_box)).blocked);
+  EXPECT_FALSE(map.QueryPath(across_patch, 0.0, ExportedSurface(map, path_box, LocalGround())).blocked);
   const std::vector<Eigen::Vector2d> across_box{{testing::C(15), testing::C(21)}, {testing::C(29), testing::C(21)}};
-  const PathResult to_box = map.QueryPath(across_box, 0.0, ExportedSurface(map, path_box));  // box outside
+  const PathResult to_box = map.QueryPath(across_box, 0.0, ExportedSurface(map, path_box, LocalGround()));  // box outside
   EXPECT_TRUE(to_box.blocked);
   EXPECT_NEAR(to_box.first_non_traversable_distance_m, 2.0 - testing::C(15), 0.051);  // x = 2.0
   // Columns outside the projected region answer as the whole export, projected on their own.
-  const ExportedSurface corner(map, Eigen::AlignedBox2d(Eigen::Vector2d(2.5, 2.5), Eigen::Vector2d(2.9, 2.9)));
+  const ExportedSurface corner(map, Eigen::AlignedBox2d(Eigen::Vector2d(2.5, 2.5), Eigen::Vector2d(2.9, 2.9)),
+                               LocalGround());
   EXPECT_EQ(corner(testing::C(6), testing::C(6)).cls, TravClass::kTraversable);
   EXPECT_EQ(corner(testing::C(12), testing::C(12)).cls, TravClass::kTraversable);  // the filled hole
   EXPECT_EQ(corner(testing::C(21), testing::C(21)).cls, TravClass::kNonTraversable);
@@ -397,12 +406,12 @@ TEST(MapExport, CsvPlyAndPcdListEveryOccupiedVoxel) {
 
   const auto csv = Lines(ReadTextFile(dir / "m.csv"));
   ASSERT_EQ(csv.size(), 15u);
-  EXPECT_EQ(csv[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations");
+  EXPECT_EQ(csv[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence");
   int non_traversable = 0;
   for (std::size_t i = 1; i < csv.size(); ++i) {
     if (csv[i].find(",3,1.0000,") != std::string::npos) {
       ++non_traversable;
-      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1");
+      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1,0.6357");
     }
   }
   EXPECT_EQ(non_traversable, 1);
@@ -457,7 +466,7 @@ TEST(MapExport, ErrorsNameTheFile) {
 TEST(MapExport, QueryCsvRowPrintsUnknownAsNaN) {
   CellInfo unknown;
   unknown.center = {1.0, 2.0, std::nan("")};
-  EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0");
+  EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0,nan");
 }
 
 TEST(MapExport, QueryCsvRowPrintsFarPointsWholeInExponentForm) {
@@ -465,7 +474,7 @@ TEST(MapExport, QueryCsvRowPrintsFarPointsWholeInExponentForm) {
   CellInfo far;
   far.center = Eigen::Vector3d(1e308, -2.5e12, 999999999.0);
   const std::string row = QueryCsvRow(far);
-  EXPECT_EQ(row, "1.000000e+308,-2.500000e+12,999999999.0000,0,nan,nan,nan,nan,0");
+  EXPECT_EQ(row, "1.000000e+308,-2.500000e+12,999999999.0000,0,nan,nan,nan,nan,0,nan");
   EXPECT_DOUBLE_EQ(std::stod(row.substr(0, row.find(','))), 1e308);
 }
 

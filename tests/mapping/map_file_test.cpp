@@ -253,7 +253,7 @@ std::string Sealed(const std::string& header, std::uint64_t nodes, const std::st
 
 /// One node as TravNode::writeData writes it (40 bytes, `value` first), then its child bits.
 std::string Node(float value, unsigned char children) {
-  std::string out(40, '\0');
+  std::string out(52, '\0');
   std::memcpy(out.data(), &value, sizeof(value));
   return out + static_cast<char>(children);
 }
@@ -293,6 +293,44 @@ TEST(MapFile, ANodeStreamThatLiesBehindAValidChecksumIsRejected) {
   EXPECT_EQ(TraversabilityMap::Load(bad).NumNodes(), BuildMap(1).NumNodes());
 }
 
+/// The node stream of `stream` (format 2: 52 payload bytes and a child byte per node, depth
+/// first) with each node's payload cut to format 1's 40 bytes.
+std::string AsFormat1(const std::string& stream) {
+  std::string out;
+  std::size_t at = 0;
+  std::vector<int> children_left;
+  do {
+    out += stream.substr(at, 40);
+    const auto bits = static_cast<unsigned char>(stream[at + 52]);
+    out += static_cast<char>(bits);
+    at += 53;
+    int count = 0;
+    for (int i = 0; i < 8; ++i) count += (bits >> i) & 1;
+    if (count > 0) children_left.push_back(count);
+    while (!children_left.empty() && children_left.back() == 0) children_left.pop_back();
+    if (!children_left.empty()) --children_left.back();
+  } while (at < stream.size());
+  return out;
+}
+
+TEST(MapFile, AFormatOneMapLoadsWithoutFusedHeights) {
+  const TempDir dir;
+  const std::string good = dir / "good.ot";
+  const TraversabilityMap map = BuildMap(2);
+  map.Save(good);
+  const std::string bytes = ReadBytes(good);
+  std::string header = bytes.substr(0, bytes.find("\ndata\n") + 6);
+  header.replace(header.find("format_version: 2"), 17, "format_version: 1");
+  const std::string stream = bytes.substr(header.size(), bytes.rfind("\n# ssta-map-end") - header.size());
+  const std::string old = dir / "old.ot";
+  WriteBytes(old, Sealed(header, map.NumNodes(), AsFormat1(stream)));
+  const TraversabilityMap loaded = TraversabilityMap::Load(old);
+  EXPECT_EQ(loaded.NumNodes(), map.NumNodes());
+  const CellInfo cell = loaded.TopSurfaceAt(1.05, 1.05);
+  EXPECT_EQ(cell.cls, map.TopSurfaceAt(1.05, 1.05).cls);
+  EXPECT_NEAR(cell.surface_z_m, cell.center.z(), 1e-9);  // no fused height: the voxel's centre
+}
+
 TEST(MapFile, APlainOcTreeFileIsTheWrongTreeType) {
   const TempDir dir;
   octomap::OcTree plain(0.1);
@@ -307,10 +345,10 @@ TEST(MapFile, ANewerFormatVersionIsAnError) {
   const std::string path = dir / "map.ot";
   BuildMap(1).Save(path);
   std::string bytes = ReadBytes(path);
-  const std::string tag = "#@ssta format_version: 1\n";
+  const std::string tag = "#@ssta format_version: 2\n";
   const std::size_t at = bytes.find(tag);
   ASSERT_NE(at, std::string::npos);
-  bytes.replace(at, tag.size(), "#@ssta format_version: 2\n");
+  bytes.replace(at, tag.size(), "#@ssta format_version: 3\n");
   WriteBytes(path, bytes);
   ExpectLoadError(path, "newer");
 }

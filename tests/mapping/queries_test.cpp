@@ -88,18 +88,30 @@ TEST_F(FloorAndBoxQueries, CellAtAnswersForEachVoxelOfTheBox) {
 }
 
 TEST_F(FloorAndBoxQueries, FootprintOverlappingTheBoxIsNonTraversable) {
-  // x in [0.6, 1.2], y in [0.96, 1.34]: 6 x 3 column centres, 2 x 3 of them on the box.
+  // x in [0.6, 1.2], y in [0.96, 1.34]: it touches 6 x 5 columns, 2 x 3 of them on the box.
   const FootprintResult r = map().QueryFootprint({0.9, 1.15, 0.0, 0.6, 0.38});
-  EXPECT_EQ(r.cells, 18);
-  EXPECT_EQ(r.observed_cells, 18);
+  EXPECT_EQ(r.cells, 30);
+  EXPECT_EQ(r.observed_cells, 30);
   EXPECT_EQ(r.worst, TravClass::kNonTraversable);
-  EXPECT_NEAR(r.mean_cost, 6.0 / 18.0, 1e-12);
+  EXPECT_NEAR(r.mean_cost, 6.0 / 30.0, 1e-12);
   EXPECT_EQ(r.max_cost, 1.0);
   EXPECT_DOUBLE_EQ(r.fraction_observed, 1.0);
   // The same rectangle turned by 90 degrees (length along y now).
   const FootprintResult turned = map().QueryFootprint({0.9, 1.15, kPi / 2, 0.38, 0.6});
-  EXPECT_EQ(turned.cells, 18);
-  EXPECT_NEAR(turned.mean_cost, 6.0 / 18.0, 1e-12);
+  EXPECT_EQ(turned.cells, 30);
+  EXPECT_NEAR(turned.mean_cost, 6.0 / 30.0, 1e-12);
+}
+
+TEST_F(FloorAndBoxQueries, AFootprintThatOverlapsTheBoxByLessThanHalfAColumnIsBlocked) {
+  // x in [0.6, 1.04]: the box's first column (x in [1.0, 1.1]) is under 4 cm of the footprint.
+  const FootprintResult r = map().QueryFootprint({0.82, 1.15, 0.0, 0.44, 0.2});
+  EXPECT_EQ(r.worst, TravClass::kNonTraversable);
+  // Ending on the column's edge at x = 1.0, the footprint stands beside the box.
+  const FootprintResult beside = map().QueryFootprint({0.8, 1.15, 0.0, 0.4, 0.2});
+  EXPECT_EQ(beside.worst, TravClass::kTraversable);
+  // Turned by 30 degrees with its corner reaching into the box's column.
+  const FootprintResult corner = map().QueryFootprint({0.88, 0.87, kPi / 6, 0.44, 0.2});
+  EXPECT_EQ(corner.worst, TravClass::kNonTraversable);
 }
 
 TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {

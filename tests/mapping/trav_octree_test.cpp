@@ -85,6 +85,9 @@ TravNode FilledNode() {
   node.max_step_m = 0.31f;
   node.observations = 42;
   node.last_seen_ns = 1403636580013555456LL;
+  node.surface_z = -0.43f;
+  node.surface_weight = 2500.0f;
+  node.surface_xy_sigma_m = 0.03f;
   return node;
 }
 
@@ -92,7 +95,7 @@ TEST(TravOcTree, NodePayloadRoundTripsThroughItsBinaryForm) {
   const TravNode node = FilledNode();
   std::stringstream s;
   node.writeData(s);
-  EXPECT_EQ(s.str().size(), 4u * 7 + 4 + 8);
+  EXPECT_EQ(s.str().size(), 4u * 7 + 4 + 8 + 4 * 3);
   TravNode read;
   read.readData(s);
   EXPECT_TRUE(s.good());

@@ -11,12 +11,15 @@
 
 namespace ssta {
 
-/// Header of the query CSV (INTERFACES section 5) and of the `csv` export.
-inline constexpr char kQueryCsvHeader[] = "x,y,z,class,cost,probability,slope_deg,step_m,observations";
+/// Header of the query CSV (docs/interfaces.md, section 5, with the confidence appended) and of
+/// the `csv` export.
+inline constexpr char kQueryCsvHeader[] =
+    "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence";
 
 /// One CSV row (no newline) for `cell` under kQueryCsvHeader: centre x, y, z [m] with 4
 /// decimals (in exponent form from 1e9 m on), class id, cost and probability with 4 decimals,
-/// slope [deg] with 2, mean step [m] with 3, observations. Unknown values print as "nan".
+/// slope [deg] with 2, step [m] with 3, observations, confidence with 4 decimals. Unknown values
+/// print as "nan".
 std::string QueryCsvRow(const CellInfo& cell);
 
 struct GridExportOptions {
@@ -34,8 +37,10 @@ struct GridExportOptions {
   /// Steps against the local ground: a level non-traversable pixel at the height of the
   /// traversable ground within this radius [m] is traversable (JudgeStepsByLocalGround; the
   /// level limit is the map's vehicle semi_slope_deg, the height tolerance one pixel edge).
-  /// 0: off.
-  double local_ground_radius_m = 1.0;
+  /// For maps of frames classed with steps against their dominant plane (eq. 5); the shipped
+  /// frames measure local steps and the map judges each column from the surface around it,
+  /// so it is off by default. 0: off.
+  double local_ground_radius_m = 0.0;
 };
 
 /// One pass over a projection: each non-traversable pixel (3) whose mean slope is below

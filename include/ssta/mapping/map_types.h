@@ -26,6 +26,13 @@ struct ClassifiedPoint {
   /// Signed height above the frame's dominant ground plane [m] (negative below); NaN when the
   /// frame has no ground plane that passed the quality check.
   float height_m = std::numeric_limits<float>::quiet_NaN();
+  /// 1-sigma of the point's height [m] from the stereo depth noise (its depth error along its
+  /// ray, seen vertically and through the surface's slope across the error's horizontal part);
+  /// NaN: the point carries no height to fuse.
+  float height_sigma_m = std::numeric_limits<float>::quiet_NaN();
+  /// Horizontal 1-sigma of the point's position from the same depth error [m]; NaN with
+  /// height_sigma_m.
+  float horizontal_sigma_m = std::numeric_limits<float>::quiet_NaN();
 };
 
 /// What one InsertFrame call did.
@@ -58,6 +65,17 @@ struct CellInfo {
   /// Probability of `cls` (softmax of the class log-odds); NaN unless cls is 1..3, and NaN
   /// where an export step, not the map's evidence, gave the class (ExportedSurface).
   double probability = std::numeric_limits<double>::quiet_NaN();
+  /// How sure the map is of `cls`, in [0, 1]: for a column's top surface (TopSurfaceAt and the
+  /// queries and exports built on it), the posterior probability of `cls` from the frames'
+  /// class evidence and the fused surface around the column (its slope and step against the
+  /// vehicle's limits, with their stereo uncertainty); for a voxel (CellAt), the frames'
+  /// evidence alone (= probability). NaN unless cls is 1..3.
+  double confidence = std::numeric_limits<double>::quiet_NaN();
+  /// The fused height of the surface in the voxel (world z) [m]; the voxel centre's z when no
+  /// height was fused; NaN unobserved.
+  double surface_z_m = std::numeric_limits<double>::quiet_NaN();
+  /// 1-sigma of surface_z_m [m]; NaN unobserved.
+  double height_sigma_m = std::numeric_limits<double>::quiet_NaN();
   double occupancy = std::numeric_limits<double>::quiet_NaN();  ///< P(occupied); NaN unobserved
   double slope_deg = std::numeric_limits<double>::quiet_NaN();  ///< mean slope [deg]
   double step_m = std::numeric_limits<double>::quiet_NaN();     ///< mean (signed) step [m]
@@ -76,8 +94,8 @@ struct FootprintQuery {
   double width_m = 0.0;
 };
 
-/// The ground under a footprint: one top-surface cell per map column whose centre lies inside
-/// the rectangle (the column under (x, y) when none does). An undecided top surface (class 4)
+/// The ground under a footprint: one top-surface cell per map column the rectangle touches
+/// (the column under (x, y) when none does). An undecided top surface (class 4)
 /// counts as observed but gives no verdict: `worst` stays kUnknown if all cells are such.
 struct FootprintResult {
   TravClass worst = TravClass::kUnknown;  ///< worst of the 1..3 verdicts; kUnknown if none

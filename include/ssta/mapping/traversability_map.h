@@ -19,7 +19,7 @@ struct TraversabilityMapAccess;  // private door for the exporters and tests (sr
 }  // namespace internal
 
 /// Version of the map file layout this build writes; it reads this version and older ones.
-inline constexpr int kMapFormatVersion = 1;
+inline constexpr int kMapFormatVersion = 2;
 
 /// A persistent 3D traversability map: an octree of voxels in the world frame W (z up, metres)
 /// holding occupancy, per-class evidence, mean slope and step, an observation count and the
@@ -95,9 +95,9 @@ class TraversabilityMap {
   using SurfaceSource = std::function<CellInfo(double x, double y)>;
 
   /// The top surfaces under a vehicle footprint (see FootprintResult), read from `surface`
-  /// (empty: TopSurfaceAt). A column counts when its centre lies inside the rectangle (edges
-  /// included, to 1e-9 m): pad length and width by one resolution to also catch obstacles
-  /// that overlap the rectangle by less than half a column. Throws ssta::Error for a
+  /// (empty: TopSurfaceAt). Every column the rectangle touches counts (its square overlaps the
+  /// rectangle by more than 1e-9 m): an obstacle under any part of the footprint is under the
+  /// robot. Throws ssta::Error for a
   /// non-finite x, y or yaw, a negative or non-finite size, a rectangle beyond the map's
   /// addressable area (+-32768 resolutions) or over more than 10^7 columns.
   FootprintResult QueryFootprint(const FootprintQuery& query, const SurfaceSource& surface = {}) const;

@@ -1,0 +1,49 @@
+#pragma once
+
+// The verdict of a map cell from the fused surface around it: the rule of docs/interfaces.md,
+// section 3 (slope of the surface, height jumps within step_radius_m) applied to surface heights
+// that carry their stereo uncertainty, so that the verdict comes with how sure it is.
+
+#include <array>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "ssta/analysis/vehicle_options.h"
+
+namespace ssta {
+
+/// One map column's top surface near the cell being judged.
+struct SurfaceSample {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  ///< column centre in W [m]
+  double height_m = 0.0;                         ///< fused height of its top surface [m]
+  double sigma_m = 0.0;                          ///< 1-sigma of that height [m], > 0
+  /// How far off its column that height may belong, 1-sigma [m] (range noise smears far
+  /// surfaces sideways).
+  double xy_sigma_m = 0.0;
+};
+
+/// What the surface around a cell says about it.
+struct SurfaceVerdict {
+  bool determined = false;  ///< enough columns around the cell to fit a surface
+  double slope_deg = 0.0;   ///< slope of the fitted local plane [deg]
+  double slope_sigma_deg = 0.0;
+  /// The largest height jump within the step radius not explained by that plane [m]: the
+  /// range of the columns' residuals, each taken one sigma towards the plane.
+  double step_m = 0.0;
+  double step_sigma_m = 0.0;
+  /// Probability of traversable, semi-traversable and non-traversable (the worse of the slope
+  /// and the step classes), from the two estimates and their sigmas; sums to 1.
+  std::array<double, 3> probability{1.0 / 3, 1.0 / 3, 1.0 / 3};
+};
+
+/// Judges the cell at `centre` from the `samples` of the columns (a grid `spacing_m` apart)
+/// whose centres lie within `vehicle.step_radius_m` of it, the cell's own included. A plane is
+/// fitted by iteratively reweighted least squares (weights 1 / sigma^2, Huber on the residuals)
+/// to the columns on the cell's side of any jump: its slope is the slope class's; the range of
+/// the columns' heights about it (LargestJump) the step's. Not determined when fewer than half
+/// the disc's columns, or fewer than 4, are seen, or they lie on one line.
+SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
+                            double spacing_m, const VehicleOptions& vehicle);
+
+}  // namespace ssta

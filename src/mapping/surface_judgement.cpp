@@ -1,0 +1,130 @@
+#include "ssta/mapping/surface_judgement.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+#include "ssta/core/units.h"
+
+namespace ssta {
+namespace {
+
+/// P(X <= x) for X ~ N(mean, sigma^2).
+double NormalCdf(double x, double mean, double sigma) {
+  return 0.5 * std::erfc(-(x - mean) / (sigma * std::sqrt(2.0)));
+}
+
+/// Probabilities of the three classes of a quantity estimated as `value` +- `sigma` against the
+/// thresholds `semi` and `max` (class 1 up to semi, 2 up to max, 3 beyond).
+std::array<double, 3> ClassProbabilities(double value, double sigma, double semi, double max) {
+  const double below_semi = NormalCdf(semi, value, sigma), below_max = NormalCdf(max, value, sigma);
+  return {below_semi, std::max(0.0, below_max - below_semi), 1.0 - below_max};
+}
+
+/// The height jump within the disc that the local surface does not explain: each column's
+/// height less what `gradient` (the local plane's, dh/dx and dh/dy) rises from `centre`, taken
+/// one sigma towards the plane; the step is the second highest of these less the second lowest,
+/// so that a single stray column (a voxel of noise above the ground) makes no step, while a jump
+/// has columns on both of its sides. Its sigma is the noise of those two columns.
+void LargestJump(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s, const Eigen::Vector2d& gradient,
+                 double* step, double* sigma) {
+  struct Level {
+    double value;
+    double sigma;
+  };
+  std::vector<Level> upper, lower;
+  for (const SurfaceSample& sample : s) {
+    const double residual = sample.height_m - gradient.dot(sample.xy - centre);
+    upper.push_back({residual - sample.sigma_m, sample.sigma_m});
+    lower.push_back({residual + sample.sigma_m, sample.sigma_m});
+  }
+  const auto by_value = [](const Level& a, const Level& b) { return a.value > b.value; };
+  std::nth_element(upper.begin(), upper.begin() + 1, upper.end(), by_value);
+  std::nth_element(lower.begin(), lower.begin() + 1, lower.end(),
+                   [](const Level& a, const Level& b) { return a.value < b.value; });
+  *step = std::max(0.0, upper[1].value - lower[1].value);
+  *sigma = std::hypot(upper[1].sigma, lower[1].sigma);
+}
+
+/// Weighted least-squares plane h = a + b dx + c dy through `s` (dx, dy from `centre`), with
+/// Huber reweighting of the residuals. Returns false when the samples do not span a plane.
+bool FitPlane(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s, Eigen::Vector3d* plane,
+              Eigen::Matrix3d* covariance) {
+  std::vector<double> robust(s.size(), 1.0);
+  for (int iteration = 0; iteration < 4; ++iteration) {
+    Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Eigen::Vector3d row(1.0, s[i].xy.x() - centre.x(), s[i].xy.y() - centre.y());
+      const double w = robust[i] / (s[i].sigma_m * s[i].sigma_m);
+      normal += w * row * row.transpose();
+      rhs += w * s[i].height_m * row;
+    }
+    const Eigen::LDLT<Eigen::Matrix3d> solver(normal);
+    if (solver.info() != Eigen::Success || !(normal.determinant() > 1e-12 * normal.trace() * normal.trace())) {
+      return false;
+    }
+    *plane = solver.solve(rhs);
+    *covariance = normal.inverse();
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const Eigen::Vector3d row(1.0, s[i].xy.x() - centre.x(), s[i].xy.y() - centre.y());
+      const double scale = 1.5 * std::max(s[i].sigma_m, 0.02);
+      const double r = std::abs(s[i].height_m - row.dot(*plane));
+      robust[i] = r <= scale ? 1.0 : scale / r;
+    }
+  }
+  return plane->allFinite();
+}
+
+}  // namespace
+
+SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
+                            double spacing_m, const VehicleOptions& vehicle) {
+  SurfaceVerdict v;
+  // Most of the disc must be seen: a few far columns between unobserved ones do not show a
+  // surface's slope or steps.
+  const double cells_in_disc = kPi * vehicle.step_radius_m * vehicle.step_radius_m / (spacing_m * spacing_m);
+  if (samples.size() < 4 || samples.size() < 0.5 * cells_in_disc) return v;
+  // Heights that may belong a step radius away from their columns show no step or slope there.
+  std::vector<double> xy_sigmas;
+  for (const SurfaceSample& s : samples) xy_sigmas.push_back(s.xy_sigma_m);
+  std::nth_element(xy_sigmas.begin(), xy_sigmas.begin() + xy_sigmas.size() / 2, xy_sigmas.end());
+  if (xy_sigmas[xy_sigmas.size() / 2] > 0.5 * vehicle.step_radius_m) return v;
+  // The slope: a plane through the columns that lie on the centre column's side of any jump
+  // (within what the steepest drivable slope rises from it), so a curb does not tilt it.
+  const SurfaceSample* own = &samples.front();
+  for (const SurfaceSample& s : samples) {
+    if ((s.xy - centre).squaredNorm() < (own->xy - centre).squaredNorm()) own = &s;
+  }
+  const double tan_max = std::tan(DegToRad(vehicle.max_slope_deg));
+  std::vector<SurfaceSample> smooth;
+  for (const SurfaceSample& s : samples) {
+    const double allowed = (s.xy - own->xy).norm() * tan_max + 2.0 * std::hypot(s.sigma_m, own->sigma_m);
+    if (std::abs(s.height_m - own->height_m) <= allowed) smooth.push_back(s);
+  }
+  Eigen::Vector3d plane;
+  Eigen::Matrix3d covariance;
+  if (smooth.size() < 4 || !FitPlane(centre, smooth, &plane, &covariance)) return v;
+  const double gradient = plane.tail<2>().norm();
+  v.slope_deg = RadToDeg(std::atan(gradient));
+  // sigma of |gradient| along its direction, to degrees through d(atan g)/dg = 1 / (1 + g^2).
+  const Eigen::Vector2d direction = gradient > 1e-9 ? Eigen::Vector2d(plane.tail<2>() / gradient) : Eigen::Vector2d(1, 0);
+  const double gradient_sigma = std::sqrt(std::max(0.0, direction.dot(covariance.bottomRightCorner<2, 2>() * direction)));
+  v.slope_sigma_deg = std::max(0.5, RadToDeg(gradient_sigma / (1.0 + gradient * gradient)));
+  v.determined = true;
+  // The step: height differences within the disc that the local plane does not explain.
+  LargestJump(centre, samples, plane.tail<2>(), &v.step_m, &v.step_sigma_m);
+
+  const std::array<double, 3> slope =
+      ClassProbabilities(v.slope_deg, v.slope_sigma_deg, vehicle.semi_slope_deg, vehicle.max_slope_deg);
+  const std::array<double, 3> step = ClassProbabilities(v.step_m, std::max(0.01, v.step_sigma_m),
+                                                        vehicle.semi_step_m, vehicle.max_step_m);
+  // The worse of two independent classes: P(class <= k) is the product of the two.
+  const double trav = slope[0] * step[0];
+  const double at_most_semi = (slope[0] + slope[1]) * (step[0] + step[1]);
+  v.probability = {trav, std::max(0.0, at_most_semi - trav), std::max(0.0, 1.0 - at_most_semi)};
+  return v;
+}
+
+}  // namespace ssta

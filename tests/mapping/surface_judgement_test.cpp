@@ -1,0 +1,96 @@
+// The verdict of a cell from the fused surface around it, on analytic worlds whose class is known
+// in closed form (default vehicle: slope 15 / 25 deg, step 0.1 / 0.2 m, step radius 0.2 m).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include "ssta/core/units.h"
+#include "ssta/mapping/surface_judgement.h"
+
+namespace ssta {
+namespace {
+
+/// The columns of a 0.1 m map within the step radius of (0, 0), on the surface `height`, each
+/// with `sigma` of noise drawn from `seed` (0: exact heights).
+std::vector<SurfaceSample> Disc(const std::function<double(double, double)>& height, double sigma,
+                                unsigned seed = 0) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  std::vector<SurfaceSample> s;
+  for (int j = -2; j <= 2; ++j) {
+    for (int i = -2; i <= 2; ++i) {
+      const Eigen::Vector2d xy(0.1 * i, 0.1 * j);
+      if (xy.norm() > 0.2 + 1e-9) continue;
+      s.push_back({xy, height(xy.x(), xy.y()) + (seed ? noise(rng) : 0.0), sigma});
+    }
+  }
+  return s;
+}
+
+int Verdict(const SurfaceVerdict& v) {
+  return static_cast<int>(std::max_element(v.probability.begin(), v.probability.end()) - v.probability.begin()) + 1;
+}
+
+TEST(JudgeSurface, SmoothRampsAreJudgedByTheirSlopeAlone) {
+  const VehicleOptions vehicle;
+  for (const auto& [deg, expected] : {std::pair{5.0, 1}, {20.0, 2}, {32.0, 3}}) {
+    SCOPED_TRACE(deg);
+    const double g = std::tan(DegToRad(deg));
+    const SurfaceVerdict v = JudgeSurface({0, 0}, Disc([g](double x, double) { return 3.0 + g * x; }, 0.01), 0.1, vehicle);
+    ASSERT_TRUE(v.determined);
+    EXPECT_NEAR(v.slope_deg, deg, 0.01);
+    EXPECT_LT(v.step_m, 0.06);  // a ramp has no step
+    EXPECT_EQ(Verdict(v), expected);
+    EXPECT_GT(v.probability[expected - 1], 0.9);
+  }
+}
+
+TEST(JudgeSurface, AJumpInTheDiscIsAStepOfItsHeightOnEitherSide) {
+  const VehicleOptions vehicle;
+  for (const auto& [jump, expected] : {std::pair{0.05, 1}, {0.15, 2}, {0.4, 3}}) {
+    for (const double edge : {-0.05, 0.05}) {  // the cell below the jump and the cell on top
+      SCOPED_TRACE(std::to_string(jump) + (edge < 0 ? " on top" : " below"));
+      const auto box = [jump, edge](double x, double) { return x >= edge ? 0.0 : jump; };
+      const SurfaceVerdict v = JudgeSurface({0, 0}, Disc(box, 0.005), 0.1, vehicle);
+      ASSERT_TRUE(v.determined);
+      EXPECT_NEAR(v.step_m, jump, 0.05);
+      if (jump > 0.1) {
+        EXPECT_LT(v.slope_deg, 1.0);  // the plane keeps to the cell's own side of the jump
+      }
+      EXPECT_EQ(Verdict(v), expected);
+    }
+  }
+}
+
+TEST(JudgeSurface, LevelGroundIsTraversableAtAnyHeight) {
+  const VehicleOptions vehicle;
+  for (const double height : {-1.5, 0.0, 0.6, 4.0}) {
+    const SurfaceVerdict v = JudgeSurface({0, 0}, Disc([height](double, double) { return height; }, 0.01), 0.1, vehicle);
+    EXPECT_EQ(Verdict(v), 1) << height;
+  }
+}
+
+TEST(JudgeSurface, NoisyFarHeightsGiveALevelSurfaceAnUnsureVerdict) {
+  const VehicleOptions vehicle;
+  const auto level = [](double, double) { return 0.0; };
+  const SurfaceVerdict near = JudgeSurface({0, 0}, Disc(level, 0.01, 7), 0.1, vehicle);
+  const SurfaceVerdict far = JudgeSurface({0, 0}, Disc(level, 0.15, 7), 0.1, vehicle);
+  EXPECT_GT(near.probability[0], 0.95);
+  EXPECT_LT(far.probability[0], near.probability[0] - 0.2);  // the noise leaves it open
+  EXPECT_GT(far.slope_sigma_deg, 5 * near.slope_sigma_deg);
+}
+
+TEST(JudgeSurface, TooFewColumnsLeaveTheCellUndetermined) {
+  const VehicleOptions vehicle;
+  std::vector<SurfaceSample> three = {{{0, 0}, 0, 0.01}, {{0.1, 0}, 0, 0.01}, {{0, 0.1}, 0, 0.01}};
+  EXPECT_FALSE(JudgeSurface({0, 0}, three, 0.1, vehicle).determined);
+  std::vector<SurfaceSample> line;
+  for (int i = -2; i <= 2; ++i) line.push_back({{0.1 * i, 0}, 0, 0.01});
+  EXPECT_FALSE(JudgeSurface({0, 0}, line, 0.1, vehicle).determined);
+}
+
+}  // namespace
+}  // namespace ssta
