@@ -228,7 +228,7 @@ const std::vector<BadInput>& Cases() {
       {"MapFromANewerFormatVersion",
        [](auto&, auto& d) {
          ASSERT_EQ(RunSsta(Substitute(kBuild, kEuroc + "/mav0", d)).exit_code, 0);
-         Replace(d + "/m.ot", "#@ssta format_version: 1", "#@ssta format_version: 9");
+         Replace(d + "/m.ot", "#@ssta format_version: 2", "#@ssta format_version: 9");
        },
        "query --map {map} --at 1,2", {"{dir}/m.ot: map format version 9 is newer than this ssta reads"}},
       {"ResumeWithAnotherResolution",

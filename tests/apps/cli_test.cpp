@@ -58,7 +58,7 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
   ASSERT_EQ(r.exit_code, 0);
   auto lines = Lines(r.output);
   ASSERT_EQ(lines.size(), 2u) << r.output;
-  EXPECT_EQ(lines[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations");
+  EXPECT_EQ(lines[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence");
   EXPECT_EQ(lines[1].substr(0, lines[1].find(',')), "500.0000");
   EXPECT_NE(lines[1].find(",0,"), std::string::npos) << lines[1];
 
@@ -150,7 +150,7 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   auto r = RunSsta(query + " --footprint 0.65,0.65,0,0.3,0.3", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n3,1.0000,1.0000,1.0000,9,9\n");
-  r = RunSsta(query + " --footprint 0.65,0.65,90,0.3,0.3 --as-exported", false);
+  r = RunSsta(query + " --footprint 0.65,0.65,90,0.3,0.3 --as-exported --local-ground 1", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9");
 
@@ -162,7 +162,7 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   EXPECT_EQ(lines[0], "distance_m,x,y,class,cost,fraction_observed");
   EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0000,1.0000");
   EXPECT_NE(r.output.find("blocked at 0.50 m"), std::string::npos) << r.output;  // x = 0.55 (0.5 rounds below)
-  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 0.4 --as-exported");
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 0.4 --as-exported --local-ground 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("path 1.50 m, 31 samples, worst class 1, not blocked, 100 % observed"), std::string::npos)
       << r.output;
@@ -266,7 +266,7 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   const std::string json = ReadTextFile(dir / "f.json");
   EXPECT_NE(json.find("\"unsafe\": 25"), std::string::npos) << json;
   EXPECT_NE(json.find("\"accuracy\": " + std::to_string(734.0 / 784.0).substr(0, 6)), std::string::npos) << json;
-  r = RunSsta(eval + " --length 0.3 --yaws 0,90 --as-exported");
+  r = RunSsta(eval + " --length 0.3 --yaws 0,90 --as-exported --local-ground 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("poses: 1800, partly unseen in the truth (unscored): 232"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("answered traversable or semi): 50 (0.0319)"), std::string::npos) << r.output;
