@@ -26,11 +26,12 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   const Eigen::Vector3d& up = in.up_rectified;
   const double focal_times_baseline = g.f * g.baseline_m;
   const AnalysisOptions& options = options_;
-  // Two steps do their costly part on inputs the others do not change: the pixel slopes on the
-  // normals, the face test on the disparity. Each runs beside the steps before it:
+  // Three steps do their costly part on inputs the others do not change: the pixel slopes on
+  // the normals, the face test on the disparity, the local steps on the cloud. Each runs beside
+  // the steps before it:
   //   AnalyzeSurfaces                              | pixel slope classes
-  //   apply slopes, ground consistency, fragments  | face search
-  //   apply faces, consensus fill, height fill
+  //   apply slopes, ground consistency, fragments  | face search, local step classes
+  //   apply local steps, apply faces, consensus fill, height fill
   // The slope classes are computed before the quality check is known: on a frame that fails it
   // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
   AnalysisResult a;
@@ -47,9 +48,6 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
         if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes_, &a.labels);
         RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
         RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
-        if (options.step_reference == StepReference::kLocal && a.quality.passed) {
-          RefineByLocalSteps(cloud, *in.normals, up, vehicle_, noise, &a.labels);
-        }
       },
       [&] {
         // Only for a frame that passed the quality check (known from here on): on the others
@@ -57,7 +55,13 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
         if (options.face_window_px > 0 && a.quality.passed) {
           FindDisparityFaces(*in.disparity, g.f, g.cu, g.cv, up, options, &faces_);
         }
+        if (options.step_reference == StepReference::kLocal && a.quality.passed) {
+          LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_);
+        }
       });
+  if (options.step_reference == StepReference::kLocal && a.quality.passed) {
+    ApplyLocalStepClasses(step_classes_, &a.labels);
+  }
   if (a.quality.passed) {
     ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);  // nothing when the test is off
     FillUndecidedByConsensus(options, &a.labels);

@@ -15,17 +15,23 @@ namespace {
 
 /// 1-sigma of the height at a map column of a point `q` (rectified camera frame, depth q.z())
 /// whose depth errs by `per_m2` q.z()^2: its error along its ray, seen vertically, and its
-/// horizontal part through the surface's slope (at most 45 degrees: a face's height is its
-/// own), at least 5 mm.
-float HeightSigma(const Eigen::Vector3f& q, const Eigen::Matrix3f& world_R_rectified, double per_m2,
-                  float slope_deg, float* horizontal_sigma) {
-  const float along = static_cast<float>(per_m2) * q.z() * q.norm();  // k Z^2 |q| / Z
-  const Eigen::Vector3f ray = world_R_rectified * q.normalized();
-  const float vertical = along * std::abs(ray.z());
-  const float horizontal = along * std::sqrt(std::max(0.0f, 1.0f - ray.z() * ray.z()));
+/// horizontal part through the surface's `gradient` (rise over run), at least 5 mm.
+float HeightSigma(const Eigen::Vector3f& q, const Eigen::Matrix3f& world_R_rectified, float per_m2, float gradient,
+                  float* horizontal_sigma) {
+  const float range = q.norm();
+  const float along = per_m2 * q.z() * range;  // k Z^2 |q| / Z
+  const float ray_up = world_R_rectified.row(2).dot(q) / range;
+  const float vertical = along * std::abs(ray_up);
+  const float horizontal = along * std::sqrt(std::max(0.0f, 1.0f - ray_up * ray_up));
   *horizontal_sigma = horizontal;
-  const float gradient = std::isfinite(slope_deg) ? std::tan(std::min(slope_deg, 45.0f) * 0.0174532925f) : 0.0f;
-  return std::max(0.005f, std::hypot(vertical, gradient * horizontal));
+  const float slanted = gradient * horizontal;
+  return std::max(0.005f, std::sqrt(vertical * vertical + slanted * slanted));  // both far below overflow
+}
+
+/// The gradient (rise over run) of a surface of `slope_deg`, at most 1: a face's height is its
+/// own, not its foot's. 0 for no slope (NaN).
+float Gradient(float slope_deg) {
+  return std::isfinite(slope_deg) ? std::tan(std::min(slope_deg, 45.0f) * 0.0174532925f) : 0.0f;
 }
 
 }  // namespace
@@ -48,16 +54,20 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   const auto& segments = frame.analysis.segments;
   std::vector<std::pair<float, float>> segment_values(segments.size());
+  std::vector<float> segment_gradients(segments.size());
   for (std::size_t i = 0; i < segments.size(); ++i) {
     const SegmentResult& s = segments[i];
     segment_values[i] = {s.has_plane ? static_cast<float>(s.slope_deg) : kNaN, static_cast<float>(s.step_m)};
+    segment_gradients[i] = Gradient(segment_values[i].first);
   }
   const bool has_ground = frame.analysis.ground.found && frame.analysis.quality.passed;
-  const auto segment_slope = [&](int id) { return id >= 0 ? segment_values[static_cast<std::size_t>(id)].first : kNaN; };
+  const auto gradient = [&](int id) { return id >= 0 ? segment_gradients[static_cast<std::size_t>(id)] : 0.0f; };
+  const auto per_m2 = static_cast<float>(frame.depth_noise_per_m2);
   const Eigen::Vector4f ground = frame.analysis.ground.plane.cast<float>();
   points->clear();
   points->reserve(cloud.size() / (stride * stride) + 1);
   const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
+  const Eigen::Matrix3f world_R_rectified = transform.linear();
   for (int v = 0; v < cloud.height(); v += stride) {
     for (int u = 0; u < cloud.width(); u += stride) {
       const Eigen::Vector3f& p = cloud(v, u);
@@ -75,8 +85,8 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
       out.world_p = transform * q;
       if (has_ground) out.height_m = ground.head<3>().dot(q) + ground.w();
       if (frame.depth_noise_per_m2 > 0) {
-        out.height_sigma_m = HeightSigma(q, transform.linear(), frame.depth_noise_per_m2,
-                                         segment_slope(frame.segment_ids(v, u)), &out.horizontal_sigma_m);
+        out.height_sigma_m = HeightSigma(q, world_R_rectified, per_m2, gradient(frame.segment_ids(v, u)),
+                                         &out.horizontal_sigma_m);
       }
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);

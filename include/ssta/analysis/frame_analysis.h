@@ -27,11 +27,12 @@ struct FrameAnalysisInput {
 ///   1. per-pixel slopes (RefineByPixelSlope),
 ///   2. ground consistency (RefineByGroundDisparity),
 ///   3. fragments on a neighbour's plane (RefineByFragmentPlanes),
-///   4. thin faces from the disparity (RefineByDisparityFaces),
-///   5. undecided pixels amid a consensus (FillUndecidedByConsensus),
-///   6. undecided pixels by their own height (FillUndecidedByHeight).
-/// Steps 1 and 4-6 run only on a frame that passed the quality check. The costly parts of
-/// steps 1 and 4 read inputs no other step changes; they run beside the steps before them, and
+///   4. steps within the step radius of each point (RefineByLocalSteps; step_reference local),
+///   5. thin faces from the disparity (RefineByDisparityFaces),
+///   6. undecided pixels amid a consensus (FillUndecidedByConsensus),
+///   7. undecided pixels by their own height (FillUndecidedByHeight).
+/// Steps 1 and 4-7 run only on a frame that passed the quality check. The costly parts of
+/// steps 1, 4 and 5 read inputs no other step changes; they run beside the steps before them, and
 /// their results are applied at their places in the chain, so the labels are those of the steps
 /// one after the other (the texture mask of analysis.label_min_texture needs the full image and
 /// is applied by FramePipeline after this).
@@ -52,6 +53,7 @@ class FrameAnalyzer {
   double disparity_sigma_px_;
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
+  ImageU8 step_classes_;    // the local steps' classes, kept between frames
 };
 
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified

@@ -145,4 +145,12 @@ void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, co
 void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
                         const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* labels);
 
+/// RefineByLocalSteps in two steps, so that the costly one can run beside the refinements before
+/// it: LocalStepClasses reads the cloud and normals only and writes, per pixel, the step class of
+/// its point (0: none, its point is missing or too smeared); ApplyLocalStepClasses then changes
+/// the labels. The two in turn give exactly RefineByLocalSteps' labels.
+void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
+                      const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes);
+void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels);
+
 }  // namespace ssta
