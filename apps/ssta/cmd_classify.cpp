@@ -67,7 +67,7 @@ void RegisterClassify(CLI::App& app) {
   auto args = std::make_shared<ClassifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "classify", "Classify every stereo frame of a sequence (or one pair) into the five SSTA classes");
-  CLI::Option* sequence = cmd->add_option("--sequence", args->sequence, "ASL sequence folder (INTERFACES section 2)");
+  CLI::Option* sequence = cmd->add_option("--sequence", args->sequence, "ASL sequence folder (docs/interfaces.md, section 2)");
   // The single pair's options and the sequence exclude each other: one of them would be ignored.
   for (CLI::Option* pair_option :
        {cmd->add_option("--left", args->left, "single-pair mode: left image"),

@@ -1,5 +1,5 @@
 // `ssta eval`: scores classifications, exported grids, query answers and a map's footprint
-// verdicts against the ground truth of a synthetic sequence (INTERFACES section 6). Prints a
+// verdicts against the ground truth of a synthetic sequence (docs/interfaces.md, section 6). Prints a
 // report; --json writes the machine-readable summary.
 
 #include <cmath>
@@ -231,7 +231,7 @@ void RegisterEval(CLI::App& app) {
   CLI::App* query = eval->add_subcommand(
       "query", "Score the CSV answers of `ssta query` against the ground-truth grid");
   AddCommon(query, query_args.get(),
-            "CSV written by ssta query (x,y,z,class,cost,probability,slope_deg,step_m,observations)");
+            "CSV written by ssta query (x,y,z,class,...: its header names the columns)");
   query->callback([query_args] {
     RequireTruthVehicle(*query_args);
     Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);

@@ -1,4 +1,4 @@
-// ssta query: answers from a map for planners, as CSV on stdout (INTERFACES section 5).
+// ssta query: answers from a map for planners, as CSV on stdout (docs/interfaces.md, section 5).
 
 #include <algorithm>
 #include <cctype>
@@ -159,7 +159,7 @@ std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, c
                         : exported != nullptr ? (*exported)(p[0], p[1])
                                               : map.TopSurfaceAt(p[0], p[1]);
   if (cell.observed) return QueryCsvRow(cell);
-  // Unobserved: class 0 at the asked point (INTERFACES section 5); with --as-exported, the
+  // Unobserved: class 0 at the asked point (docs/interfaces.md, section 5); with --as-exported, the
   // class of a filled hole.
   CellInfo unknown = cell;
   unknown.center = Eigen::Vector3d(p[0], p[1], p.size() == 3 ? p[2] : std::numeric_limits<double>::quiet_NaN());
@@ -172,7 +172,8 @@ void RegisterQuery(CLI::App& app) {
   auto args = std::make_shared<QueryArgs>();
   CLI::App* cmd = app.add_subcommand("query", "Query map cells for a planner: CSV on stdout");
   cmd->footer(
-      "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations.\n"
+      "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence\n"
+      "(confidence: the posterior probability of the class from the frames and the fused surface).\n"
       "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
       "x,y,z are then that voxel's centre. An unobserved cell is the point asked (z nan for X,Y), class 0\n"
       "with cost nan: the planner decides. --as-exported gives X,Y the class\n"

@@ -92,10 +92,16 @@ void RegisterSynth(CLI::App& app) {
       "  dropoff  flat ground ending 6 m ahead in a 0.8 m drop; a 0.3 m hole; rocks\n"
       "  forest   trunks, logs (a 0.12 m log across the way 6.5 m ahead), rocks\n"
       "  ramp     one plane of --ramp-slope-deg everywhere; the vehicle drives up it\n"
-      "The way ahead is clear for 5.5 m (yard 6.5 m; ramp unlimited): about 80 frames at the\n"
-      "default speed and rate. Longer runs are written with a warning.\n"
-      "Labels are 255 (don't care) for sky, beyond 12 m (--max-label-range), pixels hidden from cam1 and a 1 px\n"
-      "band on class boundaries; vertical faces are non-traversable.");
+      "  random   terrain composed from all of the above (slopes, ditches, a drop-off, ramps, terraces,\n"
+      "           curbs, crates, rocks, trunks, logs), a rig (image size, focal length, baseline,\n"
+      "           height, pitch) and light (sun, sky, noise) drawn from --seed; the rig options are\n"
+      "           ignored, gt/rig.yaml records the rig drawn\n"
+      "The way ahead is clear for 5.5 m (yard 6.5 m, random 7 m; ramp unlimited): about 80 frames\n"
+      "at the default speed and rate. Longer runs are written with a warning.\n"
+      "Truth follows the class rule (docs/interfaces.md, section 3): the worse of the surface's slope\n"
+      "class and the step class of the true heights within the vehicle's step_radius_m. Labels are\n"
+      "255 (don't care) for sky, beyond --max-label-range, pixels hidden from cam1 and a 1 px band\n"
+      "on class boundaries.");
   cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp | random (terrain, rig and light drawn from --seed)")
       ->capture_default_str();
   cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required()->check(OutputFolder());

@@ -38,7 +38,7 @@ void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_n
                         double* local_ground_radius_m);
 
 /// `--config FILE` (repeatable) for the commands that read a map (`query`, `export`, `eval
-/// footprints`): every command takes one (INTERFACES section 4), and a script may pass the one
+/// footprints`): every command takes one (docs/interfaces.md, section 4), and a script may pass the one
 /// it built the map with. A map's classes were fused for the vehicle it was built for, so the
 /// files, read over that vehicle, must leave it as it is (LoadMapForConfig checks); the other
 /// sections do not apply to reading a map, though a bad value in them is still an error.

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 namespace ssta {
 namespace {
 
-constexpr std::int64_t kPairToleranceNs = 1'000'000;  // 1 ms (INTERFACES section 2)
+constexpr std::int64_t kPairToleranceNs = 1'000'000;  // 1 ms (docs/interfaces.md, section 2)
 // Pose files print unit quaternions to a few digits at least; a norm further off is damage.
 constexpr double kMaxQuaternionNormError = 0.01;
 
@@ -202,7 +202,7 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   const std::string cam0 = seq.root + "/cam0";
   const std::string cam1 = seq.root + "/cam1";
   for (const auto& dir : {cam0, cam1}) {
-    if (!fs::is_directory(dir)) throw Error(dir + ": camera folder not found (expected the ASL layout, INTERFACES section 2)");
+    if (!fs::is_directory(dir)) throw Error(dir + ": camera folder not found (expected the ASL layout, docs/interfaces.md, section 2)");
   }
   seq.calibration = LoadStereoCalibration(cam0 + "/sensor.yaml", cam1 + "/sensor.yaml");
 

@@ -145,7 +145,7 @@ void WriteGrid(const TerrainTruth& truth, const SynthOptions& o, const Eigen::Al
   WriteImage(grid, Join(gt_dir, "grid_classes.png"));
   std::ostringstream yaml;
   yaml << std::setprecision(10);
-  yaml << "# Ground-truth world grid of classes (ids of INTERFACES section 3); row 0 = largest y.\n"
+  yaml << "# Ground-truth world grid of classes (ids of docs/interfaces.md, section 3); row 0 = largest y.\n"
        << "# A cell takes the worst true class of 3x3 samples of the top surface in it (the class of a\n"
        << "# point: docs/interfaces.md, section 3). Cells no camera saw are 255 (don't care).\n"
        << "image: grid_classes.png\n"

@@ -1,4 +1,4 @@
-// Bad input through the `ssta` binary, one case per kind of damage issue 8 lists: each must end
+// Bad input through the `ssta` binary, one case per kind of damage a user's files can have: each must end
 // with exit status 2 and one line, "ssta: error: ...", naming the file (and line) or the key.
 // Each case damages a fresh copy of the EuRoC mini sequence (three frames) and runs build-map
 // (or query) on it; per-frame damage runs with --strict, which makes a skipped frame fatal.
@@ -264,7 +264,7 @@ TEST_P(BadInputTest, ExitsWithTwoAndOneLineNamingTheFileLineOrKey) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Issue8, BadInputTest, ::testing::ValuesIn(Cases()),
+INSTANTIATE_TEST_SUITE_P(Damaged, BadInputTest, ::testing::ValuesIn(Cases()),
                          [](const ::testing::TestParamInfo<BadInput>& info) { return std::string(info.param.name); });
 
 }  // namespace

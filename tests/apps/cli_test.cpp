@@ -1,5 +1,5 @@
 // The map and classify commands end to end through the built `ssta` binary: exit status, the
-// one-line error naming the file or key, and the query CSV contract (INTERFACES section 5).
+// one-line error naming the file or key, and the query CSV contract (docs/interfaces.md, section 5).
 
 #include <gtest/gtest.h>
 

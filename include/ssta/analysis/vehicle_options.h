@@ -7,7 +7,7 @@
 
 namespace ssta {
 
-/// What the vehicle can drive over (INTERFACES section 4, YAML section `vehicle`).
+/// What the vehicle can drive over (docs/interfaces.md, section 4, YAML section `vehicle`).
 struct VehicleOptions {
   double max_slope_deg = 25.0;   ///< steeper than this: non-traversable [deg]
   double semi_slope_deg = 15.0;  ///< steeper than this (up to max): semi-traversable [deg]

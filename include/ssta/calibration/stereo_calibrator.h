@@ -158,7 +158,7 @@ RectificationCheck CheckRectification(const StereoCalibration& calibration,
                                       const StereoCalibrationSummary& summary, ImageRgb* picture);
 
 /// The whole `ssta calibrate-stereo`: calibrates, writes `out_dir/cam0/sensor.yaml` and
-/// `out_dir/cam1/sensor.yaml` (ASL format, INTERFACES section 2), reads them back with
+/// `out_dir/cam1/sensor.yaml` (ASL format, docs/interfaces.md, section 2), reads them back with
 /// LoadStereoCalibration, runs CheckRectification on what was read and writes
 /// `out_dir/rectified_pair.png` and `out_dir/calibration_report.json`. Throws ssta::Error
 /// as StereoCalibrator::Calibrate does, or naming a file that cannot be written.

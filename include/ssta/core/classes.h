@@ -8,7 +8,7 @@
 
 namespace ssta {
 
-/// Traversability classes (INTERFACES section 3); the numeric value is the id written to label
+/// Traversability classes (docs/interfaces.md, section 3); the numeric value is the id written to label
 /// images, maps and exports.
 enum class TravClass : std::uint8_t {
   kUnknown = 0,          ///< no depth: no disparity, outside the common area, never observed
@@ -25,7 +25,7 @@ inline constexpr int kNumClasses = 5;
 /// Lower-case name as used in reports and JSON: "unknown", "traversable", ...
 std::string_view ClassName(TravClass c);
 
-/// Display colour of a class (INTERFACES section 3). Undecided has no colour; this returns
+/// Display colour of a class (docs/interfaces.md, section 3). Undecided has no colour; this returns
 /// black for it and callers leave the image showing through.
 Rgb8 ClassColour(TravClass c);
 

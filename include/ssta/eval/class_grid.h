@@ -16,7 +16,7 @@ struct GridCell {
   int col = 0;
 };
 
-/// A 2D world grid of class ids in the map_server convention (INTERFACES section 5, `export`
+/// A 2D world grid of class ids in the map_server convention (docs/interfaces.md, section 5, `export`
 /// grid): column c spans x in [origin.x + c * res, origin.x + (c + 1) * res); image row 0 holds
 /// the largest y, so row r spans y in [origin.y + (H - 1 - r) * res, origin.y + (H - r) * res).
 /// `origin_m` is the world (x, y) of the lower-left corner of the lower-left pixel (the last
@@ -50,7 +50,7 @@ ClassGrid ReadClassGrid(const std::string& yaml_path, const std::string& classes
 /// neither exists.
 std::string FindGroundTruthDir(const std::string& sequence);
 
-/// Reads SEQ/gt/grid_classes.png with SEQ/gt/grid.yaml (INTERFACES section 6). Throws
+/// Reads SEQ/gt/grid_classes.png with SEQ/gt/grid.yaml (docs/interfaces.md, section 6). Throws
 /// ssta::Error as ReadClassGrid.
 ClassGrid ReadGroundTruthGrid(const std::string& sequence);
 

@@ -9,7 +9,7 @@
 
 namespace ssta {
 
-/// One row of the CSV written by `ssta query` (INTERFACES section 5). Only the columns the
+/// One row of the CSV written by `ssta query` (docs/interfaces.md, section 5). Only the columns the
 /// scorer needs are kept.
 struct QueryRow {
   double x_m = 0.0;            ///< world x [m]

@@ -7,7 +7,7 @@
 
 namespace ssta {
 
-/// One camera of an ASL sequence (`camN/sensor.yaml`, INTERFACES section 2): a pinhole model
+/// One camera of an ASL sequence (`camN/sensor.yaml`, docs/interfaces.md, section 2): a pinhole model
 /// with radial-tangential distortion and the camera's pose in the body frame.
 struct CameraCalibration {
   int width = 0;   ///< image width [px]

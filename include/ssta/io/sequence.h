@@ -62,7 +62,7 @@ class Sequence {
   explicit Sequence(SequenceData data);
 
   /// Opens `path` as a KITTI raw drive when it has `image_00/` and `oxts/`, else as an ASL /
-  /// EuRoC sequence (INTERFACES section 2). Throws ssta::Error naming the file (and line).
+  /// EuRoC sequence (docs/interfaces.md, section 2). Throws ssta::Error naming the file (and line).
   static Sequence Open(const std::string& path);
 
   /// The ASL / EuRoC layout (the folder, or the folder holding `mav0/`). Left/right frames are

@@ -54,7 +54,7 @@ struct GridExportOptions {
 /// number of pixels changed. Throws ssta::Error unless radius_m > 0 and tolerance_m >= 0.
 int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolerance_m, double level_slope_deg);
 
-/// One pass over `classes` (ids of INTERFACES section 3): each unknown pixel (0) of which at
+/// One pass over `classes` (ids of docs/interfaces.md, section 3): each unknown pixel (0) of which at
 /// least `min_neighbours` (1..8) of the 8 neighbours hold a class 1..3 in the input takes the
 /// most frequent of those classes, a tie going to the worse. Filled pixels do not count for
 /// their neighbours, so a fill never grows from another; undecided pixels (4) stay and do not
@@ -107,7 +107,7 @@ class ExportedSurface {
 CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
                               const GridExportOptions& options = GridExportOptions{});
 
-/// The `grid` export (INTERFACES section 5): PREFIX.png (class colours, undecided grey),
+/// The `grid` export (docs/interfaces.md, section 5): PREFIX.png (class colours, undecided grey),
 /// PREFIX_classes.png (8-bit class ids), PREFIX.pgm (non-traversable 0, traversable and semi
 /// 254, unknown and undecided 205) and PREFIX.yaml (map_server: image, resolution, origin
 /// [x, y, 0.0] of the lower-left pixel's lower-left corner, negate 0, occupied_thresh 0.65,

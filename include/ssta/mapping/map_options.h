@@ -15,7 +15,7 @@ namespace ssta {
 /// and a matching one for the class evidence; they suit stereo at 0.1 m voxels.
 ///
 /// Occupancy is one log-odds per voxel (OctoMap's); class evidence is three more log-odds per
-/// voxel, one for each of traversable, semi-traversable and non-traversable (INTERFACES
+/// voxel, one for each of traversable, semi-traversable and non-traversable (docs/interfaces.md,
 /// section 3). These options travel with the map file, so a resumed map fuses exactly as the
 /// run that created it.
 struct MapOptions {

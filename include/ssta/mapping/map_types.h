@@ -1,7 +1,7 @@
 #pragma once
 
 // Value types that go in and out of a TraversabilityMap. World frame W throughout: right-handed,
-// z up, metres (INTERFACES section 1). Angles in these structs are degrees only where the name
+// z up, metres (docs/interfaces.md, section 1). Angles in these structs are degrees only where the name
 // says so (`slope_deg`); `yaw` is radians.
 
 #include <cstddef>

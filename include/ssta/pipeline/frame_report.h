@@ -7,7 +7,7 @@
 
 namespace ssta {
 
-/// The per-frame JSON (INTERFACES section 5 extension): every segment of at least
+/// The per-frame JSON (docs/interfaces.md, section 5 extension): every segment of at least
 /// min_plane_points points (id, inliers, centroid, normal, plane, slope_deg, step_m, class,
 /// reason), the smaller fragments summed up (count, pixels per class), the ground plane, the
 /// quality verdict and the stage timings. Coordinates are in the rectified cam0 frame [m].

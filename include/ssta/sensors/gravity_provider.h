@@ -38,7 +38,7 @@ std::string GravitySourceName(GravitySource source);
 /// asks: the IMU attitude filter, the pose's attitude, a level body, or a fixed vector.
 /// Thread-safe for concurrent readers once built. With an IMU in use (source auto or imu, and
 /// IMU samples), every frame takes its attitude from the IMU: a frame outside the IMU's time
-/// range throws (the callers skip it with that reason), as INTERFACES section 2 asks.
+/// range throws (the callers skip it with that reason), as docs/interfaces.md, section 2 asks.
 class GravityProvider {
  public:
   /// Throws ssta::Error naming the IMU file when an IMU in use overlaps none of the frames.

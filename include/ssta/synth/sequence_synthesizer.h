@@ -39,7 +39,7 @@ Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& moti
 /// missing; files of an earlier synth run are overwritten, and its per-frame images removed
 /// first; a folder holding a recorded sequence, without gt/, is refused): cam0/, cam1/, imu0/, pose0/,
 /// vehicle.yaml and gt/ (labels, disparity, grid_classes.png + grid.yaml, extrinsics.yaml,
-/// faults.yaml), as INTERFACES sections 2 and 6 describe. Deterministic for given options.
+/// faults.yaml), as docs/interfaces.md, sections 2 and 6 describe. Deterministic for given options.
 /// Conventions: IMU and pose0 start 0.1 s before the first frame and end 0.1 s after the last;
 /// gt/disparity covers every surface pixel of cam0 including those hidden from cam1 (KITTI
 /// "disp_occ"), while gt/labels marks hidden pixels 255; gt/extrinsics.yaml is a full
