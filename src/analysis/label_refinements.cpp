@@ -46,10 +46,11 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
   // DisparityOffPlanePx; above the horizon no point is consistent.
   const double fb = focal_times_baseline;
   const int num_segments = static_cast<int>(result->segments.size());
-  // Only small segments without a traversable verdict can change: the others' pixels are skipped.
+  // Only small segments without the ground's verdict can change: the others' pixels are skipped.
+  const TravClass ground_class = result->ground.surface_class;
   std::vector<bool> candidate(num_segments, false);
   for (const SegmentResult& seg : result->segments) {
-    if (seg.id >= 0 && seg.id < num_segments) candidate[seg.id] = seg.small && seg.verdict != TravClass::kTraversable;
+    if (seg.id >= 0 && seg.id < num_segments) candidate[seg.id] = seg.small && seg.verdict != ground_class;
   }
   std::vector<int> points(num_segments, 0), consistent(num_segments, 0);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
@@ -66,9 +67,9 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
     const int id = seg.id;
     if (id < 0 || id >= num_segments || !candidate[id]) continue;
     if (points[id] == 0 || consistent[id] < options.ground_consistent_share * points[id]) continue;
-    new_class[id] = static_cast<std::uint8_t>(TravClass::kTraversable);
+    new_class[id] = static_cast<std::uint8_t>(ground_class);
     any = true;
-    seg.verdict = TravClass::kTraversable;
+    seg.verdict = ground_class;
     seg.reason = internal::FormatNumber("small, and on the ground plane within stereo noise:",
                                         100.0 * consistent[id] / points[id], 0,
                                         "% of its points within ground_tolerance_px of the plane's disparity");
@@ -235,7 +236,7 @@ void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, co
     if (c == TravClass::kSemiTraversable && height < 0) c = TravClass::kUndecided;
     if (options.ground_tolerance_px > 0 &&
         std::abs(DisparityOffPlanePx(plane, p, focal_times_baseline)) <= options.ground_tolerance_px) {
-      c = TravClass::kTraversable;
+      c = result->ground.surface_class;  // on the ground plane: the ground's class
     }
     if (c == TravClass::kTraversable || c == TravClass::kSemiTraversable) labels[i] = static_cast<std::uint8_t>(c);
   }

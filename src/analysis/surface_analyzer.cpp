@@ -227,22 +227,28 @@ SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_mi
   return s;
 }
 
-/// The dominant ground plane: the largest traversable, large-enough segment below the camera.
+/// The dominant ground plane: the largest traversable, large-enough segment below the camera;
+/// without one, the largest semi-traversable one (a vehicle climbing a slope sees no level
+/// ground, and the slope it stands on is still the ground its frames are judged against).
 GroundPlane FindGroundPlane(const std::vector<SegmentResult>& segments, const FrameMoments& moments,
                             const DepthNoise& noise) {
   const int depth_pixels = moments.depth_pixels;
   GroundPlane ground;
-  for (const SegmentResult& s : segments) {
-    if (!s.has_plane || s.small || s.slope_class != TravClass::kTraversable) continue;
-    const double camera_height = s.plane(3);  // signed distance of the camera origin
-    if (camera_height <= 0) continue;         // the plane is above the camera
-    if (!ground.found || s.inliers > segments[ground.segment_id].inliers) {
-      ground.found = true;
-      ground.segment_id = s.id;
+  for (const TravClass wanted : {TravClass::kTraversable, TravClass::kSemiTraversable}) {
+    for (const SegmentResult& s : segments) {
+      if (!s.has_plane || s.small || s.slope_class != wanted) continue;
+      const double camera_height = s.plane(3);  // signed distance of the camera origin
+      if (camera_height <= 0) continue;         // the plane is above the camera
+      if (!ground.found || s.inliers > segments[ground.segment_id].inliers) {
+        ground.found = true;
+        ground.segment_id = s.id;
+      }
     }
+    if (ground.found) break;
   }
   if (!ground.found) return ground;
   const SegmentResult& g = segments[ground.segment_id];
+  ground.surface_class = g.slope_class;
   ground.plane = g.plane;
   ground.camera_height_m = g.plane(3);
   ground.rms_m = g.rms_m;
@@ -307,7 +313,7 @@ double QuadraticRms(const Image3f& cloud, const ImageI32& segment_ids, const Gro
 QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehicle, const AnalysisOptions& options) {
   QualityCheck quality;
   if (!ground.found) {
-    quality.reason = "no dominant ground plane (no large traversable segment below the camera)";
+    quality.reason = "no dominant ground plane (no large traversable or semi-traversable segment below the camera)";
   } else if (ground.camera_height_m < vehicle.min_camera_height_m ||
              ground.camera_height_m > vehicle.max_camera_height_m) {
     quality.reason = FormatNumber("implausible camera height", ground.camera_height_m, 2, " m") +

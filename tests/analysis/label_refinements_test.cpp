@@ -131,6 +131,29 @@ TEST(RefineByFragmentPlanes, FragmentsOnAnAdjacentPlaneTakeItsVerdict) {
   }
 }
 
+TEST(RefineByGroundDisparity, OnSemiTraversableGroundSmallSegmentsTakeItsClass) {
+  // The ground is a 20 deg slope (no level ground in view): a small noisy fragment of it is
+  // semi-traversable like the slope, not traversable.
+  AnalyticWorld w(100, 100);
+  PaintRamp(w, 0, 0, 100, 0, 100, 20.0);
+  const double s = 20.0 * M_PI / 180.0, tilted = 60.0 * M_PI / 180.0;
+  // Through the ramp's point 3 m up its slope, tilted 40 deg more: its far edge 0.13 m off it.
+  w.Paint(1, 0, 8, 0, 8, {0.0, 1.0 - 3.0 * std::sin(s), 2.0 + 3.0 * std::cos(s)}, {1, 0, 0},
+          {0, -std::sin(tilted), std::cos(tilted)}, 0.025);
+  AnalysisOptions options = PlanesOnly();
+  options.small_segments = SmallSegmentPolicy::kAll;
+  options.min_plane_points = 30;
+  AnalysisResult r = w.Analyze({}, options);
+  ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+  ASSERT_EQ(r.ground.surface_class, TravClass::kSemiTraversable);
+  ASSERT_TRUE(r.segments[1].small);
+  ASSERT_EQ(r.segments[1].verdict, TravClass::kNonTraversable);  // 60 degrees by its own plane
+  options.ground_tolerance_px = 1.0;
+  RefineByGroundDisparity(w.cloud_, w.ids_, kFocalTimesBaseline, options, &r);
+  EXPECT_EQ(r.segments[1].verdict, TravClass::kSemiTraversable) << r.segments[1].reason;
+  EXPECT_EQ(r.labels(3, 3), static_cast<std::uint8_t>(TravClass::kSemiTraversable));
+}
+
 TEST(RefineByGroundDisparity, LargeSegmentsKeepTheirVerdicts) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 80);

@@ -128,6 +128,30 @@ TEST(SurfaceAnalyzer, GroundAboveTheCameraIsRejected) {
   EXPECT_EQ(r.labels(50, 50), static_cast<std::uint8_t>(TravClass::kUndecided));
 }
 
+TEST(SurfaceAnalyzer, OnASlopeWithoutLevelGroundTheSlopeIsTheGround) {
+  // A vehicle climbing a 20 deg slope sees no traversable segment: the semi-traversable slope
+  // it stands on is the ground, and the frame is judged, not dropped.
+  AnalyticWorld w(100, 100);
+  PaintRamp(w, 0, 0, 100, 0, 100, 20.0);
+  const AnalysisResult r = w.Analyze();
+  ASSERT_TRUE(r.ground.found);
+  EXPECT_TRUE(r.quality.passed) << r.quality.reason;
+  EXPECT_EQ(r.ground.segment_id, 0);
+  EXPECT_EQ(r.ground.surface_class, TravClass::kSemiTraversable);
+  const double s = 20.0 * M_PI / 180.0;
+  EXPECT_NEAR(r.ground.camera_height_m, std::cos(s) * 1.0 + std::sin(s) * 2.0, 1e-6);  // |n . p0|
+  EXPECT_EQ(r.labels(50, 50), static_cast<std::uint8_t>(TravClass::kSemiTraversable));
+
+  // Level ground in view, however small beside the slope, stays the ground.
+  AnalyticWorld both(100, 100);
+  PaintFloor(both, 0, 0, 30, 0, 100);
+  PaintRamp(both, 1, 30, 100, 0, 100, 20.0);
+  const AnalysisResult b = both.Analyze();
+  ASSERT_TRUE(b.ground.found);
+  EXPECT_EQ(b.ground.segment_id, 0);
+  EXPECT_EQ(b.ground.surface_class, TravClass::kTraversable);
+}
+
 TEST(SurfaceAnalyzer, QualityCheckRejectsImplausibleCameraHeight) {
   AnalyticWorld w(100, 100);
   PaintFloor(w, 0, 0, 100, 0, 100, 5.0);

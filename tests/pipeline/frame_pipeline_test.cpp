@@ -102,17 +102,17 @@ TEST(FramePipeline, MapPointsAtTheSubPixelDisparityLieCloserToTheSurface) {
 
 TEST(FramePipeline, LabelsKeepTheRectifiedSizeAndClassTheRampBySlope) {
   testing::PlaneScene scene;
-  scene.slope_deg = 20.0;  // semi-traversable by slope, yet the only plane: no ground plane
+  scene.slope_deg = 20.0;  // semi-traversable by slope, and the only plane: the ground
   FramePipeline pipeline(RectifiedRig(scene), Config{});
   const FrameResult r = pipeline.Process(testing::RenderPlane(scene, 0.0),
                                          testing::RenderPlane(scene, scene.baseline_m), scene.UpCamera());
   EXPECT_NEAR(Largest(r.analysis).slope_deg, 20.0, 1.0);
   EXPECT_EQ(r.labels.width(), scene.width);
   EXPECT_EQ(r.labels.height(), scene.height);
-  // A single 20-degree plane is not traversable, so there is no dominant ground plane and
-  // nothing is guessed: depth pixels are undecided.
-  EXPECT_FALSE(r.analysis.quality.passed);
-  EXPECT_EQ(r.labels(scene.height - 20, scene.width / 2), static_cast<std::uint8_t>(TravClass::kUndecided));
+  // A single 20-degree plane is the slope the vehicle climbs: the ground, semi-traversable.
+  EXPECT_TRUE(r.analysis.quality.passed) << r.analysis.quality.reason;
+  EXPECT_EQ(r.analysis.ground.surface_class, TravClass::kSemiTraversable);
+  EXPECT_EQ(r.labels(scene.height - 20, scene.width / 2), static_cast<std::uint8_t>(TravClass::kSemiTraversable));
 }
 
 TEST(FramePipeline, UntexturedSkyIsLabelledUnknownThoughItHasDepth) {

@@ -185,12 +185,15 @@ struct SegmentResult {
 };
 
 /// The dominant ground plane (paper III-E): the largest traversable segment whose normal points
-/// up and which lies below the camera.
+/// up and which lies below the camera; without one, the largest such semi-traversable segment.
 struct GroundPlane {
   bool found = false;
   int segment_id = -1;
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< n . p + D = 0, n pointing up
   double camera_height_m = 0.0;  ///< camera origin above the plane [m]
+  /// The ground segment's slope class: traversable, or semi-traversable where no traversable
+  /// segment is large enough (the vehicle on a slope it may climb, none of it level).
+  TravClass surface_class = TravClass::kTraversable;
   double rms_m = 0.0;            ///< RMS of its inliers to the plane [m]
   /// RMS distance to the plane that the stereo depth noise alone gives its inliers [m]: a point
   /// at depth Z errs by k Z^2 along its ray (DepthNoise), k Z h across a plane h below the
