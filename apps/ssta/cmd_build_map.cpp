@@ -8,6 +8,7 @@
 #include "config_loading.h"
 #include "progress.h"
 #include "ssta/io/file_util.h"
+#include "ssta/mapping/map_picture.h"
 #include "ssta/pipeline/map_builder.h"
 
 namespace ssta::cli {
@@ -17,7 +18,7 @@ std::atomic<bool> g_stop{false};
 extern "C" void RequestStop(int) { g_stop = true; }
 
 struct BuildMapArgs {
-  std::string sequence, json;
+  std::string sequence, json, picture;
   std::vector<std::string> config;
   BuildMapOptions options;
   bool quiet = false;
@@ -38,14 +39,21 @@ void Run(const BuildMapArgs& a) {
   const BuildMapSummary summary = BuildMap(sequence, name.empty() ? a.sequence : name, config, a.options,
                                            [&](int done, int total) { progress.Update(done, total); }, &g_stop);
   progress.Finish();
+  const bool fused = summary.frames_used > 0 || summary.frames_already_in_map > 0;
+  if (fused && !a.picture.empty()) {
+    MapPictureOptions picture;
+    picture.title = std::filesystem::path(a.options.map_path).filename().string();
+    ExportPicture(TraversabilityMap::Load(a.options.map_path), a.picture, picture);
+  }
   if (!a.quiet) {
     // Said once the file is written: a run that fuses nothing leaves it as it was.
     const bool replaced = !a.options.resume && map_existed && summary.frames_used > 0;
     std::cout << summary.BriefReport() << "map: " << a.options.map_path
               << (replaced ? " (replaced the earlier file; --resume continues a map)" : "") << "\n";
+    if (fused && !a.picture.empty()) std::cout << "picture: " << a.picture << "\n";
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
-  if (summary.frames_used == 0 && summary.frames_already_in_map == 0) {
+  if (!fused) {
     throw Error(a.sequence + ": no frame could be fused; " + a.options.map_path +
                 (map_existed ? " was left as it was" : " was not written"));
   }
@@ -68,6 +76,10 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.frames.max_frames, "fuse at most N frames (0: all)");
   cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file")->check(OutputFile());
+  cmd->add_option("--picture", args->picture,
+                  "write a picture of the map for people to this PNG (as export --format picture: classes, relief, "
+                  "sensor path, legend, scale)")
+      ->check(OutputFile());
   cmd->add_flag("--refine", args->refine,
                 "refine cam0's mount pitch and roll online from the ground (sets refinement.online; "
                 "docs/mount_calibration.md)");

@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
+#include "ssta/mapping/map_picture.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/config.h"
 
@@ -24,6 +25,7 @@ struct ExportArgs {
   std::vector<std::string> config;
   int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
   double local_ground_radius_m = GridExportOptions{}.local_ground_radius_m;
+  bool flat = false;
 };
 
 // True when `a` and `b` name the same file (or would, once written).
@@ -99,29 +101,36 @@ void RegisterExport(CLI::App& app) {
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   AddMapConfig(cmd, &args->config);
   cmd->add_option("--format", args->format,
-                  "grid (PREFIX.png, PREFIX_classes.png, PREFIX.pgm, PREFIX.yaml for map_server) | octovis "
+                  "grid (PREFIX.png, PREFIX_classes.png, PREFIX.pgm, PREFIX.yaml for map_server) | picture "
+                  "(PREFIX.png for people: the grid with legend, scale, axes, sensor path, relief) | octovis "
                   "(PREFIX.ot ColorOcTree) | ply | pcd | csv")
       ->required()
-      ->check(CLI::IsMember({"grid", "octovis", "ply", "pcd", "csv"}));
+      ->check(CLI::IsMember({"grid", "picture", "octovis", "ply", "pcd", "csv"}));
   cmd->add_option("--out", args->out, "output prefix (the extension is added)")->required()->check(OutputPrefix());
-  cmd->add_option("--resolution", args->resolution_m, "grid: pixel edge [m] (default: the map's); a coarser pixel takes the worst class of the map columns it holds");
-  cmd->add_option("--region", args->region, "grid: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
+  cmd->add_option("--resolution", args->resolution_m,
+                  "grid, picture: pixel edge [m] (default: the map's; a picture of a large map coarsens to 1500 "
+                  "cells along its longer side); a coarser pixel takes the worst class of the map columns it holds");
+  cmd->add_option("--region", args->region, "grid, picture: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')
       ->expected(4);
-  AddGridExportSteps(cmd, "grid: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
+  AddGridExportSteps(cmd, "grid, picture: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
+  cmd->add_flag("--flat", args->flat, "picture: flat class colours, without the relief shading");
   cmd->callback([args, cmd] {
     const std::string& f = args->format;
-    if (f != "grid") {  // the grid's options would be ignored: say so instead
+    const bool gridded = f == "grid" || f == "picture";
+    if (!gridded) {  // the grid's options would be ignored: say so instead
       for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
-        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid");
+        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid or picture");
       }
     }
+    if (f != "picture" && args->flat) throw Error("--flat: only for --format picture");
     if (cmd->count("--resolution") > 0 && !(args->resolution_m > 0.0 && std::isfinite(args->resolution_m))) {
       throw Error("--resolution: must be a positive number of metres");
     }
     const std::vector<std::string> suffixes =
-        f == "grid" ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
-                    : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
+        f == "grid"      ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
+        : f == "picture" ? std::vector<std::string>{".png"}
+                         : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
     for (const std::string& suffix : suffixes) {
       if (SameFile(args->out + suffix, args->map)) {
         throw Error("--out " + args->out + ": would write " + args->out + suffix + " over the map it reads (" +
@@ -130,16 +139,25 @@ void RegisterExport(CLI::App& app) {
     }
     const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
     std::string written;
-    if (f == "grid") {
-      GridExportOptions options;
-      options.resolution_m = args->resolution_m;
-      options.fill_min_neighbours = args->fill_min_neighbours;
-      options.local_ground_radius_m = args->local_ground_radius_m;
-      if (!args->region.empty()) {
-        const auto& r = args->region;
-        if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
-        options.region = Eigen::AlignedBox2d(Eigen::Vector2d(r[0], r[1]), Eigen::Vector2d(r[2], r[3]));
-      }
+    GridExportOptions options;
+    options.resolution_m = args->resolution_m;
+    options.fill_min_neighbours = args->fill_min_neighbours;
+    options.local_ground_radius_m = args->local_ground_radius_m;
+    if (!args->region.empty()) {
+      const auto& r = args->region;
+      if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
+      options.region = Eigen::AlignedBox2d(Eigen::Vector2d(r[0], r[1]), Eigen::Vector2d(r[2], r[3]));
+    }
+    if (f == "picture") {
+      MapPictureOptions picture_options;
+      picture_options.grid = options;
+      picture_options.hillshade = !args->flat;
+      picture_options.title = std::filesystem::path(args->map).filename().string();
+      const MapPicture picture = ExportPicture(map, args->out + ".png", picture_options);
+      written = args->out + ".png (" + std::to_string(picture.grid.width()) + "x" +
+                std::to_string(picture.grid.height()) + " cells of " + std::to_string(picture.grid.resolution_m).substr(0, 5) +
+                " m)";
+    } else if (f == "grid") {
       GridExportChanges changes;
       const GridProjection grid = ExportGrid(map, args->out, options, &changes);
       std::string files;  // each file whole: a brace expansion would read "yard._classes.png"

@@ -83,13 +83,13 @@ Image<T> FromMat(const cv::Mat& m) {
   return out;
 }
 
-void WriteMat(const cv::Mat& m, const std::string& path) {
+void WriteMat(const cv::Mat& m, const std::string& path, const std::vector<int>& params = {}) {
   const std::string ext = std::filesystem::path(path).extension().string();
   WriteFileAtomically(path, [&](const std::string& tmp) {
     std::vector<uchar> buffer;
     bool ok = false;
     try {
-      ok = cv::imencode(ext, m, buffer);
+      ok = cv::imencode(ext, m, buffer, params);
     } catch (const cv::Exception& e) {
       throw Error(path + ": cannot encode image: " + e.what());
     }
@@ -133,6 +133,13 @@ void WriteImage(const ImageRgb& image, const std::string& path) {
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
   WriteMat(bgr, path);
+}
+
+void WriteImageCompact(const ImageRgb& image, const std::string& path) {
+  cv::Mat rgb(image.height(), image.width(), CV_8UC3, const_cast<Rgb8*>(image.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  WriteMat(bgr, path, {cv::IMWRITE_PNG_COMPRESSION, 9});
 }
 
 }  // namespace ssta

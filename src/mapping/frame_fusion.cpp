@@ -433,6 +433,10 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   fusion.CollectVoxels();
   fusion.UpdateVoxels(timestamp_ns);
   ++impl_->frames_inserted;
+  std::vector<Eigen::Vector3d>& path = impl_->sensor_path;
+  if (path.empty() || (path.back() - sensor_origin_world).norm() >= impl_->options.resolution_m) {
+    path.push_back(sensor_origin_world);
+  }
   impl_->last_timestamp_ns = timestamp_ns;
   return stats;
 }

@@ -150,6 +150,14 @@ std::string MetadataYaml(const TraversabilityMap& map) {
     matrix("refined_body_T_cam0", m.refined_mount->refined);
     out << YAML::EndMap;
   }
+  if (!map.sensor_path().empty()) {
+    // x, y, z of each kept origin, to the millimetre: the path is for pictures and reports.
+    out << YAML::Key << "sensor_path" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const Eigen::Vector3d& p : map.sensor_path()) {
+      for (int i = 0; i < 3; ++i) out << num(std::round(p[i] * 1000.0) / 1000.0);
+    }
+    out << YAML::EndSeq;
+  }
   out << YAML::EndMap;
   if (!out.good()) throw InternalError(std::string("map metadata YAML: ") + out.GetLastError());
   return out.c_str();
@@ -284,7 +292,7 @@ void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std
 
 void ReadMetadata(const std::string& yaml, const std::string& path, int* format, MapOptions* options,
                   MapMetadata* metadata, std::uint64_t* frames, std::int64_t* last_ts,
-                  std::string* software_version) {
+                  std::string* software_version, std::vector<Eigen::Vector3d>* sensor_path) {
   internal::YamlSection root(internal::ParseYaml(yaml, path), path, "");
   if (!root.Has("format_version")) {
     throw Error(path + ": not an SSTA map (its header has no '#@ssta format_version')");
@@ -327,6 +335,19 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
       return t;
     };
     metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
+  }
+  sensor_path->clear();
+  if (root.Has("sensor_path")) {
+    const auto values = root.Require<std::vector<double>>("sensor_path");
+    if (values.size() % 3 != 0) {
+      throw Error(root.Name("sensor_path") + ": needs x, y, z triples (" + std::to_string(values.size()) +
+                  " numbers)");
+    }
+    for (std::size_t i = 0; i < values.size(); i += 3) {
+      const Eigen::Vector3d p(values[i], values[i + 1], values[i + 2]);
+      if (!p.allFinite()) throw Error(root.Name("sensor_path") + ": point " + std::to_string(i / 3) + " is not finite");
+      sensor_path->push_back(p);
+    }
   }
 }
 
@@ -374,7 +395,7 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
   // The metadata (and with it the format version) is read before the node stream is trusted.
   int format = kMapFormatVersion;
   ReadMetadata(header.metadata_yaml, path, &format, &impl->options, &impl->metadata,
-               &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version);
+               &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
   const std::size_t data_end = VerifyTrailer(bytes, path);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
   if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {

@@ -7,6 +7,9 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "mapping/trav_octree.h"
 #include "ssta/mapping/traversability_map.h"
@@ -24,6 +27,8 @@ struct TraversabilityMap::Impl {
   std::uint64_t frames_inserted = 0;
   std::int64_t last_timestamp_ns = 0;
   std::string software_version;
+  /// TraversabilityMap::sensor_path.
+  std::vector<Eigen::Vector3d> sensor_path;
   /// InsertFrame's buffers, kept from frame to frame so that a frame allocates nothing once
   /// they have grown; no map state (created on the first insert, never saved or compared).
   std::shared_ptr<internal::InsertScratch> insert_scratch;

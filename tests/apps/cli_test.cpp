@@ -2,6 +2,7 @@
 // one-line error naming the file or key, and the query CSV contract (docs/interfaces.md, section 5).
 
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -82,6 +83,23 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
     r = RunSsta("export --map " + map + " --format " + format + " --out " + (dir / "x"));
     EXPECT_EQ(r.exit_code, 0) << format << ": " << r.output;
   }
+  // The picture: one PNG, larger than the grid (legend, axes), named in the report.
+  r = RunSsta("export --map " + map + " --format picture --out " + (dir / "pic"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(dir / "pic.png"), std::string::npos) << r.output;
+  const cv::Mat picture = cv::imread(dir / "pic.png", cv::IMREAD_COLOR);
+  const cv::Mat grid = cv::imread(dir / "g.png", cv::IMREAD_COLOR);
+  EXPECT_GT(picture.cols, grid.cols + 150);
+  EXPECT_GT(picture.rows, grid.rows);
+  r = RunSsta("export --map " + map + " --format grid --flat --out " + (dir / "g2"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--flat: only for --format picture"), std::string::npos) << r.output;
+  // build-map draws it too when asked, and its report names it.
+  r = RunSsta("build-map --sequence " + kEuroc + " --static --config " + kEurocConfig + " --map " + (dir / "m2.ot") +
+              " --picture " + (dir / "m2.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("picture: " + (dir / "m2.png")), std::string::npos) << r.output;
+  EXPECT_EQ(cv::imread(dir / "m2.png", cv::IMREAD_COLOR).size(), picture.size());
 
   // query --as-exported answers every cell of the grid with the grid's class.
   double res = 0, x0 = 0, y0 = 0;

@@ -331,6 +331,48 @@ TEST(MapFile, AFormatOneMapLoadsWithoutFusedHeights) {
   EXPECT_NEAR(cell.surface_z_m, cell.center.z(), 1e-9);  // no fused height: the voxel's centre
 }
 
+TEST(MapFile, TheSensorPathKeepsAnOriginPerResolutionMovedAndSurvivesSaveAndLoad) {
+  TraversabilityMap map(OctoMapCarving(), SomeMetadata());
+  const auto frames = Frames(1);
+  // Origins 0.5 m apart, then one 0.04 m from the last (less than a resolution: not kept).
+  map.InsertFrame(frames[0], {0.3, 0.2, 1.2}, 1);
+  map.InsertFrame(frames[0], {0.8, 0.2, 1.2}, 2);
+  map.InsertFrame(frames[0], {0.84, 0.2, 1.2}, 3);
+  map.InsertFrame(frames[0], {0.8, 0.7123456, 1.3}, 4);
+  ASSERT_EQ(map.sensor_path().size(), 3u);
+  EXPECT_TRUE(map.sensor_path()[1].isApprox(Eigen::Vector3d(0.8, 0.2, 1.2)));
+
+  const TempDir dir;
+  const std::string path = dir / "map.ot";
+  map.Save(path);
+  const TraversabilityMap loaded = TraversabilityMap::Load(path);
+  ASSERT_EQ(loaded.sensor_path().size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_LT((loaded.sensor_path()[i] - map.sensor_path()[i]).norm(), 1e-3) << i;  // to the millimetre
+  }
+  EXPECT_TRUE(BuildMap(0).sensor_path().empty());
+
+  // A broken path is an error naming the key; a file without one reads as an empty path.
+  const std::string bytes = ReadBytes(path);
+  std::string header = bytes.substr(0, bytes.find("\ndata\n") + 6);
+  const std::string stream = bytes.substr(header.size(), bytes.rfind("\n# ssta-map-end") - header.size());
+  const std::size_t at = header.find("sensor_path: [");
+  ASSERT_NE(at, std::string::npos);
+  std::string odd = header;
+  odd.insert(at + 14, "1, ");
+  const std::string bad = dir / "bad.ot";
+  WriteBytes(bad, Sealed(odd, map.NumNodes(), stream));
+  ExpectLoadError(bad, "sensor_path: needs x, y, z triples");
+  std::string none = header;
+  none.erase(at - 7, none.find('\n', at) - (at - 7) + 1);  // the line "#@ssta sensor_path: [...]"
+  ASSERT_EQ(none.find("sensor_path"), std::string::npos);
+  const std::string old = dir / "old.ot";
+  WriteBytes(old, Sealed(none, map.NumNodes(), stream));
+  const TraversabilityMap without = TraversabilityMap::Load(old);
+  EXPECT_TRUE(without.sensor_path().empty());
+  EXPECT_EQ(without.NumNodes(), map.NumNodes());
+}
+
 TEST(MapFile, APlainOcTreeFileIsTheWrongTreeType) {
   const TempDir dir;
   octomap::OcTree plain(0.1);

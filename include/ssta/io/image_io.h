@@ -21,5 +21,9 @@ ImageU16 ReadImageU16(const std::string& path);
 void WriteImage(const ImageU8& image, const std::string& path);
 void WriteImage(const ImageU16& image, const std::string& path);
 void WriteImage(const ImageRgb& image, const std::string& path);
+/// As WriteImage, with zlib's strongest PNG compression: files several times smaller for
+/// pictures with large flat areas, slower to write. For pictures people keep, not for
+/// per-frame outputs.
+void WriteImageCompact(const ImageRgb& image, const std::string& path);
 
 }  // namespace ssta

@@ -135,6 +135,11 @@ class TraversabilityMap {
   /// Replaces the metadata (e.g. appends a sequence name). Throws ssta::Error on an invalid
   /// vehicle.
   void set_metadata(MapMetadata metadata);
+  /// Where the sensor was: the origins of the inserted frames in W [m], in insertion order,
+  /// one wherever the sensor moved at least one resolution from the last one kept. For
+  /// pictures and reports (the picture export draws it); it survives Save/Load, and a file
+  /// without it reads as an empty path.
+  const std::vector<Eigen::Vector3d>& sensor_path() const;
   /// InsertFrame calls that inserted a frame, over the map's life (survives Save/Load).
   std::uint64_t frames_inserted() const;
   /// Timestamp of the last inserted frame [ns]; 0 before the first.
