@@ -25,7 +25,7 @@ echo "== classifying $seq"
 "$ssta" classify --sequence "$seq" --out "$out/classified"
 
 echo "== building the map $out/map.ot"
-"$ssta" build-map --sequence "$seq" --map "$out/map.ot"
+"$ssta" build-map --sequence "$seq" --map "$out/map.ot" --picture "$out/map.png"
 "$ssta" export --map "$out/map.ot" --format grid --out "$out/grid"
 
 echo "== asking the map: the cell 3 m ahead, and a 1.0 x 0.6 m robot there"
@@ -47,6 +47,7 @@ Done. Look at:
   $out/classified/config.yaml  every setting used (--config it to repeat the run)
   $out/compare/              ground truth | prediction, side by side
   $out/eval.json             labels: accuracy, per-class IoU, coverage, confusion matrix
+  $out/map.png               the map for people: classes over the relief, the path, legend, scale
   $out/map.ot                the map (ssta query / ssta export read it; maps/README.md)
   $out/grid.png              the map's top-down grid in class colours (grid.yaml for map_server)
   $out/eval_map.png          truth | map | errors; eval_map.json the map's scores
