@@ -45,7 +45,10 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
           });
   RunBoth(
       [&] {
-        if (options.pixel_slopes && a.quality.passed) ApplyPixelSlopeClasses(slope_classes_, &a.labels);
+        if (options.pixel_slopes && a.quality.passed) {
+          // Under the local rule a segment's verdict is its slope's alone, so a gentler pixel may relax it.
+          ApplyPixelSlopeClasses(slope_classes_, &a.labels, options.step_reference == StepReference::kLocal);
+        }
         RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
         RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
       },

@@ -137,12 +137,12 @@ void SegmentBoxSums(const Image3f& normals, const ImageI32& ids, int window, OnR
 }  // namespace
 
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels, const ImageI32* segment_ids, int window_px) {
+                        ImageU8* labels, const ImageI32* segment_ids, int window_px, bool gentler_too) {
   SSTA_CHECK(normals.width() == labels->width() && normals.height() == labels->height(),
              "normals and labels differ in size");
   thread_local ImageU8 slope_classes;
   PixelSlopeClasses(normals, up_camera, vehicle, segment_ids, window_px, &slope_classes);
-  ApplyPixelSlopeClasses(slope_classes, labels);
+  ApplyPixelSlopeClasses(slope_classes, labels, gentler_too);
 }
 
 void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
@@ -158,6 +158,7 @@ void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera,
   auto slope_class = [&](float c) -> std::uint8_t {
     if (c < cos_max) return static_cast<std::uint8_t>(TravClass::kNonTraversable);
     if (c < cos_semi) return static_cast<std::uint8_t>(TravClass::kSemiTraversable);
+    if (c >= cos_semi) return static_cast<std::uint8_t>(TravClass::kTraversable);
     return 0;
   };
   if (window_px == 1) {
@@ -181,13 +182,19 @@ void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera,
   });
 }
 
-// A traversable or semi-traversable pixel takes the worse of its label and its slope's class.
-void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels) {
+void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels, bool gentler_too) {
   SSTA_CHECK(slope_classes.width() == labels->width() && slope_classes.height() == labels->height(),
              "ApplyPixelSlopeClasses: slope classes and labels differ in size");
+  constexpr std::uint8_t kSemi = 2;
   for (std::size_t i = 0; i < labels->size(); ++i) {
     std::uint8_t& label = (*labels)[i];
-    if (label == 1 || label == 2) label = std::max(label, slope_classes[i]);
+    if (label != 1 && label != kSemi) continue;
+    const std::uint8_t slope = slope_classes[i];
+    if (gentler_too && label == kSemi && slope == 1) {
+      label = 1;
+    } else {
+      label = std::max(label, slope);
+    }
   }
 }
 

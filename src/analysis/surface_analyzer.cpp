@@ -77,7 +77,8 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
                         "inliers_min = ratio * width * height (eq. 4): smaller segments are small"));
     f.push_back(Flag<O>("pixel_slopes", &O::pixel_slopes,
                         "a traversable or semi pixel whose own normal is steeper takes that slope class "
-                        "(smooth hillsides have no segment boundary); false: the paper"));
+                        "(smooth hillsides have no segment boundary), and with step_reference local a semi "
+                        "pixel whose normal is gentler becomes traversable; false: the paper"));
     f.push_back(Integer<O>("pixel_slope_window_px", &O::pixel_slope_window_px, Closed(1, 255), "px",
                            "that normal is the mean over a box this wide within the pixel's segment; 1: its own")
                     .Require([](const O& o) { return o.pixel_slope_window_px % 2 == 1; }, "must be odd"));

@@ -189,6 +189,42 @@ TEST(RefineByPixelSlope, SteepPixelsOfATraversableSegmentTakeTheirSlopeClass) {
   EXPECT_EQ(labels[4], 2);
 }
 
+TEST(ApplyPixelSlopeClasses, UnderTheLocalRuleAGentlerPixelRelaxesItsSemiTraversableSegment) {
+  // One segment averaging a hillside from 10 to 20 deg reads 16 deg (semi-traversable); the
+  // pixels' own slopes say which part is gentler than 15 deg.
+  const Eigen::Vector3d up(0, -1, 0);
+  auto normal_at = [](double deg) {
+    const double r = deg * M_PI / 180.0;
+    return Eigen::Vector3f(0, -static_cast<float>(std::cos(r)), -static_cast<float>(std::sin(r)));
+  };
+  Image3f normals(6, 1, NanVector3f());
+  const double slopes[] = {10, 14, 16, 20, 30, 0};
+  for (int u = 0; u < 5; ++u) normals[u] = normal_at(slopes[u]);  // pixel 5: no normal
+  ImageU8 slope_classes;
+  PixelSlopeClasses(normals, up, VehicleOptions{}, nullptr, 1, &slope_classes);
+  EXPECT_EQ(slope_classes[0], 1);
+  EXPECT_EQ(slope_classes[2], 2);
+  EXPECT_EQ(slope_classes[4], 3);
+  EXPECT_EQ(slope_classes[5], 0);
+
+  ImageU8 relaxed(6, 1, 2);
+  ApplyPixelSlopeClasses(slope_classes, &relaxed, true);
+  const std::vector<int> expected_relaxed = {1, 1, 2, 2, 3, 2};
+  ImageU8 worse_only(6, 1, 2);
+  ApplyPixelSlopeClasses(slope_classes, &worse_only);  // the other step rules: semi may be a step
+  const std::vector<int> expected_worse_only = {2, 2, 2, 2, 3, 2};
+  for (int u = 0; u < 6; ++u) {
+    EXPECT_EQ(relaxed[u], expected_relaxed[u]) << u;
+    EXPECT_EQ(worse_only[u], expected_worse_only[u]) << u;
+  }
+  // Obstacles and undecided pixels are never relaxed.
+  ImageU8 other(6, 1, 3);
+  other[1] = 4;
+  ApplyPixelSlopeClasses(slope_classes, &other, true);
+  EXPECT_EQ(other[0], 3);
+  EXPECT_EQ(other[1], 4);
+}
+
 TEST(RefineByPixelSlope, AveragingInsideTheSegmentStopsTheFlicker) {
   // A 13 deg slope (traversable, semi from 15 deg) whose pixel normals alternate 13 +- 4 deg in
   // a checkerboard, as stereo noise does: one pixel in two reads 17 deg. Beside it, in another

@@ -210,7 +210,8 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
     ASSERT_TRUE(a.quality.passed);
     const ImageU8 before_slopes = a.labels;
     RefineByPixelSlope(normals, r.up_rectified, config.vehicle, &a.labels, &r.segment_ids,
-                       config.analysis.pixel_slope_window_px);
+                       config.analysis.pixel_slope_window_px,
+                       config.analysis.step_reference == StepReference::kLocal);
     int slope_changes = 0;
     for (std::size_t i = 0; i < a.labels.size(); ++i) slope_changes += a.labels[i] != before_slopes[i];
     EXPECT_GT(slope_changes, 100);  // the slope step matters on this frame

@@ -30,17 +30,22 @@ namespace ssta {
 /// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
 /// its own segment (`segment_ids`, required then): per-pixel normals of stereo points carry a few
 /// degrees of noise, and where the true slope is near a threshold the classes flicker.
+/// `gentler_too`: as ApplyPixelSlopeClasses's.
 void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1);
+                        ImageU8* labels, const ImageI32* segment_ids = nullptr, int window_px = 1,
+                        bool gentler_too = false);
 
 /// RefineByPixelSlope in two steps, so that the costly one can run beside AnalyzeSurfaces:
-/// PixelSlopeClasses reads the normals and segment ids only and writes, per pixel, the class its
-/// (window-averaged) slope would force on a traversable or semi-traversable label (0: none,
-/// 2: semi-traversable, 3: non-traversable); ApplyPixelSlopeClasses then changes the labels.
-/// The two in turn give exactly RefineByPixelSlope's labels.
+/// PixelSlopeClasses reads the normals and segment ids only and writes, per pixel, the slope
+/// class of its (window-averaged) normal (0: no normal, 1..3); ApplyPixelSlopeClasses then
+/// gives each traversable or semi-traversable label the worse of it and its slope's class.
+/// The two in turn give exactly RefineByPixelSlope's labels. With `gentler_too`, a
+/// semi-traversable label whose slope is traversable also becomes traversable: for labels that
+/// come from segments' slopes alone (AnalysisOptions::step_reference local), where a segment's
+/// one plane averages a hillside whose slope crosses semi_slope_deg within it.
 void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                        const ImageI32* segment_ids, int window_px, ImageU8* slope_classes);
-void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels);
+void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels, bool gentler_too = false);
 
 /// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
 /// dominant ground plane that passed the quality check, else does nothing). A point is

@@ -90,8 +90,10 @@ struct AnalysisOptions {
 
   /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
   /// is in a worse slope class takes that class. On smooth terrain a hillside has no segment
-  /// boundary, and one PCA slope for the whole segment averages its steep flank away. false:
-  /// the paper, one verdict per segment.
+  /// boundary, and one PCA slope for the whole segment averages its steep flank away. With
+  /// step_reference local (a segment's verdict is then its slope's alone) a semi-traversable
+  /// pixel whose own normal is gentler than semi_slope_deg also becomes traversable: the same
+  /// average hides a hillside's gentle parts. false: the paper, one verdict per segment.
   bool pixel_slopes = true;
   /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
   /// segment [px, odd]; 1: the pixel's own normal.
