@@ -19,7 +19,7 @@ struct LevelledPoint {
   std::uint32_t pixel;
   float x, y, h;
   float relative_sigma;  ///< 1-sigma of its depth over its depth: k Z
-  float smear;           ///< 1-sigma of its error along its ray [m]: k Z |p|
+  float smear_squared;   ///< square of the 1-sigma of its error along its ray [m^2]: (k Z |p|)^2
 };
 
 /// The frame's points on a grid of horizontal cells in the levelled frame.
@@ -27,7 +27,7 @@ class HeightGrid {
  public:
   HeightGrid(const std::vector<LevelledPoint>& points, const Image3f& normals, const Eigen::Vector3d& up,
              double cell_m, double max_slope_deg)
-      : cell_m_(static_cast<float>(cell_m)) {
+      : cell_m_(static_cast<float>(cell_m)), per_cell_(1.0f / static_cast<float>(cell_m)) {
     const Eigen::Vector3d east = up.unitOrthogonal();
     const Eigen::Vector3d north = up.cross(east);
     Bounds(points);
@@ -106,8 +106,8 @@ class HeightGrid {
 
  private:
   int CellOf(float x, float y) const {
-    const int i = static_cast<int>(std::floor((x - x0_) / cell_m_));
-    const int j = static_cast<int>(std::floor((y - y0_) / cell_m_));
+    const int i = static_cast<int>(std::floor((x - x0_) * per_cell_));
+    const int j = static_cast<int>(std::floor((y - y0_) * per_cell_));
     if (i < 0 || j < 0 || i >= nx_ || j >= ny_) return -1;
     return j * nx_ + i;
   }
@@ -128,6 +128,7 @@ class HeightGrid {
   }
 
   float cell_m_;
+  float per_cell_;  // 1 / cell_m_
   float x0_ = 0, y0_ = 0;
   int nx_ = 0, ny_ = 0;
   std::vector<int> cell_of_;
@@ -160,9 +161,9 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     const Eigen::Vector3f& p = cloud[i];
     if (!IsFinite(p)) continue;
     const float relative_sigma = per_m2 * p.z();
-    const float smear = relative_sigma * p.norm();
-    if (smear > 2.0f * radius) continue;
-    points.push_back({static_cast<std::uint32_t>(i), east.dot(p), north.dot(p), up.dot(p), relative_sigma, smear});
+    const float smear_squared = relative_sigma * relative_sigma * p.squaredNorm();
+    if (smear_squared > 4.0f * radius * radius) continue;
+    points.push_back({static_cast<std::uint32_t>(i), east.dot(p), north.dot(p), up.dot(p), relative_sigma, smear_squared});
   }
   const HeightGrid grid(points, normals, up_camera, 0.5 * vehicle.step_radius_m, vehicle.max_slope_deg);
   const std::vector<float> steps = grid.Steps(vehicle.step_radius_m);
@@ -172,7 +173,7 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     // A point whose depth error smears it sideways over the step radius cannot tell which side
     // of a jump it lies on.
     const int c = grid.CellOfPoint(k);
-    if (c < 0 || points[k].smear > radius) continue;
+    if (c < 0 || points[k].smear_squared > radius * radius) continue;
     (*step_classes)[points[k].pixel] = cell_class[static_cast<std::size_t>(c)];
   }
 }

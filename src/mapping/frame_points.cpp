@@ -18,14 +18,14 @@ namespace {
 /// horizontal part through the surface's `gradient` (rise over run), at least 5 mm.
 float HeightSigma(const Eigen::Vector3f& q, const Eigen::Matrix3f& world_R_rectified, float per_m2, float gradient,
                   float* horizontal_sigma) {
-  const float range = q.norm();
-  const float along = per_m2 * q.z() * range;  // k Z^2 |q| / Z
-  const float ray_up = world_R_rectified.row(2).dot(q) / range;
-  const float vertical = along * std::abs(ray_up);
-  const float horizontal = along * std::sqrt(std::max(0.0f, 1.0f - ray_up * ray_up));
-  *horizontal_sigma = horizontal;
-  const float slanted = gradient * horizontal;
-  return std::max(0.005f, std::sqrt(vertical * vertical + slanted * slanted));  // both far below overflow
+  // Along the ray the error is k Z^2 |q| / Z = k Z |q|; its vertical part k Z |q . up| and its
+  // horizontal part k Z sqrt(|q|^2 - (q . up)^2), without dividing by |q|.
+  const float scale = per_m2 * q.z();
+  const float up = world_R_rectified.row(2).dot(q);
+  const float across_squared = std::max(0.0f, q.squaredNorm() - up * up);
+  *horizontal_sigma = scale * std::sqrt(across_squared);
+  // sqrt(vertical^2 + (gradient horizontal)^2), both far below overflow.
+  return std::max(0.005f, scale * std::sqrt(up * up + gradient * gradient * across_squared));
 }
 
 /// The gradient (rise over run) of a surface of `slope_deg`, at most 1: a face's height is its
