@@ -102,6 +102,14 @@ void WriteMat(const cv::Mat& m, const std::string& path, const std::vector<int>&
   });
 }
 
+/// An RGB image written as OpenCV wants it (BGR), with imencode's `params`.
+void WriteRgb(const ImageRgb& image, const std::string& path, const std::vector<int>& params) {
+  cv::Mat rgb(image.height(), image.width(), CV_8UC3, const_cast<Rgb8*>(image.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  WriteMat(bgr, path, params);
+}
+
 }  // namespace
 
 ImageU8 ReadGreyImage(const std::string& path) {
@@ -128,18 +136,10 @@ void WriteImage(const ImageU16& image, const std::string& path) {
   WriteMat(cv::Mat(image.height(), image.width(), CV_16UC1, const_cast<std::uint16_t*>(image.data())), path);
 }
 
-void WriteImage(const ImageRgb& image, const std::string& path) {
-  cv::Mat rgb(image.height(), image.width(), CV_8UC3, const_cast<Rgb8*>(image.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  WriteMat(bgr, path);
-}
+void WriteImage(const ImageRgb& image, const std::string& path) { WriteRgb(image, path, {}); }
 
 void WriteImageCompact(const ImageRgb& image, const std::string& path) {
-  cv::Mat rgb(image.height(), image.width(), CV_8UC3, const_cast<Rgb8*>(image.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  WriteMat(bgr, path, {cv::IMWRITE_PNG_COMPRESSION, 9});
+  WriteRgb(image, path, {cv::IMWRITE_PNG_COMPRESSION, 9});
 }
 
 }  // namespace ssta

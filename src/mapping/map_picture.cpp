@@ -162,6 +162,18 @@ void DrawAxes(const MapPicture& picture, cv::Mat* canvas) {
   Text(canvas, "y [m]", kMargin, tl.y() - 8);
 }
 
+/// The path's start: a dark ring with a light centre at `centre`.
+void DrawStartMarker(const cv::Point& centre, cv::Mat* canvas) {
+  cv::circle(*canvas, centre, 7, ToScalar(colours::kPath), cv::FILLED, cv::LINE_AA);
+  cv::circle(*canvas, centre, 4, ToScalar(colours::kPathHalo), cv::FILLED, cv::LINE_AA);
+}
+
+/// The path's end: a dark square with a light halo at `centre`.
+void DrawEndMarker(const cv::Point& centre, cv::Mat* canvas) {
+  cv::rectangle(*canvas, cv::Rect(centre.x - 5, centre.y - 5, 11, 11), ToScalar(colours::kPathHalo), cv::FILLED);
+  cv::rectangle(*canvas, cv::Rect(centre.x - 4, centre.y - 4, 9, 9), ToScalar(colours::kPath), cv::FILLED);
+}
+
 void DrawPath(const MapPicture& picture, const std::vector<Eigen::Vector3d>& path, cv::Mat* canvas) {
   if (path.empty()) return;
   std::vector<cv::Point> points;
@@ -172,11 +184,8 @@ void DrawPath(const MapPicture& picture, const std::vector<Eigen::Vector3d>& pat
   // A white halo under the dark line keeps it visible on every class colour.
   cv::polylines(*canvas, points, false, ToScalar(colours::kPathHalo), 5, cv::LINE_AA);
   cv::polylines(*canvas, points, false, ToScalar(colours::kPath), 2, cv::LINE_AA);
-  const cv::Point& end = points.back();
-  cv::rectangle(*canvas, cv::Rect(end.x - 5, end.y - 5, 11, 11), ToScalar(colours::kPathHalo), cv::FILLED);
-  cv::rectangle(*canvas, cv::Rect(end.x - 4, end.y - 4, 9, 9), ToScalar(colours::kPath), cv::FILLED);
-  cv::circle(*canvas, points.front(), 7, ToScalar(colours::kPath), cv::FILLED, cv::LINE_AA);
-  cv::circle(*canvas, points.front(), 4, ToScalar(colours::kPathHalo), cv::FILLED, cv::LINE_AA);
+  DrawEndMarker(points.back(), canvas);
+  DrawStartMarker(points.front(), canvas);
 }
 
 void DrawLegend(const MapPicture& picture, bool hillshade, bool has_path, cv::Mat* canvas) {
@@ -199,11 +208,10 @@ void DrawLegend(const MapPicture& picture, bool hillshade, bool has_path, cv::Ma
     cv::line(*canvas, {x, y + kSwatch / 2}, {x + kSwatch + 4, y + kSwatch / 2}, ToScalar(colours::kPath), 2, cv::LINE_AA);
     Text(canvas, "sensor path", x + kSwatch + 8, y + kSwatch - 2);
     y += kLegendRow;
-    cv::circle(*canvas, {x + kSwatch / 2, y + kSwatch / 2}, 7, ToScalar(colours::kPath), cv::FILLED, cv::LINE_AA);
-    cv::circle(*canvas, {x + kSwatch / 2, y + kSwatch / 2}, 4, ToScalar(colours::kPathHalo), cv::FILLED, cv::LINE_AA);
+    DrawStartMarker({x + kSwatch / 2, y + kSwatch / 2}, canvas);
     Text(canvas, "start", x + kSwatch + 8, y + kSwatch - 2);
     y += kLegendRow;
-    cv::rectangle(*canvas, cv::Rect(x + 3, y + 3, 9, 9), ToScalar(colours::kPath), cv::FILLED);
+    DrawEndMarker({x + kSwatch / 2, y + kSwatch / 2}, canvas);
     Text(canvas, "end", x + kSwatch + 8, y + kSwatch - 2);
     y += kLegendRow;
   }

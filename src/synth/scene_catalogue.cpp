@@ -149,60 +149,6 @@ Scene MakeDropoff(std::uint64_t seed) {
   return s;
 }
 
-Scene MakeForest(std::uint64_t seed) {
-  Scene s;
-  Rng rng(seed * 32452843 + 7);
-  s.ground_material = Material::kSoil;
-  for (int i = 0; i < 6; ++i) {
-    s.bumps.push_back({rng.Uniform(0, 25), rng.Uniform(-10, 10), rng.Uniform(-0.2, 0.25),
-                       rng.Uniform(5.0, 10.0)});
-  }
-  s.Finish();
-  for (int i = 0; i < 18; ++i) {  // trunks
-    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 28.0, 1.3, 11.0);
-    Obstacle c;
-    c.shape = Obstacle::Shape::kCylinder;
-    c.x = p.x();
-    c.y = p.y();
-    c.a = rng.Uniform(0.1, 0.35);
-    c.z_min = s.BaseHeight(c.x, c.y) - 0.5;
-    c.z_max = c.z_min + 0.5 + rng.Uniform(6, 12);
-    c.material = Material::kBark;
-    s.obstacles.push_back(c);
-  }
-  auto add_log = [&](double x, double y, double yaw, double radius, double half_length) {
-    Obstacle g;
-    g.shape = Obstacle::Shape::kLog;
-    g.x = x;
-    g.y = y;
-    g.yaw_rad = yaw;
-    g.a = radius;
-    g.b = half_length;
-    // Rest on the higher end of the ground under the log.
-    const Eigen::Vector2d axis(std::cos(yaw), std::sin(yaw));
-    double ground = -kInf;
-    for (double u = -1; u <= 1; u += 0.25) {
-      ground = std::max(ground, s.BaseHeight(x + u * half_length * axis.x(),
-                                             y + u * half_length * axis.y()));
-    }
-    g.z_max = ground + 2 * radius - 0.02;
-    g.z_min = g.z_max - 2 * radius;
-    g.material = Material::kWood;
-    s.obstacles.push_back(g);
-  };
-  add_log(6.5, 0.3, kPi / 2 + 0.15, 0.07, 1.6);  // a thin log across the way (about 0.12 m)
-  for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 4.0, 16.0, 2.7, 7.0);
-    add_log(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.1, 0.25), rng.Uniform(1.0, 2.2));
-  }
-  for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 14.0, 1.5, 6.0);
-    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
-  }
-  s.clear_run_m = 5.5;  // the log across the way at x = 6.5
-  return s;
-}
-
 /// A vertical trunk of `radius` standing `height` above the base ground at (x, y).
 Obstacle MakeTrunk(const Scene& s, double x, double y, double radius, double height) {
   Obstacle c;
@@ -234,6 +180,37 @@ Obstacle MakeLog(const Scene& s, double x, double y, double yaw, double radius, 
   g.z_min = g.z_max - 2 * radius;
   g.material = Material::kWood;
   return g;
+}
+
+Scene MakeForest(std::uint64_t seed) {
+  Scene s;
+  Rng rng(seed * 32452843 + 7);
+  s.ground_material = Material::kSoil;
+  for (int i = 0; i < 6; ++i) {
+    s.bumps.push_back({rng.Uniform(0, 25), rng.Uniform(-10, 10), rng.Uniform(-0.2, 0.25),
+                       rng.Uniform(5.0, 10.0)});
+  }
+  s.Finish();
+  for (int i = 0; i < 18; ++i) {  // trunks
+    const Eigen::Vector2d p = SidePosition(&rng, 2.5, 28.0, 1.3, 11.0);
+    const double radius = rng.Uniform(0.1, 0.35);  // before the height: the draw order fixes each seed's scene
+    const double height = rng.Uniform(6, 12);
+    s.obstacles.push_back(MakeTrunk(s, p.x(), p.y(), radius, height));
+  }
+  auto add_log = [&](double x, double y, double yaw, double radius, double half_length) {
+    s.obstacles.push_back(MakeLog(s, x, y, yaw, radius, half_length));
+  };
+  add_log(6.5, 0.3, kPi / 2 + 0.15, 0.07, 1.6);  // a thin log across the way (about 0.12 m)
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 4.0, 16.0, 2.7, 7.0);
+    add_log(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.1, 0.25), rng.Uniform(1.0, 2.2));
+  }
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = SidePosition(&rng, 3.0, 14.0, 1.5, 6.0);
+    AddRock(&s, &rng, p.x(), p.y(), rng.Uniform(0.05, 0.3));
+  }
+  s.clear_run_m = 5.5;  // the log across the way at x = 6.5
+  return s;
 }
 
 /// Terrain composed from the elements of every scene, drawn from `seed`: rolling slopes and
