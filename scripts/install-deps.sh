@@ -8,6 +8,13 @@ packages=(
   libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libceres-dev
   libyaml-cpp-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
+  # ROS bags: ROS 1 through rosbag and the message packages, ROS 2 (MCAP, sqlite3) read by SSTA
+  librosbag-dev libsensor-msgs-dev libnav-msgs-dev libtf2-msgs-dev libgeometry-msgs-dev
+  libzstd-dev liblz4-dev libsqlite3-dev
+  # the Python API and its tests
+  python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-matplotlib
+  # the fleet recipe and its test: a one-node Slurm cluster
+  slurm-wlm slurmctld slurmd munge
 )
 
 missing=()
