@@ -22,4 +22,5 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/sstaConfigVersion.c
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/sstaConfig.cmake
               ${CMAKE_CURRENT_BINARY_DIR}/sstaConfigVersion.cmake
               ${PROJECT_SOURCE_DIR}/cmake/FindSstaPCL.cmake
+              ${PROJECT_SOURCE_DIR}/cmake/FindSstaRosbag.cmake
         DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/ssta)

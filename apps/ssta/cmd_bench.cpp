@@ -7,6 +7,7 @@
 #include <random>
 #include <string>
 
+#include "bag_options.h"
 #include "commands.h"
 #include "config_loading.h"
 #include "ssta/core/error.h"
@@ -19,6 +20,7 @@ namespace {
 
 struct BenchArgs {
   std::string sequence, json, keep_rendered;
+  BagTopics topics;
   std::vector<std::string> config;
   int frames = 30;
   bool refine = false;  ///< sets refinement.online
@@ -67,7 +69,7 @@ void Run(BenchArgs& a) {
     a.sequence = rendered->path();
     source = "synthetic " + a.synth.scene;
   }
-  const Sequence sequence = Sequence::Open(a.sequence);
+  const Sequence sequence = Sequence::Open(a.sequence, a.topics);
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
   BenchReport report = RunPipelineBench(sequence, config, a.options);
@@ -88,7 +90,8 @@ void RegisterBench(CLI::App& app) {
       "--camera-height 1.65 --camera-pitch-deg 0 --config config/sensors/kitti.yaml).\n"
       "The first --warmup frames are run but not counted; the rendering options are ignored with\n"
       "--sequence. Speed only: use `ssta eval` for accuracy. See docs/performance.md.");
-  cmd->add_option("--sequence", args->sequence, "sequence folder to run on (default: render frames)");
+  cmd->add_option("--sequence", args->sequence, "sequence to run on: a folder or a ROS bag (default: render frames)");
+  AddBagTopicOptions(cmd, &args->topics);
   cmd->add_option("--frames", args->frames, "frames to measure (after the warm-up)")->capture_default_str();
   cmd->add_option("--warmup", args->options.warmup_frames, "frames run first and not counted")
       ->capture_default_str();

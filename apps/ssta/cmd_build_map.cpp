@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bag_options.h"
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
@@ -19,6 +20,7 @@ extern "C" void RequestStop(int) { g_stop = true; }
 
 struct BuildMapArgs {
   std::string sequence, json, picture;
+  BagTopics topics;
   std::vector<std::string> config;
   BuildMapOptions options;
   bool quiet = false;
@@ -27,7 +29,7 @@ struct BuildMapArgs {
 };
 
 void Run(const BuildMapArgs& a) {
-  const Sequence sequence = Sequence::Open(a.sequence);
+  const Sequence sequence = Sequence::Open(a.sequence, a.topics);
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
   const bool map_existed = std::filesystem::exists(a.options.map_path);
@@ -65,7 +67,8 @@ void Run(const BuildMapArgs& a) {
 void RegisterBuildMap(CLI::App& app) {
   auto args = std::make_shared<BuildMapArgs>();
   CLI::App* cmd = app.add_subcommand("build-map", "Fuse a sequence's classified frames into a 3D traversability map (OctoMap)");
-  cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
+  cmd->add_option("--sequence", args->sequence, "sequence: an ASL / EuRoC folder, a KITTI raw drive, or a ROS 1 / ROS 2 bag")->required();
+  AddBagTopicOptions(cmd, &args->topics);
   cmd->add_option("--map", args->options.map_path, "map file to write (.ot)")->required()->check(OutputFile());
   cmd->add_option("--config", args->config, "YAML config; repeatable, later files win");
   cmd->add_flag("--resume", args->options.resume,

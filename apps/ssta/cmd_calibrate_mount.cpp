@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "bag_options.h"
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
@@ -17,6 +18,7 @@ namespace {
 
 struct CalibrateMountArgs {
   std::string sequence, out, out_cam1, out_dir, report, ground_reference;
+  BagTopics topics;
   std::vector<std::string> config;
   MountCalibrationOptions options;
   bool quiet = false;
@@ -41,7 +43,7 @@ void Run(const CalibrateMountArgs& a) {
   if (a.out.empty() == a.out_dir.empty()) throw Error("--out: give exactly one of --out FILE and --out-dir DIR");
   if (!a.out_cam1.empty() && a.out.empty()) throw Error("--out-cam1: only with --out");
   const auto [cam0_path, cam1_path] = OutputPaths(a);
-  const Sequence sequence = Sequence::Open(a.sequence);
+  const Sequence sequence = Sequence::Open(a.sequence, a.topics);
   const Config config = LoadLayeredConfig(&sequence, a.config);
   MountCalibrationOptions options = a.options;
   options.refinement = config.refinement;
@@ -85,7 +87,8 @@ void RegisterCalibrateMount(CLI::App& app) {
       "from the rig only when the estimate is determined; when there are too few frames, the result\n"
       "is not better determined than its prior, or the terrain is too rough for the model, it exits\n"
       "with status 2 and writes nothing but --report. See docs/mount_calibration.md.");
-  cmd->add_option("--sequence", args->sequence, "sequence folder (ASL / EuRoC layout, or a KITTI raw drive)")->required();
+  cmd->add_option("--sequence", args->sequence, "sequence: an ASL / EuRoC folder, a KITTI raw drive, or a ROS 1 / ROS 2 bag")->required();
+  AddBagTopicOptions(cmd, &args->topics);
   cmd->add_option("--out", args->out, "refined cam0 sensor.yaml to write (cam1 goes beside it as cam1_sensor.yaml)");
   cmd->add_option("--out-cam1", args->out_cam1, "with --out: where the cam1 sensor.yaml goes instead");
   cmd->add_option("--out-dir", args->out_dir, "instead of --out: write DIR/cam0/sensor.yaml and DIR/cam1/sensor.yaml");

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "bag_options.h"
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
@@ -15,6 +16,7 @@ namespace {
 
 struct ClassifyArgs {
   std::string sequence, left, right, calib0, calib1;
+  BagTopics topics;
   std::vector<std::string> config;
   std::vector<double> up;
   ClassifyOptions options;
@@ -22,7 +24,7 @@ struct ClassifyArgs {
 };
 
 void RunSequence(const ClassifyArgs& a) {
-  const Sequence sequence = Sequence::Open(a.sequence);
+  const Sequence sequence = Sequence::Open(a.sequence, a.topics);
   const Config config = LoadLayeredConfig(&sequence, a.config);
   ProgressLine progress("classify", !a.quiet);
   const ClassifySummary summary = ClassifySequence(
@@ -67,7 +69,8 @@ void RegisterClassify(CLI::App& app) {
   auto args = std::make_shared<ClassifyArgs>();
   CLI::App* cmd = app.add_subcommand(
       "classify", "Classify every stereo frame of a sequence (or one pair) into the five SSTA classes");
-  CLI::Option* sequence = cmd->add_option("--sequence", args->sequence, "ASL sequence folder (docs/interfaces.md, section 2)");
+  CLI::Option* sequence = cmd->add_option("--sequence", args->sequence, "sequence: an ASL / EuRoC folder, a KITTI raw drive, or a ROS 1 / ROS 2 bag");
+  AddBagTopicOptions(cmd, &args->topics);
   // The single pair's options and the sequence exclude each other: one of them would be ignored.
   for (CLI::Option* pair_option :
        {cmd->add_option("--left", args->left, "single-pair mode: left image"),

@@ -34,6 +34,8 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterCalibrateMount(app);
   ssta::cli::RegisterBench(app);
   ssta::cli::RegisterConfig(app);
+  ssta::cli::RegisterInspect(app);
+  ssta::cli::RegisterConvert(app);
   if (argc == 1) {  // nothing asked: the usage, as a failed run (nothing ran)
     std::cerr << app.help();
     return 2;

@@ -86,7 +86,8 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
   std::vector<Input> inputs;
   for (const StereoFrame& frame : run.frames()) {
     const std::int64_t t = frame.timestamp_ns;
-    inputs.push_back({ReadGreyImage(frame.left_path), ReadGreyImage(frame.right_path), PoseOrLevelled(run, t), t});
+    StereoImages images = sequence.ReadImages(frame);
+    inputs.push_back({std::move(images.left), std::move(images.right), PoseOrLevelled(run, t), t});
   }
   MapMetadata metadata;
   metadata.vehicle = config.vehicle;
@@ -314,7 +315,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
 
   for (int k = 0; k < options.warmup_frames + measured; ++k) {
     const StereoFrame& frame = run.frames()[static_cast<std::size_t>(k)];
-    const StereoImages images = ReadStereoImages(frame, sequence.calibration());
+    const StereoImages images = sequence.ReadImages(frame);
     const std::int64_t t = frame.timestamp_ns;
     const Eigen::Isometry3d world_T_body = PoseOrLevelled(run, t);
     const Eigen::Vector3d up_camera = chain.UpInCamera(UpInBody(world_T_body));

@@ -186,8 +186,13 @@ std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
 
 Sequence::Sequence(SequenceData data) : data_(std::move(data)) {}
 
-Sequence Sequence::Open(const std::string& path) {
-  if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
+Sequence Sequence::Open(const std::string& path, const BagTopics& topics) {
+  if (IsBagPath(path)) return OpenBag(path, topics);
+  if (!fs::exists(path)) throw Error(path + ": sequence not found (a folder or a ROS bag)");
+  if (!fs::is_directory(path)) {
+    throw Error(path + ": not a sequence: neither a folder (ASL, KITTI raw) nor a ROS bag (.bag, .mcap, .db3, a "
+                "rosbag2 folder)");
+  }
   if (fs::is_directory(fs::path(path) / "image_00") && fs::is_directory(fs::path(path) / "oxts")) {
     return OpenKittiRaw(path);
   }
@@ -281,6 +286,11 @@ Sequence Sequence::OpenAsl(const std::string& path) {
     }
   }
   return Sequence(std::move(seq));
+}
+
+StereoImages Sequence::ReadImages(const StereoFrame& frame) const {
+  if (data_.image_source) return data_.image_source->Read(frame);
+  return ReadStereoImages(frame, data_.calibration);
 }
 
 StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration& calibration) {

@@ -78,7 +78,7 @@ Eigen::Isometry3d SequenceRun::WorldTBody(std::int64_t t, bool static_platform) 
 }
 
 FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera) {
-  const StereoImages images = ReadStereoImages(frame, sequence_.calibration());
+  const StereoImages images = sequence_.ReadImages(frame);
   FrameResult result =
       oracles_.disparity
           ? pipeline_.ProcessWithDisparity(images.left, images.right,

@@ -1,6 +1,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,11 +14,38 @@
 
 namespace ssta {
 
-/// One stereo frame of a sequence: the paired left/right image files.
+/// One stereo frame of a sequence: the paired left/right images.
 struct StereoFrame {
   std::int64_t timestamp_ns = 0;  ///< left image time
+  /// The image files; for a bag, "BAG:TOPIC@STAMP" names the message (for reports).
   std::string left_path;
   std::string right_path;
+  /// For a bag: the pair's index in the bag's frame list (-1 for image files).
+  std::int64_t message_index = -1;
+};
+
+/// The grey images of one stereo frame.
+struct StereoImages {
+  ImageU8 left;
+  ImageU8 right;
+};
+
+/// Where a sequence keeps its images when they are not files (a bag): reads one frame's pair
+/// as grey images of the calibration's size. Safe for concurrent calls.
+class StereoImageSource {
+ public:
+  virtual ~StereoImageSource() = default;
+  virtual StereoImages Read(const StereoFrame& frame) const = 0;
+};
+
+/// Which topics of a ROS bag make the sequence (docs/bags.md). An empty field is found
+/// automatically; "none" for `imu` or `pose` uses none.
+struct BagTopics {
+  std::string left;        ///< sensor_msgs/Image or CompressedImage, the left camera
+  std::string right;       ///< the right camera
+  std::string imu;         ///< sensor_msgs/Imu
+  std::string pose;        ///< nav_msgs/Odometry topic, or "/tf"
+  std::string pose_frame;  ///< the body frame: its pose is the vehicle pose, the cameras are mounted on it
 };
 
 /// A frame that cannot be used, with the reason (reported, never guessed).
@@ -52,6 +81,11 @@ struct SequenceData {
   std::string pose_path;  ///< the file (or folder) `poses` were read from ("" without them)
   Eigen::Isometry3d body_T_imu = Eigen::Isometry3d::Identity();
   std::optional<std::string> vehicle_config;
+  /// Reads frames whose images are not files (bags); null for image files.
+  std::shared_ptr<const StereoImageSource> image_source;
+  /// What the reader assumed where the recording was silent (a bag without a camera mount in
+  /// /tf_static, say), one sentence each, for reports.
+  std::vector<std::string> notes;
 };
 
 /// A recorded stereo sequence, read at open: calibration, frame list (left/right paired by
@@ -61,9 +95,19 @@ class Sequence {
  public:
   explicit Sequence(SequenceData data);
 
-  /// Opens `path` as a KITTI raw drive when it has `image_00/` and `oxts/`, else as an ASL /
-  /// EuRoC sequence (docs/interfaces.md, section 2). Throws ssta::Error naming the file (and line).
-  static Sequence Open(const std::string& path);
+  /// Opens `path` as a ROS bag (a `.bag` file, a rosbag2 folder, a `.mcap` or `.db3` file:
+  /// OpenBag with `topics`), a KITTI raw drive when it has `image_00/` and `oxts/`, else as an
+  /// ASL / EuRoC sequence (docs/interfaces.md, section 2). Throws ssta::Error naming the file
+  /// (and line).
+  static Sequence Open(const std::string& path, const BagTopics& topics = {});
+
+  /// A ROS 1 bag or a ROS 2 bag (MCAP or sqlite3) as a sequence (docs/bags.md): left and right
+  /// images with their CameraInfo as the calibration (raw images are rectified with it as ROS's
+  /// image_proc does, so the sequence's calibration is the rectified pair), Imu samples, poses
+  /// from Odometry or /tf, the camera and IMU mounts from /tf_static. Frames pair as in an ASL
+  /// sequence (header stamps, exact or nearest within 1 ms). Reads every message's header at
+  /// open; images are decoded as frames are read. Throws ssta::Error naming the bag and topic.
+  static Sequence OpenBag(const std::string& path, const BagTopics& topics = {});
 
   /// The ASL / EuRoC layout (the folder, or the folder holding `mav0/`). Left/right frames are
   /// paired exactly or to the nearest within 1 ms. Throws ssta::Error naming the file and line
@@ -94,6 +138,12 @@ class Sequence {
   const Eigen::Isometry3d& body_T_imu() const { return data_.body_T_imu; }
   /// `vehicle.yaml` shipped with the sequence, if any (a config file with a vehicle section).
   const std::optional<std::string>& vehicle_config() const { return data_.vehicle_config; }
+  /// What the reader assumed where the recording was silent (bags), for reports.
+  const std::vector<std::string>& notes() const { return data_.notes; }
+
+  /// The grey images of `frame`, from its files or its bag, checked against the calibration's
+  /// size. Throws ssta::Error naming the file (or bag and message).
+  StereoImages ReadImages(const StereoFrame& frame) const;
 
   /// Poses are not interpolated across a gap longer than this [ns]: that would be a guess.
   static constexpr std::int64_t kMaxPoseGapNs = 500'000'000;
@@ -113,17 +163,28 @@ class Sequence {
   SequenceData data_;
 };
 
-/// The grey images of one stereo frame.
-struct StereoImages {
-  ImageU8 left;
-  ImageU8 right;
-};
-
 /// Reads both images of `frame` and checks their size against the calibration's resolution
 /// (sensor.yaml), so a left and right of different sizes or a resized image is caught at the
 /// file. Throws ssta::Error naming the image file that is missing, unreadable, truncated or of
 /// the wrong size.
 StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration& calibration);
+
+/// True when `path` is a ROS bag: a file that starts "#ROSBAG V2.0", a folder with
+/// `metadata.yaml`, a `.mcap` or `.db3` file.
+bool IsBagPath(const std::string& path);
+
+/// What a bag holds (topics, types, counts, rates, time span) and what OpenBag would make of it
+/// with `topics` (the topics chosen, the calibration, the mounts, the frames paired and skipped,
+/// the assumptions), as text for a person. Throws ssta::Error as OpenBag, except that a bag
+/// OpenBag cannot use is described with the reason.
+std::string DescribeBag(const std::string& path, const BagTopics& topics = {});
+
+/// Writes `sequence` in the ASL layout under `out` (docs/interfaces.md, section 2): the images
+/// as read (grey, rectified when the bag's images were raw), both sensor.yaml, imu0 and pose0
+/// when present. `progress(done, total)` is called per frame. Throws ssta::Error naming the
+/// file it cannot write.
+void WriteAslSequence(const Sequence& sequence, const std::string& out,
+                      const std::function<void(int, int)>& progress = {});
 
 /// Every `every`-th frame from the first, at most `max_frames` of them (0: no limit).
 /// Precondition: every >= 1, max_frames >= 0.

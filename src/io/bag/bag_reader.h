@@ -48,10 +48,6 @@ class BagReader {
   virtual std::vector<std::uint8_t> Read(const BagMessageRef& ref) const = 0;
 };
 
-/// True when `path` is a ROS 1 bag (a file starting "#ROSBAG V2.0") or a ROS 2 bag (a folder with
-/// metadata.yaml, or a .mcap / .db3 file).
-bool IsBagPath(const std::string& path);
-
 /// Opens a ROS 1 bag (format 2.0; bz2 and lz4 chunks) with Debian's rosbag library.
 /// Throws ssta::Error naming the file.
 std::unique_ptr<BagReader> OpenRos1Bag(const std::string& path);
