@@ -3,4 +3,16 @@ ssta_add_test(io_test
   ${CMAKE_CURRENT_LIST_DIR}/file_util_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/text_parsers_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/kitti_raw_test.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/kitti_raw_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/ros2_bag_test.cpp)
+
+# Test support: writes rosbag2 bags (MCAP or sqlite3) and encodes ROS 2 messages as CDR. Other
+# test binaries (the bag sequence and integration tests) link it too.
+add_library(ssta_test_ros2_writer STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/support/ros2_bag_writer.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/support/ros_cdr_encoder.cpp)
+target_include_directories(ssta_test_ros2_writer PUBLIC ${PROJECT_SOURCE_DIR}/tests ${PROJECT_SOURCE_DIR}/src)
+target_link_libraries(ssta_test_ros2_writer PUBLIC ssta::io PRIVATE ${SSTA_BAG_LIBS})
+ssta_set_warnings(ssta_test_ros2_writer)
+# ros2_bag_test.cpp also makes sqlite files that are no bags.
+target_link_libraries(io_test PRIVATE ssta_test_ros2_writer sqlite3)
