@@ -12,9 +12,11 @@ namespace ssta::internal {
 namespace {
 
 constexpr std::size_t kFirstOutputBytes = 64 * 1024;
-// rosbag2 writes chunks of about 1 MB; one message alone (an image) can make a chunk larger, never
-// a gigabyte. Larger announcements are refused before any memory is taken for them.
-constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{1} << 30;
+// rosbag2 writes chunks of about 1 MB; one message alone makes a larger one (a 4K RGB image is
+// 25 MB, a dense point cloud 64 MB), never a quarter of a gigabyte. Larger announcements are
+// refused before any memory is taken for them; the bound also keeps a hostile zstd stream of
+// run-length blocks (4 bytes per 128 KB) from filling the memory.
+constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{256} << 20;
 
 /// The output buffer's next size: starts near a typical ratio, doubles, never passes `limit`.
 std::size_t GrownSize(std::size_t current, std::size_t limit, std::size_t compressed_size) {
@@ -106,7 +108,7 @@ std::vector<std::uint8_t> DecompressChunk(const std::string& compression, const 
                                           const std::string& where) {
   if (uncompressed_size > kMaxChunkBytes) {
     throw Error(where + ": the chunk announces " + std::to_string(uncompressed_size) +
-                " bytes uncompressed, more than the 1 GiB this reader accepts");
+                " bytes uncompressed, more than the 256 MiB this reader accepts");
   }
   if (compression.empty()) {
     if (size != uncompressed_size) {
