@@ -87,7 +87,7 @@ std::unique_ptr<ExportedSurface> ExportedOver(const TraversabilityMap& map, Eige
   return std::make_unique<ExportedSurface>(map, box, options);
 }
 
-py::array Query(const MapHandle& handle, const py::handle& points_arg, bool as_exported, int fill_holes,
+py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_exported, int fill_holes,
                 double local_ground_radius_m) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   const auto points = MatrixArg(points_arg, "points", 2, 3);
@@ -132,7 +132,7 @@ py::array Query(const MapHandle& handle, const py::handle& points_arg, bool as_e
   return std::move(out);
 }
 
-py::array Footprints(const MapHandle& handle, const py::handle& poses_arg, double length_m, double width_m,
+py::array Footprints(const MapHandle& handle, const py::object& poses_arg, double length_m, double width_m,
                      bool as_exported, int fill_holes, double local_ground_radius_m) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   NonNegativeArg(length_m, "length_m");
@@ -169,7 +169,7 @@ py::array Footprints(const MapHandle& handle, const py::handle& poses_arg, doubl
   return std::move(out);
 }
 
-py::dict Path(const MapHandle& handle, const py::handle& vertices_arg, double width_m, bool as_exported,
+py::dict Path(const MapHandle& handle, const py::object& vertices_arg, double width_m, bool as_exported,
               int fill_holes, double local_ground_radius_m) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   NonNegativeArg(width_m, "width_m");

@@ -468,7 +468,7 @@ class PythonPipeline {
   PythonPipeline(const StereoCalibration& calibration, const std::shared_ptr<Config>& config)
       : pipeline_(calibration, config ? *config : Config{}) {}
 
-  py::dict Classify(const py::handle& left_arg, const py::handle& right_arg, const py::object& up_arg) {
+  py::dict Classify(const py::object& left_arg, const py::object& right_arg, const py::object& up_arg) {
     const ImageU8 left = GreyArg(left_arg, "left"), right = GreyArg(right_arg, "right");
     Eigen::Vector3d up = pipeline_.UpInCamera(Eigen::Vector3d::UnitZ());
     if (!up_arg.is_none()) {
@@ -538,7 +538,7 @@ in parallel.
            py::arg("up") = py::none(), kClassifyDoc);
   m.def(
       "classify",
-      [](const py::handle& left, const py::handle& right, const StereoCalibration& calibration,
+      [](const py::object& left, const py::object& right, const StereoCalibration& calibration,
          const std::shared_ptr<Config>& config, const py::object& up) {
         PythonPipeline pipeline(calibration, config);
         return pipeline.Classify(left, right, up);
