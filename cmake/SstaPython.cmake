@@ -1,10 +1,10 @@
 # Finds what the Python API (python/) needs: a Python 3 interpreter with its headers, NumPy and
 # pybind11. Sets SSTA_PYTHON_FOUND, and on success Python3_EXECUTABLE and the pybind11 targets.
 #
-# The interpreter must be one that has NumPy and pybind11: the first python3 on PATH is often a
-# pyenv or conda one without them while Debian's /usr/bin/python3 has python3-numpy and
-# python3-pybind11. So each candidate is asked to import both, in order: a Python3_EXECUTABLE
-# given on the command line, the python3 on PATH, /usr/bin/python3.
+# The interpreter must be one that has NumPy: the first python3 on PATH is often a pyenv or conda
+# one without it while Debian's /usr/bin/python3 has python3-numpy. So each candidate is asked to
+# import it, in order: a Python3_EXECUTABLE given on the command line, the python3 on PATH,
+# /usr/bin/python3.
 
 set(SSTA_PYTHON_FOUND OFF)
 set(_ssta_python_candidates "")
@@ -22,13 +22,19 @@ endif()
 
 set(_ssta_python "")
 foreach(candidate IN LISTS _ssta_python_candidates)
-  execute_process(COMMAND "${candidate}" -c "import numpy, pybind11; print(pybind11.get_cmake_dir(), end='')"
-                  RESULT_VARIABLE _ssta_rc OUTPUT_VARIABLE _ssta_pybind11_dir ERROR_QUIET)
+  execute_process(COMMAND "${candidate}" -c "import numpy" RESULT_VARIABLE _ssta_rc OUTPUT_QUIET ERROR_QUIET)
   if(_ssta_rc EQUAL 0)
     set(_ssta_python "${candidate}")
     break()
   endif()
 endforeach()
+# pybind11's CMake files: pybind11-dev puts them on CMake's default path, python3-pybind11 (or a
+# pip install) beside the Python package, which tells where.
+set(_ssta_pybind11_dir "")
+if(_ssta_python)
+  execute_process(COMMAND "${_ssta_python}" -c "import pybind11; print(pybind11.get_cmake_dir(), end='')"
+                  OUTPUT_VARIABLE _ssta_pybind11_dir ERROR_QUIET)
+endif()
 
 if(_ssta_python)
   set(Python3_EXECUTABLE "${_ssta_python}" CACHE FILEPATH "Python the ssta module is built for" FORCE)
