@@ -7,6 +7,8 @@
 #     (pipelined build-map and its CLI, online refinement, concurrent queries, the stereo and
 #     frame pipelines called from several threads); any race report fails a test. Not in CI
 #     (a second full build): run it after touching the pipelined build or the map's readers.
+# Both build without the Python module: an instrumented extension would need the sanitizer's
+# runtime preloaded into the Python interpreter (python/tests run in scripts/test.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -16,7 +18,8 @@ jobs=${JOBS:-2}
 case "$mode" in
   address)
     build_dir=${BUILD_DIR:-build-asan}
-    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSTA_SANITIZE=ON -DSSTA_BUILD_TESTS=ON
+    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSTA_SANITIZE=ON -DSSTA_BUILD_TESTS=ON \
+      -DSSTA_BUILD_PYTHON=OFF
     cmake --build "$build_dir" -j "$jobs"
     cd "$build_dir"
     # One OpenCV thread per test process: ctest runs $jobs processes at once, and each one
@@ -29,7 +32,8 @@ case "$mode" in
     ;;
   thread)
     build_dir=${BUILD_DIR:-build-tsan}
-    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSTA_SANITIZE_THREAD=ON -DSSTA_BUILD_TESTS=ON
+    cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSSTA_SANITIZE_THREAD=ON -DSSTA_BUILD_TESTS=ON \
+      -DSSTA_BUILD_PYTHON=OFF
     cmake --build "$build_dir" -j "$jobs" --target ssta_cli pipeline_test cli_test sensors_test mapping_test stereo_test
     cd "$build_dir"
     # GDAL (loaded by OpenCV's image codecs) takes its own locks in an order TSan flags: suppressed.

@@ -1,0 +1,102 @@
+#pragma once
+
+// Shared by the two translation units of the Python module: argument checks and the exceptions
+// they raise. Conventions (docs/python.md): a bad argument raises ValueError naming it; a
+// missing input file FileNotFoundError naming the file; the library's ssta::Error becomes
+// ssta.Error (a ValueError) with the message the command line prints.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "ssta/core/error.h"
+
+namespace ssta::python {
+
+namespace py = pybind11;
+
+/// Raised as Python's FileNotFoundError with `filename` set (module.cpp translates it).
+class MissingFile : public std::runtime_error {
+ public:
+  MissingFile(const std::string& message, std::string path)
+      : std::runtime_error(message), path_(std::move(path)) {}
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+};
+
+/// Runs `call` (which reads the input files `paths`); when it throws ssta::Error and one of
+/// `paths` does not exist, throws MissingFile with the library's message instead, so Python
+/// gets FileNotFoundError with the text the command line prints.
+template <class Call>
+auto ReportingMissingFiles(const std::vector<std::string>& paths, Call&& call) {
+  try {
+    return call();
+  } catch (const Error& e) {
+    for (const std::string& path : paths) {
+      std::error_code ec;
+      if (!std::filesystem::exists(path, ec)) throw MissingFile(e.what(), path);
+    }
+    throw;
+  }
+}
+
+/// A str or os.PathLike as a path; ValueError naming `name` otherwise.
+inline std::string PathArg(const py::handle& value, const char* name) {
+  if (py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__")) {
+    const py::object path = py::module_::import("os").attr("fspath")(value);
+    if (py::isinstance<py::str>(path)) return path.cast<std::string>();
+  }
+  throw py::value_error(std::string(name) + ": expected a path (str or os.PathLike), got " +
+                        py::str(py::type::of(value).attr("__name__")).cast<std::string>());
+}
+
+/// `value` as a C-contiguous float64 array of shape (N, c) with c in [min_cols, max_cols] and
+/// N >= 1; any real numeric dtype is converted. ValueError naming `name` for another shape or
+/// dtype (finiteness is checked by the caller, without the GIL: RequireFinite).
+inline py::array_t<double, py::array::c_style> MatrixArg(const py::handle& value, const char* name, int min_cols,
+                                                         int max_cols) {
+  const std::string cols = min_cols == max_cols ? std::to_string(min_cols)
+                                                : std::to_string(min_cols) + " or " + std::to_string(max_cols);
+  const py::array any = py::array::ensure(value);
+  if (!any) throw py::value_error(std::string(name) + ": expected an array of shape (N, " + cols + ")");
+  const char kind = any.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u') {
+    throw py::value_error(std::string(name) + ": expected real numbers (float64), got dtype " +
+                          py::str(any.dtype()).cast<std::string>());
+  }
+  std::string shape = "(";
+  for (py::ssize_t i = 0; i < any.ndim(); ++i) shape += (i ? ", " : "") + std::to_string(any.shape(i));
+  shape += any.ndim() == 1 ? ",)" : ")";
+  if (any.ndim() != 2 || any.shape(1) < min_cols || any.shape(1) > max_cols || any.shape(0) < 1) {
+    throw py::value_error(std::string(name) + ": expected shape (N, " + cols + ") with N >= 1, got " + shape);
+  }
+  return py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(any);
+}
+
+/// Throws ValueError naming `name` and the first row that holds NaN or infinity. Needs no GIL.
+inline void RequireFinite(const double* data, py::ssize_t rows, py::ssize_t cols, const char* name) {
+  for (py::ssize_t i = 0; i < rows * cols; ++i) {
+    if (!std::isfinite(data[i])) {
+      throw py::value_error(std::string(name) + ": row " + std::to_string(i / cols) + " holds NaN or infinity");
+    }
+  }
+}
+
+/// A finite float >= 0 named `name`; ValueError otherwise.
+inline double NonNegativeArg(double value, const char* name) {
+  if (!(std::isfinite(value) && value >= 0.0)) {
+    throw py::value_error(std::string(name) + ": must be a finite number >= 0, got " + std::to_string(value));
+  }
+  return value;
+}
+
+void BindMap(py::module_& m);
+
+}  // namespace ssta::python

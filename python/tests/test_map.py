@@ -1,0 +1,272 @@
+"""ssta.Map against `ssta query` / `ssta export` on the same map: the same answers, the same
+errors."""
+
+import threading
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+import matplotlib.image
+import numpy as np
+import pytest
+
+import ssta
+from conftest import cli_error, read_csv
+
+# The CSV's precision per column (QueryCsvRow): compare to half its last digit.
+CSV_DECIMALS = {"x": 4, "y": 4, "z": 4, "cost": 4, "probability": 4, "slope_deg": 2, "step_m": 3,
+                "confidence": 4, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4}
+
+
+def assert_rows_match_csv(rows, csv_columns, columns_of_rows=None):
+    """Each column of the CLI's CSV equals the structured rows' field: ids exactly, numbers to
+    the CSV's precision, NaN where the CSV says nan."""
+    for name, expected in csv_columns.items():
+        field = (columns_of_rows or {}).get(name, name)
+        got = rows[field].astype(np.float64)
+        assert got.shape == expected.shape, name
+        np.testing.assert_array_equal(np.isnan(got), np.isnan(expected), err_msg=name)
+        tolerance = 0.5 * 10.0 ** -CSV_DECIMALS.get(name, 0) + 1e-9
+        np.testing.assert_allclose(got, expected, rtol=0, atol=tolerance, equal_nan=True, err_msg=name)
+
+
+def assert_structured_equal(a, b):
+    """Structured arrays equal field by field, NaN equal to NaN."""
+    assert a.dtype.names == b.dtype.names and a.shape == b.shape
+    for name in a.dtype.names:
+        np.testing.assert_array_equal(a[name], b[name], err_msg=name)
+
+
+@pytest.fixture(scope="module")
+def the_map(yard_map):
+    return ssta.Map.open(yard_map)
+
+
+@pytest.fixture(scope="module")
+def points(the_map):
+    """A grid over the map's bounds and a margin beyond them (unobserved columns too)."""
+    x0, y0, _, x1, y1, _ = the_map.bounds
+    xs, ys = np.meshgrid(np.linspace(x0 - 1, x1 + 1, 23), np.linspace(y0 - 1, y1 + 1, 17))
+    return np.column_stack([xs.ravel(), ys.ravel()])
+
+
+def cli_query(cli, tmp_path, map_path, points, *extra):
+    csv_path = tmp_path / "points.csv"
+    np.savetxt(csv_path, points, delimiter=",", fmt="%.17g")
+    return read_csv(cli("query", "--map", map_path, "--points", csv_path, *extra).stdout)
+
+
+def test_query_xy_equals_cli(the_map, yard_map, points, cli, tmp_path):
+    rows = the_map.query(points)
+    assert rows.dtype.names == ("x", "y", "z", "class", "cost", "probability", "slope_deg", "step_m",
+                                "observations", "confidence", "height_m", "observed")
+    expected = cli_query(cli, tmp_path, yard_map, points)
+    assert_rows_match_csv(rows, expected)
+    # The test would pass on an empty map: the grid must reach every class the map holds.
+    assert {1, 2, 3} <= set(rows["class"]) and 0 in rows["class"]
+    assert np.array_equal(rows["observed"], ~np.isnan(rows["z"]))
+
+
+def test_query_xyz_equals_cli(the_map, yard_map, points, cli, tmp_path):
+    xyz = np.column_stack([points, np.full(len(points), 0.05)])
+    expected = cli_query(cli, tmp_path, yard_map, xyz)
+    assert_rows_match_csv(the_map.query(xyz), expected)
+
+
+@pytest.mark.parametrize("fill_holes,local_ground", [(5, 0.0), (0, 0.0), (3, 0.5)])
+def test_query_as_exported_equals_cli(the_map, yard_map, points, cli, tmp_path, fill_holes, local_ground):
+    rows = the_map.query(points, as_exported=True, fill_holes=fill_holes, local_ground_radius_m=local_ground)
+    expected = cli_query(cli, tmp_path, yard_map, points, "--as-exported", "--fill-holes", fill_holes,
+                         "--local-ground", local_ground)
+    assert_rows_match_csv(rows, expected)
+
+
+def test_query_accepts_other_real_dtypes(the_map, points):
+    as_float32 = the_map.query(points.astype(np.float32))
+    np.testing.assert_array_equal(as_float32["class"], the_map.query(points.astype(np.float32).astype(np.float64))["class"])
+    integer_rows = the_map.query(np.array([[3, 0], [4, 1]], dtype=np.int32))
+    np.testing.assert_array_equal(integer_rows["class"], the_map.query(np.array([[3.0, 0.0], [4.0, 1.0]]))["class"])
+
+
+FOOTPRINTS = [(3.0, 0.0, 0.0, 1.2, 0.8), (4.0, 1.0, 30.0, 1.0, 0.6), (6.5, -1.5, 90.0, 2.0, 1.0),
+              (9.0, 2.0, -45.0, 0.5, 0.5), (40.0, 40.0, 0.0, 1.0, 1.0)]
+
+
+@pytest.mark.parametrize("as_exported", [False, True])
+def test_footprints_equal_cli(the_map, yard_map, cli, as_exported):
+    poses = np.array([(x, y, np.radians(yaw_deg)) for x, y, yaw_deg, _, _ in FOOTPRINTS])
+    extra = ["--as-exported"] if as_exported else []
+    for (x, y, yaw_deg, length, width), pose in zip(FOOTPRINTS, poses):
+        got = the_map.footprints(pose[None, :], length, width, as_exported=as_exported)
+        expected = read_csv(cli("query", "--map", yard_map, "--footprint",
+                                f"{x},{y},{yaw_deg},{length},{width}", *extra).stdout)
+        assert_rows_match_csv(got, expected, {})
+    # All poses in one call answer as one at a time (one exported surface serves them all).
+    same = [(x, y, np.radians(yaw)) for x, y, yaw, _, _ in FOOTPRINTS]
+    together = the_map.footprints(np.array(same), 1.2, 0.8, as_exported=as_exported)
+    one_by_one = np.concatenate([the_map.footprints(np.array([p]), 1.2, 0.8, as_exported=as_exported) for p in same])
+    assert_structured_equal(together, one_by_one)
+
+
+@pytest.mark.parametrize("as_exported", [False, True])
+def test_path_equals_cli(the_map, yard_map, cli, tmp_path, as_exported):
+    vertices = np.array([[1.5, 0.0], [5.0, 0.5], [8.0, -2.0], [12.0, -2.0]])
+    np.savetxt(tmp_path / "path.csv", vertices, delimiter=",", header="x,y", comments="")
+    extra = ["--as-exported"] if as_exported else []
+    result = cli("query", "--map", yard_map, "--path", tmp_path / "path.csv", "--width", 0.8, *extra)
+    got = the_map.path(vertices, 0.8, as_exported=as_exported)
+    assert_rows_match_csv(got["samples"], read_csv(result.stdout))
+    # The verdict the CLI prints on stderr: "path L m, N samples, worst class W, blocked at D m, P % observed".
+    verdict = result.stderr.strip()
+    assert f"path {got['length_m']:.2f} m, {len(got['samples'])} samples, worst class {got['worst']}," in verdict
+    if got["blocked"]:
+        assert f"blocked at {got['first_non_traversable_distance_m']:.2f} m" in verdict
+        assert got["first_non_traversable"] is not None
+    else:
+        assert "not blocked" in verdict and got["first_non_traversable"] is None
+
+
+def test_project_as_exported_equals_grid_export(the_map, yard_map, cli, tmp_path):
+    cli("export", "--map", yard_map, "--format", "grid", "--out", tmp_path / "grid")
+    classes_png = np.round(matplotlib.image.imread(tmp_path / "grid_classes.png") * 255).astype(np.uint8)
+    grid = the_map.project(as_exported=True)
+    np.testing.assert_array_equal(grid["class"], classes_png)
+    yaml_text = (tmp_path / "grid.yaml").read_text()
+    origin_line = next(line for line in yaml_text.splitlines() if line.startswith("origin:"))
+    origin = [float(v) for v in origin_line.split("[")[1].split("]")[0].split(",")][:2]
+    np.testing.assert_allclose(grid["origin"], origin, atol=1e-6)
+    assert grid["resolution_m"] == the_map.resolution_m
+    x0, x1, y0, y1 = grid["extent"]
+    assert (x1 - x0, y1 - y0) == pytest.approx((grid["class"].shape[1] * 0.1, grid["class"].shape[0] * 0.1))
+
+
+def test_project_pixels_equal_point_queries(the_map):
+    """Project at the map's resolution is TopSurfaceAt of each pixel centre (row 0 the largest y)."""
+    grid = the_map.project(region=(2.0, -2.0, 6.0, 1.0))
+    h, w = grid["class"].shape
+    x0, y0 = grid["origin"]
+    r = grid["resolution_m"]
+    v, u = np.mgrid[0:h, 0:w]
+    centres = np.column_stack([(x0 + (u + 0.5) * r).ravel(), (y0 + (h - 1 - v + 0.5) * r).ravel()])
+    rows = the_map.query(centres)
+    np.testing.assert_array_equal(grid["class"].ravel(), rows["class"])
+    np.testing.assert_allclose(grid["cost"].ravel(), rows["cost"], atol=1e-6, equal_nan=True)
+    assert grid["cost"].dtype == np.float32 and grid["class"].dtype == np.uint8
+
+
+def test_metadata_names_the_map_and_its_vehicle(the_map, yard_map):
+    meta = the_map.metadata
+    assert meta["file"] == str(yard_map)
+    assert meta["sequences"] == ["yard"]
+    assert meta["frames_inserted"] == 6
+    assert meta["resolution_m"] == the_map.resolution_m == 0.1
+    assert meta["vehicle"] == ssta.Config().vehicle.to_dict()
+    assert meta["software_version"] == ssta.__version__
+    assert meta["sensor_path"].shape[1] == 3 and len(meta["sensor_path"]) >= 2
+    assert meta["refined_mount"] is None
+
+
+# ----------------------------------------------------------------------------------------------
+# Errors: the argument or file at fault is named; the library's are the command line's.
+
+def test_missing_map_is_file_not_found_naming_it(tmp_path):
+    missing = tmp_path / "nowhere.ot"
+    with pytest.raises(FileNotFoundError) as e:
+        ssta.Map.open(missing)
+    assert e.value.filename == str(missing)
+    assert str(missing) in str(e.value)
+
+
+def test_corrupt_map_is_ssta_error_with_the_cli_message(tmp_path):
+    corrupt = tmp_path / "corrupt.ot"
+    corrupt.write_bytes(b"# Octomap OcTree binary file\nnot a map\n")
+    with pytest.raises(ssta.Error) as e:
+        ssta.Map.open(corrupt)
+    assert isinstance(e.value, ValueError)
+    assert str(e.value) == cli_error("query", "--map", corrupt, "--at", "1,1")
+    assert str(corrupt) in str(e.value)
+
+
+@pytest.mark.parametrize("points,message", [
+    (np.zeros((3, 4)), "points: expected shape (N, 2 or 3) with N >= 1, got (3, 4)"),
+    (np.zeros(2), "points: expected shape (N, 2 or 3) with N >= 1, got (2,)"),
+    (np.zeros((0, 2)), "points: expected shape (N, 2 or 3) with N >= 1, got (0, 2)"),
+    (np.array([["a", "b"]]), "points: expected real numbers (float64), got dtype <U1"),
+    (np.zeros((2, 2), dtype=complex), "points: expected real numbers (float64), got dtype complex128"),
+    (np.array([[1.0, 2.0], [3.0, 4.0], [np.nan, 1.0]]), "points: row 2 holds NaN or infinity"),
+    (np.array([[1.0, np.inf]]), "points: row 0 holds NaN or infinity"),
+])
+def test_bad_points_raise_value_error_naming_them(the_map, points, message):
+    with pytest.raises(ValueError) as e:
+        the_map.query(points)
+    assert str(e.value) == message
+    assert not isinstance(e.value, ssta.Error)  # an argument's fault, not the library's
+
+
+def test_bad_query_arguments_name_themselves(the_map):
+    with pytest.raises(ValueError, match=r"^points: as_exported answers \(x, y\) points"):
+        the_map.query(np.zeros((1, 3)), as_exported=True)
+    with pytest.raises(ValueError, match=r"^fill_holes: must be in 0\.\.8"):
+        the_map.query(np.zeros((1, 2)), as_exported=True, fill_holes=9)
+    with pytest.raises(ValueError, match=r"^local_ground_radius_m: must be a finite number >= 0"):
+        the_map.query(np.zeros((1, 2)), as_exported=True, local_ground_radius_m=-1)
+    with pytest.raises(ValueError, match=r"^poses: expected shape \(N, 3\)"):
+        the_map.footprints(np.zeros((2, 2)), 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"^poses: row 1 holds NaN"):
+        the_map.footprints(np.array([[1.0, 1.0, 0.0], [1.0, np.nan, 0.0]]), 1.0, 1.0)
+    with pytest.raises(ValueError, match=r"^length_m: must be a finite number >= 0"):
+        the_map.footprints(np.zeros((1, 3)), -1.0, 1.0)
+    with pytest.raises(ValueError, match=r"^width_m: must be a finite number >= 0"):
+        the_map.path(np.zeros((2, 2)), float("nan"))
+    with pytest.raises(ValueError, match=r"^vertices: row 0 holds NaN"):
+        the_map.path(np.array([[np.nan, 0.0], [1.0, 1.0]]), 0.5)
+    with pytest.raises(ValueError, match=r"^region: expected four finite numbers"):
+        the_map.project(region=(1.0, 1.0, 0.0, 2.0))
+    with pytest.raises(ValueError, match=r"^resolution_m: must be a finite number > 0"):
+        the_map.project(resolution_m=0.0)
+    with pytest.raises(ValueError, match=r"^path: expected a path \(str or os.PathLike\), got int"):
+        ssta.Map.open(3)
+
+
+def test_library_limits_name_the_argument_and_row(the_map, yard_map):
+    # A footprint over more than 10^7 columns: the CLI names its option, the binding the row.
+    with pytest.raises(ssta.Error) as e:
+        the_map.footprints(np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 0.0]]), 1e4, 1e4)
+    cli = cli_error("query", "--map", yard_map, "--footprint", "0,0,0,1e4,1e4")
+    assert str(e.value) == "poses[0]: " + cli.split(": ", 1)[1]
+
+
+# ----------------------------------------------------------------------------------------------
+# Threads
+
+def test_concurrent_queries_give_the_same_answers(the_map, points):
+    expected = the_map.query(points)
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        results = list(pool.map(lambda _: the_map.query(points), range(8)))
+    for rows in results:
+        assert_structured_equal(rows, expected)
+
+
+def test_query_releases_the_gil(the_map):
+    """While one thread runs a long query, another runs Python: the query holds no GIL."""
+    x0, y0, _, x1, y1, _ = the_map.bounds
+    big = np.column_stack([np.linspace(x0, x1, 1_500_000), np.linspace(y0, y1, 1_500_000)])
+    start = time.perf_counter()
+    the_map.query(big)
+    alone_s = time.perf_counter() - start
+    done = threading.Event()
+
+    def worker():
+        the_map.query(big)
+        done.set()
+
+    thread = threading.Thread(target=worker)
+    last = time.perf_counter()
+    longest_gap = 0.0
+    thread.start()
+    while not done.is_set():
+        now = time.perf_counter()
+        longest_gap = max(longest_gap, now - last)
+        last = now
+    thread.join()
+    # Held, the GIL would stop this loop for the whole query; released, it runs throughout.
+    assert longest_gap < 0.5 * alone_s, (longest_gap, alone_s)
