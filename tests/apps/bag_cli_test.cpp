@@ -57,5 +57,15 @@ TEST(BagCli, BadBagsAndTopicsAreOneLineNamingThem) {
   EXPECT_NE(r.output.find("has no poses"), std::string::npos) << r.output;
 }
 
+TEST(BagCli, InspectDescribesAFolderSequenceToo) {
+  const std::string euroc = std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini";
+  const auto r = RunSsta("inspect --sequence " + euroc);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* expected : {"asl sequence", "752x480 px", "raw (rectified on read)", "frames: 3 paired, 0 skipped",
+                               "imu: ", "poses: "}) {
+    EXPECT_NE(r.output.find(expected), std::string::npos) << expected << "\n" << r.output;
+  }
+}
+
 }  // namespace
 }  // namespace ssta
