@@ -20,6 +20,7 @@
 #include "io/bag/ros_messages.h"
 #include "io/bag/tf_tree.h"
 #include "io/support/bag_content.h"
+#include "io/support/ros_cdr_encoder.h"
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
 #include "ssta/io/sequence.h"
@@ -416,6 +417,44 @@ TEST(BagImages, CompressedPngIsDecodedLosslessly) {
   EXPECT_EQ(back(2, 4), 17 * 4 + 100);
   m.data.resize(20);
   EXPECT_THROW(internal::GreyImage(m, "p"), Error);
+}
+
+// A stereo pair recorded compressed (image_transport's `.../compressed` topics, PNG here, so
+// lossless): the CameraInfo is found one namespace up and the frames decode to the images.
+TEST(BagImages, ACompressedStereoPairIsASequence) {
+  testing::TempDir dir;
+  const testing::BagContent c = TinyContent();
+  testing::Ros2BagWriter writer(dir / "compressed");
+  writer.AddTopic(testing::kLeftInfo, "sensor_msgs/msg/CameraInfo");
+  writer.AddTopic(testing::kRightInfo, "sensor_msgs/msg/CameraInfo");
+  const std::string left = std::string(testing::kLeftImage) + "/compressed";
+  const std::string right = std::string(testing::kRightImage) + "/compressed";
+  writer.AddTopic(left, "sensor_msgs/msg/CompressedImage");
+  writer.AddTopic(right, "sensor_msgs/msg/CompressedImage");
+  writer.Write(testing::kLeftInfo, 1, testing::EncodeCdr(c.left_info));
+  writer.Write(testing::kRightInfo, 1, testing::EncodeCdr(c.right_info));
+  for (std::size_t i = 0; i < c.left.size(); ++i) {
+    for (const auto& [topic, raw] : {std::pair<std::string, const internal::RosImage*>{left, &c.left[i]}, {right, &c.right[i]}}) {
+      ImageU8 image(static_cast<int>(raw->width), static_cast<int>(raw->height));
+      std::copy(raw->data.begin(), raw->data.end(), image.data());
+      image(2, 3) = static_cast<std::uint8_t>(200 + i);  // one pixel that tells the frames apart
+      WriteImage(image, dir / "frame.png");
+      const std::string bytes = FileBytes(dir / "frame.png");
+      internal::RosCompressedImage m;
+      m.header = raw->header;
+      m.format = "mono8; png compressed ";
+      m.data.assign(bytes.begin(), bytes.end());
+      writer.Write(topic, raw->header.stamp_ns, testing::EncodeCdr(m));
+    }
+  }
+  writer.Close();
+  const Sequence s = Sequence::Open(dir / "compressed");
+  EXPECT_EQ(s.format(), "ros2 mcap");
+  ASSERT_EQ(s.frames().size(), 2u);
+  EXPECT_NE(s.frames()[1].left_path.find(left + "@1100000000"), std::string::npos) << s.frames()[1].left_path;
+  const StereoImages images = s.ReadImages(s.frames()[1]);
+  EXPECT_EQ(images.left(2, 3), 201);
+  EXPECT_EQ(images.right(5, 7), 10);
 }
 
 // A raw camera whose CameraInfo rotates it (R) is rectified on read as image_proc does: the
