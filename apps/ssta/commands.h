@@ -23,6 +23,7 @@ void RegisterCalibrateStereo(CLI::App& app);
 void RegisterBench(CLI::App& app);
 void RegisterCalibrateMount(CLI::App& app);
 void RegisterConfig(CLI::App& app);
+void RegisterMergeMaps(CLI::App& app);
 
 /// Validators for the paths a command writes, checked while the command line is parsed, so a
 /// run fails before its work and not after it. A file needs an existing folder and must not be

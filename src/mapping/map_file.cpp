@@ -150,6 +150,22 @@ std::string MetadataYaml(const TraversabilityMap& map) {
     matrix("refined_body_T_cam0", m.refined_mount->refined);
     out << YAML::EndMap;
   }
+  if (!m.world_frame.empty()) out << YAML::Key << "world_frame" << YAML::Value << YAML::DoubleQuoted << m.world_frame;
+  if (!m.merged_from.empty()) {
+    out << YAML::Key << "merged_from" << YAML::Value << YAML::BeginSeq;
+    for (const MapSource& source : m.merged_from) {
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "file" << YAML::Value << YAML::DoubleQuoted << source.file;
+      out << YAML::Key << "checksum" << YAML::Value << source.checksum;
+      out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const std::string& name : source.sequences) out << YAML::DoubleQuoted << name;
+      out << YAML::EndSeq;
+      out << YAML::Key << "frames_inserted" << YAML::Value << source.frames_inserted;
+      out << YAML::Key << "software_version" << YAML::Value << YAML::DoubleQuoted << source.software_version;
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
   if (!map.sensor_path().empty()) {
     // x, y, z of each kept origin, to the millimetre: the path is for pictures and reports.
     out << YAML::Key << "sensor_path" << YAML::Value << YAML::Flow << YAML::BeginSeq;
@@ -224,8 +240,9 @@ Header ParseHeader(const std::string& bytes, const std::string& path) {
   return header;
 }
 
-/// Checks the trailer and returns the offset where it starts (= end of the node stream).
-std::size_t VerifyTrailer(const std::string& bytes, const std::string& path) {
+/// Checks the trailer and returns the offset where it starts (= end of the node stream);
+/// `*checksum` is its hash as "fnv1a64:<hex>".
+std::size_t VerifyTrailer(const std::string& bytes, const std::string& path, std::string* checksum) {
   const std::size_t tag = bytes.rfind(kTrailerTag);
   const std::string truncated = path + ": truncated or corrupt map (";
   if (tag == std::string::npos) throw Error(truncated + "no end marker; was the save interrupted?)");
@@ -239,6 +256,7 @@ std::size_t VerifyTrailer(const std::string& bytes, const std::string& path) {
   char expected[17];
   std::snprintf(expected, sizeof(expected), "%016" PRIx64, Fnv1a(kFnvOffset, bytes.data(), tag));
   if (std::string(expected) != hash_text) throw Error(truncated + "checksum mismatch)");
+  *checksum = std::string("fnv1a64:") + expected;
   return tag;
 }
 
@@ -336,6 +354,21 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
     };
     metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
   }
+  if (root.Has("world_frame")) metadata->world_frame = root.Require<std::string>("world_frame");
+  if (root.Has("merged_from")) {
+    const YAML::Node list = internal::ParseYaml(yaml, path)["merged_from"];
+    if (!list.IsSequence()) throw Error(root.Name("merged_from") + ": must be a list");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      internal::YamlSection entry(list[i], path, "merged_from[" + std::to_string(i) + "]");
+      MapSource source;
+      source.file = entry.Require<std::string>("file");
+      source.checksum = entry.Require<std::string>("checksum");
+      source.sequences = entry.Require<std::vector<std::string>>("sequences");
+      source.frames_inserted = entry.Require<std::uint64_t>("frames_inserted");
+      source.software_version = entry.Require<std::string>("software_version");
+      metadata->merged_from.push_back(std::move(source));
+    }
+  }
   sensor_path->clear();
   if (root.Has("sensor_path")) {
     const auto values = root.Require<std::vector<double>>("sensor_path");
@@ -396,7 +429,7 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
   int format = kMapFormatVersion;
   ReadMetadata(header.metadata_yaml, path, &format, &impl->options, &impl->metadata,
                &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
-  const std::size_t data_end = VerifyTrailer(bytes, path);
+  const std::size_t data_end = VerifyTrailer(bytes, path, &impl->file_checksum);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
   if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
     throw Error(path + ": corrupt map (header res " + std::to_string(header.resolution) +

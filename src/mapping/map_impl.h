@@ -27,6 +27,8 @@ struct TraversabilityMap::Impl {
   std::uint64_t frames_inserted = 0;
   std::int64_t last_timestamp_ns = 0;
   std::string software_version;
+  /// For a map read from a file, the hash in its end marker ("fnv1a64:<hex>"); empty otherwise.
+  std::string file_checksum;
   /// TraversabilityMap::sensor_path.
   std::vector<Eigen::Vector3d> sensor_path;
   /// InsertFrame's buffers, kept from frame to frame so that a frame allocates nothing once
