@@ -24,6 +24,10 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 ///    last seen and (over voxels with a fused height) the horizontal sigma take the max, max
 ///    and min;
 ///  - the fused surface height is the inverse-variance weighted mean, its weights add.
+///  - with the merged map's free_space_keeps_traversable, one map's rays do not erode ground
+///    the other map held as traversable before the first map's last frame (as one run in time
+///    order spares it): that map adds only its hits to the occupancy (observations times the
+///    hit log-odds, or its net log-odds when larger).
 /// A voxel only one map holds keeps its values. Without the clamps the result is the same in
 /// any order up to float rounding (commutative exactly); where a sum reaches a clamp, the
 /// order of merges can change the voxel (docs/fleet.md measures by how much).
