@@ -139,6 +139,7 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 }
 
 void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into) {
+  if (into == &from) throw Error(from_file + ": a map merged into itself would count its evidence twice");
   CheckMergeable(*into, "the merged map", from, from_file);
   auto& out = internal::TraversabilityMapAccess::Impl(*into);
   const auto& in = internal::TraversabilityMapAccess::Impl(from);

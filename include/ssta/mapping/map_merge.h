@@ -33,7 +33,8 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 /// order of merges can change the voxel (docs/fleet.md measures by how much).
 /// The metadata: `into` gains `from`'s sequences, its sources (`from` itself when it was not
 /// merged, described as `from_file`), sensor path and frame count; last timestamp is the later.
-/// Throws as CheckMergeable. Not thread safe on `into`; `from` is only read.
+/// Throws as CheckMergeable, and when `from` is `into`. Not thread safe on `into`; `from` is
+/// only read.
 void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into);
 
 /// What MergeMaps did.
