@@ -88,11 +88,12 @@ free_port() {
 }
 port=$(free_port)
 host=$(hostname -s)
+# Addresses given, not looked up: a container's short hostname need not resolve.
 memory_mb=$(($(awk '/MemTotal/ {print $2}' /proc/meminfo) / 1024 / 2))
 mkdir -p "$root/state" "$root/spool"
 cat > "$root/slurm.conf" << CONF
 ClusterName=sstafleet
-SlurmctldHost=$host
+SlurmctldHost=$host(127.0.0.1)
 SlurmctldPort=$port
 SlurmdPort=$((port + 1))
 SlurmUser=root
@@ -116,7 +117,7 @@ JobCompType=jobcomp/none
 MpiDefault=none
 ReturnToService=2
 SchedulerType=sched/backfill
-NodeName=$host CPUs=$(nproc) RealMemory=$memory_mb State=UNKNOWN
+NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=$memory_mb State=UNKNOWN
 PartitionName=fleet Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 CONF
 export SLURM_CONF=$root/slurm.conf
