@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -70,6 +72,10 @@ struct TraversabilityMapAccess {
     return TraversabilityMap(std::move(impl));
   }
 };
+
+/// TraversabilityMap::Impl for the code of src/mapping that is not its friend (the name is
+/// private; the type TraversabilityMapAccess hands out is not).
+using MapImpl = std::remove_reference_t<decltype(TraversabilityMapAccess::Impl(std::declval<TraversabilityMap&>()))>;
 
 }  // namespace internal
 }  // namespace ssta

@@ -12,6 +12,7 @@
 #include <optional>
 #include <sstream>
 
+#include "mapping/map_file_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
 
@@ -138,24 +139,38 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
   }
 }
 
+namespace {
+
+using internal::MapImpl;
+
+/// The rule for merging a map whose last frame is at `from_last_ns` into `out`.
+CombineEvidence CombineInto(const MapImpl& out, std::int64_t from_last_ns) {
+  return {out.tree->getClampingThresMinLog(), out.tree->getClampingThresMaxLog(), out.options.class_clamp_min,
+          out.options.class_clamp_max, out.tree->getProbHitLog(), out.options.free_space_keeps_traversable,
+          out.last_timestamp_ns, from_last_ns};
+}
+
+/// Everything but the voxels of `from` (read from `from_file`) into `out`.
+void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, MapImpl* out) {
+  const auto& in = internal::TraversabilityMapAccess::Impl(from);
+  MapMetadata& meta = out->metadata;
+  meta.sequences.insert(meta.sequences.end(), in.metadata.sequences.begin(), in.metadata.sequences.end());
+  for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
+  if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
+  out->sensor_path.insert(out->sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());
+  out->frames_inserted += in.frames_inserted;
+  out->last_timestamp_ns = std::max(out->last_timestamp_ns, in.last_timestamp_ns);
+}
+
+}  // namespace
+
 void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into) {
   if (into == &from) throw Error(from_file + ": a map merged into itself would count its evidence twice");
   CheckMergeable(*into, "the merged map", from, from_file);
   auto& out = internal::TraversabilityMapAccess::Impl(*into);
   const auto& in = internal::TraversabilityMapAccess::Impl(from);
-  const CombineEvidence combine{out.tree->getClampingThresMinLog(), out.tree->getClampingThresMaxLog(),
-                                out.options.class_clamp_min, out.options.class_clamp_max, out.tree->getProbHitLog(),
-                                out.options.free_space_keeps_traversable, out.last_timestamp_ns,
-                                in.last_timestamp_ns};
-  out.tree->MergeFrom(*in.tree, combine);
-
-  MapMetadata& meta = out.metadata;
-  meta.sequences.insert(meta.sequences.end(), in.metadata.sequences.begin(), in.metadata.sequences.end());
-  for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
-  if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
-  out.sensor_path.insert(out.sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());
-  out.frames_inserted += in.frames_inserted;
-  out.last_timestamp_ns = std::max(out.last_timestamp_ns, in.last_timestamp_ns);
+  out.tree->MergeFrom(*in.tree, CombineInto(out, in.last_timestamp_ns));
+  MergeMetadata(from, from_file, &out);
 }
 
 TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary) {
@@ -167,7 +182,9 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
   std::optional<TraversabilityMap> merged;
   std::string first_file;
   for (const std::string& file : map_files) {
-    const TraversabilityMap map = TraversabilityMap::Load(file);
+    // Read node by node into the merged map: memory holds the merged map, not also this one.
+    internal::MapFileReader reader(file);
+    const TraversabilityMap& map = reader.shell();
     if (!merged) {
       MapMetadata metadata;
       metadata.vehicle = map.metadata().vehicle;
@@ -178,8 +195,14 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
     } else {
       CheckMergeable(*merged, first_file, map, file);
     }
-    MergeMapInto(map, file, &*merged);
-    s.largest_input_nodes = std::max(s.largest_input_nodes, map.NumNodes());
+    auto& out = internal::TraversabilityMapAccess::Impl(*merged);
+    if (reader.nodes() > 0) {
+      out.tree->MergeFromNodes([&](internal::TravNode* node, unsigned depth) { return reader.ReadNode(node, depth); },
+                               CombineInto(out, map.last_timestamp_ns()));
+    }
+    reader.Finish();
+    MergeMetadata(map, file, &out);
+    s.largest_input_nodes = std::max<std::size_t>(s.largest_input_nodes, reader.nodes());
     ++s.inputs;
   }
   s.nodes = merged->NumNodes();

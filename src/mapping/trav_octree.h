@@ -113,6 +113,13 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   template <typename Combine>
   void MergeFrom(const TravOcTree& from, Combine&& combine);
 
+  /// MergeFrom with the other tree's nodes read one at a time, in OctoMap's stream order
+  /// (depth first), instead of from a tree: `read(&node, depth)` fills `node`'s occupancy and
+  /// payload and returns its child mask (MapFileReader::ReadNode). The same tree results as
+  /// from MergeFrom on the tree those nodes make, and memory holds only this tree's nodes.
+  template <typename Read, typename Combine>
+  void MergeFromNodes(Read&& read, Combine&& combine);
+
   /// coordToKeyChecked(x, y, z, key) with the same arithmetic, inline: the per-point loop of
   /// InsertFrame would otherwise pay a call and a store-to-load stall on the key per point.
   bool CoordToKeyChecked(double x, double y, double z, octomap::OcTreeKey* key) const {
@@ -153,6 +160,12 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   /// MergeFrom below `into`, whose whole region the pruned block `block` covers uniformly.
   template <typename Combine>
   void MergeBlockRecurs(TravNode* into, const TravNode& block, Combine& combine);
+  /// MergeFromNodes below `into`, whose region the next node read covers.
+  template <typename Read, typename Combine>
+  void MergeReadRecurs(TravNode* into, unsigned depth, Read& read, Combine& combine);
+  /// Gives `into` (a new node) the payload and the subtree of the next node read.
+  template <typename Read>
+  void ReadSubtree(TravNode* into, unsigned depth, Read& read);
   /// Gives `into` (a node without children) the payload and the subtree of `from`.
   void CopySubtree(TravNode* into, const TravNode& from);
   /// OctoMap's floor(resolution_factor * c) + tree_max_val, or -1 when that lies outside
@@ -283,6 +296,47 @@ void TravOcTree::MergeBlockRecurs(TravNode* into, const TravNode& block, Combine
     }
   }
   if (!pruneNode(into)) into->updateOccupancyChildren();
+}
+
+template <typename Read, typename Combine>
+void TravOcTree::MergeFromNodes(Read&& read, Combine&& combine) {
+  if (root == nullptr) {
+    root = new TravNode();
+    ++tree_size;
+    size_changed = true;
+    ReadSubtree(root, 0, read);
+    return;
+  }
+  MergeReadRecurs(root, 0, read, combine);
+}
+
+template <typename Read, typename Combine>
+void TravOcTree::MergeReadRecurs(TravNode* into, unsigned depth, Read& read, Combine& combine) {
+  TravNode from;
+  const unsigned children = read(&from, depth);
+  if (children == 0) {
+    MergeBlockRecurs(into, from, combine);
+    return;
+  }
+  // As MergeNodeRecurs: an inner node's own payload means nothing, its children are read next.
+  if (!nodeHasChildren(into)) expandNode(into);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (((children >> i) & 1u) == 0) continue;
+    if (nodeChildExists(into, i)) {
+      MergeReadRecurs(getNodeChild(into, i), depth + 1, read, combine);
+    } else {
+      ReadSubtree(createNodeChild(into, i), depth + 1, read);
+    }
+  }
+  if (!pruneNode(into)) into->updateOccupancyChildren();
+}
+
+template <typename Read>
+void TravOcTree::ReadSubtree(TravNode* into, unsigned depth, Read& read) {
+  const unsigned children = read(into, depth);
+  for (unsigned i = 0; i < 8; ++i) {
+    if ((children >> i) & 1u) ReadSubtree(createNodeChild(into, i), depth + 1, read);
+  }
 }
 
 /// Calls fn(key) for every full-resolution voxel of a leaf at `depth` whose lowest voxel is

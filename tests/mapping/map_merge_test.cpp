@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <random>
 #include <string>
@@ -16,6 +18,7 @@
 #include "map_test_util.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
 #include "ssta/mapping/map_merge.h"
 #include "temp_dir.h"
 
@@ -297,6 +300,79 @@ TEST(MapMerge, LaterRaysLeaveGroundHeldAsTraversableButEarlierOnesCount) {
       EXPECT_NEAR(n->getLogOdds(), rays_later ? 1.7 + hit : 0.2, 1e-5) << rays_later << ground_first;
     }
   }
+}
+
+TEST(MapMerge, FilesMergedAsTheyAreReadGiveTheMapOfTheLoadedOnes) {
+  // MergeMaps reads each file node by node into the merged map; MergeMapInto merges loaded
+  // trees. The two must build the same tree: voxels and nodes.
+  const testing::TempDir dir;
+  std::vector<std::string> files;
+  for (std::uint32_t seed : {11u, 12u, 13u}) {
+    files.push_back(dir / ("r" + std::to_string(seed) + ".ot"));
+    RandomMap(seed, 1.0).Save(files.back());
+  }
+  const TraversabilityMap streamed = MergeMaps(files);
+  TraversabilityMap loaded = TraversabilityMap::Load(files[0]);
+  TraversabilityMap in_memory(loaded.options(), MapMetadata{});
+  for (const std::string& f : files) MergeMapInto(TraversabilityMap::Load(f), f, &in_memory);
+  EXPECT_EQ(streamed.NumNodes(), in_memory.NumNodes());
+  const auto a = Voxels(streamed), b = Voxels(in_memory);
+  ASSERT_EQ(a.size(), b.size());
+  int differ = 0;
+  for (const auto& [code, v] : a) differ += SameBits(v, b.at(code)) ? 0 : 1;
+  EXPECT_EQ(differ, 0);
+  EXPECT_EQ(streamed.metadata().merged_from.size(), 3u);
+}
+
+/// `bytes` with its end marker recomputed, as a writer that lies about its nodes would leave it.
+std::string WithTrailer(std::string bytes) {
+  const std::string tag = "\n# ssta-map-end bytes ";
+  bytes.erase(bytes.rfind(tag));
+  std::uint64_t h = 14695981039346656037ull;
+  for (const char c : bytes) {
+    h ^= static_cast<unsigned char>(c);
+    h *= 1099511628211ull;
+  }
+  char trailer[96];
+  std::snprintf(trailer, sizeof trailer, "%s%zu fnv1a64 %016llx\n", tag.c_str(), bytes.size(),
+                static_cast<unsigned long long>(h));
+  return bytes + trailer;
+}
+
+TEST(MapMerge, RefusesDamagedInputsAsLoadDoes) {
+  const testing::TempDir dir;
+  RandomMap(5, 1.0).Save(dir / "good.ot");
+  const std::string bytes = ReadTextFile(dir / "good.ot");
+  auto message = [&](const std::string& name, const std::string& content) {
+    std::ofstream(dir / name, std::ios::binary) << content;
+    try {
+      MergeMaps({dir / "good.ot", dir / name});
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("merged");
+  };
+  const std::size_t data = bytes.find("\ndata\n") + 6;
+  std::string flipped = bytes;
+  flipped[data + 100] = static_cast<char>(flipped[data + 100] ^ 0x40);
+  EXPECT_NE(message("flipped.ot", flipped).find("flipped.ot: truncated or corrupt map (checksum mismatch)"),
+            std::string::npos);
+  EXPECT_NE(message("cut.ot", bytes.substr(0, bytes.size() / 2)).find("cut.ot: truncated or corrupt map"),
+            std::string::npos);
+  // A consistent end marker over a node stream that does not match its header.
+  const std::size_t size_at = bytes.find("\nsize ") + 6;
+  const std::size_t size_end = bytes.find('\n', size_at);
+  const std::uint64_t nodes = std::stoull(bytes.substr(size_at, size_end - size_at));
+  std::string lying = bytes;
+  lying.replace(size_at, size_end - size_at, std::to_string(nodes + 1));
+  EXPECT_NE(message("lying.ot", WithTrailer(lying)).find("lying.ot: corrupt map (the node stream does not match its header)"),
+            std::string::npos);
+  std::string nan = bytes;
+  const float bad = NAN;
+  std::memcpy(&nan[data], &bad, sizeof bad);  // the root's occupancy
+  EXPECT_NE(message("nan.ot", WithTrailer(nan)).find("nan.ot: corrupt map (node 0 holds NaN or infinity)"),
+            std::string::npos);
+  EXPECT_EQ(message("copy.ot", bytes), "merged");
 }
 
 TEST(MapMerge, RefusesMapsThatDoNotShareResolutionVehicleOrFrame) {

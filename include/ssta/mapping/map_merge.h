@@ -47,10 +47,12 @@ struct MergeSummary {
 };
 
 /// Merges the map files `map_files` (at least one) into a new map: the first file's options
-/// and vehicle, every file's evidence added (MergeMapInto) in the order given. The files are
-/// read one at a time, so memory holds the merged map plus one input (its bytes and its
-/// tree), never all inputs. Throws ssta::Error naming the file that cannot be read or merged
-/// (CheckMergeable: against the first file) before the result exists.
+/// and vehicle, every file's evidence added as MergeMapInto adds it, in the order given (the
+/// same tree, bit for bit). Each file is checked as Load checks it (end marker, checksum,
+/// header, every node) and read node by node into the merged map, without a tree of its own:
+/// memory holds the merged map and fixed buffers, whatever the inputs' sizes. Throws
+/// ssta::Error naming the file that cannot be read or merged (CheckMergeable: against the
+/// first file); the partial result is dropped.
 TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary = nullptr);
 
 }  // namespace ssta
