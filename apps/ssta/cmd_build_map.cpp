@@ -76,6 +76,9 @@ void RegisterBuildMap(CLI::App& app) {
                 "(frames already in the map are not fused again)");
   cmd->add_flag("--static", args->options.static_platform,
                 "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
+  cmd->add_option("--world-frame", args->options.world_frame,
+                  "name of the world frame the poses are in, recorded in the map: maps merge only when they "
+                  "name the same frame (docs/fleet.md)");
   cmd->add_option("--max-frames", args->options.frames.max_frames, "fuse at most N frames (0: all)");
   cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_option("--json", args->json, "write the run's summary as JSON to this file")->check(OutputFile());

@@ -25,6 +25,7 @@ void RegisterCalibrateMount(CLI::App& app);
 void RegisterConfig(CLI::App& app);
 void RegisterInspect(CLI::App& app);
 void RegisterConvert(CLI::App& app);
+void RegisterMergeMaps(CLI::App& app);
 
 /// Validators for the paths a command writes, checked while the command line is parsed, so a
 /// run fails before its work and not after it. A file needs an existing folder and must not be

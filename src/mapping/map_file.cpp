@@ -15,6 +15,8 @@
 // stays a valid .ot file; the trailer lets Load reject truncated or damaged files before
 // OctoMap's recursive reader (which does not check its stream) touches them.
 
+#include <algorithm>
+#include <cctype>
 #include <cinttypes>
 #include <cmath>
 #include <cstdio>
@@ -29,6 +31,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "io/yaml_reader.h"
+#include "mapping/map_file_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
 #include "ssta/io/camera_calibration.h"
@@ -150,6 +153,22 @@ std::string MetadataYaml(const TraversabilityMap& map) {
     matrix("refined_body_T_cam0", m.refined_mount->refined);
     out << YAML::EndMap;
   }
+  if (!m.world_frame.empty()) out << YAML::Key << "world_frame" << YAML::Value << YAML::DoubleQuoted << m.world_frame;
+  if (!m.merged_from.empty()) {
+    out << YAML::Key << "merged_from" << YAML::Value << YAML::BeginSeq;
+    for (const MapSource& source : m.merged_from) {
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "file" << YAML::Value << YAML::DoubleQuoted << source.file;
+      out << YAML::Key << "checksum" << YAML::Value << source.checksum;
+      out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const std::string& name : source.sequences) out << YAML::DoubleQuoted << name;
+      out << YAML::EndSeq;
+      out << YAML::Key << "frames_inserted" << YAML::Value << source.frames_inserted;
+      out << YAML::Key << "software_version" << YAML::Value << YAML::DoubleQuoted << source.software_version;
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
   if (!map.sensor_path().empty()) {
     // x, y, z of each kept origin, to the millimetre: the path is for pictures and reports.
     out << YAML::Key << "sensor_path" << YAML::Value << YAML::Flow << YAML::BeginSeq;
@@ -224,22 +243,54 @@ Header ParseHeader(const std::string& bytes, const std::string& path) {
   return header;
 }
 
-/// Checks the trailer and returns the offset where it starts (= end of the node stream).
-std::size_t VerifyTrailer(const std::string& bytes, const std::string& path) {
-  const std::size_t tag = bytes.rfind(kTrailerTag);
+/// Parses the trailer within `tail`, the file's bytes from offset `tail_offset` to its end,
+/// and returns the file offset where it starts (= end of the node stream); `*hash` is the
+/// hash it records, 16 hex digits.
+std::size_t ParseTrailer(const std::string& tail, std::size_t tail_offset, const std::string& path,
+                         std::string* hash) {
+  const std::size_t tag = tail.rfind(kTrailerTag);
   const std::string truncated = path + ": truncated or corrupt map (";
   if (tag == std::string::npos) throw Error(truncated + "no end marker; was the save interrupted?)");
   unsigned long long count = 0;
   char hash_text[17] = {0};
-  const std::string trailer = bytes.substr(tag + sizeof(kTrailerTag) - 1);
+  const std::string trailer = tail.substr(tag + sizeof(kTrailerTag) - 1);
   if (std::sscanf(trailer.c_str(), "%llu fnv1a64 %16[0-9a-f]", &count, hash_text) != 2 ||
-      count != tag || trailer.empty() || trailer.back() != '\n') {
+      count != tail_offset + tag || trailer.empty() || trailer.back() != '\n') {
     throw Error(truncated + "bad end marker)");
   }
-  char expected[17];
-  std::snprintf(expected, sizeof(expected), "%016" PRIx64, Fnv1a(kFnvOffset, bytes.data(), tag));
-  if (std::string(expected) != hash_text) throw Error(truncated + "checksum mismatch)");
-  return tag;
+  *hash = hash_text;
+  return tail_offset + tag;
+}
+
+std::string HashText(std::uint64_t hash) {
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016" PRIx64, hash);
+  return text;
+}
+
+void RequireHash(const std::string& recorded, std::uint64_t computed, const std::string& path, std::string* checksum) {
+  if (HashText(computed) != recorded) throw Error(path + ": truncated or corrupt map (checksum mismatch)");
+  *checksum = "fnv1a64:" + recorded;
+}
+
+/// Checks the trailer and returns the offset where it starts (= end of the node stream);
+/// `*checksum` is its hash as "fnv1a64:<hex>".
+std::size_t VerifyTrailer(const std::string& bytes, const std::string& path, std::string* checksum) {
+  std::string recorded;
+  const std::size_t end = ParseTrailer(bytes, 0, path, &recorded);
+  RequireHash(recorded, Fnv1a(kFnvOffset, bytes.data(), end), path, checksum);
+  return end;
+}
+
+/// Checks a node's values as CheckNodeStream does: OctoMap's reader trusts them.
+void RequireFinite(const internal::TravNode& node, std::uint64_t index, const std::string& path) {
+  const float values[] = {node.getValue(),   node.class_log_odds[0], node.class_log_odds[1],
+                          node.class_log_odds[2], node.slope_deg, node.step_m,
+                          node.max_step_m,   node.surface_z,      node.surface_weight,
+                          node.surface_xy_sigma_m};
+  for (const float v : values) {
+    if (!std::isfinite(v)) throw Error(path + ": corrupt map (node " + std::to_string(index) + " holds NaN or infinity)");
+  }
 }
 
 /// Walks the node stream [begin, end) the way OctoMap's reader will (a node's payload, then a
@@ -262,13 +313,7 @@ void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std
     in.read(&children, 1);
     if (!in) throw Error(corrupt + "the node stream ends inside node " + std::to_string(nodes) + ")");
     ++nodes;
-    const float values[] = {node.getValue(),   node.class_log_odds[0], node.class_log_odds[1],
-                            node.class_log_odds[2], node.slope_deg, node.step_m,
-                            node.max_step_m,   node.surface_z,      node.surface_weight,
-                            node.surface_xy_sigma_m};
-    for (const float v : values) {
-      if (!std::isfinite(v)) throw Error(corrupt + "node " + std::to_string(nodes - 1) + " holds NaN or infinity)");
-    }
+    RequireFinite(node, nodes - 1, path);
     const auto bits = static_cast<unsigned char>(children);
     if (bits == 0) return;
     if (depth >= max_depth) throw Error(corrupt + "a node lies deeper than the tree depth)");
@@ -336,6 +381,21 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
     };
     metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
   }
+  if (root.Has("world_frame")) metadata->world_frame = root.Require<std::string>("world_frame");
+  if (root.Has("merged_from")) {
+    const YAML::Node list = internal::ParseYaml(yaml, path)["merged_from"];
+    if (!list.IsSequence()) throw Error(root.Name("merged_from") + ": must be a list");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      internal::YamlSection entry(list[i], path, "merged_from[" + std::to_string(i) + "]");
+      MapSource source;
+      source.file = entry.Require<std::string>("file");
+      source.checksum = entry.Require<std::string>("checksum");
+      source.sequences = entry.Require<std::vector<std::string>>("sequences");
+      source.frames_inserted = entry.Require<std::uint64_t>("frames_inserted");
+      source.software_version = entry.Require<std::string>("software_version");
+      metadata->merged_from.push_back(std::move(source));
+    }
+  }
   sensor_path->clear();
   if (root.Has("sensor_path")) {
     const auto values = root.Require<std::vector<double>>("sensor_path");
@@ -396,7 +456,7 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
   int format = kMapFormatVersion;
   ReadMetadata(header.metadata_yaml, path, &format, &impl->options, &impl->metadata,
                &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
-  const std::size_t data_end = VerifyTrailer(bytes, path);
+  const std::size_t data_end = VerifyTrailer(bytes, path, &impl->file_checksum);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
   if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
     throw Error(path + ": corrupt map (header res " + std::to_string(header.resolution) +
@@ -421,4 +481,106 @@ TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::st
   return internal::TraversabilityMapAccess::FromImpl(std::move(impl));
 }
 
+namespace internal {
+
+/// Reads the node stream [begin, end) of the file through a fixed buffer.
+class MapFileReader::LimitedFileBuf : public std::streambuf {
+ public:
+  LimitedFileBuf(std::ifstream* file, std::uint64_t length) : file_(file), left_(length) {}
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    if (left_ == 0) return traits_type::eof();
+    const auto n = static_cast<std::streamsize>(std::min<std::uint64_t>(left_, sizeof(buffer_)));
+    file_->read(buffer_, n);
+    if (file_->gcount() != n) return traits_type::eof();
+    left_ -= static_cast<std::uint64_t>(n);
+    setg(buffer_, buffer_, buffer_ + n);
+    return traits_type::to_int_type(buffer_[0]);
+  }
+
+ private:
+  std::ifstream* file_;
+  std::uint64_t left_;
+  char buffer_[1 << 16];
+};
+
+MapFileReader::MapFileReader(const std::string& path) : path_(path), file_(path, std::ios::binary) {
+  if (!file_) throw Error(path + ": cannot open map file");
+  file_.seekg(0, std::ios::end);
+  const auto size = static_cast<std::uint64_t>(file_.tellg());
+  // Pass 1: the trailer from the file's last bytes, then the hash of everything before it.
+  const std::uint64_t tail_size = std::min<std::uint64_t>(size, 128);
+  std::string tail(tail_size, '\0');
+  file_.seekg(static_cast<std::streamoff>(size - tail_size));
+  file_.read(tail.data(), static_cast<std::streamsize>(tail_size));
+  std::string recorded;
+  const std::uint64_t data_end = ParseTrailer(tail, size - tail_size, path, &recorded);
+  file_.seekg(0);
+  std::uint64_t hash = kFnvOffset;
+  std::vector<char> chunk(1 << 20);
+  for (std::uint64_t left = data_end; left > 0;) {
+    const auto n = static_cast<std::streamsize>(std::min<std::uint64_t>(left, chunk.size()));
+    file_.read(chunk.data(), n);
+    if (file_.gcount() != n) throw Error(path + ": read failed");
+    hash = Fnv1a(hash, chunk.data(), static_cast<std::size_t>(n));
+    left -= static_cast<std::uint64_t>(n);
+  }
+  auto impl = std::make_unique<MapImpl>();
+  RequireHash(recorded, hash, path, &impl->file_checksum);
+
+  // Pass 2: the header's lines up to 'data', as Load reads them, then the nodes on demand.
+  file_.seekg(0);
+  std::string header_text;
+  for (std::string line; std::getline(file_, line);) {
+    header_text += line + '\n';
+    if (line.rfind("data", 0) == 0 && (line.size() == 4 || std::isspace(static_cast<unsigned char>(line[4])))) break;
+    if (header_text.size() > data_end) break;
+  }
+  const Header header = ParseHeader(header_text, path);
+  if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
+  ReadMetadata(header.metadata_yaml, path, &format_, &impl->options, &impl->metadata, &impl->frames_inserted,
+               &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
+  if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
+    throw Error(path + ": corrupt map (header res " + std::to_string(header.resolution) +
+                " differs from map_options.resolution_m)");
+  }
+  impl->tree = MakeTree(impl->options);
+  max_depth_ = impl->tree->getTreeDepth();
+  nodes_ = header.size;
+  shell_ = TraversabilityMapAccess::FromImpl(std::move(impl));
+  file_.clear();
+  file_.seekg(static_cast<std::streamoff>(header.data_begin));
+  buffer_ = std::make_unique<LimitedFileBuf>(&file_, data_end - header.data_begin);
+  stream_ = std::make_unique<std::istream>(buffer_.get());
+}
+
+MapFileReader::~MapFileReader() = default;
+
+unsigned char MapFileReader::ReadNode(TravNode* node, unsigned depth) {
+  const std::string corrupt = path_ + ": corrupt map (";
+  if (nodes_read_ >= nodes_) throw Error(corrupt + "the node stream does not match its header)");
+  {
+    const ScopedNodeFormat node_format(format_);
+    node->readData(*stream_);
+  }
+  char children = 0;
+  stream_->read(&children, 1);
+  if (!*stream_) throw Error(corrupt + "the node stream ends inside node " + std::to_string(nodes_read_) + ")");
+  RequireFinite(*node, nodes_read_, path_);
+  ++nodes_read_;
+  const auto bits = static_cast<unsigned char>(children);
+  if (bits != 0 && depth >= max_depth_) throw Error(corrupt + "a node lies deeper than the tree depth)");
+  return bits;
+}
+
+void MapFileReader::Finish() {
+  const bool at_end = stream_->peek() == std::char_traits<char>::eof();
+  if (nodes_read_ != nodes_ || !at_end) {
+    throw Error(path_ + ": corrupt map (the node stream does not match its header)");
+  }
+}
+
+}  // namespace internal
 }  // namespace ssta

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -27,6 +29,8 @@ struct TraversabilityMap::Impl {
   std::uint64_t frames_inserted = 0;
   std::int64_t last_timestamp_ns = 0;
   std::string software_version;
+  /// For a map read from a file, the hash in its end marker ("fnv1a64:<hex>"); empty otherwise.
+  std::string file_checksum;
   /// TraversabilityMap::sensor_path.
   std::vector<Eigen::Vector3d> sensor_path;
   /// InsertFrame's buffers, kept from frame to frame so that a frame allocates nothing once
@@ -68,6 +72,10 @@ struct TraversabilityMapAccess {
     return TraversabilityMap(std::move(impl));
   }
 };
+
+/// TraversabilityMap::Impl for the code of src/mapping that is not its friend (the name is
+/// private; the type TraversabilityMapAccess hands out is not).
+using MapImpl = std::remove_reference_t<decltype(TraversabilityMapAccess::Impl(std::declval<TraversabilityMap&>()))>;
 
 }  // namespace internal
 }  // namespace ssta

@@ -110,6 +110,13 @@ TravOcTree::TravOcTree(double resolution) : octomap::OccupancyOcTreeBase<TravNod
   registration_.EnsureLinking();
 }
 
+void TravOcTree::CopySubtree(TravNode* into, const TravNode& from) {
+  into->copyData(from);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (nodeChildExists(&from, i)) CopySubtree(createNodeChild(into, i), *getNodeChild(&from, i));
+  }
+}
+
 bool TravOcTree::isNodeCollapsible(const TravNode* node) const {
   // Same rule as OctoMap's, spelled out so that it visibly compares the whole payload.
   if (!nodeChildExists(node, 0)) return false;

@@ -103,6 +103,23 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
   template <typename Update, typename Unchanged>
   void UpdateLeaves(const std::vector<std::uint64_t>& codes, Update&& update, Unchanged&& unchanged);
 
+  /// Adds the voxels of `from` (a tree of the same resolution) to this tree: where only one
+  /// tree holds a voxel, the result holds it as that tree has it; where both do,
+  /// `combine(into_voxel, from_voxel)` sets the result's payload and occupancy. A pruned block
+  /// meets the other tree's finer nodes voxel by voxel (it is combined with each of them), so
+  /// the result does not depend on how either tree was pruned. Visited inner nodes are pruned
+  /// or refreshed on the way back up, as UpdateLeaves does. `combine` must not touch the tree
+  /// structure. Memory: the nodes this tree gains; `from` is only read.
+  template <typename Combine>
+  void MergeFrom(const TravOcTree& from, Combine&& combine);
+
+  /// MergeFrom with the other tree's nodes read one at a time, in OctoMap's stream order
+  /// (depth first), instead of from a tree: `read(&node, depth)` fills `node`'s occupancy and
+  /// payload and returns its child mask (MapFileReader::ReadNode). The same tree results as
+  /// from MergeFrom on the tree those nodes make, and memory holds only this tree's nodes.
+  template <typename Read, typename Combine>
+  void MergeFromNodes(Read&& read, Combine&& combine);
+
   /// coordToKeyChecked(x, y, z, key) with the same arithmetic, inline: the per-point loop of
   /// InsertFrame would otherwise pay a call and a store-to-load stall on the key per point.
   bool CoordToKeyChecked(double x, double y, double z, octomap::OcTreeKey* key) const {
@@ -137,6 +154,20 @@ class TravOcTree : public octomap::OccupancyOcTreeBase<TravNode> {
     }
     return getNodeChild(node, pos);
   }
+  /// MergeFrom below `into`, whose region `from` covers node for node.
+  template <typename Combine>
+  void MergeNodeRecurs(TravNode* into, const TravNode& from, Combine& combine);
+  /// MergeFrom below `into`, whose whole region the pruned block `block` covers uniformly.
+  template <typename Combine>
+  void MergeBlockRecurs(TravNode* into, const TravNode& block, Combine& combine);
+  /// MergeFromNodes below `into`, whose region the next node read covers.
+  template <typename Read, typename Combine>
+  void MergeReadRecurs(TravNode* into, unsigned depth, Read& read, Combine& combine);
+  /// Gives `into` (a new node) the payload and the subtree of the next node read.
+  template <typename Read>
+  void ReadSubtree(TravNode* into, unsigned depth, Read& read);
+  /// Gives `into` (a node without children) the payload and the subtree of `from`.
+  void CopySubtree(TravNode* into, const TravNode& from);
   /// OctoMap's floor(resolution_factor * c) + tree_max_val, or -1 when that lies outside
   /// [-tree_max_val, tree_max_val) (where OctoMap's int conversion could overflow).
   int CoordToScaledKey(double c) const {
@@ -215,6 +246,97 @@ void TravOcTree::UpdateBatchRecurs(TravNode* node, bool just_created,
     begin = end;
   }
   if (!pruneNode(node)) node->updateOccupancyChildren();
+}
+
+template <typename Combine>
+void TravOcTree::MergeFrom(const TravOcTree& from, Combine&& combine) {
+  if (from.root == nullptr) return;
+  if (root == nullptr) {
+    root = new TravNode();
+    ++tree_size;
+    size_changed = true;
+    CopySubtree(root, *from.root);
+    return;
+  }
+  MergeNodeRecurs(root, *from.root, combine);
+}
+
+template <typename Combine>
+void TravOcTree::MergeNodeRecurs(TravNode* into, const TravNode& from, Combine& combine) {
+  if (!nodeHasChildren(&from)) {
+    MergeBlockRecurs(into, from, combine);
+    return;
+  }
+  // `from` is finer here: a pruned block of this tree is split so that each of its voxels
+  // meets its counterpart (expandNode copies the block's payload to the eight children).
+  if (!nodeHasChildren(into)) expandNode(into);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!nodeChildExists(&from, i)) continue;
+    const TravNode& from_child = *getNodeChild(&from, i);
+    if (nodeChildExists(into, i)) {
+      MergeNodeRecurs(getNodeChild(into, i), from_child, combine);
+    } else {
+      CopySubtree(createNodeChild(into, i), from_child);
+    }
+  }
+  if (!pruneNode(into)) into->updateOccupancyChildren();
+}
+
+template <typename Combine>
+void TravOcTree::MergeBlockRecurs(TravNode* into, const TravNode& block, Combine& combine) {
+  if (!nodeHasChildren(into)) {
+    combine(*into, block);
+    return;
+  }
+  for (unsigned i = 0; i < 8; ++i) {
+    if (nodeChildExists(into, i)) {
+      MergeBlockRecurs(getNodeChild(into, i), block, combine);
+    } else {
+      createNodeChild(into, i)->copyData(block);  // unobserved here: the block's voxels as they are
+    }
+  }
+  if (!pruneNode(into)) into->updateOccupancyChildren();
+}
+
+template <typename Read, typename Combine>
+void TravOcTree::MergeFromNodes(Read&& read, Combine&& combine) {
+  if (root == nullptr) {
+    root = new TravNode();
+    ++tree_size;
+    size_changed = true;
+    ReadSubtree(root, 0, read);
+    return;
+  }
+  MergeReadRecurs(root, 0, read, combine);
+}
+
+template <typename Read, typename Combine>
+void TravOcTree::MergeReadRecurs(TravNode* into, unsigned depth, Read& read, Combine& combine) {
+  TravNode from;
+  const unsigned children = read(&from, depth);
+  if (children == 0) {
+    MergeBlockRecurs(into, from, combine);
+    return;
+  }
+  // As MergeNodeRecurs: an inner node's own payload means nothing, its children are read next.
+  if (!nodeHasChildren(into)) expandNode(into);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (((children >> i) & 1u) == 0) continue;
+    if (nodeChildExists(into, i)) {
+      MergeReadRecurs(getNodeChild(into, i), depth + 1, read, combine);
+    } else {
+      ReadSubtree(createNodeChild(into, i), depth + 1, read);
+    }
+  }
+  if (!pruneNode(into)) into->updateOccupancyChildren();
+}
+
+template <typename Read>
+void TravOcTree::ReadSubtree(TravNode* into, unsigned depth, Read& read) {
+  const unsigned children = read(into, depth);
+  for (unsigned i = 0; i < 8; ++i) {
+    if ((children >> i) & 1u) ReadSubtree(createNodeChild(into, i), depth + 1, read);
+  }
 }
 
 /// Calls fn(key) for every full-resolution voxel of a leaf at `depth` whose lowest voxel is

@@ -47,6 +47,7 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
     metadata.vehicle = config.vehicle;
     metadata.calibration_summary = calibration;
     metadata.sequences = {sequence_name};
+    metadata.world_frame = options.world_frame;
     return TraversabilityMap(config.map.FusionFor(geometry.f * geometry.baseline_m, config.stereo.disparity_sigma_px),
                              metadata);
   }
@@ -63,6 +64,11 @@ TraversabilityMap OpenMap(const BuildMapOptions& options, const Config& config, 
   RequireSameVehicle(map.metadata().vehicle, options.map_path + ": the map was built for", config.vehicle,
                      "the config gives", "",
                      "a resumed map keeps its vehicle: its classes are that vehicle's; build a new map for this one");
+  // A resumed map's voxels are in its world frame: poses in another would land beside them.
+  if (!options.world_frame.empty() && options.world_frame != map.metadata().world_frame) {
+    throw Error(options.map_path + ": the map's world frame is '" + map.metadata().world_frame +
+                "', but --world-frame gives '" + options.world_frame + "'; a resumed map keeps its frame");
+  }
   MapMetadata metadata = map.metadata();
   *continues_sequence = !metadata.sequences.empty() && SameSequenceName(metadata.sequences.back(), sequence_name);
   if (!*continues_sequence) metadata.sequences.push_back(sequence_name);

@@ -237,6 +237,15 @@ const std::vector<BadInput>& Cases() {
          std::ofstream(d + "/c.yaml") << "map:\n  resolution_m: 0.2\n";
        },
        kBuild + " --resume --config {dir}/c.yaml", {"{dir}/m.ot: map resolution", "differs from map.resolution_m 0.2"}},
+      {"MergeMapsOfAnotherWorldFrame",
+       [](auto&, auto& d) {
+         ASSERT_EQ(RunSsta(Substitute(kBuild + " --world-frame site", kEuroc + "/mav0", d)).exit_code, 0);
+         const std::string other = "build-map -q --static --config " + kEurocConfig +
+                                   " --sequence {root} --map {dir}/n.ot --world-frame odom";
+         ASSERT_EQ(RunSsta(Substitute(other, kEuroc + "/mav0", d)).exit_code, 0);
+       },
+       "merge-maps {dir}/m.ot {dir}/n.ot --out {dir}/merged.ot",
+       {"{dir}/n.ot: world frame 'odom', but {dir}/m.ot has 'site'"}},
   };
   return cases;
 }

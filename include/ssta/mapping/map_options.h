@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -115,12 +116,27 @@ struct RefinedMount {
   Eigen::Isometry3d refined = Eigen::Isometry3d::Identity();     ///< body_T_cam0 in use at the end
 };
 
+/// One map file that went into a merge (MergeMaps): where its evidence came from.
+struct MapSource {
+  std::string file;      ///< the file as the merge was given it
+  std::string checksum;  ///< "fnv1a64:<16 hex digits>", the hash in the file's end marker
+  std::vector<std::string> sequences;  ///< the sequences fused into it, in order
+  std::uint64_t frames_inserted = 0;   ///< frames fused into it
+  std::string software_version;        ///< the ssta version that wrote it
+};
+
 struct MapMetadata {
   VehicleOptions vehicle;           ///< the vehicle whose limits gave the classes (and costs)
   std::string calibration_summary;  ///< free text or YAML describing the stereo calibration
   std::vector<std::string> sequences;  ///< names of the sequences fused, in fusion order
   /// Set by a build with online mount refinement once a solve was applied; nullopt otherwise.
   std::optional<RefinedMount> refined_mount;
+  /// Name of the world frame W the poses were given in (`build-map --world-frame`); empty:
+  /// unnamed. Maps merge only when they name the same frame: their voxels must share W.
+  std::string world_frame;
+  /// A merged map: the built (not merged) maps whose evidence it holds, in merge order (a
+  /// merge of merged maps lists their sources). Empty for a map that was not merged.
+  std::vector<MapSource> merged_from;
 };
 
 }  // namespace ssta

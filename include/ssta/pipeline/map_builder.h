@@ -26,6 +26,10 @@ struct BuildMapOptions {
   /// The platform stands still and the sequence has no poses: every frame is taken at the
   /// origin, levelled by gravity (IMU, else a level body), yaw 0.
   bool static_platform = false;
+  /// Name of the world frame the sequence's poses are in, recorded in a new map's metadata
+  /// (MapMetadata::world_frame): maps merge only when they name the same frame. Empty:
+  /// unnamed; with `resume`, a non-empty name must be the map's.
+  std::string world_frame;
   /// Which frames to fuse; with `strict` a frame that cannot be used (no pose, unreadable
   /// image, ...) is an error, and the map keeps what was fused before it.
   FrameSelection frames;

@@ -1,0 +1,58 @@
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "ssta/mapping/traversability_map.h"
+
+namespace ssta {
+
+/// Throws ssta::Error when the map `from` (read from the file `from_file`) cannot be merged
+/// into `into` (from `into_file`), naming both files and the difference: another resolution,
+/// another vehicle (its classes are that vehicle's), another world frame name, or another
+/// evidence scale (the occupancy and class log-odds clamps and the occupied threshold, which
+/// give the sums their meaning). The other fusion options (range, hit and miss
+/// probabilities, free-space rules) shaped how each map gathered its evidence and may differ;
+/// the merged map keeps `into`'s.
+void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
+                    const TraversabilityMap& from, const std::string& from_file);
+
+/// Adds the evidence of `from` to `into`, voxel by voxel (docs/fleet.md):
+///  - occupancy and the three class log-odds add, clamped to the map's clamps;
+///  - observations add; mean slope and step are the observation-weighted means; max step,
+///    last seen and (over voxels with a fused height) the horizontal sigma take the max, max
+///    and min;
+///  - the fused surface height is the inverse-variance weighted mean, its weights add.
+///  - with the merged map's free_space_keeps_traversable, one map's rays do not erode ground
+///    the other map held as traversable before the first map's last frame (as one run in time
+///    order spares it): that map adds only its hits to the occupancy (observations times the
+///    hit log-odds, or its net log-odds when larger).
+/// A voxel only one map holds keeps its values. Without the clamps the result is the same in
+/// any order up to float rounding (commutative exactly); where a sum reaches a clamp, the
+/// order of merges can change the voxel (docs/fleet.md measures by how much).
+/// The metadata: `into` gains `from`'s sequences, its sources (`from` itself when it was not
+/// merged, described as `from_file`), sensor path and frame count; last timestamp is the later.
+/// Throws as CheckMergeable, and when `from` is `into`. Not thread safe on `into`; `from` is
+/// only read.
+void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into);
+
+/// What MergeMaps did.
+struct MergeSummary {
+  std::size_t inputs = 0;        ///< map files merged
+  std::size_t nodes = 0;         ///< octree nodes of the merged map
+  std::size_t largest_input_nodes = 0;  ///< nodes of the largest input (memory: see MergeMaps)
+  double wall_s = 0.0;           ///< time to read and merge [s]
+  std::string BriefReport() const;
+};
+
+/// Merges the map files `map_files` (at least one) into a new map: the first file's options
+/// and vehicle, every file's evidence added as MergeMapInto adds it, in the order given (the
+/// same tree, bit for bit). Each file is checked as Load checks it (end marker, checksum,
+/// header, every node) and read node by node into the merged map, without a tree of its own:
+/// memory holds the merged map and fixed buffers, whatever the inputs' sizes. Throws
+/// ssta::Error naming the file that cannot be read or merged (CheckMergeable: against the
+/// first file); the partial result is dropped.
+TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary = nullptr);
+
+}  // namespace ssta

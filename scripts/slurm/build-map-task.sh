@@ -1,0 +1,43 @@
+#!/bin/bash
+# One array task of fleet-submit.sh: `ssta build-map` of the recording on line
+# SLURM_ARRAY_TASK_ID + 1 of OUT/todo.txt into OUT/maps/<name>.ot, then the task's record
+# OUT/done/<name>.tsv (name, recording, its checksum, map, its checksum) once the map reads
+# back. A map an interrupted task left (checkpoints, or a stop on SIGTERM at the time limit)
+# is continued with --resume.
+#   build-map-task.sh CONF OUT
+set -euo pipefail
+conf=${1:?conf}
+out=${2:?out}
+# shellcheck source=fleet.conf
+source "$conf"
+index=${SLURM_ARRAY_TASK_ID:?"not a Slurm array task"}
+rec=$(sed -n "$((index + 1))p" "$out/todo.txt")
+[[ -n $rec ]] || { echo "$out/todo.txt: no line $((index + 1))" >&2; exit 1; }
+name=$(basename "$rec")
+map="$out/maps/$name.ot"
+rm -f "$out/done/$name.tsv"
+
+args=()
+for c in ${BUILD_MAP_CONFIG:-}; do args+=(--config "$c"); done
+# shellcheck disable=SC2206  # a list of words by design
+args+=(${BUILD_MAP_ARGS:-})
+if [[ -f $map ]]; then
+  # A map that does not read (a crash while the first save was renamed cannot leave one, but
+  # a full disk can) is built again from the start.
+  if "$SSTA" query --map "$map" --at 0,0 > /dev/null 2>&1; then
+    args+=(--resume)
+  else
+    echo "$map: does not read back; building it again" >&2
+    rm -f "$map"
+  fi
+fi
+echo "build-map $name on $(hostname) with $CPUS_PER_TASK threads: $rec -> $map"
+"$SSTA" --threads "${SLURM_CPUS_PER_TASK:-$CPUS_PER_TASK}" build-map --sequence "$rec" --map "$map" "${args[@]}" -q
+"$SSTA" query --map "$map" --at 0,0 > /dev/null  # it reads back: checksum and structure
+
+# The recording's checksum: SHA-256 over the sorted list of its files' SHA-256 sums.
+rec_sum=$(cd "$rec" && find . -type f -print0 | LC_ALL=C sort -z | xargs -0 sha256sum | sha256sum | cut -d' ' -f1)
+map_sum=$(sha256sum "$map" | cut -d' ' -f1)
+printf '%s\t%s\t%s\t%s\t%s\n' "$name" "$rec" "$rec_sum" "$map" "$map_sum" > "$out/done/$name.tsv.tmp"
+mv "$out/done/$name.tsv.tmp" "$out/done/$name.tsv"
+echo "done: $map sha256 $map_sum"

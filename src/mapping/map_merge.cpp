@@ -1,0 +1,221 @@
+// Merging maps: the evidence of several recordings of one site added into one map
+// (docs/fleet.md). The tree walk is TravOcTree::MergeFrom; this file holds the per-voxel rule,
+// the checks and the metadata.
+
+#include "ssta/mapping/map_merge.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "mapping/map_file_reader.h"
+#include "mapping/map_impl.h"
+#include "ssta/core/error.h"
+
+namespace ssta {
+namespace {
+
+float ClampedSum(float a, float b, double lo, double hi) {
+  return static_cast<float>(std::min(hi, std::max(lo, static_cast<double>(a) + b)));
+}
+
+/// Mean of `a` over `wa` samples and `b` over `wb`, in double: the same bits for (a, b) and
+/// (b, a). Precondition: wa + wb > 0.
+float WeightedMean(float a, double wa, float b, double wb) {
+  return static_cast<float>((wa * a + wb * b) / (wa + wb));
+}
+
+/// The voxel's verdict is traversable (as frame_fusion.cpp's HeldAsTraversable).
+bool HeldAsTraversable(const internal::TravNode& node) {
+  const auto& l = node.class_log_odds;
+  return l[0] > 0.0f && l[0] > l[1] && l[0] > l[2];
+}
+
+/// The per-voxel rule of MergeMapInto (map_merge.h). Every step is symmetric in its two
+/// operands, so merge(A, B) and merge(B, A) hold the same bits.
+struct CombineEvidence {
+  double occupancy_min, occupancy_max, class_min, class_max;
+  double occupancy_hit;  ///< log-odds a hit adds (MapOptions::occupancy_hit_prob)
+  bool keeps_traversable;  ///< MapOptions::free_space_keeps_traversable of the merged map
+  /// The last frame of each map [ns] (TraversabilityMap::last_timestamp_ns).
+  std::int64_t into_last_ns, from_last_ns;
+
+  /// One run over the recordings in time order spares ground held as traversable from the
+  /// rays of later frames (free_space_keeps_traversable), but not from the rays of earlier
+  /// ones: those passed before the ground was seen, and the hits had to outweigh them. So a
+  /// map's misses are left out where the other map held the voxel as traversable ground
+  /// before the passing map's last frame.
+  bool Spared(const internal::TravNode& ground, std::int64_t passing_last_ns) const {
+    return keeps_traversable && HeldAsTraversable(ground) && ground.last_seen_ns < passing_last_ns;
+  }
+  /// What `passed` adds to the occupancy of ground the other map held: its hits without its
+  /// misses. A map keeps only the net log-odds, so its hits are estimated from its
+  /// observations (each a hit of occupancy_hit_prob; hits without a class verdict are not
+  /// counted, so the net sum is the floor).
+  float HitsOnly(const internal::TravNode& passed) const {
+    const double hits = std::min(occupancy_max, passed.observations * occupancy_hit);
+    return std::max(passed.getLogOdds(), static_cast<float>(hits));
+  }
+
+  void operator()(internal::TravNode& into, const internal::TravNode& from) const {
+    float into_occupancy = into.getLogOdds(), from_occupancy = from.getLogOdds();
+    if (Spared(into, from_last_ns)) from_occupancy = HitsOnly(from);
+    if (Spared(from, into_last_ns)) into_occupancy = HitsOnly(into);
+    into.setLogOdds(ClampedSum(into_occupancy, from_occupancy, occupancy_min, occupancy_max));
+    for (int k = 0; k < 3; ++k) {
+      into.class_log_odds[k] = ClampedSum(into.class_log_odds[k], from.class_log_odds[k], class_min, class_max);
+    }
+    const double n_into = into.observations, n_from = from.observations;
+    if (n_into + n_from > 0.0) {
+      into.slope_deg = WeightedMean(into.slope_deg, n_into, from.slope_deg, n_from);
+      into.step_m = WeightedMean(into.step_m, n_into, from.step_m, n_from);
+    }
+    const std::uint64_t observations = std::uint64_t{into.observations} + from.observations;
+    into.observations = static_cast<std::uint32_t>(std::min<std::uint64_t>(observations, UINT32_MAX));
+    into.max_step_m = std::max(into.max_step_m, from.max_step_m);
+    into.last_seen_ns = std::max(into.last_seen_ns, from.last_seen_ns);
+    if (from.surface_weight > 0.0f) {
+      if (into.surface_weight > 0.0f) {
+        into.surface_z = WeightedMean(into.surface_z, into.surface_weight, from.surface_z, from.surface_weight);
+        into.surface_xy_sigma_m = std::min(into.surface_xy_sigma_m, from.surface_xy_sigma_m);
+      } else {
+        into.surface_z = from.surface_z;
+        into.surface_xy_sigma_m = from.surface_xy_sigma_m;
+      }
+      into.surface_weight = static_cast<float>(static_cast<double>(into.surface_weight) + from.surface_weight);
+    }
+  }
+};
+
+std::string Number(double v) { return ShortestDecimal(v); }
+
+/// `from`'s sources as the merged map lists them: its own when it is a merge, else itself.
+std::vector<MapSource> SourcesOf(const TraversabilityMap& map, const std::string& file) {
+  if (!map.metadata().merged_from.empty()) return map.metadata().merged_from;
+  MapSource source;
+  source.file = file;
+  source.checksum = internal::TraversabilityMapAccess::Impl(map).file_checksum;
+  source.sequences = map.metadata().sequences;
+  source.frames_inserted = map.frames_inserted();
+  source.software_version = map.software_version();
+  return {source};
+}
+
+}  // namespace
+
+void CheckMergeable(const TraversabilityMap& into, const std::string& into_file, const TraversabilityMap& from,
+                    const std::string& from_file) {
+  const MapOptions& a = into.options();
+  const MapOptions& b = from.options();
+  const std::string advice = "maps merge only when they share resolution, vehicle, world frame and evidence scale";
+  if (std::abs(a.resolution_m - b.resolution_m) > 1e-9 * a.resolution_m) {
+    throw Error(from_file + ": resolution " + Number(b.resolution_m) + " m, but " + into_file + " has " +
+                Number(a.resolution_m) + " m; " + advice);
+  }
+  RequireSameVehicle(into.metadata().vehicle, into_file + ": built for", from.metadata().vehicle,
+                     from_file + ": built for", "", advice);
+  if (into.metadata().world_frame != from.metadata().world_frame) {
+    const auto name = [](const std::string& frame) { return frame.empty() ? std::string("(unnamed)") : "'" + frame + "'"; };
+    throw Error(from_file + ": world frame " + name(from.metadata().world_frame) + ", but " + into_file + " has " +
+                name(into.metadata().world_frame) + "; " + advice);
+  }
+  const struct {
+    const char* key;
+    double MapOptions::*field;
+  } scale[] = {{"occupancy_clamp_min_prob", &MapOptions::occupancy_clamp_min_prob},
+               {"occupancy_clamp_max_prob", &MapOptions::occupancy_clamp_max_prob},
+               {"occupied_threshold_prob", &MapOptions::occupied_threshold_prob},
+               {"class_clamp_min", &MapOptions::class_clamp_min},
+               {"class_clamp_max", &MapOptions::class_clamp_max}};
+  for (const auto& s : scale) {
+    if (a.*s.field != b.*s.field) {
+      throw Error(from_file + ": map_options." + s.key + " " + Number(b.*s.field) + ", but " + into_file + " has " +
+                  Number(a.*s.field) + "; " + advice);
+    }
+  }
+}
+
+namespace {
+
+using internal::MapImpl;
+
+/// The rule for merging a map whose last frame is at `from_last_ns` into `out`.
+CombineEvidence CombineInto(const MapImpl& out, std::int64_t from_last_ns) {
+  return {out.tree->getClampingThresMinLog(), out.tree->getClampingThresMaxLog(), out.options.class_clamp_min,
+          out.options.class_clamp_max, out.tree->getProbHitLog(), out.options.free_space_keeps_traversable,
+          out.last_timestamp_ns, from_last_ns};
+}
+
+/// Everything but the voxels of `from` (read from `from_file`) into `out`.
+void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, MapImpl* out) {
+  const auto& in = internal::TraversabilityMapAccess::Impl(from);
+  MapMetadata& meta = out->metadata;
+  meta.sequences.insert(meta.sequences.end(), in.metadata.sequences.begin(), in.metadata.sequences.end());
+  for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
+  if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
+  out->sensor_path.insert(out->sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());
+  out->frames_inserted += in.frames_inserted;
+  out->last_timestamp_ns = std::max(out->last_timestamp_ns, in.last_timestamp_ns);
+}
+
+}  // namespace
+
+void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into) {
+  if (into == &from) throw Error(from_file + ": a map merged into itself would count its evidence twice");
+  CheckMergeable(*into, "the merged map", from, from_file);
+  auto& out = internal::TraversabilityMapAccess::Impl(*into);
+  const auto& in = internal::TraversabilityMapAccess::Impl(from);
+  out.tree->MergeFrom(*in.tree, CombineInto(out, in.last_timestamp_ns));
+  MergeMetadata(from, from_file, &out);
+}
+
+TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary) {
+  if (map_files.empty()) throw Error("merge: no map to merge");
+  const auto start = std::chrono::steady_clock::now();
+  MergeSummary s;
+  // The first input is read and checked like the others; the merged map starts empty with its
+  // options, vehicle and frame, so every input enters through the same rule.
+  std::optional<TraversabilityMap> merged;
+  std::string first_file;
+  for (const std::string& file : map_files) {
+    // Read node by node into the merged map: memory holds the merged map, not also this one.
+    internal::MapFileReader reader(file);
+    const TraversabilityMap& map = reader.shell();
+    if (!merged) {
+      MapMetadata metadata;
+      metadata.vehicle = map.metadata().vehicle;
+      metadata.world_frame = map.metadata().world_frame;
+      metadata.calibration_summary = map.metadata().calibration_summary;
+      merged.emplace(map.options(), metadata);
+      first_file = file;
+    } else {
+      CheckMergeable(*merged, first_file, map, file);
+    }
+    auto& out = internal::TraversabilityMapAccess::Impl(*merged);
+    if (reader.nodes() > 0) {
+      out.tree->MergeFromNodes([&](internal::TravNode* node, unsigned depth) { return reader.ReadNode(node, depth); },
+                               CombineInto(out, map.last_timestamp_ns()));
+    }
+    reader.Finish();
+    MergeMetadata(map, file, &out);
+    s.largest_input_nodes = std::max<std::size_t>(s.largest_input_nodes, reader.nodes());
+    ++s.inputs;
+  }
+  s.nodes = merged->NumNodes();
+  s.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (summary != nullptr) *summary = s;
+  return std::move(*merged);
+}
+
+std::string MergeSummary::BriefReport() const {
+  std::ostringstream r;
+  r << "merged " << inputs << " map" << (inputs == 1 ? "" : "s") << " into " << nodes << " nodes (largest input "
+    << largest_input_nodes << ") in " << wall_s << " s\n";
+  return r.str();
+}
+
+}  // namespace ssta
