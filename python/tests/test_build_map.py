@@ -54,7 +54,16 @@ def test_resume_continues_the_map(yard, tmp_path):
     assert ssta.Map.open(tmp_path / "m.ot").metadata["frames_inserted"] == 6
 
 
-def test_ctrl_c_stops_after_the_frame_and_saves(yard, tmp_path):
+@pytest.fixture
+def ctrl_c_raises():
+    # A shell starts background jobs (as CI may run this suite) with SIGINT ignored, and Python
+    # then leaves it ignored: install its own handler, as an interactive session has it.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_ctrl_c_stops_after_the_frame_and_saves(yard, tmp_path, ctrl_c_raises):
     def interrupt_after_two(done, total):
         if done == 2:
             os.kill(os.getpid(), signal.SIGINT)  # as Ctrl-C on the terminal
