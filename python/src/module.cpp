@@ -647,7 +647,8 @@ Classifies every usable frame of a sequence and fuses it into the map at `map_pa
 `build-map --json`: frames listed, used, skipped with their reasons, map size, wall time, ...).
 
 Args:
-    sequence: an ASL / EuRoC sequence folder or a KITTI raw drive.
+    sequence: an ASL / EuRoC sequence folder, a KITTI raw drive, or a ROS 1 / ROS 2 bag (topics
+        found automatically, docs/bags.md).
     map_path: the .ot file to write (its folder must exist). Written atomically and
         checkpointed (config map.checkpoint_every_frames).
     config: None (the defaults and the sequence's vehicle.yaml, as the command line without

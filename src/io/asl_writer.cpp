@@ -23,6 +23,16 @@ std::string MatrixYaml(const Eigen::Matrix4d& m) {
   return out.str();
 }
 
+/// `text` inside a double-quoted YAML scalar.
+std::string YamlEscaped(const std::string& text) {
+  std::string out;
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
 }  // namespace
 
 void WriteAslSequence(const Sequence& sequence, const std::string& out, const std::function<void(int, int)>& progress) {
@@ -47,11 +57,6 @@ void WriteAslSequence(const Sequence& sequence, const std::string& out, const st
     list << frame.timestamp_ns << "," << name << "\n";
     if (progress) progress(++done, total);
   }
-  // The lists go last: a folder whose conversion stopped half-way has no data.csv to be read as
-  // a (shorter) sequence.
-  WriteTextAtomically(cam[0] + "/data.csv", list.str());
-  WriteTextAtomically(cam[1] + "/data.csv", list.str());
-
   if (!sequence.imu().empty()) {
     MakeDirectories(out + "/imu0");
     std::ostringstream csv;
@@ -63,7 +68,7 @@ void WriteAslSequence(const Sequence& sequence, const std::string& out, const st
           << s.specific_force.x() << "," << s.specific_force.y() << "," << s.specific_force.z() << "\n";
     }
     WriteTextAtomically(out + "/imu0/data.csv", csv.str());
-    WriteTextAtomically(out + "/imu0/sensor.yaml", "sensor_type: imu\ncomment: " + comment + "\n" +
+    WriteTextAtomically(out + "/imu0/sensor.yaml", "sensor_type: imu\ncomment: \"" + YamlEscaped(comment) + "\"\n" +
                                                         MatrixYaml(sequence.body_T_imu().matrix()));
   }
   if (!sequence.poses().empty()) {
@@ -77,6 +82,11 @@ void WriteAslSequence(const Sequence& sequence, const std::string& out, const st
     }
     WriteTextAtomically(out + "/pose0/data.csv", csv.str());
   }
+  // The camera lists go last: a folder whose conversion stopped half-way has no data.csv to be
+  // read as a (shorter, or IMU-less) sequence.
+  WriteTextAtomically(cam[0] + "/data.csv", list.str());
+  WriteTextAtomically(cam[1] + "/data.csv", list.str());
+
 }
 
 }  // namespace ssta

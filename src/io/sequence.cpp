@@ -188,6 +188,13 @@ Sequence::Sequence(SequenceData data) : data_(std::move(data)) {}
 
 Sequence Sequence::Open(const std::string& path, const BagTopics& topics) {
   if (IsBagPath(path)) return OpenBag(path, topics);
+  for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--left-topic", &topics.left},
+                                      {"--right-topic", &topics.right},
+                                      {"--imu-topic", &topics.imu},
+                                      {"--pose-topic", &topics.pose},
+                                      {"--pose-frame", &topics.pose_frame}}) {
+    if (!value->empty()) throw Error(path + ": " + option + " applies to ROS bags; this is not one (a .bag, .mcap, .db3 or rosbag2 folder)");
+  }
   if (!fs::exists(path)) throw Error(path + ": sequence not found (a folder or a ROS bag)");
   if (!fs::is_directory(path)) {
     throw Error(path + ": not a sequence: neither a folder (ASL, KITTI raw) nor a ROS bag (.bag, .mcap, .db3, a "

@@ -211,6 +211,92 @@ TEST(BagTopics, WithoutMountsAndPosesTheAssumptionsAreNoted) {
   EXPECT_EQ(images.left(5, 7), 10);
 }
 
+// A camera with its own IMU and no robot around it (a RealSense D435i's bag): no body frame in
+// /tf, so the body is made up around the camera, and the IMU's mount is read relative to the
+// camera and carried through that assumed mount: at rest the IMU must read gravity as up.
+TEST(BagTopics, AnImuOnTheCameraWithoutABodyFrameIsMountedThroughTheAssumedMount) {
+  testing::TempDir dir;
+  testing::BagContent c = TinyContent();
+  // The IMU in the camera's optical axes (x right, y down, z forward): at rest, specific force
+  // points up, which is optical -y.
+  for (int i = 0; i < 5; ++i) {
+    internal::RosImu imu;
+    imu.header = {900'000'000 + i * 100'000'000, testing::kLeftFrame};
+    imu.linear_acceleration = {0.0, -9.81, 0.0};
+    c.imu.push_back(imu);
+  }
+  testing::WriteRos1Bag(c, dir / "d435i.bag");
+  const Sequence s = Sequence::Open(dir / "d435i.bag");
+  ASSERT_EQ(s.imu().size(), 5u);
+  const Eigen::Vector3d up_in_body = s.body_T_imu().linear() * s.imu().front().specific_force;
+  EXPECT_TRUE(up_in_body.isApprox(Eigen::Vector3d(0, 0, 9.81), 1e-9)) << up_in_body.transpose();
+  // Without poses or a mount: the two assumptions are noted, the IMU's is not.
+  EXPECT_EQ(s.notes().size(), 2u);
+}
+
+// A recording whose poses live only on /tf (a SLAM node's odom -> base_link, no Odometry topic)
+// is mapped with them by default; a /tf that only holds fixed mounts gives no poses.
+TEST(BagTopics, TfMovingTheBodyIsThePoseByDefault) {
+  testing::TempDir dir;
+  const std::string path = dir / "tf_only.bag";
+  testing::WriteRos1Bag(TinyContent(), path);
+  const auto add_tf = [&](const char* topic, double x0, double x1) {
+    rosbag::Bag bag(path, rosbag::bagmode::Append);
+    for (const auto& [t, x] : {std::pair<double, double>{0.9, x0}, {1.3, x1}}) {
+      geometry_msgs::TransformStamped link;
+      link.header.stamp.fromSec(t);
+      link.header.frame_id = "odom";
+      link.child_frame_id = "base_link";
+      link.transform.translation.x = x;
+      link.transform.rotation.w = 1.0;
+      tf2_msgs::TFMessage m;
+      m.transforms.push_back(link);
+      bag.write(topic, ros::Time(t), m);
+    }
+  };
+  add_tf("/tf_static", 0.0, 0.0);
+  EXPECT_TRUE(Sequence::Open(path).poses().empty());
+  add_tf("/tf", 0.0, 4.0);
+  const Sequence s = Sequence::Open(path);
+  ASSERT_EQ(s.poses().size(), 2u);
+  EXPECT_NEAR(s.WorldTBodyAt(1'100'000'000)->translation().x(), 2.0, 1e-9);
+}
+
+// A misconfigured static_transform_publisher (a zero quaternion) on a link SSTA does not use
+// leaves the bag readable, as tf2 leaves it out; it is noted.
+TEST(BagTopics, ABrokenTransformIsLeftOutWithANote) {
+  testing::TempDir dir;
+  const std::string path = dir / "bad_tf.bag";
+  testing::WriteRos1Bag(TinyContent(), path);
+  {
+    rosbag::Bag bag(path, rosbag::bagmode::Append);
+    geometry_msgs::TransformStamped bad;
+    bad.header.frame_id = "base_link";
+    bad.child_frame_id = "laser";  // rotation left 0 0 0 0
+    tf2_msgs::TFMessage m;
+    m.transforms.push_back(bad);
+    bag.write("/tf_static", ros::Time(1.0), m);
+  }
+  const Sequence s = Sequence::Open(path);
+  EXPECT_EQ(s.frames().size(), 2u);
+  ASSERT_FALSE(s.notes().empty());
+  EXPECT_NE(s.notes().front().find("/tf_static base_link -> laser: quaternion norm 0"), std::string::npos)
+      << s.notes().front();
+}
+
+TEST(BagTopics, TopicOptionsOnAFolderAreAnError) {
+  BagTopics topics;
+  topics.imu = "/imu";
+  const std::string euroc = std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini";
+  try {
+    Sequence::Open(euroc, topics);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(std::string(e.what()), euroc + ": --imu-topic applies to ROS bags; this is not one (a .bag, .mcap, "
+                                             ".db3 or rosbag2 folder)");
+  }
+}
+
 TEST(BagTopics, ChoiceErrorsNameTheBagAndTheWayOut) {
   testing::TempDir dir;
   const std::string path = dir / "tiny.bag";
@@ -385,10 +471,20 @@ TEST(BagImages, EncodingsBecomeGrey) {
   for (std::size_t p = 1; p < bgra.data.size(); p += 4) bgra.data[p] = 255;  // green
   EXPECT_EQ(internal::GreyImage(bgra, "c")(1, 3), 150);
   // A Bayer mosaic of a uniform grey scene demosaics to that grey.
+  // A Bayer mosaic of a uniform colour (R 200, G 100, B 50) demosaics to that colour's grey,
+  // 0.299 R + 0.587 G + 0.114 B = 124; reading BGGR as RGGB would give 96.
   internal::RosImage bayer = Image("bayer_bggr8", 1);
   bayer.width = bayer.height = bayer.step = 8;
-  bayer.data.assign(64, 90);
-  EXPECT_EQ(internal::GreyImage(bayer, "b")(4, 4), 90);
+  bayer.data.resize(64);
+  for (int v = 0; v < 8; ++v) {
+    for (int u = 0; u < 8; ++u) {
+      const bool even_row = v % 2 == 0, even_col = u % 2 == 0;  // B G / G R
+      bayer.data[static_cast<std::size_t>(8 * v + u)] = even_row && even_col ? 50 : !even_row && !even_col ? 200 : 100;
+    }
+  }
+  EXPECT_NEAR(internal::GreyImage(bayer, "b")(4, 4), 124, 1);
+  bayer.encoding = "bayer_rggb8";
+  EXPECT_NEAR(internal::GreyImage(bayer, "b")(4, 4), 96, 1);
   // Wrong: an unknown encoding, data shorter than height * step.
   try {
     internal::GreyImage(Image("yuv422", 2), "cam.bag:/left@5");
@@ -521,7 +617,7 @@ TEST(BagMessages, TruncatedMessagesAreErrorsNamingThem) {
     internal::DecodeHeader(big, RosEncoding::kCdr, "h");
     FAIL();
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("not little endian"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("is not read (plain little-endian CDR is 00 01"), std::string::npos) << e.what();
   }
 }
 

@@ -106,6 +106,8 @@ class Topics {
 struct ChosenTopics {
   std::string left, right, left_info, right_info, imu, pose;
   std::string pose_frame;
+  /// `pose` is "/tf" because the bag has no Odometry: used when /tf moves the body frame.
+  bool pose_from_tf_if_moving = false;
 };
 
 std::pair<std::string, std::string> ChooseImagePair(const Topics& topics, const BagTopics& asked, const std::string& path) {
@@ -188,7 +190,10 @@ ChosenTopics ChooseTopics(const BagReader& bag, const BagTopics& asked) {
     out.pose = "/tf";
   } else {
     out.pose = ChooseSingle(topics, asked.pose, "nav_msgs/Odometry", "--pose-topic", bag.path());
-    if (out.pose.empty() && !asked.pose_frame.empty() && topics.Has("/tf")) out.pose = "/tf";
+    if (out.pose.empty() && topics.Has("/tf")) {
+      out.pose = "/tf";
+      out.pose_from_tf_if_moving = asked.pose.empty() && asked.pose_frame.empty();
+    }
   }
   return out;
 }
@@ -349,6 +354,11 @@ ImageU8 ToImage(const cv::Mat& grey) {
 
 cv::Mat GreyFromCompressed(const RosCompressedImage& m, const std::string& where) {
   if (m.format.find("compressedDepth") != std::string::npos) throw Error(where + ": a compressed depth image, not a camera image");
+  // image_transport writes "bayer_rggb8; png compressed ...": the PNG holds the mosaic, which
+  // decoding as grey would pass on undemosaiced.
+  if (m.format.rfind("bayer", 0) == 0) {
+    throw Error(where + ": a compressed Bayer mosaic (" + m.format + ") is not read; record the raw Image or a debayered topic");
+  }
   cv::Mat grey;
   if (!m.data.empty()) {
     const cv::Mat buffer(1, static_cast<int>(m.data.size()), CV_8UC1, const_cast<std::uint8_t*>(m.data.data()));
@@ -477,9 +487,12 @@ void PairFrames(const std::string& path, const ChosenTopics& chosen, const std::
             [](const SkippedFrame& a, const SkippedFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
 }
 
-/// Every transform on /tf_static and /tf (when `dynamic`).
-TfTree ReadTf(const BagReader& bag, const Topics& topics, bool dynamic) {
+/// Every transform on /tf_static and /tf (when `dynamic`). A transform whose rotation is not a
+/// quaternion (a misconfigured static_transform_publisher's 0 0 0 0) is left out with a note, as
+/// tf2 ignores it: it breaks only the chains through its link, which then report their absence.
+TfTree ReadTf(const BagReader& bag, const Topics& topics, bool dynamic, std::vector<std::string>* notes) {
   TfTree tree;
+  std::set<std::string> bad_links;
   for (const std::string topic : {"/tf_static", "/tf"}) {
     const bool is_static = topic == "/tf_static";
     if (!topics.Has(topic) || (!is_static && !dynamic)) continue;
@@ -488,9 +501,13 @@ TfTree ReadTf(const BagReader& bag, const Topics& topics, bool dynamic) {
     for (const BagMessageRef& ref : bag.List({topics.Index(topic)})) {
       const std::string where = bag.path() + ": " + topic;
       for (const RosTransform& t : DecodeTfMessage(bag.Read(ref), encoding, where)) {
-        tree.Add(t.header.frame_id, t.child_frame_id, t.header.stamp_ns,
-                 FromXyzw(t.translation, t.rotation_xyzw, where + " " + t.header.frame_id + " -> " + t.child_frame_id),
-                 is_static);
+        const std::string link = topic + " " + t.header.frame_id + " -> " + t.child_frame_id;
+        try {
+          tree.Add(t.header.frame_id, t.child_frame_id, t.header.stamp_ns,
+                   FromXyzw(t.translation, t.rotation_xyzw, where + " " + link), is_static);
+        } catch (const Error& e) {
+          if (bad_links.insert(link).second) notes->push_back(std::string(e.what()) + ": left out, as tf2 leaves it out");
+        }
       }
     }
   }
@@ -616,7 +633,12 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
   };
   const RosCameraInfo left_info = FirstMessage(*bag, topics, chosen.left_info, decode_info);
   const RosCameraInfo right_info = FirstMessage(*bag, topics, chosen.right_info, decode_info);
-  const auto rectified_topic = [](const std::string& t) { return t.find("rect") != std::string::npos; };
+  // image_proc's outputs are image_rect, image_rect_color, image_rect_raw...: the topic's own
+  // name, not a namespace that happens to hold "rect".
+  const auto rectified_topic = [](std::string t) {
+    if (t.size() > 11 && t.compare(t.size() - 11, 11, "/compressed") == 0) t.erase(t.size() - 11);
+    return t.substr(t.rfind('/') + 1).rfind("image_rect", 0) == 0;
+  };
   std::array<CameraModel, 2> cameras = {
       MakeCameraModel(left_info, rectified_topic(chosen.left), path + ": " + chosen.left_info),
       MakeCameraModel(right_info, rectified_topic(chosen.right), path + ": " + chosen.right_info)};
@@ -634,13 +656,14 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
   const std::vector<Stamped> left = ImageStamps(*bag, topics, chosen.left);
   const std::vector<Stamped> right = ImageStamps(*bag, topics, chosen.right);
   if (left.empty()) throw Error(path + ": " + chosen.left + " holds no images");
+  if (right.empty()) throw Error(path + ": " + chosen.right + " holds no images");
   std::vector<BagImageSource::Pair> pairs;
   PairFrames(path, chosen, left, right, &seq, &pairs);
 
   std::string imu_frame;
   if (!chosen.imu.empty()) ReadImu(*bag, topics, chosen.imu, &seq, &imu_frame);
 
-  const TfTree tf = ReadTf(*bag, topics, true);
+  const TfTree tf = ReadTf(*bag, topics, true, &seq.notes);
   std::string body = chosen.pose_frame;
   if (!chosen.pose.empty() && chosen.pose != "/tf") {
     const std::string child = ReadOdometry(*bag, topics, chosen.pose, &seq);
@@ -666,8 +689,13 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
     }
   }
   if (chosen.pose == "/tf") {
-    if (body.empty()) throw Error(path + ": /tf has no base_link or base_footprint frame: name the body frame with --pose-frame");
-    PosesFromTf(path, tf, body, &seq);
+    // Without Odometry, /tf is the pose when it moves the body frame (a SLAM or odometry node's
+    // odom -> base_link); asked for, it must.
+    const bool moving = !body.empty() && !tf.ChangeTimes(tf.RootOf(body), body).empty();
+    if (!chosen.pose_from_tf_if_moving || moving) {
+      if (body.empty()) throw Error(path + ": /tf has no base_link or base_footprint frame: name the body frame with --pose-frame");
+      PosesFromTf(path, tf, body, &seq);
+    }
   }
 
   // Mounts: each camera's optical frame (the rectified one) and the IMU in the body frame.
@@ -675,14 +703,17 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
   Eigen::Isometry3d body_T_optical = ForwardLookingMount();
   std::optional<Eigen::Isometry3d> mount;
   if (!body.empty() && !camera_frame.empty()) mount = tf.Lookup(body, camera_frame, left.front().stamp_ns);
+  // Without a mount the body frame is made up around the camera: other mounts (the IMU's) are
+  // then read relative to the camera frame and carried through the assumed mount.
+  std::string mount_frame = body;
   if (mount) {
     body_T_optical = *mount;
   } else {
+    mount_frame = camera_frame;
     seq.notes.push_back("no transform from the body frame" + (body.empty() ? std::string() : " '" + body + "'") +
                         " to the camera frame '" + camera_frame +
                         "' in /tf_static or /tf: the left camera is taken at the body origin, looking along body x "
                         "(the dominant ground plane and the IMU still level each frame)");
-    body = body.empty() ? camera_frame : body;
   }
   Eigen::Isometry3d body_T_left = body_T_optical;
   body_T_left.linear() = body_T_optical.linear() * RawFromRectified(left_info);
@@ -695,9 +726,14 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
 
   if (!seq.imu.empty()) {
     std::optional<Eigen::Isometry3d> imu_mount;
-    if (!imu_frame.empty()) imu_mount = imu_frame == body ? Eigen::Isometry3d::Identity() : tf.Lookup(body, imu_frame, left.front().stamp_ns);
+    bool relative_to_camera = !mount;
+    if (!imu_frame.empty()) imu_mount = tf.Lookup(mount_frame, imu_frame, left.front().stamp_ns);
+    if (!imu_mount && !mount && !body.empty() && !imu_frame.empty()) {
+      imu_mount = tf.Lookup(body, imu_frame, left.front().stamp_ns);  // a body frame /tf knows
+      relative_to_camera = false;
+    }
     if (imu_mount) {
-      seq.body_T_imu = *imu_mount;
+      seq.body_T_imu = relative_to_camera ? body_T_optical * *imu_mount : *imu_mount;
     } else {
       seq.notes.push_back("no transform from the body frame to the IMU frame '" + imu_frame +
                           "': the IMU axes are taken as the body axes (x forward, y left, z up)");

@@ -16,7 +16,6 @@ constexpr std::size_t kFirstOutputBytes = 64 * 1024;
 // 25 MB, a dense point cloud 64 MB), never a quarter of a gigabyte. Larger announcements are
 // refused before any memory is taken for them; the bound also keeps a hostile zstd stream of
 // run-length blocks (4 bytes per 128 KB) from filling the memory.
-constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{256} << 20;
 
 /// The output buffer's next size: starts near a typical ratio, doubles, never passes `limit`.
 std::size_t GrownSize(std::size_t current, std::size_t limit, std::size_t compressed_size) {

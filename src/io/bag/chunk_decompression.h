@@ -9,6 +9,10 @@
 
 namespace ssta::internal {
 
+/// The largest chunk the MCAP reader accepts, uncompressed [bytes]: a 4K image is 25 MB, a dense
+/// cloud 64 MB; more is a damaged or hostile header.
+constexpr std::uint64_t kMaxChunkBytes = std::uint64_t{256} << 20;
+
 /// Decompresses `size` bytes to exactly `uncompressed_size` bytes. Memory grows with the output
 /// actually produced, never with the announced size alone, so a lying header cannot make it
 /// allocate gigabytes. Throws ssta::Error starting with `where` for an unknown compression, a

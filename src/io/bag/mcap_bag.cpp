@@ -26,6 +26,9 @@ constexpr std::uint64_t kMagicBytes = 8;
 constexpr std::uint64_t kRecordHeaderBytes = 9;  // opcode uint8 + content length uint64
 constexpr std::uint64_t kFooterBytes = kRecordHeaderBytes + 20;
 constexpr std::uint64_t kMessageFixedBytes = 22;  // channel_id, sequence, log_time, publish_time
+// A chunk's fields before its records: 28 bytes of sizes and times, the compression name (a
+// few letters; 4 KiB is far more) and the records' length.
+constexpr std::uint64_t kChunkHeadBytes = 4096;
 /// BagMessageRef::offset of a Message record that sits in the data section, outside any chunk.
 constexpr std::uint64_t kOutsideChunks = ~std::uint64_t{0};
 constexpr std::size_t kCachedChunks = 2;
@@ -644,17 +647,27 @@ std::shared_ptr<const std::vector<std::uint8_t>> McapBag::ChunkAt(std::uint64_t 
 
 std::vector<std::uint8_t> McapBag::DecodeChunk(const RecordHeader& h) const {
   const std::string where = Where("Chunk", h.offset);
-  const std::vector<std::uint8_t> content = Content(h);
-  Cursor c(content.data(), content.size(), where);
+  // The fields before the records first: the sizes they announce are checked before the
+  // records are read into memory.
+  const std::vector<std::uint8_t> head = Bytes(h.content(), std::min<std::uint64_t>(h.length, kChunkHeadBytes));
+  Cursor c(head.data(), head.size(), where);
   c.U64();  // message_start_time
   c.U64();  // message_end_time
   const std::uint64_t uncompressed_size = c.U64();
   const std::uint32_t crc = c.U32();
   const std::string compression = c.String();
   const std::uint64_t records_bytes = c.U64();
-  const std::uint8_t* records = c.Take(records_bytes, "the chunk's records");
-  std::vector<std::uint8_t> out = DecompressChunk(compression, records, static_cast<std::size_t>(records_bytes),
-                                                  uncompressed_size, where);
+  const std::uint64_t records_offset = head.size() - c.remaining();
+  if (uncompressed_size > kMaxChunkBytes || records_bytes > 2 * kMaxChunkBytes) {
+    throw Error(where + ": the chunk announces " + std::to_string(uncompressed_size) + " bytes (" +
+                std::to_string(records_bytes) + " stored), more than the 256 MiB this reader accepts");
+  }
+  if (records_bytes > h.length - records_offset) {
+    throw Error(where + ": the chunk's records (" + std::to_string(records_bytes) + " bytes) run past its record (" +
+                std::to_string(h.length) + " bytes)");
+  }
+  const std::vector<std::uint8_t> records = Bytes(h.content() + records_offset, records_bytes);
+  std::vector<std::uint8_t> out = DecompressChunk(compression, records.data(), records.size(), uncompressed_size, where);
   // A CRC of zero means the writer did not compute one.
   if (crc != 0 && Crc32(out.data(), out.size()) != crc) {
     throw Error(where + ": CRC-32 of the uncompressed records does not match (the chunk is corrupt)");

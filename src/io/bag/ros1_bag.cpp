@@ -1,6 +1,7 @@
 // ROS 1 bags (format 2.0) through Debian's rosbag_storage: it reads the container (chunks, bz2
 // and lz4 compression, the connection and chunk indexes); ros_messages.cpp decodes the bytes.
 
+#include <algorithm>
 #include <map>
 #include <mutex>
 
@@ -39,24 +40,15 @@ class Ros1Bag final : public BagReader {
   const std::vector<BagConnection>& connections() const override { return connections_; }
 
   std::vector<BagMessageRef> List(const std::vector<int>& wanted) const override {
-    std::map<std::string, int> topics;
-    for (int c : wanted) topics.emplace(connections_.at(static_cast<std::size_t>(c)).topic, c);
     std::vector<BagMessageRef> out;
     const std::lock_guard<std::mutex> lock(mutex_);
-    try {
-      // rosbag's view merges the per-connection indexes in time order without reading data.
-      rosbag::View view(bag_, [&](const rosbag::ConnectionInfo* c) { return topics.count(c->topic) > 0; });
-      for (const rosbag::MessageInstance& m : view) {
-        BagMessageRef ref;
-        ref.log_time_ns = static_cast<std::int64_t>(m.getTime().toNSec());
-        ref.connection = topics.at(m.getTopic());
-        ref.position = instances_.size();
-        instances_.push_back(m);
-        out.push_back(ref);
-      }
-    } catch (const rosbag::BagException& e) {
-      throw Error(path_ + ": " + e.what());
+    for (const int c : wanted) {
+      const std::vector<BagMessageRef>& one = ListOne(c);
+      out.insert(out.end(), one.begin(), one.end());
     }
+    std::stable_sort(out.begin(), out.end(), [](const BagMessageRef& a, const BagMessageRef& b) {
+      return a.log_time_ns < b.log_time_ns;
+    });
     return out;
   }
 
@@ -81,8 +73,32 @@ class Ros1Bag final : public BagReader {
   std::vector<BagConnection> connections_;
   std::map<std::string, int> topic_index_;
   mutable std::mutex mutex_;
-  // rosbag's handles to the listed messages: a reference's position indexes this list.
+  /// One connection's messages, listed once: rosbag's view merges the per-connection indexes in
+  /// time order without reading data. Caller holds mutex_.
+  const std::vector<BagMessageRef>& ListOne(int c) const {
+    const auto cached = listed_.find(c);
+    if (cached != listed_.end()) return cached->second;
+    const std::string& topic = connections_.at(static_cast<std::size_t>(c)).topic;
+    std::vector<BagMessageRef> refs;
+    try {
+      rosbag::View view(bag_, [&](const rosbag::ConnectionInfo* info) { return info->topic == topic; });
+      for (const rosbag::MessageInstance& m : view) {
+        BagMessageRef ref;
+        ref.log_time_ns = static_cast<std::int64_t>(m.getTime().toNSec());
+        ref.connection = c;
+        ref.position = instances_.size();
+        instances_.push_back(m);
+        refs.push_back(ref);
+      }
+    } catch (const rosbag::BagException& e) {
+      throw Error(path_ + ": " + e.what());
+    }
+    return listed_.emplace(c, std::move(refs)).first->second;
+  }
+
+  // rosbag's handles to the listed messages (each once): a reference's position indexes this list.
   mutable std::vector<rosbag::MessageInstance> instances_;
+  mutable std::map<int, std::vector<BagMessageRef>> listed_;
 };
 
 }  // namespace

@@ -20,7 +20,7 @@ class FieldReader {
     // types). 00 00 and 00 02 are big endian, which no ROS 2 middleware on x86 or ARM writes.
     if (bytes_[0] != 0 || (bytes_[1] != 1 && bytes_[1] != 3)) {
       Fail("CDR encapsulation " + std::to_string(bytes_[0]) + " " + std::to_string(bytes_[1]) +
-           " is not little endian (00 01)");
+           " is not read (plain little-endian CDR is 00 01; big-endian and XCDR2 are not read)");
     }
     pos_ = origin_ = 4;
   }

@@ -26,7 +26,7 @@ class TfTree {
   /// target_T_source at `t`, through the frames' common ancestor; nullopt when the two frames
   /// are not connected or a moving link on the way has no transform near `t` (moving links
   /// interpolate between their samples; outside their time range the nearest sample holds for
-  /// kMaxExtrapolationNs).
+  /// kMaxExtrapolationNs; a link published once holds at all times, as a static one).
   std::optional<Eigen::Isometry3d> Lookup(const std::string& target, const std::string& source, std::int64_t t) const;
   /// The times at which a moving link between `frame` and its ancestor `ancestor` changes, sorted.
   std::vector<std::int64_t> ChangeTimes(const std::string& ancestor, const std::string& frame) const;
