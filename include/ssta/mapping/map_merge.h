@@ -28,9 +28,13 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 ///    the other map held as traversable before the first map's last frame (as one run in time
 ///    order spares it): that map adds only its hits to the occupancy (observations times the
 ///    hit log-odds, or its net log-odds when larger).
-/// A voxel only one map holds keeps its values. Without the clamps the result is the same in
-/// any order up to float rounding (commutative exactly); where a sum reaches a clamp, the
-/// order of merges can change the voxel (docs/fleet.md measures by how much).
+/// A voxel only one map holds keeps its values. Merging is commutative exactly. Grouping
+/// (which maps are merged first) can change a voxel in two ways: where a sum reaches a clamp,
+/// and through the ground-sparing rule above, which compares each map's last frame with the
+/// time the other map last saw the voxel, so where recordings overlap in time a merged map's
+/// last frame can spare ground that one of its parts alone would not have. Without the clamps
+/// and with free_space_keeps_traversable off, the result is the same in any order up to float
+/// rounding (docs/fleet.md measures by how much the order changes a map).
 /// The metadata: `into` gains `from`'s sequences, its sources (`from` itself when it was not
 /// merged, described as `from_file`), sensor path and frame count; last timestamp is the later.
 /// Throws as CheckMergeable; when `from` is `into`; and when a source of `from` (by its file
