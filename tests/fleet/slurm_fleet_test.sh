@@ -196,8 +196,9 @@ submit_log=$("$src/scripts/slurm/fleet-submit.sh" --conf "$root/fleet.conf" --re
   --out "$root/fleet" --wait) || fail "the resubmitted fleet jobs failed: $submit_log"
 echo "$submit_log"
 grep -q "2 of 4 recordings (2 already mapped)" <<< "$submit_log" || fail "the resubmission did not rebuild exactly 2 maps"
-[[ $(sed -n '1p;2p' "$root/fleet/todo.txt" | xargs -n1 basename | tr '\n' ' ') == "rec1 rec2 " ]] ||
-  fail "rebuilt $(cat "$root/fleet/todo.txt"), expected rec1 and rec2"
+todo=$(sed -n 's/^lists: //p' <<< "$submit_log")/todo.txt
+[[ $(sed -n '1p;2p' "$todo" | xargs -n1 basename | tr '\n' ' ') == "rec1 rec2 " ]] ||
+  fail "rebuilt $(cat "$todo"), expected rec1 and rec2"
 [[ $(sha256sum "$root/fleet/maps/rec0.ot" | cut -d' ' -f1) == "$untouched_sum" ]] || fail "rec0's map was rebuilt"
 # The builds and the merge are deterministic: the same merged map, byte for byte.
 [[ $(sha256sum "$merged" | cut -d' ' -f1) == "$merged_sum" ]] || fail "the resumed merge differs from the first"
