@@ -19,8 +19,9 @@ struct MergeMapsArgs {
 
 void Run(const MergeMapsArgs& a) {
   // The output may replace an input only once every input is read; MergeMaps reads them all
-  // before Save writes, and Save replaces the file atomically, so that is safe, but an input
-  // named twice would count its evidence twice.
+  // before Save writes, and Save replaces the file atomically, so that is safe. An input named
+  // twice would count its evidence twice: refused here before any file is read. A copy of an
+  // input, or a merged map holding another input, MergeMaps refuses by the sources' checksums.
   for (std::size_t i = 0; i < a.inputs.size(); ++i) {
     for (std::size_t j = i + 1; j < a.inputs.size(); ++j) {
       std::error_code error;

@@ -1,8 +1,8 @@
 """ssta.Map against `ssta query` / `ssta export` on the same map: the same answers, the same
 errors."""
 
+import sys
 import threading
-import time
 from concurrent.futures import ThreadPoolExecutor
 
 import matplotlib.image
@@ -247,26 +247,44 @@ def test_concurrent_queries_give_the_same_answers(the_map, points):
 
 
 def test_query_releases_the_gil(the_map):
-    """While one thread runs a long query, another runs Python: the query holds no GIL."""
+    """While one thread runs a long query, another runs Python: the query holds no GIL.
+
+    No timing: with a switch interval far longer than the test, a thread holding the GIL keeps
+    it until it lets go of its own accord. The worker holds it up to the query; the main thread,
+    woken meanwhile, can run only if the query lets go. It then counts to a fixed number and
+    blocks, handing the GIL back. The worker, once the query returned, reads the count: the
+    whole count if the GIL was released, 0 if it was held. Up to five queries, so that a main
+    thread the OS did not schedule during one query does not fail the test."""
     x0, y0, _, x1, y1, _ = the_map.bounds
-    big = np.column_stack([np.linspace(x0, x1, 1_500_000), np.linspace(y0, y1, 1_500_000)])
-    start = time.perf_counter()
-    the_map.query(big)
-    alone_s = time.perf_counter() - start
-    done = threading.Event()
+    big = np.column_stack([np.linspace(x0, x1, 500_000), np.linspace(y0, y1, 500_000)])
+    target = 1000
+    count = 0
+    counted = threading.Event()
+    started = threading.Event()
+    finished = threading.Event()
+    seen = []
 
     def worker():
-        the_map.query(big)
-        done.set()
+        started.set()  # wakes the main thread, which then waits for the GIL
+        for _ in range(5):
+            the_map.query(big)
+            if counted.is_set():
+                break
+        seen.append(count)
+        finished.set()
 
-    thread = threading.Thread(target=worker)
-    last = time.perf_counter()
-    longest_gap = 0.0
-    thread.start()
-    while not done.is_set():
-        now = time.perf_counter()
-        longest_gap = max(longest_gap, now - last)
-        last = now
-    thread.join()
-    # Held, the GIL would stop this loop for the whole query; released, it runs throughout.
-    assert longest_gap < 0.5 * alone_s, (longest_gap, alone_s)
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1000.0)
+    try:
+        thread = threading.Thread(target=worker)
+        thread.start()
+        assert started.wait(timeout=600)
+        while count < target:
+            count += 1
+        counted.set()
+        assert finished.wait(timeout=600)  # blocks: the worker takes the GIL back
+        thread.join()
+    finally:
+        sys.setswitchinterval(interval)
+    # Held, the GIL would have kept the main thread from counting until every query returned.
+    assert seen == [target], "the main thread did not run during the queries: the query holds the GIL"

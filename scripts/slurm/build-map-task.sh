@@ -1,26 +1,30 @@
 #!/bin/bash
 # One array task of fleet-submit.sh: `ssta build-map` of the recording on line
-# SLURM_ARRAY_TASK_ID + 1 of OUT/todo.txt into OUT/maps/<name>.ot, then the task's record
+# SLURM_ARRAY_TASK_ID + 1 of TODO (its submission's list, which no later submission rewrites)
+# into OUT/maps/<name>.ot, then the task's record
 # OUT/done/<name>.tsv (name, recording, its checksum, map, its checksum) once the map reads
 # back. A map an interrupted task left (checkpoints, or a stop on SIGTERM at the time limit)
 # is continued with --resume.
-#   build-map-task.sh CONF OUT
+#   build-map-task.sh CONF OUT TODO
 set -euo pipefail
 conf=${1:?conf}
 out=${2:?out}
+todo=${3:?todo list}
 # shellcheck source=fleet.conf
 source "$conf"
 index=${SLURM_ARRAY_TASK_ID:?"not a Slurm array task"}
-rec=$(sed -n "$((index + 1))p" "$out/todo.txt")
-[[ -n $rec ]] || { echo "$out/todo.txt: no line $((index + 1))" >&2; exit 1; }
+rec=$(sed -n "$((index + 1))p" "$todo")
+[[ -n $rec ]] || { echo "$todo: no line $((index + 1))" >&2; exit 1; }
 name=$(basename "$rec")
 map="$out/maps/$name.ot"
 rm -f "$out/done/$name.tsv"
 
+# Both settings are words split at blanks, not globbed.
 args=()
-for c in ${BUILD_MAP_CONFIG:-}; do args+=(--config "$c"); done
-# shellcheck disable=SC2206  # a list of words by design
-args+=(${BUILD_MAP_ARGS:-})
+read -ra configs <<< "${BUILD_MAP_CONFIG:-}"
+for c in "${configs[@]+"${configs[@]}"}"; do args+=(--config "$c"); done
+read -ra extra <<< "${BUILD_MAP_ARGS:-}"
+args+=("${extra[@]+"${extra[@]}"}")
 if [[ -f $map ]]; then
   # A map that does not read (a crash while the first save was renamed cannot leave one, but
   # a full disk can) is built again from the start.
@@ -32,7 +36,7 @@ if [[ -f $map ]]; then
   fi
 fi
 echo "build-map $name on $(hostname) with $CPUS_PER_TASK threads: $rec -> $map"
-"$SSTA" --threads "${SLURM_CPUS_PER_TASK:-$CPUS_PER_TASK}" build-map --sequence "$rec" --map "$map" "${args[@]}" -q
+"$SSTA" --threads "${SLURM_CPUS_PER_TASK:-$CPUS_PER_TASK}" build-map --sequence "$rec" --map "$map" "${args[@]+"${args[@]}"}" -q
 "$SSTA" query --map "$map" --at 0,0 > /dev/null  # it reads back: checksum and structure
 
 # The recording's checksum: SHA-256 over the sorted list of its files' SHA-256 sums.

@@ -7,10 +7,14 @@
 #   fleet-submit.sh --conf fleet.conf --recordings LIST --out DIR [--wait]
 #
 # LIST holds one recording folder per line (its folder name names its map, so names must be
-# unique). DIR receives maps/<name>.ot, done/<name>.tsv (a task's record: recording and map
-# checksums), logs/, merged.ot and manifest.tsv. Submitting again resumes: a recording whose
-# map exists with its record, the map's checksum as recorded, is not built again; a map that
-# an interrupted task left behind is continued (build-map --resume).
+# unique; blanks around a line and '#' comments are ignored). DIR receives maps/<name>.ot,
+# done/<name>.tsv (a task's record: recording and map checksums), logs/, merged.ot and
+# manifest.tsv, and submissions/<time>-<id>/ with this submission's recordings.txt and
+# todo.txt: the jobs read their lists there, so no later submission changes them. Submitting
+# again resumes: a recording whose map exists with its record, the map's checksum as recorded,
+# is not built again; a map that an interrupted task left behind is continued (build-map
+# --resume). Refused while jobs of an earlier submission to DIR are pending or running (the
+# jobs carry the comment "ssta-fleet DIR").
 # --wait: return when the merge job has ended, with its exit status.
 set -euo pipefail
 
@@ -34,14 +38,30 @@ conf=$(realpath "$conf")
 source "$conf"
 mkdir -p "$out"
 out=$(realpath "$out")
-mkdir -p "$out/maps" "$out/done" "$out/logs"
+mkdir -p "$out/maps" "$out/done" "$out/logs" "$out/submissions"
+
+# One submission at a time per DIR: tasks of two would build the same maps at once, and the
+# merge job of the first would merge maps the second is rewriting.
+comment="ssta-fleet $out"
+active=$(squeue -h --states=PENDING,RUNNING,CONFIGURING,SUSPENDED,REQUEUED -o '%i %k') ||
+  { echo "squeue failed: cannot tell whether jobs of an earlier submission to $out still run" >&2; exit 1; }
+ids=()
+while IFS= read -r job; do
+  [[ ${job#* } == "$comment" ]] && ids+=("${job%% *}")
+done <<< "$active"
+if ((${#ids[@]} > 0)); then
+  echo "$out: jobs of an earlier submission are still pending or running: ${ids[*]}" >&2
+  echo "  wait until they end (squeue), or cancel them (scancel ${ids[*]}), then submit again" >&2
+  exit 1
+fi
 
 # The recordings, as absolute paths; blank lines and '#' comments are skipped.
 recordings=()
 declare -A seen=()
 while IFS= read -r line || [[ -n $line ]]; do
   line=${line%%#*}
-  line=$(echo "$line" | xargs)  # trims blanks
+  line=${line#"${line%%[![:space:]]*}"}  # leading blanks
+  line=${line%"${line##*[![:space:]]}"}  # trailing blanks
   [[ -z $line ]] && continue
   [[ -d $line ]] || { echo "$list: recording '$line' is not a folder" >&2; exit 1; }
   rec=$(realpath "$line")
@@ -54,7 +74,9 @@ while IFS= read -r line || [[ -n $line ]]; do
   recordings+=("$rec")
 done < "$list"
 ((${#recordings[@]} > 0)) || { echo "$list: lists no recording" >&2; exit 1; }
-printf '%s\n' "${recordings[@]}" > "$out/recordings.txt"
+# This submission's lists, under a name no other submission uses; the jobs get their paths.
+submission=$(mktemp -d "$out/submissions/$(date +%Y%m%dT%H%M%S)-XXXXXX")
+printf '%s\n' "${recordings[@]}" > "$submission/recordings.txt"
 
 # A map is done when its task's record exists and the map still has the recorded checksum.
 map_done() {
@@ -66,12 +88,14 @@ todo=()
 for rec in "${recordings[@]}"; do
   map_done "$(basename "$rec")" || todo+=("$rec")
 done
-printf '%s\n' "${todo[@]+"${todo[@]}"}" | sed '/^$/d' > "$out/todo.txt"
+printf '%s\n' "${todo[@]+"${todo[@]}"}" | sed '/^$/d' > "$submission/todo.txt"
+echo "lists: $submission"
 
-common=()
+common=(--comment="$comment")
 [[ -n ${PARTITION:-} ]] && common+=(--partition "$PARTITION")
-# shellcheck disable=SC2206  # SBATCH_ARGS is a list of words by design
-[[ -n ${SBATCH_ARGS:-} ]] && common+=($SBATCH_ARGS)
+# SBATCH_ARGS: words split at blanks, not globbed (--nodelist=node[01-04] stays as it is).
+read -ra sbatch_args <<< "${SBATCH_ARGS:-}"
+common+=("${sbatch_args[@]+"${sbatch_args[@]}"}")
 
 dependency=()
 if ((${#todo[@]} > 0)); then
@@ -79,7 +103,7 @@ if ((${#todo[@]} > 0)); then
   ((${MAX_PARALLEL_TASKS:-0} > 0)) && array+="%$MAX_PARALLEL_TASKS"
   build_job=$(sbatch --parsable "${common[@]}" --job-name=ssta-build-map --array="$array" \
     --cpus-per-task="$CPUS_PER_TASK" --mem="$MEM_PER_TASK" --time="$TIME_PER_TASK" \
-    --output="$out/logs/build-map_%A_%a.log" "$here/build-map-task.sh" "$conf" "$out")
+    --output="$out/logs/build-map_%A_%a.log" "$here/build-map-task.sh" "$conf" "$out" "$submission/todo.txt")
   build_job=${build_job%%;*}
   dependency=(--dependency="afterok:$build_job" --kill-on-invalid-dep=yes)
   echo "build-map: job array $build_job, ${#todo[@]} of ${#recordings[@]} recordings ($((${#recordings[@]} - ${#todo[@]})) already mapped)"
@@ -95,11 +119,11 @@ if ((wait_for_merge)); then
   status=0
   sbatch --parsable "${common[@]}" "${dependency[@]}" "${wait_args[@]}" --job-name=ssta-merge-maps \
     --cpus-per-task="$MERGE_CPUS" --mem="$MERGE_MEM" --time="$MERGE_TIME" --output="$merge_output" \
-    "$here/merge-task.sh" "$conf" "$out" > "$out/logs/merge-job.txt" || status=$?
+    "$here/merge-task.sh" "$conf" "$out" "$submission/recordings.txt" > "$out/logs/merge-job.txt" || status=$?
   echo "merge-maps: job $(cut -d';' -f1 < "$out/logs/merge-job.txt") ended with status $status"
   exit $status
 fi
 merge_job=$(sbatch --parsable "${common[@]}" "${dependency[@]}" --job-name=ssta-merge-maps \
   --cpus-per-task="$MERGE_CPUS" --mem="$MERGE_MEM" --time="$MERGE_TIME" --output="$merge_output" \
-  "$here/merge-task.sh" "$conf" "$out")
+  "$here/merge-task.sh" "$conf" "$out" "$submission/recordings.txt")
 echo "merge-maps: job ${merge_job%%;*} -> $out/merged.ot, $out/manifest.tsv"

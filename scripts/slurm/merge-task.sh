@@ -1,12 +1,23 @@
 #!/bin/bash
-# The merge job of fleet-submit.sh: every recording's map (each with its task's record) merged
-# into OUT/merged.ot by a tree of `ssta merge-maps`, MERGE_FAN_IN maps at a time and up to
-# MERGE_CPUS merges at once, then OUT/manifest.tsv: every recording, map and the merged map
-# with its SHA-256 sum.
-#   merge-task.sh CONF OUT
+# The merge job of fleet-submit.sh: the map of every recording in RECORDINGS (its
+# submission's list; each map with its task's record) merged into OUT/merged.ot by a tree of
+# `ssta merge-maps`, MERGE_FAN_IN maps at a time and up to MERGE_CPUS merges at once, then
+# OUT/manifest.tsv: every recording, map and the merged map with its SHA-256 sum.
+#   merge-task.sh CONF OUT RECORDINGS
 set -euo pipefail
 conf=${1:?conf}
 out=${2:?out}
+recordings=${3:?recordings list}
+# When one merge fails, set -e ends the job: the merges still running in the background go too.
+stop_merges() {
+  local pids
+  pids=$(jobs -pr)
+  [[ -n $pids ]] || return 0
+  # shellcheck disable=SC2086  # a list of pids
+  kill $pids 2> /dev/null || true
+  wait 2> /dev/null || true
+}
+trap stop_merges EXIT
 # shellcheck source=fleet.conf
 source "$conf"
 ((MERGE_FAN_IN >= 2)) || { echo "$conf: MERGE_FAN_IN must be at least 2" >&2; exit 1; }
@@ -19,7 +30,7 @@ while IFS= read -r rec; do
   [[ $(cut -f5 "$record") == $(sha256sum "$map" | cut -d' ' -f1) ]] ||
     { echo "$map: changed since its task recorded it" >&2; exit 1; }
   inputs+=("$map")
-done < "$out/recordings.txt"
+done < "$recordings"
 
 # Levels of merges of MERGE_FAN_IN maps until one merge takes the rest. The evidence adds the
 # same in any grouping (docs/fleet.md: up to where the clamps are reached).
@@ -58,7 +69,7 @@ manifest="$out/manifest.tsv"
     IFS=$'\t' read -r name rec_path rec_sum map map_sum < "$out/done/$(basename "$rec").tsv"
     printf 'recording\t%s\t%s\t%s\n' "$name" "$rec_path" "$rec_sum"
     printf 'map\t%s\t%s\t%s\n' "$name" "$map" "$map_sum"
-  done < "$out/recordings.txt"
+  done < "$recordings"
   printf 'merged\t-\t%s\t%s\n' "$out/merged.ot" "$(sha256sum "$out/merged.ot" | cut -d' ' -f1)"
 } > "$manifest.tmp"
 mv "$manifest.tmp" "$manifest"

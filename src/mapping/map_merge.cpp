@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <functional>
 #include <optional>
 #include <sstream>
 
@@ -105,6 +106,31 @@ std::vector<MapSource> SourcesOf(const TraversabilityMap& map, const std::string
   return {source};
 }
 
+/// What a source holds, for a message: its recordings, or its file when it names none.
+std::string Holdings(const MapSource& source) {
+  if (source.sequences.empty()) return "the map " + source.file;
+  std::string names;
+  for (const std::string& sequence : source.sequences) names += (names.empty() ? "'" : ", '") + sequence + "'";
+  return (source.sequences.size() == 1 ? "the recording " : "the recordings ") + names;
+}
+
+/// Throws when a source of `from` (read from `from_file`) is one of `have`, the sources merged
+/// so far, by its checksum (a copy of a file is the same evidence under another name; a merged
+/// map holds its sources' evidence): its evidence would count twice. `input_of(i)` names the
+/// input that brought `have[i]`. A source without a checksum (never saved) is not compared.
+void RefuseEvidenceMergedBefore(const std::vector<MapSource>& have,
+                                const std::function<std::string(std::size_t)>& input_of,
+                                const TraversabilityMap& from, const std::string& from_file) {
+  for (const MapSource& adding : SourcesOf(from, from_file)) {
+    if (adding.checksum.empty()) continue;
+    for (std::size_t i = 0; i < have.size(); ++i) {
+      if (have[i].checksum != adding.checksum) continue;
+      throw Error(input_of(i) + " and " + from_file + " both hold " + Holdings(have[i]) + " (checksum " +
+                  adding.checksum + "): merging them would count its evidence twice");
+    }
+  }
+}
+
 }  // namespace
 
 void CheckMergeable(const TraversabilityMap& into, const std::string& into_file, const TraversabilityMap& from,
@@ -167,6 +193,10 @@ void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, 
 void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into) {
   if (into == &from) throw Error(from_file + ": a map merged into itself would count its evidence twice");
   CheckMergeable(*into, "the merged map", from, from_file);
+  // A map that is not a merge holds its own evidence (when it was read from a file).
+  const std::vector<MapSource> have = into->metadata().merged_from.empty() ? SourcesOf(*into, "the merged map")
+                                                                           : into->metadata().merged_from;
+  RefuseEvidenceMergedBefore(have, [](std::size_t) { return std::string("the merged map"); }, from, from_file);
   auto& out = internal::TraversabilityMapAccess::Impl(*into);
   const auto& in = internal::TraversabilityMapAccess::Impl(from);
   out.tree->MergeFrom(*in.tree, CombineInto(out, in.last_timestamp_ns));
@@ -181,6 +211,7 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
   // options, vehicle and frame, so every input enters through the same rule.
   std::optional<TraversabilityMap> merged;
   std::string first_file;
+  std::vector<std::string> input_of_source;  // the file that brought each of merged_from
   for (const std::string& file : map_files) {
     // Read node by node into the merged map: memory holds the merged map, not also this one.
     internal::MapFileReader reader(file);
@@ -196,12 +227,14 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
       CheckMergeable(*merged, first_file, map, file);
     }
     auto& out = internal::TraversabilityMapAccess::Impl(*merged);
+    RefuseEvidenceMergedBefore(out.metadata.merged_from, [&](std::size_t i) { return input_of_source[i]; }, map, file);
     if (reader.nodes() > 0) {
       out.tree->MergeFromNodes([&](internal::TravNode* node, unsigned depth) { return reader.ReadNode(node, depth); },
                                CombineInto(out, map.last_timestamp_ns()));
     }
     reader.Finish();
     MergeMetadata(map, file, &out);
+    input_of_source.resize(out.metadata.merged_from.size(), file);
     s.largest_input_nodes = std::max<std::size_t>(s.largest_input_nodes, reader.nodes());
     ++s.inputs;
   }

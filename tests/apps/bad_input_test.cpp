@@ -246,6 +246,21 @@ const std::vector<BadInput>& Cases() {
        },
        "merge-maps {dir}/m.ot {dir}/n.ot --out {dir}/merged.ot",
        {"{dir}/n.ot: world frame 'odom', but {dir}/m.ot has 'site'"}},
+      {"MergeMapsACopyOfAMap",
+       [](auto&, auto& d) {
+         ASSERT_EQ(RunSsta(Substitute(kBuild, kEuroc + "/mav0", d)).exit_code, 0);
+         fs::copy_file(d + "/m.ot", d + "/copy.ot");
+       },
+       "merge-maps {dir}/m.ot {dir}/copy.ot --out {dir}/merged.ot",
+       {"{dir}/m.ot and {dir}/copy.ot both hold the recording", "(checksum fnv1a64:",
+        "merging them would count its evidence twice"}},
+      {"MergeMapsAMapWithAMergeThatHoldsIt",
+       [](auto&, auto& d) {
+         ASSERT_EQ(RunSsta(Substitute(kBuild, kEuroc + "/mav0", d)).exit_code, 0);
+         ASSERT_EQ(RunSsta(Substitute("merge-maps -q {dir}/m.ot --out {dir}/mm.ot", kEuroc + "/mav0", d)).exit_code, 0);
+       },
+       "merge-maps {dir}/mm.ot {dir}/m.ot --out {dir}/merged.ot",
+       {"{dir}/mm.ot and {dir}/m.ot both hold the recording", "merging them would count its evidence twice"}},
   };
   return cases;
 }

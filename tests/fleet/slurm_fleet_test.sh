@@ -4,7 +4,8 @@
 # recordings of one drive mapped as a job array and merged by the dependent job, checked
 # against the same recordings mapped one after the other (build-map --resume) and against
 # the truth; then a re-submission that must rebuild only the maps that were removed or
-# damaged. Fails, naming the reason, when the cluster cannot start.
+# damaged, after a submission refused while a held merge job of the same --out is pending.
+# Fails, naming the reason, when the cluster cannot start.
 #   slurm_fleet_test.sh SSTA_BINARY SOURCE_DIR
 # Writes only under TMPDIR; every daemon it starts is stopped on exit.
 set -euo pipefail
@@ -86,12 +87,16 @@ free_port() {
   done
   fail "no free port pair found"
 }
-port=$(free_port)
 host=$(hostname -s)
 # Addresses given, not looked up: a container's short hostname need not resolve.
 memory_mb=$(($(awk '/MemTotal/ {print $2}' /proc/meminfo) / 1024 / 2))
 mkdir -p "$root/state" "$root/spool"
-cat > "$root/slurm.conf" << CONF
+# Starts slurmctld and slurmd on a free port pair and waits until the node is idle: up to 120 s,
+# as a busy 2-core machine can take. Returns 1 when a daemon exited because another process took
+# its port between free_port and the bind (the daemon's log says so); fails otherwise.
+start_cluster() {
+  port=$(free_port)
+  cat > "$root/slurm.conf" << CONF
 ClusterName=sstafleet
 SlurmctldHost=$host(127.0.0.1)
 SlurmctldPort=$port
@@ -120,19 +125,35 @@ SchedulerType=sched/backfill
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$(nproc) RealMemory=$memory_mb State=UNKNOWN
 PartitionName=fleet Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 CONF
-export SLURM_CONF=$root/slurm.conf
-slurmctld -D -i -f "$SLURM_CONF" > "$root/slurmctld.out.log" 2>&1 &
-daemons+=($!)
-slurmd -D -f "$SLURM_CONF" -N "$host" > "$root/slurmd.out.log" 2>&1 &
-daemons+=($!)
-state=""
-for _ in $(seq 1 60); do
-  state=$(sinfo -h -o %T 2> /dev/null || true)
-  [[ $state == idle ]] && break
-  for pid in "${daemons[@]}"; do kill -0 "$pid" 2> /dev/null || fail "a Slurm daemon exited at start (pid $pid; its log is below)"; done
-  sleep 0.5
-done
-[[ $state == idle ]] || fail "the node did not become idle within 30 s (state '$state'; logs below)"
+  export SLURM_CONF=$root/slurm.conf
+  slurmctld -D -i -f "$SLURM_CONF" > "$root/slurmctld.out.log" 2>&1 &
+  local ctld=$!
+  slurmd -D -f "$SLURM_CONF" -N "$host" > "$root/slurmd.out.log" 2>&1 &
+  local slurmd_pid=$!
+  daemons+=("$ctld" "$slurmd_pid")
+  state=""
+  for _ in $(seq 1 240); do
+    state=$(sinfo -h -o %T 2> /dev/null || true)
+    [[ $state == idle ]] && return 0
+    for pid in "$ctld" "$slurmd_pid"; do
+      kill -0 "$pid" 2> /dev/null && continue
+      if cat "$root"/slurm*.log 2> /dev/null | grep -qi "address already in use"; then
+        kill "$ctld" "$slurmd_pid" 2> /dev/null || true
+        wait "$ctld" "$slurmd_pid" 2> /dev/null || true
+        daemons=("${daemons[@]:0:${#daemons[@]}-2}")
+        for log in "$root"/slurm*.log; do mv "$log" "${log%.log}.port$port.log"; done
+        return 1
+      fi
+      fail "a Slurm daemon exited at start (pid $pid; its log is below)"
+    done
+    sleep 0.5
+  done
+  fail "the node did not become idle within 120 s (state '$state'; logs below)"
+}
+if ! start_cluster; then
+  echo "port $port or $((port + 1)) was taken before the daemons bound it; once more with other ports"
+  start_cluster || fail "the daemons could not bind their ports twice (logs below)"
+fi
 
 # --- The recipe. ---
 cat > "$root/fleet.conf" << CONF
@@ -186,6 +207,24 @@ awk -v m="$acc_merged" -v s="$acc_sequential" 'BEGIN { exit !(s > 0.75 && m > 0.
 awk -v m="$acc_merged" -v s="$acc_sequential" 'BEGIN { d = m - s; exit !(d < 0.015 && d > -0.015) }' ||
   fail "merged $acc_merged is not within 1.5 points of sequential $acc_sequential"
 
+# --- No second submission while this one's jobs are pending: a held merge job refuses it. ---
+echo "submitting with the merge job held, then again"
+sed 's/^SBATCH_ARGS=.*/SBATCH_ARGS="--hold"/' "$root/fleet.conf" > "$root/held.conf"
+held_log=$("$src/scripts/slurm/fleet-submit.sh" --conf "$root/held.conf" --recordings "$root/recordings.txt" \
+  --out "$root/fleet") || fail "the held submission failed: $held_log"
+held_job=$(sed -n 's/^merge-maps: job \([0-9]*\) .*/\1/p' <<< "$held_log")
+[[ -n $held_job ]] || fail "no merge job in: $held_log"
+if refusal=$("$src/scripts/slurm/fleet-submit.sh" --conf "$root/fleet.conf" --recordings "$root/recordings.txt" \
+  --out "$root/fleet" 2>&1); then
+  fail "submitted while merge job $held_job is pending: $refusal"
+fi
+grep -q "still pending or running: $held_job\$" <<< "$refusal" || fail "the refusal does not name job $held_job: $refusal"
+scancel "$held_job"
+for _ in $(seq 1 60); do
+  [[ -z $(squeue -h -j "$held_job" -t PENDING,RUNNING 2> /dev/null) ]] && break
+  sleep 0.5
+done
+
 # --- Resume: one map removed, one damaged; only those two are built again. ---
 echo "resubmitting with rec1's map damaged and rec2's removed"
 merged_sum=$(sha256sum "$merged" | cut -d' ' -f1)
@@ -196,8 +235,9 @@ submit_log=$("$src/scripts/slurm/fleet-submit.sh" --conf "$root/fleet.conf" --re
   --out "$root/fleet" --wait) || fail "the resubmitted fleet jobs failed: $submit_log"
 echo "$submit_log"
 grep -q "2 of 4 recordings (2 already mapped)" <<< "$submit_log" || fail "the resubmission did not rebuild exactly 2 maps"
-[[ $(sed -n '1p;2p' "$root/fleet/todo.txt" | xargs -n1 basename | tr '\n' ' ') == "rec1 rec2 " ]] ||
-  fail "rebuilt $(cat "$root/fleet/todo.txt"), expected rec1 and rec2"
+todo=$(sed -n 's/^lists: //p' <<< "$submit_log")/todo.txt
+[[ $(sed -n '1p;2p' "$todo" | xargs -n1 basename | tr '\n' ' ') == "rec1 rec2 " ]] ||
+  fail "rebuilt $(cat "$todo"), expected rec1 and rec2"
 [[ $(sha256sum "$root/fleet/maps/rec0.ot" | cut -d' ' -f1) == "$untouched_sum" ]] || fail "rec0's map was rebuilt"
 # The builds and the merge are deterministic: the same merged map, byte for byte.
 [[ $(sha256sum "$merged" | cut -d' ' -f1) == "$merged_sum" ]] || fail "the resumed merge differs from the first"

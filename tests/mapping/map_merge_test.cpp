@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <random>
@@ -372,7 +373,8 @@ TEST(MapMerge, RefusesDamagedInputsAsLoadDoes) {
   std::memcpy(&nan[data], &bad, sizeof bad);  // the root's occupancy
   EXPECT_NE(message("nan.ot", WithTrailer(nan)).find("nan.ot: corrupt map (node 0 holds NaN or infinity)"),
             std::string::npos);
-  EXPECT_EQ(message("copy.ot", bytes), "merged");
+  RandomMap(6, 1.0).Save(dir / "other.ot");
+  EXPECT_EQ(message("other.ot", ReadTextFile(dir / "other.ot")), "merged");
 }
 
 TEST(MapMerge, RefusesMapsThatDoNotShareResolutionVehicleOrFrame) {
@@ -411,7 +413,55 @@ TEST(MapMerge, RefusesMapsThatDoNotShareResolutionVehicleOrFrame) {
   EXPECT_NE(frame.find("(unnamed)"), std::string::npos) << frame;
   const std::string scale = message("clamps.ot");
   EXPECT_NE(scale.find("map_options.class_clamp_max 5"), std::string::npos) << scale;
-  EXPECT_EQ(message("a.ot"), "merged");
+  MapMetadata another_recording;
+  another_recording.sequences = {"b"};
+  TraversabilityMap(MapOptions{}, another_recording).Save(dir / "b.ot");
+  EXPECT_EQ(message("b.ot"), "merged");
+}
+
+/// A map of one recording named `name` (its sequence), saved as dir/<name>.ot.
+void SaveRecordingMap(const testing::TempDir& dir, const std::string& name, std::int64_t t_ns) {
+  MapMetadata metadata;
+  metadata.sequences = {name};
+  TraversabilityMap map(MapOptions{}, metadata);
+  map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), t_ns);
+  map.Save(dir / (name + ".ot"));
+}
+
+TEST(MapMerge, RefusesEvidenceItHoldsAlready) {
+  const testing::TempDir dir;
+  SaveRecordingMap(dir, "r0", 1000);
+  SaveRecordingMap(dir, "r1", 2000);
+  SaveRecordingMap(dir, "r2", 3000);
+  std::filesystem::copy_file(dir / "r0.ot", dir / "copy.ot");
+  MergeMaps({dir / "r0.ot", dir / "r1.ot"}).Save(dir / "m01.ot");
+  auto message = [&](const std::vector<std::string>& files) {
+    try {
+      MergeMaps(files);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("merged");
+  };
+  const std::string r0_sum = TraversabilityMap::Load(dir / "m01.ot").metadata().merged_from[0].checksum;
+  const std::string tail = " (checksum " + r0_sum + "): merging them would count its evidence twice";
+  // A copy under another name.
+  EXPECT_EQ(message({dir / "r0.ot", dir / "copy.ot"}),
+            (dir / "r0.ot") + " and " + (dir / "copy.ot") + " both hold the recording 'r0'" + tail);
+  // A merged map and one of its sources, in either order, and among other inputs.
+  EXPECT_EQ(message({dir / "r0.ot", dir / "m01.ot"}),
+            (dir / "r0.ot") + " and " + (dir / "m01.ot") + " both hold the recording 'r0'" + tail);
+  EXPECT_EQ(message({dir / "r2.ot", dir / "m01.ot", dir / "copy.ot"}),
+            (dir / "m01.ot") + " and " + (dir / "copy.ot") + " both hold the recording 'r0'" + tail);
+  // Loaded maps, merged in memory.
+  TraversabilityMap m01 = TraversabilityMap::Load(dir / "m01.ot");
+  EXPECT_THROW(MergeMapInto(TraversabilityMap::Load(dir / "copy.ot"), dir / "copy.ot", &m01), Error);
+  TraversabilityMap r0 = TraversabilityMap::Load(dir / "r0.ot");
+  EXPECT_THROW(MergeMapInto(TraversabilityMap::Load(dir / "copy.ot"), dir / "copy.ot", &r0), Error);
+  // Distinct evidence merges.
+  EXPECT_EQ(message({dir / "m01.ot", dir / "r2.ot"}), "merged");
+  MergeMapInto(TraversabilityMap::Load(dir / "r2.ot"), dir / "r2.ot", &m01);
+  EXPECT_EQ(m01.metadata().merged_from.size(), 3u);
 }
 
 TEST(MapMerge, RecordsEverySourceAcrossATreeOfMerges) {

@@ -28,13 +28,19 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 ///    the other map held as traversable before the first map's last frame (as one run in time
 ///    order spares it): that map adds only its hits to the occupancy (observations times the
 ///    hit log-odds, or its net log-odds when larger).
-/// A voxel only one map holds keeps its values. Without the clamps the result is the same in
-/// any order up to float rounding (commutative exactly); where a sum reaches a clamp, the
-/// order of merges can change the voxel (docs/fleet.md measures by how much).
+/// A voxel only one map holds keeps its values. Merging is commutative exactly. Grouping
+/// (which maps are merged first) can change a voxel in two ways: where a sum reaches a clamp,
+/// and through the ground-sparing rule above, which compares each map's last frame with the
+/// time the other map last saw the voxel, so where recordings overlap in time a merged map's
+/// last frame can spare ground that one of its parts alone would not have. Without the clamps
+/// and with free_space_keeps_traversable off, the result is the same in any order up to float
+/// rounding (docs/fleet.md measures by how much the order changes a map).
 /// The metadata: `into` gains `from`'s sequences, its sources (`from` itself when it was not
 /// merged, described as `from_file`), sensor path and frame count; last timestamp is the later.
-/// Throws as CheckMergeable, and when `from` is `into`. Not thread safe on `into`; `from` is
-/// only read.
+/// Throws as CheckMergeable; when `from` is `into`; and when a source of `from` (by its file
+/// checksum) is already in `into` (its `merged_from`, or `into` itself when it was read from a
+/// file and is not a merge): its evidence would count twice. Not thread safe on `into`; `from`
+/// is only read.
 void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into);
 
 /// What MergeMaps did.
@@ -52,7 +58,8 @@ struct MergeSummary {
 /// header, every node) and read node by node into the merged map, without a tree of its own:
 /// memory holds the merged map and fixed buffers, whatever the inputs' sizes. Throws
 /// ssta::Error naming the file that cannot be read or merged (CheckMergeable: against the
-/// first file); the partial result is dropped.
+/// first file), and naming both files when two inputs hold the same source map (its checksum
+/// in both: a copy, or a merged map and one of its sources); the partial result is dropped.
 TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary = nullptr);
 
 }  // namespace ssta
