@@ -11,21 +11,10 @@
 #include <cstdlib>
 #include <vector>
 
+#include "../src/query_row.h"
 #include "ssta/mapping/traversability_map.h"
 
-namespace {
-
-// The row ssta.Map.query fills (map_bindings.cpp), so both sides write the same bytes.
-struct QueryRow {
-  double x, y, z;
-  std::uint8_t cls;
-  double cost, probability, slope_deg, step_m;
-  std::uint32_t observations;
-  double confidence, height_m;
-  bool observed;
-};
-
-}  // namespace
+using ssta::python::QueryRow;  // the row ssta.Map.query fills
 
 int main(int argc, char** argv) {
   if (argc != 4) {

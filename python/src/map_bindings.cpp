@@ -14,6 +14,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
+#include "query_row.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
 
@@ -21,17 +22,6 @@ namespace ssta::python {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// One row of Map.query, in the columns of `ssta query` (x .. confidence), then the surface
-// height and whether the map saw a surface there.
-struct QueryRow {
-  double x, y, z;
-  std::uint8_t cls;
-  double cost, probability, slope_deg, step_m;
-  std::uint32_t observations;
-  double confidence, height_m;
-  bool observed;
-};
 
 // One row of Map.footprints: the columns of `ssta query --footprint`.
 struct FootprintRow {

@@ -104,6 +104,19 @@ std::vector<internal::ImageListEntry> ReadImageList(const std::string& cam_dir) 
 
 namespace internal {
 
+std::vector<std::ptrdiff_t> PairNearestWithin1Ms(const std::vector<std::int64_t>& left,
+                                                 const std::vector<std::int64_t>& right) {
+  std::vector<std::ptrdiff_t> out;
+  out.reserve(left.size());
+  std::size_t j = 0;
+  for (const std::int64_t t : left) {
+    while (j + 1 < right.size() && std::llabs(right[j + 1] - t) <= std::llabs(right[j] - t)) ++j;
+    const bool paired = !right.empty() && std::llabs(right[j] - t) <= kPairToleranceNs;
+    out.push_back(paired ? static_cast<std::ptrdiff_t>(j) : -1);
+  }
+  return out;
+}
+
 std::vector<CsvRow> ParseAslNumericCsv(const std::string& text, const std::string& path, int columns) {
   std::vector<CsvRow> rows;
   const std::string expected = std::to_string(columns) + " columns";
@@ -221,18 +234,20 @@ Sequence Sequence::OpenAsl(const std::string& path) {
   const auto left = ReadImageList(cam0);
   const auto right = ReadImageList(cam1);
   if (left.empty()) throw Error(cam0 + "/data.csv: lists no frames (an empty sequence)");
-  // Pair by timestamp: exact, or the nearest right frame within 1 ms.
+  const auto times = [](const std::vector<internal::ImageListEntry>& list) {
+    std::vector<std::int64_t> out;
+    for (const auto& entry : list) out.push_back(entry.timestamp_ns);
+    return out;
+  };
+  const std::vector<std::ptrdiff_t> paired = internal::PairNearestWithin1Ms(times(left), times(right));
   std::vector<bool> right_used(right.size(), false);
-  std::size_t j = 0;
-  for (const auto& l : left) {
-    while (j + 1 < right.size() &&
-           std::llabs(right[j + 1].timestamp_ns - l.timestamp_ns) <= std::llabs(right[j].timestamp_ns - l.timestamp_ns)) {
-      ++j;
-    }
-    if (right.empty() || std::llabs(right[j].timestamp_ns - l.timestamp_ns) > kPairToleranceNs) {
+  for (std::size_t i = 0; i < left.size(); ++i) {
+    const auto& l = left[i];
+    if (paired[i] < 0) {
       seq.skipped.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
       continue;
     }
+    const auto j = static_cast<std::size_t>(paired[i]);
     right_used[j] = true;  // paired: a missing image skips the pair once, as one frame
     if (!fs::exists(l.file)) {
       seq.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
-#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -22,14 +21,13 @@
 #include "ssta/core/error.h"
 #include "ssta/io/sequence.h"
 #include "tf_tree.h"
+#include "io/text_parsers.h"
 
 namespace fs = std::filesystem;
 
 namespace ssta {
 namespace internal {
 namespace {
-
-constexpr std::int64_t kPairToleranceNs = 1'000'000;  // as ASL sequences (docs/interfaces.md, section 2)
 
 /// "sensor_msgs/msg/Image" (ROS 2) and "sensor_msgs/Image" (ROS 1) are the same type.
 std::string PlainType(const std::string& type) {
@@ -375,11 +373,9 @@ class BagImageSource final : public StereoImageSource {
     BagMessageRef left, right;
   };
 
-  BagImageSource(std::shared_ptr<const BagReader> bag, std::array<std::string, 2> topics,
-                 std::array<RosEncoding, 2> encodings, std::array<bool, 2> compressed, std::array<CameraModel, 2> cameras,
+  BagImageSource(std::shared_ptr<const BagReader> bag, std::array<RosEncoding, 2> encodings, std::array<bool, 2> compressed, std::array<CameraModel, 2> cameras,
                  std::vector<Pair> pairs)
       : bag_(std::move(bag)),
-        topics_(std::move(topics)),
         encodings_(encodings),
         compressed_(compressed),
         cameras_(std::move(cameras)),
@@ -420,7 +416,6 @@ class BagImageSource final : public StereoImageSource {
 
  private:
   std::shared_ptr<const BagReader> bag_;
-  std::array<std::string, 2> topics_;
   std::array<RosEncoding, 2> encodings_;
   std::array<bool, 2> compressed_;
   std::array<CameraModel, 2> cameras_;
@@ -458,20 +453,21 @@ double RateHz(const std::vector<Stamped>& stamps) {
 /// Pairs left and right frames as ASL sequences do; skips are reported.
 void PairFrames(const std::string& path, const ChosenTopics& chosen, const std::vector<Stamped>& left,
                 const std::vector<Stamped>& right, SequenceData* seq, std::vector<BagImageSource::Pair>* pairs) {
+  const auto times = [](const std::vector<Stamped>& list) {
+    std::vector<std::int64_t> out;
+    for (const Stamped& s : list) out.push_back(s.stamp_ns);
+    return out;
+  };
+  const std::vector<std::ptrdiff_t> paired = PairNearestWithin1Ms(times(left), times(right));
   std::vector<bool> right_used(right.size(), false);
-  std::size_t j = 0;
-  std::int64_t previous = std::numeric_limits<std::int64_t>::min();
-  for (const Stamped& l : left) {
-    if (l.stamp_ns == previous) {
+  for (std::size_t i = 0; i < left.size(); ++i) {
+    const Stamped& l = left[i];
+    if (i > 0 && l.stamp_ns == left[i - 1].stamp_ns) {
       seq->skipped.push_back({l.stamp_ns, "left image with a duplicated stamp"});
       continue;
     }
-    previous = l.stamp_ns;
-    while (j + 1 < right.size() &&
-           std::llabs(right[j + 1].stamp_ns - l.stamp_ns) <= std::llabs(right[j].stamp_ns - l.stamp_ns)) {
-      ++j;
-    }
-    if (right.empty() || std::llabs(right[j].stamp_ns - l.stamp_ns) > kPairToleranceNs || right_used[j]) {
+    const auto j = static_cast<std::size_t>(paired[i]);
+    if (paired[i] < 0 || right_used[j]) {
       seq->skipped.push_back({l.stamp_ns, "no " + chosen.right + " image within 1 ms"});
       continue;
     }
@@ -487,15 +483,15 @@ void PairFrames(const std::string& path, const ChosenTopics& chosen, const std::
             [](const SkippedFrame& a, const SkippedFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
 }
 
-/// Every transform on /tf_static and /tf (when `dynamic`). A transform whose rotation is not a
+/// Every transform on /tf_static and /tf. A transform whose rotation is not a
 /// quaternion (a misconfigured static_transform_publisher's 0 0 0 0) is left out with a note, as
 /// tf2 ignores it: it breaks only the chains through its link, which then report their absence.
-TfTree ReadTf(const BagReader& bag, const Topics& topics, bool dynamic, std::vector<std::string>* notes) {
+TfTree ReadTf(const BagReader& bag, const Topics& topics, std::vector<std::string>* notes) {
   TfTree tree;
   std::set<std::string> bad_links;
   for (const std::string topic : {"/tf_static", "/tf"}) {
     const bool is_static = topic == "/tf_static";
-    if (!topics.Has(topic) || (!is_static && !dynamic)) continue;
+    if (!topics.Has(topic)) continue;
     if (topics.Type(topic) != "tf2_msgs/TFMessage") continue;
     const RosEncoding encoding = topics.Encoding(topic);
     for (const BagMessageRef& ref : bag.List({topics.Index(topic)})) {
@@ -596,17 +592,6 @@ ImageU8 GreyImage(const RosCompressedImage& image, const std::string& where) {
   return ToImage(GreyFromCompressed(image, where));
 }
 
-bool IsBagPathImpl(const std::string& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) return fs::exists(fs::path(path) / "metadata.yaml", ec);
-  const std::string ext = fs::path(path).extension().string();
-  if (ext == ".mcap" || ext == ".db3" || ext == ".bag") return true;
-  std::ifstream in(path, std::ios::binary);
-  char magic[13] = {};
-  in.read(magic, 13);
-  return in.gcount() == 13 && std::string(magic, 13) == "#ROSBAG V2.0\n";
-}
-
 std::unique_ptr<BagReader> OpenBag(const std::string& path) {
   if (!fs::exists(path)) throw Error(path + ": bag not found");
   std::error_code ec;
@@ -663,7 +648,7 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
   std::string imu_frame;
   if (!chosen.imu.empty()) ReadImu(*bag, topics, chosen.imu, &seq, &imu_frame);
 
-  const TfTree tf = ReadTf(*bag, topics, true, &seq.notes);
+  const TfTree tf = ReadTf(*bag, topics, &seq.notes);
   std::string body = chosen.pose_frame;
   if (!chosen.pose.empty() && chosen.pose != "/tf") {
     const std::string child = ReadOdometry(*bag, topics, chosen.pose, &seq);
@@ -743,9 +728,8 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
     seq.notes.push_back("no poses (no Odometry topic, no /tf pose chosen): build-map needs --static, or a pose "
                         "topic (--pose-topic, --pose-frame)");
   }
-  const std::string& left_topic = chosen.left;
   seq.image_source = std::make_shared<BagImageSource>(
-      bag, std::array<std::string, 2>{left_topic, chosen.right},
+      bag,
       std::array<RosEncoding, 2>{topics.Encoding(chosen.left), topics.Encoding(chosen.right)},
       std::array<bool, 2>{topics.Type(chosen.left) == "sensor_msgs/CompressedImage",
                           topics.Type(chosen.right) == "sensor_msgs/CompressedImage"},
@@ -776,7 +760,16 @@ std::string DescribeTopics(const BagReader& bag) {
 
 }  // namespace internal
 
-bool IsBagPath(const std::string& path) { return internal::IsBagPathImpl(path); }
+bool IsBagPath(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return fs::exists(fs::path(path) / "metadata.yaml", ec);
+  const std::string ext = fs::path(path).extension().string();
+  if (ext == ".mcap" || ext == ".db3" || ext == ".bag") return true;
+  std::ifstream in(path, std::ios::binary);
+  char magic[13] = {};
+  in.read(magic, 13);
+  return in.gcount() == 13 && std::string(magic, 13) == "#ROSBAG V2.0\n";
+}
 
 Sequence Sequence::OpenBag(const std::string& path, const BagTopics& topics) {
   std::shared_ptr<const internal::BagReader> bag = internal::OpenBag(path);
