@@ -9,9 +9,12 @@
 # Two fixed sets of scenes. Settings are chosen on the tuning set; the report set is read only
 # to report the result, so a figure on it says how the method does on terrain it was not tuned
 # on. Each set has the four named scenes and eight `random` ones (terrain, rig and light drawn
-# from the seed: docs/accuracy.md). FRAMES defaults to 60. Columns: label accuracy and mean IoU
-# over every frame; map grid accuracy within 10 m of the path, and over every cell the cameras
-# saw within 20 m with unknown counted as wrong (coverage in brackets).
+# from the seed: docs/accuracy.md). FRAMES defaults to 60. Columns: per-frame label accuracy,
+# non-traversable recall and the share of traversable pixels called non-traversable; the map
+# grid's accuracy within 10 m of the path and its unsafe / falsely blocked cells there; what a
+# planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
+# over all seen ground and within 10 m. The last row pools the samples of every scene.
+# SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels.
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -39,9 +42,8 @@ mkdir -p "$out" "$seqs"
 runs=()
 for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done
 for seed in $random_seeds; do runs+=("random:$seed"); done
+if [ -n "${SCENES:-}" ]; then read -r -a runs <<< "$SCENES"; fi
 
-echo "| scene | rig f / b / h | labels acc | labels mIoU | map within 10 m | map all (coverage) |"
-echo "|---|---|---|---|---|---|"
 for run in "${runs[@]}"; do
   scene=${run%%:*}
   seed=${run##*:}
@@ -51,24 +53,89 @@ for run in "${runs[@]}"; do
   if [ ! -f "$seq/gt/rig.yaml" ]; then
     "$synth" synth --scene "$scene" --seed "$seed" --frames "$frames" --out "$seq" >/dev/null
   fi
-  "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q "$@"
-  "$ssta" eval labels --pred "$out/$name/classified" --gt "$seq" --json "$out/$name/labels.json" >/dev/null
+  echo "accuracy: $name" >&2
+  if [ -z "${MAP_ONLY:-}" ]; then
+    "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q "$@"
+    "$ssta" eval labels --pred "$out/$name/classified" --gt "$seq" --json "$out/$name/labels.json" >/dev/null
+  fi
   "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "$@" >/dev/null
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
   "$ssta" eval grid --pred "$out/$name/grid" --gt "$seq" --json "$out/$name/grid.json" >/dev/null
-  python3 - "$out/$name" "$name" "$seq" <<'PY'
-import json, re, sys
-d, name, seq = sys.argv[1], sys.argv[2], sys.argv[3]
-labels = json.load(open(d + "/labels.json"))["metrics"]
-grid = json.load(open(d + "/grid.json"))["metrics"]
-within = None
-for band in json.load(open(d + "/grid.json")).get("by_distance_from_path", {}).get("bands", []):
-    if band["to_m"] <= 10.0 + 1e-9:
-        within = band["accuracy_within"]
-rig = dict(line.split(": ", 1) for line in open(seq + "/gt/rig.yaml") if ": " in line and not line.startswith("#"))
-fmt = lambda x: "n/a" if x is None else "%.3f" % x
-rig = "%.0f / %.2f / %.2f" % (float(rig["focal_px"]), float(rig["baseline_m"]), float(rig["camera_height_m"]))
-print("| %s | %s | %s | %s | %s | %s (%s) |" % (name, rig, fmt(labels["accuracy"]), fmt(labels["mean_iou"]),
-      fmt(within), fmt(grid["accuracy"]), fmt(grid["coverage"])))
-PY
+  "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported \
+    --json "$out/$name/footprints.json" >/dev/null
 done
+
+python3 - "$out" "$seqs" "$frames" "${runs[@]}" <<'PY'
+import json, os, sys
+out, seqs, frames, runs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+WITHIN_M = 10.0
+
+def load(path):
+    return json.load(open(path)) if os.path.exists(path) else None
+
+def confusion(metrics):
+    return metrics["confusion"] if metrics else None
+
+def within(doc):
+    """The confusion matrix of every sample within WITHIN_M of the path."""
+    found = None
+    for band in (doc or {}).get("by_distance_from_path", {}).get("bands", []):
+        if band["to_m"] <= WITHIN_M + 1e-9:
+            found = band["metrics_within"]["confusion"]
+    return found
+
+def add(a, b):
+    return b if a is None else [[x + y for x, y in zip(ra, rb)] for ra, rb in zip(a, b)]
+
+def rates(m):
+    """accuracy, non-traversable recall, unsafe, falsely blocked (shares; None without samples)."""
+    if m is None:
+        return None, None, None, None
+    scored = sum(sum(m[t]) for t in (1, 2, 3))
+    correct = sum(m[c][c] for c in (1, 2, 3))
+    blocked, free = sum(m[3]), sum(m[1]) + sum(m[2])
+    ratio = lambda n, d: n / d if d else None
+    return (ratio(correct, scored), ratio(m[3][3], blocked), ratio(m[3][1] + m[3][2], blocked),
+            ratio(m[1][3] + m[2][3], free))
+
+def f(x, pct=False):
+    if x is None:
+        return "n/a"
+    return "%.1f %%" % (100 * x) if pct else "%.3f" % x
+
+print("| scene | rig f / b / h | labels acc | labels non-trav recall | labels trav. called non | "
+      "map acc within 10 m | cells within 10 m: unsafe / falsely blocked | "
+      "footprints: unsafe / falsely blocked | footprints within 10 m: unsafe / falsely blocked |")
+print("|---|---|---|---|---|---|---|---|---|")
+totals = {}
+for run in runs:
+    scene, seed = run.split(":")
+    name = "%s-%s" % (scene, seed)
+    d, seq = os.path.join(out, name), os.path.join(seqs, "%s-%s" % (name, frames))
+    labels, grid, feet = load(d + "/labels.json"), load(d + "/grid.json"), load(d + "/footprints.json")
+    mats = {"labels": confusion(labels and labels["metrics"]), "cells10": within(grid),
+            "feet": confusion(feet and feet["metrics"]), "feet10": within(feet)}
+    for k, m in mats.items():
+        if m is not None:
+            totals[k] = add(totals.get(k), m)
+    rig = dict(l.split(": ", 1) for l in open(seq + "/gt/rig.yaml") if ": " in l and not l.startswith("#"))
+    rig = "%.0f / %.2f / %.2f" % (float(rig["focal_px"]), float(rig["baseline_m"]), float(rig["camera_height_m"]))
+    la, lr, _, _ = rates(mats["labels"])
+    lm = mats["labels"]
+    trav_non = (lm[1][3] / sum(lm[1])) if lm and sum(lm[1]) else None
+    ca, _, cu, cf = rates(mats["cells10"])
+    _, _, fu, ff = rates(mats["feet"])
+    _, _, wu, wf = rates(mats["feet10"])
+    print("| %s | %s | %s | %s | %s | %s | %s / %s | %s / %s | %s / %s |" % (
+        name, rig, f(la), f(lr), f(trav_non, True), f(ca), f(cu, True), f(cf, True), f(fu, True), f(ff, True),
+        f(wu, True), f(wf, True)))
+lm = totals.get("labels")
+la, lr, _, _ = rates(lm)
+trav_non = (lm[1][3] / sum(lm[1])) if lm and sum(lm[1]) else None
+ca, _, cu, cf = rates(totals.get("cells10"))
+_, _, fu, ff = rates(totals.get("feet"))
+_, _, wu, wf = rates(totals.get("feet10"))
+print("| **pooled** | | **%s** | **%s** | **%s** | **%s** | **%s / %s** | **%s / %s** | **%s / %s** |" % (
+    f(la), f(lr), f(trav_non, True), f(ca), f(cu, True), f(cf, True), f(fu, True), f(ff, True), f(wu, True),
+    f(wf, True)))
+PY

@@ -154,11 +154,21 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
     exported = std::make_unique<ExportedSurface>(
         map, Eigen::AlignedBox2d(truth.origin_m - margin, truth.origin_m + size + margin), args.exported);
   }
-  FootprintEvalSummary summary = ScoreFootprints(truth, args.footprint, [&](const FootprintPose& pose) {
+  const DrivenPath path = ReadDrivenPath(args.eval.sequence);
+  const auto oracle = [&](const FootprintPose& pose) {
     const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, args.footprint.length_m, args.footprint.width_m};
     const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
     return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
-  });
+  };
+  FootprintEvalSummary summary;
+  try {
+    summary = ScoreFootprints(truth, args.footprint, oracle, path.points);
+  } catch (const Error& e) {
+    // A pose too far from the lattice is the pose file's fault: name it.
+    if (path.source.empty() || std::string(e.what()).rfind("distance bands", 0) != 0) throw;
+    throw Error(path.source + ": " + e.what());
+  }
+  summary.path_source = path.source;
   summary.prediction = args.eval.prediction + (args.as_exported ? " (as exported)" : " (as observed)");
   return summary;
 }

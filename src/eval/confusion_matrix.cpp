@@ -122,6 +122,24 @@ double ConfusionMatrix::Accuracy() const { return Ratio(Correct(), Scored()); }
 double ConfusionMatrix::Coverage() const { return Ratio(Decided(), Scored()); }
 double ConfusionMatrix::DecidedAccuracy() const { return Ratio(Correct(), Decided()); }
 
+double ConfusionMatrix::Recall(TravClass c) const {
+  const int i = VerdictIndex(c);
+  return Ratio(counts_[i][i], TruthTotal(i));
+}
+
+namespace {
+constexpr int kTrav = static_cast<int>(TravClass::kTraversable);
+constexpr int kSemi = static_cast<int>(TravClass::kSemiTraversable);
+constexpr int kNon = static_cast<int>(TravClass::kNonTraversable);
+}  // namespace
+
+std::int64_t ConfusionMatrix::Unsafe() const { return counts_[kNon][kTrav] + counts_[kNon][kSemi]; }
+double ConfusionMatrix::UnsafeRate() const { return Ratio(Unsafe(), TruthTotal(kNon)); }
+std::int64_t ConfusionMatrix::FalselyBlocked() const { return counts_[kTrav][kNon] + counts_[kSemi][kNon]; }
+double ConfusionMatrix::FalselyBlockedRate() const {
+  return Ratio(FalselyBlocked(), TruthTotal(kTrav) + TruthTotal(kSemi));
+}
+
 std::string ConfusionMatrix::BriefReport(std::string_view unit) const {
   const std::string u(unit);
   char line[256];
@@ -136,11 +154,19 @@ std::string ConfusionMatrix::BriefReport(std::string_view unit) const {
          "   decided accuracy " + FormatRatio(DecidedAccuracy()) + "   mean IoU " +
          FormatRatio(MeanIou()) + " (over " + std::to_string(PresentClasses()) +
          " present classes)\n";
-  out += "class                 IoU    truth  predicted (on scored " + u + ")\n";
+  std::snprintf(line, sizeof line,
+                "unsafe (truly non-traversable, answered traversable or semi): %lld of %lld (%s)\n"
+                "falsely blocked (truly free, answered non-traversable): %lld of %lld (%s)\n",
+                static_cast<long long>(Unsafe()), static_cast<long long>(TruthTotal(kNon)),
+                FormatRatio(UnsafeRate()).c_str(), static_cast<long long>(FalselyBlocked()),
+                static_cast<long long>(TruthTotal(kTrav) + TruthTotal(kSemi)),
+                FormatRatio(FalselyBlockedRate()).c_str());
+  out += line;
+  out += "class                 IoU  recall    truth  predicted (on scored " + u + ")\n";
   for (int c = kFirstVerdict; c <= kLastVerdict; ++c) {
     const auto cls = static_cast<TravClass>(c);
-    std::snprintf(line, sizeof line, "%-18s %s %8lld %10lld\n",
-                  std::string(ClassName(cls)).c_str(), FormatRatio(Iou(cls)).c_str(),
+    std::snprintf(line, sizeof line, "%-18s %s  %s %8lld %10lld\n",
+                  std::string(ClassName(cls)).c_str(), FormatRatio(Iou(cls)).c_str(), FormatRatio(Recall(cls)).c_str(),
                   static_cast<long long>(TruthTotal(c)),
                   static_cast<long long>(ScoredPredictedTotal(c)));
     out += line;

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <memory>
 
 #include "core/json_writer.h"
 #include "eval/class_ids.h"
+#include "eval/distance_bands.h"
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
@@ -73,7 +75,7 @@ bool FootprintEvalOptions::IsValid(std::string* error) const {
 }
 
 FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEvalOptions& options,
-                                     const FootprintOracle& oracle) {
+                                     const FootprintOracle& oracle, const std::vector<Eigen::Vector2d>& path) {
   std::string error;
   if (!options.IsValid(&error)) throw Error("footprint evaluation: " + error);
   SSTA_CHECK(oracle != nullptr, "ScoreFootprints: no oracle");
@@ -85,6 +87,8 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
   const int k = std::max(1, static_cast<int>(std::lround(options.step_m / truth.resolution_m)));
   const double half_l = 0.5 * options.length_m, half_w = 0.5 * options.width_m;
   double known_sum = 0.0;
+  std::unique_ptr<internal::BandAccumulator> bands;
+  if (!path.empty()) bands = std::make_unique<internal::BandAccumulator>(path, FootprintEvalSummary::kDistanceBandM);
   const int height = truth.classes.height();
   for (int bot = k / 2; bot < height; bot += k) {
     for (int col = k / 2; col < truth.classes.width(); col += k) {
@@ -104,15 +108,15 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
         SSTA_CHECK(answer.fraction_known >= 0.0 && answer.fraction_known <= 1.0,
                    "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
         summary.matrix.Add(t, answer.worst);
-        const auto non = static_cast<std::uint8_t>(TravClass::kNonTraversable);
-        const auto trav = static_cast<std::uint8_t>(TravClass::kTraversable);
-        if (t == non && IsVerdict(answer.worst) && answer.worst != non) ++summary.unsafe;
-        if (t == trav && answer.worst == non) ++summary.falsely_blocked;
+        if (bands) bands->Add(centre, t, answer.worst);
         if (answer.fraction_known < 1.0) ++summary.partly_known;
         known_sum += answer.fraction_known;
       }
     }
   }
+  summary.unsafe = summary.matrix.Unsafe();
+  summary.falsely_blocked = summary.matrix.FalselyBlocked();
+  if (bands) summary.by_distance = bands->Finish();
   const std::int64_t scored = summary.matrix.Scored();
   summary.mean_fraction_known = scored > 0 ? known_sum / static_cast<double>(scored)
                                            : std::numeric_limits<double>::quiet_NaN();
@@ -129,13 +133,13 @@ std::string FootprintEvalSummary::BriefReport() const {
          std::to_string(partly_unseen) + "\n";
   const std::int64_t scored = matrix.Scored();
   auto share = [&](std::int64_t n) { return scored > 0 ? Fixed(static_cast<double>(n) / scored, 4) : "nan"; };
-  out += "unsafe (truly non-traversable, answered traversable or semi): " + std::to_string(unsafe) + " (" +
-         share(unsafe) + ")\n";
-  out += "falsely blocked (truly traversable, answered non-traversable): " + std::to_string(falsely_blocked) +
-         " (" + share(falsely_blocked) + ")\n";
   out += "partly known to the map: " + std::to_string(partly_known) + " (" + share(partly_known) +
          "), mean known share " + Fixed(mean_fraction_known, 3) + "\n";
   out += matrix.BriefReport("footprints");
+  if (!by_distance.empty()) {
+    out += "by distance from the path (" + path_source + "):\n";
+    out += internal::BandsReport(by_distance);
+  }
   return out;
 }
 
@@ -177,6 +181,10 @@ std::string FootprintEvalSummary::ToJson() const {
   json.Number(mean_fraction_known);
   json.Key("metrics");
   internal::WriteMetricsJson(matrix, &json);
+  if (!by_distance.empty()) {
+    json.Key("by_distance_from_path");
+    internal::WriteBandsJson(by_distance, path_source, kDistanceBandM, &json);
+  }
   json.EndObject();
   return json.Take();
 }

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "eval/class_ids.h"
+#include "eval/distance_bands.h"
 #include "core/json_writer.h"
 #include "eval/metrics_json.h"
 #include "io/text_parsers.h"
@@ -45,76 +46,22 @@ std::string GridText(const ClassGrid& grid) {
   return line;
 }
 
-/// Distance from `p` to the polyline `path` (at least one point).
-double DistanceToPath(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& path) {
-  if (path.size() == 1) return (p - path.front()).norm();
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 1; i < path.size(); ++i) {
-    const Eigen::Vector2d a = path[i - 1], ab = path[i] - a;
-    const double length_sq = ab.squaredNorm();
-    const double t = length_sq > 0.0 ? std::clamp((p - a).dot(ab) / length_sq, 0.0, 1.0) : 0.0;
-    best = std::min(best, (p - (a + t * ab)).norm());
-  }
-  return best;
-}
-
-/// The vehicle's (x, y) positions from a pose file, thinned to one per kPathSpacingM of travel
-/// (the polyline between them is what ScoreGridByDistance measures to).
-std::vector<Eigen::Vector2d> ReadPath(const std::string& pose_csv) {
-  constexpr double kPathSpacingM = 0.25;
-  std::vector<Eigen::Vector2d> path;
-  const std::vector<PoseSample> poses = internal::ParseAslPoseCsv(ReadTextFile(pose_csv), pose_csv);
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const Eigen::Vector2d p = poses[i].world_p_body.head<2>();
-    if (path.empty() || (p - path.back()).norm() >= kPathSpacingM || i + 1 == poses.size()) path.push_back(p);
-  }
-  return path;
-}
-
 }  // namespace
 
 std::vector<DistanceBand> ScoreGridByDistance(const ClassGrid& truth, const ClassGrid& predicted,
                                               const std::vector<Eigen::Vector2d>& path, double band_m) {
-  constexpr int kMaxBands = 10000;
-  if (!(band_m > 0.0) || !std::isfinite(band_m)) throw Error("distance bands: band_m must be positive");
-  if (path.empty()) throw Error("distance bands: the path has no points");
-  for (const Eigen::Vector2d& p : path) {
-    if (!p.allFinite()) throw Error("distance bands: the path has a point that is not finite");
-  }
+  internal::BandAccumulator bands(path, band_m);
   internal::CheckTruthIds(truth.classes, truth.source);
   internal::CheckPredictedIds(predicted.classes, predicted.source);
-  std::vector<DistanceBand> bands;
   for (int row = 0; row < truth.classes.height(); ++row) {
     for (int col = 0; col < truth.classes.width(); ++col) {
       const std::uint8_t t = truth.classes(row, col);
       if (!IsVerdict(t)) continue;
       const Eigen::Vector2d centre = truth.CellCentre({row, col});
-      const double distance = DistanceToPath(centre, path);
-      if (distance / band_m >= kMaxBands) {
-        char message[200];
-        std::snprintf(message, sizeof message,
-                      "a scored cell lies %.0f m from the path (over %d bands of %g m): is the path this grid's?",
-                      distance, kMaxBands, band_m);
-        throw Error(std::string("distance bands: ") + message);
-      }
-      const auto band = static_cast<std::size_t>(std::floor(distance / band_m));
-      while (bands.size() <= band) {
-        DistanceBand b;
-        b.from_m = static_cast<double>(bands.size()) * band_m;
-        b.to_m = b.from_m + band_m;
-        bands.push_back(b);
-      }
-      bands[band].matrix.Add(t, predicted.ClassAt(centre));
+      bands.Add(centre, t, predicted.ClassAt(centre));
     }
   }
-  std::int64_t scored = 0, correct = 0;  // of the bands so far
-  for (DistanceBand& b : bands) {
-    scored += b.matrix.Scored();
-    correct += b.matrix.Correct();
-    b.accuracy_within = scored > 0 ? static_cast<double>(correct) / static_cast<double>(scored)
-                                   : std::numeric_limits<double>::quiet_NaN();
-  }
-  return bands;
+  return bands.Finish();
 }
 
 ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth) {
@@ -186,11 +133,10 @@ GridEvalSummary EvaluateExportedGrid(const std::string& prefix, const std::strin
   summary.truth = summary.truth_grid.source;
   summary.prediction = summary.predicted_grid.source;
   summary.matrix = ScoreGrid(summary.truth_grid, summary.predicted_grid);
-  const std::filesystem::path pose_csv =
-      std::filesystem::path(gt_dir).lexically_normal().parent_path() / "pose0" / "data.csv";
-  if (std::filesystem::exists(pose_csv)) {
-    summary.path_source = pose_csv.string();
-    summary.path = ReadPath(summary.path_source);
+  const std::string pose_csv = internal::FindPoseFile(gt_dir);
+  if (!pose_csv.empty()) {
+    summary.path_source = pose_csv;
+    summary.path = internal::ReadPath(summary.path_source);
     if (!summary.path.empty()) {
       try {
         summary.by_distance = ScoreGridByDistance(summary.truth_grid, summary.predicted_grid, summary.path,
@@ -221,21 +167,7 @@ std::string GridEvalSummary::BriefReport() const {
   out += matrix.BriefReport("cells");
   if (!by_distance.empty()) {
     out += "by distance from the path (" + path_source + "):\n";
-    out += "distance [m]   scored   accuracy   coverage   mean IoU   accuracy within\n";
-    for (const DistanceBand& b : by_distance) {
-      char line[200];
-      const ConfusionMatrix& m = b.matrix;
-      char within[32] = "-";
-      if (std::isfinite(b.accuracy_within)) std::snprintf(within, sizeof within, "%.4f", b.accuracy_within);
-      if (m.Scored() == 0) {
-        std::snprintf(line, sizeof line, "%5.0f - %-5.0f %8d          -          -          - %17s\n", b.from_m,
-                      b.to_m, 0, within);
-      } else {
-        std::snprintf(line, sizeof line, "%5.0f - %-5.0f %8lld %10.4f %10.4f %10.4f %17s\n", b.from_m, b.to_m,
-                      static_cast<long long>(m.Scored()), m.Accuracy(), m.Coverage(), m.MeanIou(), within);
-      }
-      out += line;
-    }
+    out += internal::BandsReport(by_distance);
   }
   return out;
 }
@@ -261,35 +193,7 @@ std::string GridEvalSummary::ToJson() const {
   internal::WriteMetricsJson(matrix, &json);
   if (!by_distance.empty()) {
     json.Key("by_distance_from_path");
-    json.BeginObject();
-    json.Key("path");
-    json.String(path_source);
-    json.Key("band_m");
-    json.Number(kDistanceBandM);
-    json.Key("bands");
-    json.BeginArray();
-    constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-    for (const DistanceBand& b : by_distance) {
-      const bool any = b.matrix.Scored() > 0;
-      json.BeginObject();
-      json.Key("from_m");
-      json.Number(b.from_m);
-      json.Key("to_m");
-      json.Number(b.to_m);
-      json.Key("scored");
-      json.Integer(b.matrix.Scored());
-      json.Key("accuracy");
-      json.Number(any ? b.matrix.Accuracy() : kNaN);
-      json.Key("coverage");
-      json.Number(any ? b.matrix.Coverage() : kNaN);
-      json.Key("mean_iou");
-      json.Number(any ? b.matrix.MeanIou() : kNaN);
-      json.Key("accuracy_within");
-      json.Number(b.accuracy_within);  // NaN: null
-      json.EndObject();
-    }
-    json.EndArray();
-    json.EndObject();
+    internal::WriteBandsJson(by_distance, path_source, kDistanceBandM, &json);
   }
   json.EndObject();
   return json.Take();

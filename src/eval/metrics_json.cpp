@@ -37,6 +37,33 @@ void WriteMetricsJson(const ConfusionMatrix& matrix, JsonWriter* json) {
     json->Number(matrix.Iou(cls));
   }
   json->EndObject();
+  json->Key("recall");
+  json->BeginObject();
+  for (int c = 1; c <= 3; ++c) {
+    const auto cls = static_cast<TravClass>(c);
+    json->Key(ClassName(cls));
+    json->Number(matrix.Recall(cls));
+  }
+  json->EndObject();
+  const int non = static_cast<int>(TravClass::kNonTraversable);
+  json->Key("unsafe");
+  json->BeginObject();
+  json->Key("count");
+  json->Integer(matrix.Unsafe());
+  json->Key("truly_blocked");
+  json->Integer(matrix.TruthTotal(non));
+  json->Key("rate");
+  json->Number(matrix.UnsafeRate());
+  json->EndObject();
+  json->Key("falsely_blocked");
+  json->BeginObject();
+  json->Key("count");
+  json->Integer(matrix.FalselyBlocked());
+  json->Key("truly_free");
+  json->Integer(matrix.TruthTotal(non - 1) + matrix.TruthTotal(non - 2));
+  json->Key("rate");
+  json->Number(matrix.FalselyBlockedRate());
+  json->EndObject();
   json->Key("confusion");
   json->BeginArray();
   for (int t = 0; t < ConfusionMatrix::kSize; ++t) {

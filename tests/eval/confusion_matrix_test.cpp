@@ -87,6 +87,29 @@ TEST(eval_ConfusionMatrix, AllTraversablePredictionOfMixedTruth) {
   EXPECT_NEAR(m.Coverage(), 1.0, kTol);
 }
 
+TEST(eval_ConfusionMatrix, SafetyFiguresCountWhatAPlannerIsTold) {
+  ConfusionMatrix m;
+  m.Add(3, 1, 2);   // unsafe: an obstacle answered traversable
+  m.Add(3, 2, 1);   // unsafe: answered semi-traversable
+  m.Add(3, 3, 5);
+  m.Add(3, 0, 2);   // not known: neither unsafe nor blocked
+  m.Add(1, 3, 4);   // falsely blocked
+  m.Add(2, 3, 1);   // falsely blocked
+  m.Add(1, 1, 15);
+  m.Add(2, 2, 5);
+  m.Add(1, 4, 1);   // undecided: not blocked
+  m.Add(255, 3, 7);  // don't care: never counted
+  EXPECT_EQ(m.Unsafe(), 3);
+  EXPECT_NEAR(m.UnsafeRate(), 3.0 / 10.0, kTol);
+  EXPECT_EQ(m.FalselyBlocked(), 5);
+  EXPECT_NEAR(m.FalselyBlockedRate(), 5.0 / 26.0, kTol);
+  EXPECT_NEAR(m.Recall(TravClass::kNonTraversable), 5.0 / 10.0, kTol);
+  EXPECT_NEAR(m.Recall(TravClass::kTraversable), 15.0 / 20.0, kTol);
+  EXPECT_NEAR(m.Recall(TravClass::kSemiTraversable), 5.0 / 6.0, kTol);
+  EXPECT_TRUE(std::isnan(ConfusionMatrix().UnsafeRate()));
+  EXPECT_TRUE(std::isnan(ConfusionMatrix().Recall(TravClass::kTraversable)));
+}
+
 TEST(eval_ConfusionMatrix, MeanIouLeavesOutClassesAbsentFromTruthAndPrediction) {
   const ImageU8 truth = MakeLabels({{1, 1, 2, 2}});
   const ImageU8 predicted = MakeLabels({{1, 2, 2, 2}});

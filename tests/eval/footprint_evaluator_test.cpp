@@ -1,5 +1,6 @@
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -59,9 +60,14 @@ TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
   EXPECT_NEAR(s.mean_fraction_known, 1.0, kTol);
   EXPECT_NEAR(s.matrix.Accuracy(), 1410.0 / 1435.0, kTol);
 
-  // Blocking everything, half known: every truly traversable footprint is falsely blocked.
+  EXPECT_NEAR(s.matrix.UnsafeRate(), 1.0, kTol);
+  EXPECT_NEAR(s.matrix.Recall(TravClass::kNonTraversable), 0.0, kTol);
+
+  // Blocking everything, half known: every truly free (traversable or semi) footprint is
+  // falsely blocked.
   const FootprintEvalSummary b = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(3, 0.5); });
-  EXPECT_EQ(b.falsely_blocked, 1410);
+  EXPECT_EQ(b.falsely_blocked, 1410 + 9);
+  EXPECT_NEAR(b.matrix.FalselyBlockedRate(), 1.0, kTol);
   EXPECT_EQ(b.unsafe, 0);
   EXPECT_EQ(b.partly_known, 1435);
   EXPECT_NEAR(b.mean_fraction_known, 0.5, kTol);
@@ -69,6 +75,33 @@ TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
   const FootprintEvalSummary u = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(0, 0.0); });
   EXPECT_EQ(u.unsafe + u.falsely_blocked, 0);
   EXPECT_NEAR(u.matrix.Coverage(), 0.0, kTol);
+}
+
+TEST(eval_Footprints, SplitsPosesByTheirDistanceFromThePath) {
+  // The path runs along y = -1 m: a pose's distance is its centre's y + 1, so the first band
+  // (under 2 m) holds the centres with y < 1 m: bottom rows 1..9 (row 0 reaches outside the
+  // grid), columns 1..38, less the don't-care cell and its 8 neighbours.
+  FootprintEvalOptions options;
+  options.length_m = options.width_m = 0.3;
+  options.step_m = 0.1;
+  options.yaws_deg = {0.0};
+  const std::vector<Eigen::Vector2d> path = {{0.0, -1.0}, {4.0, -1.0}};
+  const FootprintEvalSummary s =
+      ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(1, 1.0); }, path);
+  ASSERT_EQ(s.by_distance.size(), 3u);  // centres up to y = 3.85: distances below 6 m
+  EXPECT_EQ(s.by_distance[0].matrix.Scored(), 9 * 38 - 1 - 8);
+  // Row 9 holds the three poses whose 3 x 3 cells reach the semi-traversable cell (row 10).
+  EXPECT_EQ(s.by_distance[0].matrix.Count(2, 1), 3);
+  std::int64_t scored = 0, unsafe = 0;
+  for (const DistanceBand& band : s.by_distance) {
+    scored += band.matrix.Scored();
+    unsafe += band.matrix.Unsafe();
+  }
+  EXPECT_EQ(scored, s.matrix.Scored());
+  EXPECT_EQ(unsafe, s.unsafe);
+  EXPECT_EQ(s.by_distance.back().matrix_within.Scored(), s.matrix.Scored());
+  EXPECT_NEAR(s.by_distance.back().accuracy_within, s.matrix.Accuracy(), kTol);
+  EXPECT_NE(s.ToJson().find("\"by_distance_from_path\""), std::string::npos);
 }
 
 TEST(eval_Footprints, DiagonalFootprintsCoverTheirDiagonalCells) {

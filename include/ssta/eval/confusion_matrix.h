@@ -31,7 +31,9 @@ namespace ssta {
 /// Ratios with a zero denominator are NaN (written as null in JSON). The JSON "metrics" object
 /// written by the scorers holds: scored, correct, decided (counts); not_scored {dont_care,
 /// truth_unknown, truth_undecided}; accuracy, coverage, decided_accuracy, mean_iou (numbers or
-/// null); present_classes; iou {traversable, semi-traversable, non-traversable}; confusion
+/// null); present_classes; iou {traversable, semi-traversable, non-traversable}; recall {the
+/// same keys}; unsafe {count, truly_blocked, rate}; falsely_blocked {count, truly_free, rate};
+/// confusion
 /// (5 rows of 5 counts, rows truth 0..4, columns predicted 0..4).
 /// A "sample" is a pixel, a
 /// grid cell or a query point depending on the scorer. A value type; not thread-safe for
@@ -77,6 +79,23 @@ class ConfusionMatrix {
   double Coverage() const;
   /// Correct / decided; NaN when nothing was decided.
   double DecidedAccuracy() const;
+
+  // What a planner is told. A planner asks whether the robot may be there: a truly
+  // non-traversable sample answered traversable or semi-traversable sends it into an obstacle,
+  // a truly free one (traversable or semi-traversable) answered non-traversable closes a way
+  // that is open. Unknown and undecided answers are neither: a planner treats them as not known.
+
+  /// Recall of class `c` (1..3, checked): truth-c samples predicted c / truth-c samples; NaN
+  /// when the truth has none.
+  double Recall(TravClass c) const;
+  /// Samples of truth non-traversable predicted traversable or semi-traversable.
+  std::int64_t Unsafe() const;
+  /// Unsafe() / samples of truth non-traversable; NaN when the truth has none.
+  double UnsafeRate() const;
+  /// Samples of truth traversable or semi-traversable predicted non-traversable.
+  std::int64_t FalselyBlocked() const;
+  /// FalselyBlocked() / samples of truth traversable or semi-traversable; NaN when none.
+  double FalselyBlockedRate() const;
 
   /// A few lines for a terminal: counts, accuracy, coverage, mean IoU, per-class IoU and the
   /// matrix. `unit` names the samples ("pixels", "cells", "points").

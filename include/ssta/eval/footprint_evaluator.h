@@ -5,8 +5,11 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/confusion_matrix.h"
+#include "ssta/eval/distance_band.h"
 
 namespace ssta {
 
@@ -55,14 +58,21 @@ struct FootprintEvalSummary {
   /// predicted = FootprintAnswer::worst. Every scored pose is a sample of the matrix.
   ConfusionMatrix matrix;
   /// Scored poses the method called traversable or semi-traversable whose truth is
-  /// non-traversable: the footprint would be driven into an obstacle or off a step.
+  /// non-traversable: the footprint would be driven into an obstacle or off a step
+  /// (matrix.Unsafe(); matrix.UnsafeRate() is its share of the truly blocked poses).
   std::int64_t unsafe = 0;
-  /// Scored poses the method called non-traversable whose truth is traversable.
+  /// Scored poses the method called non-traversable whose truth is traversable or
+  /// semi-traversable (matrix.FalselyBlocked(); the rate is over the truly free poses).
   std::int64_t falsely_blocked = 0;
   /// Scored poses the method did not know in full (fraction_known < 1), and the mean
   /// fraction_known over scored poses (NaN with none).
   std::int64_t partly_known = 0;
   double mean_fraction_known = 0.0;
+  /// With a path (the sequence's poses): the scored poses by their centre's distance from it,
+  /// in bands of kDistanceBandM, and the pose file.
+  std::vector<DistanceBand> by_distance;
+  std::string path_source;
+  static constexpr double kDistanceBandM = 2.0;
 
   std::string BriefReport() const;
   /// {"kind": "footprints", "unit": "footprints", "prediction", "truth", "footprint":
@@ -79,7 +89,9 @@ struct FootprintEvalSummary {
 /// Throws ssta::Error on invalid options (naming the key) or a truth value other than 0..4 or
 /// 255 (naming truth.source), and ssta::InternalError when the oracle answers a class above 3
 /// or a fraction outside [0, 1].
+/// With a non-empty `path` (world (x, y) points of the vehicle's path) the scored poses are
+/// also split by their centre's distance from it (FootprintEvalSummary::by_distance).
 FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEvalOptions& options,
-                                     const FootprintOracle& oracle);
+                                     const FootprintOracle& oracle, const std::vector<Eigen::Vector2d>& path = {});
 
 }  // namespace ssta

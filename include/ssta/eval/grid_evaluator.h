@@ -8,6 +8,7 @@
 
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/confusion_matrix.h"
+#include "ssta/eval/distance_band.h"
 
 namespace ssta {
 
@@ -30,15 +31,6 @@ ImageU8 ResampleToGrid(const ClassGrid& predicted, const ClassGrid& truth);
 /// at least 360 pixels high unless it would grow wider than 1200 pixels. Throws ssta::Error on
 /// invalid class values as ScoreGrid.
 ImageRgb MakeGridComparisonPicture(const ClassGrid& truth, const ClassGrid& predicted);
-
-/// The scored truth cells (truth 1..3) at one range of distances from the vehicle's path.
-struct DistanceBand {
-  double from_m = 0.0;  ///< inclusive [m]
-  double to_m = 0.0;    ///< exclusive [m]
-  ConfusionMatrix matrix;
-  /// Accuracy over the scored cells of this band and every nearer one (NaN while there are none).
-  double accuracy_within = 0.0;
-};
 
 /// ScoreGrid split by each truth cell centre's distance from `path` (a polyline of world
 /// (x, y) points; one point is a position): band k holds the cells at a distance in

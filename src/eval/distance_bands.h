@@ -1,0 +1,56 @@
+#pragma once
+
+// Private helpers of the scorers that split their samples by distance from the vehicle's path
+// (eval grid, eval footprints): the path from a sequence's pose file, the bands, and their
+// report and JSON.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/json_writer.h"
+#include "ssta/eval/distance_band.h"
+
+namespace ssta::internal {
+
+/// The vehicle's (x, y) positions from an ASL pose file, thinned to one per 0.25 m of travel
+/// (the polyline between them is what DistanceToPath measures to). Throws ssta::Error naming
+/// the file when it cannot be read.
+std::vector<Eigen::Vector2d> ReadPath(const std::string& pose_csv);
+
+/// The pose file of the sequence whose truth folder is `gt_dir` (SEQ/pose0/data.csv beside
+/// gt/), or "" when there is none.
+std::string FindPoseFile(const std::string& gt_dir);
+
+/// Distance [m] from `p` to the polyline `path` (at least one point).
+double DistanceToPath(const Eigen::Vector2d& p, const std::vector<Eigen::Vector2d>& path);
+
+/// Samples sorted into bands of `band_m` metres of distance from a path, from 0 to the farthest
+/// sample (bands without samples are kept, empty).
+class BandAccumulator {
+ public:
+  /// Throws ssta::Error for band_m <= 0, an empty path or a non-finite point of it.
+  BandAccumulator(std::vector<Eigen::Vector2d> path, double band_m);
+  /// Adds one sample at `at` (x, y in the world [m]). Throws ssta::Error when it lies more
+  /// than 10000 bands from the path (the path is not this grid's).
+  void Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted);
+  /// The bands, each with its accuracy and matrix within (this band and every nearer one).
+  std::vector<DistanceBand> Finish() const;
+
+ private:
+  std::vector<Eigen::Vector2d> path_;
+  double band_m_;
+  std::vector<DistanceBand> bands_;
+};
+
+/// A table for a terminal: per band the scored samples, accuracy, coverage, recall of each
+/// class, the unsafe and falsely blocked rates, and the accuracy within.
+std::string BandsReport(const std::vector<DistanceBand>& bands);
+
+/// {"path", "band_m", "bands": [{"from_m", "to_m", "scored", "accuracy", "coverage",
+///  "mean_iou", "accuracy_within", "metrics": {...}, "metrics_within": {...}}, ...]}.
+void WriteBandsJson(const std::vector<DistanceBand>& bands, const std::string& path_source, double band_m,
+                    JsonWriter* json);
+
+}  // namespace ssta::internal
