@@ -81,7 +81,7 @@ def within(doc):
     found = None
     for band in (doc or {}).get("by_distance_from_path", {}).get("bands", []):
         if band["to_m"] <= WITHIN_M + 1e-9:
-            found = band["metrics_within"]["confusion"]
+            found = band.get("metrics_within", {}).get("confusion")
     return found
 
 def add(a, b):
