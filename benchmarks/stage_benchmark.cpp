@@ -278,7 +278,7 @@ void BM_MapPoints(benchmark::State& state, const Dataset* d) {
   std::vector<ClassifiedPoint> points;
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry, &points);
+    MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry, d->config.vehicle, &points);
     benchmark::DoNotOptimize(points.data());
   }
   CountFrames(state);
@@ -292,7 +292,7 @@ void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
   FrameCycle frames(*d);
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
-    const auto points = MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry);
+    const auto points = MapPointsOfFrame(f.result, f.world_T_rectified, d->config.map, geometry, d->config.vehicle);
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);
@@ -336,7 +336,7 @@ void BM_EndToEndWithMap(benchmark::State& state, const Dataset* d) {
   for (auto _ : state) {
     const BenchFrame& f = frames.Next();
     const FrameResult r = pipeline.Process(f.left, f.right, f.up_camera);
-    const auto points = MapPointsOfFrame(r, f.world_T_rectified, d->config.map, pipeline.geometry());
+    const auto points = MapPointsOfFrame(r, f.world_T_rectified, d->config.map, pipeline.geometry(), d->config.vehicle);
     benchmark::DoNotOptimize(map.InsertFrame(points, f.world_T_rectified.translation(), f.timestamp_ns));
   }
   CountFrames(state);

@@ -104,7 +104,7 @@ void AddPipelinedRows(const Sequence& sequence, const Config& config, int warmup
       auto result = std::make_shared<FrameResult>(run.pipeline().Process(in.left, in.right, up_camera));
       const Eigen::Isometry3d world_T_rectified = chain.WorldTRectified(in.world_T_body);
       fusion.Submit([&, k, result, world_T_rectified] {
-        MapPointsOfFrame(*result, world_T_rectified, config.map, run.geometry(), &map_points);
+        MapPointsOfFrame(*result, world_T_rectified, config.map, run.geometry(), config.vehicle, &map_points);
         map.InsertFrame(map_points, world_T_rectified.translation(), inputs[k].t);
         finished[k] = Clock::now();
       });
@@ -330,7 +330,7 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     if (options.with_map) {
       const Timer map_timer;
       const Eigen::Isometry3d world_T_rectified = chain.WorldTRectified(world_T_body);
-      MapPointsOfFrame(result, world_T_rectified, config.map, run.geometry(), &points);
+      MapPointsOfFrame(result, world_T_rectified, config.map, run.geometry(), config.vehicle, &points);
       map.InsertFrame(points, world_T_rectified.translation(), t);
       map_wall = map_timer.WallMs();
       map_cpu = map_timer.CpuMs();

@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "core/run_both.h"
+#include "mapping/hidden_drops.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/core/error.h"
 #include "ssta/stereo/stereo_matcher.h"
@@ -38,7 +39,7 @@ float Gradient(float slope_deg) {
 
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
-                             const ImageF* point_disparity) {
+                             const ImageF* point_disparity, const ImageU8* lip) {
   SSTA_CHECK(stride >= 1, "stride must be at least 1");
   SSTA_CHECK(points != nullptr, "points must not be null");
   const Image3f& cloud = frame.cloud;
@@ -48,6 +49,8 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
                  (point_disparity->width() == cloud.width() && point_disparity->height() == cloud.height() &&
                   frame.disparity.width() == cloud.width() && frame.disparity.height() == cloud.height()),
              "the point disparity and the frame's disparity must have the size of the common area");
+  SSTA_CHECK(lip == nullptr || (lip->width() == cloud.width() && lip->height() == cloud.height()),
+             "the lip mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
   // Each segment's (slope, step) once, as the points carry them: a small flat table instead
   // of a SegmentResult (with its plane and statistics) read per point.
@@ -89,6 +92,10 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
                                          &out.horizontal_sigma_m);
       }
       out.cls = static_cast<TravClass>(labels(v, u));
+      if (lip != nullptr && (*lip)(v, u) != 0 && out.cls != TravClass::kNonTraversable) {
+        out.cls = TravClass::kNonTraversable;
+        out.vote_weight = static_cast<float>((*lip)(v, u)) / 255.0f;
+      }
       const int id = frame.segment_ids(v, u);
       if (id >= 0) {
         out.slope_deg = segment_values[static_cast<std::size_t>(id)].first;
@@ -103,14 +110,15 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
 
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
                                                      const Eigen::Isometry3d& world_T_rectified, int stride,
-                                                     const ImageU8* keep, const ImageF* point_disparity) {
+                                                     const ImageU8* keep, const ImageF* point_disparity,
+                                                     const ImageU8* lip) {
   std::vector<ClassifiedPoint> points;
-  ClassifiedPointsInWorld(frame, world_T_rectified, stride, keep, &points, point_disparity);
+  ClassifiedPointsInWorld(frame, world_T_rectified, stride, keep, &points, point_disparity, lip);
   return points;
 }
 
 void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                      const MappingOptions& options, const RectifiedGeometry& geometry,
+                      const MappingOptions& options, const RectifiedGeometry& geometry, const VehicleOptions& vehicle,
                       std::vector<ClassifiedPoint>* points) {
   // Sub-pixel disparity for the points (map.subpixel_window_px), when the frame kept the
   // matcher's images for it.
@@ -120,8 +128,8 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
   // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
   // never emitted: a map threshold no stricter than that needs no mask of its own.
   const bool mask = options.min_texture > 0.0 && frame.labels_min_texture < options.min_texture;
-  ImageU8 keep;
-  // The refinement and the texture mask are independent: they run side by side.
+  ImageU8 keep, lip;
+  // The refinement, the texture mask and the lips are independent: they run side by side.
   internal::RunBoth(
       [&] {
         if (!refine) return;
@@ -136,15 +144,24 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
           keep = SupportedPixels(frame.left_rectified, geometry, frame.texture_block_px, options.min_texture,
                                  frame.up_rectified);
         }
+        if (options.hidden_drops) {
+          // The range the map keeps points to (MappingOptions::FusionFor with the frame's rig).
+          const double range = options.auto_range && frame.depth_noise_per_m2 > 0
+                                   ? std::min(1000.0, std::sqrt(options.range_depth_sigma_m / frame.depth_noise_per_m2))
+                                   : options.fusion.max_range_m;
+          lip = internal::FindHiddenDrops(frame.cloud, world_T_rectified, frame.depth_noise_per_m2, vehicle, range,
+                                          options.pixel_stride);
+        }
       });
   ClassifiedPointsInWorld(frame, world_T_rectified, options.pixel_stride, mask ? &keep : nullptr, points,
-                          refine ? &refined : nullptr);
+                          refine ? &refined : nullptr, options.hidden_drops ? &lip : nullptr);
 }
 
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                                              const MappingOptions& options, const RectifiedGeometry& geometry) {
+                                              const MappingOptions& options, const RectifiedGeometry& geometry,
+                                              const VehicleOptions& vehicle) {
   std::vector<ClassifiedPoint> points;
-  MapPointsOfFrame(frame, world_T_rectified, options, geometry, &points);
+  MapPointsOfFrame(frame, world_T_rectified, options, geometry, vehicle, &points);
   return points;
 }
 

@@ -214,7 +214,7 @@ class MapBuilder {
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
-        MapPointsOfFrame(*result, world_T_rectified, config_.map, run_.geometry(), &map_points_);
+        MapPointsOfFrame(*result, world_T_rectified, config_.map, run_.geometry(), config_.vehicle, &map_points_);
         stats = map_.InsertFrame(map_points_, world_T_rectified.translation(), t);
       } catch (const Error& e) {
         RecordSkip(t, e.what());

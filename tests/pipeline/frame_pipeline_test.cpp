@@ -72,8 +72,8 @@ TEST(FramePipeline, MapPointsAtTheSubPixelDisparityLieCloserToTheSurface) {
   Config off = config;
   off.map.subpixel_window_px = 0;
   const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();  // a rectified rig: camera = rectified
-  const auto refined = MapPointsOfFrame(r, identity, config.map, pipeline.geometry());
-  const auto plain = MapPointsOfFrame(r, identity, off.map, pipeline.geometry());
+  const auto refined = MapPointsOfFrame(r, identity, config.map, pipeline.geometry(), config.vehicle);
+  const auto plain = MapPointsOfFrame(r, identity, off.map, pipeline.geometry(), off.vehicle);
   ASSERT_EQ(refined.size(), plain.size());
   ASSERT_GT(plain.size(), 20000u);
   const Eigen::Vector3f n = scene.NormalCamera().cast<float>();

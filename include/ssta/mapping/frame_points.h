@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/analysis/frame_result.h"
+#include "ssta/analysis/vehicle_options.h"
 #include "ssta/mapping/map_options.h"
 #include "ssta/mapping/map_types.h"
 #include "ssta/stereo/rectifier.h"
@@ -19,15 +20,18 @@ namespace ssta {
 /// segment. `world_T_rectified` maps the rectified cam0 frame into the world. With `keep`
 /// (the common area's size), pixels where it is 0 are left out. With `point_disparity` (the
 /// common area's size), each point moves along its ray to that disparity where both it and the
-/// frame's are positive (a refined disparity: MapPointsOfFrame).
+/// frame's are positive (a refined disparity: MapPointsOfFrame). With `lip` (the common area's
+/// size), the points of labelled pixels where it is non-zero are non-traversable, with that
+/// value / 255 as their vote_weight.
 std::vector<ClassifiedPoint> ClassifiedPointsInWorld(const FrameResult& frame,
                                                      const Eigen::Isometry3d& world_T_rectified, int stride,
                                                      const ImageU8* keep = nullptr,
-                                                     const ImageF* point_disparity = nullptr);
+                                                     const ImageF* point_disparity = nullptr,
+                                                     const ImageU8* lip = nullptr);
 /// The same into `*points` (cleared first; its capacity is reused from frame to frame).
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
-                             const ImageF* point_disparity = nullptr);
+                             const ImageF* point_disparity = nullptr, const ImageU8* lip = nullptr);
 
 /// Gauss-Newton steps of the map's sub-pixel refinement (map.subpixel_window_px): one moved the
 /// yard, drop-off and forest maps as two did (0.866 / 0.971 / 0.895 against 0.865 / 0.971 /
@@ -40,12 +44,15 @@ inline constexpr int kMapSubpixelSteps = 1;
 /// least as strict). It
 /// keeps noise matches out of the map. With map.subpixel_window_px, and a frame that kept the
 /// matcher's images (FrameResult::left_matched, right_matched), the points sit at the disparity refined to
-/// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's.
+/// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's. With
+/// options.hidden_drops, the lips of drop-offs whose foot the frame cannot see are
+/// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/mapping/hidden_drops.h).
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                                              const MappingOptions& options, const RectifiedGeometry& geometry);
+                                              const MappingOptions& options, const RectifiedGeometry& geometry,
+                                              const VehicleOptions& vehicle);
 /// The same into `*points` (cleared first; its capacity is reused from frame to frame).
 void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
-                      const MappingOptions& options, const RectifiedGeometry& geometry,
+                      const MappingOptions& options, const RectifiedGeometry& geometry, const VehicleOptions& vehicle,
                       std::vector<ClassifiedPoint>* points);
 
 }  // namespace ssta

@@ -33,6 +33,9 @@ struct ClassifiedPoint {
   /// Horizontal 1-sigma of the point's position from the same depth error [m]; NaN with
   /// height_sigma_m.
   float horizontal_sigma_m = std::numeric_limits<float>::quiet_NaN();
+  /// How much the point's class counts in its voxel's vote, in (0, 1]: 1 for a classified
+  /// pixel; less for a lip that one view can only suspect (MapPointsOfFrame).
+  float vote_weight = 1.0f;
 };
 
 /// What one InsertFrame call did.

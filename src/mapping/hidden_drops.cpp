@@ -1,0 +1,78 @@
+#include "mapping/hidden_drops.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "ssta/core/error.h"
+
+namespace ssta::internal {
+
+ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_rectified, double depth_noise_per_m2,
+                        const VehicleOptions& vehicle, double range_m, int stride) {
+  SSTA_CHECK(stride >= 1, "FindHiddenDrops: stride must be at least 1");
+  ImageU8 lip(cloud.width(), cloud.height(), 0);
+  const Eigen::Isometry3f world_T = world_T_rectified.cast<float>();
+  const Eigen::Vector2f origin = world_T.translation().head<2>();
+  const Eigen::RowVector3f up = world_T.linear().row(2);
+  const auto per_m2 = static_cast<float>(std::max(0.0, depth_noise_per_m2));
+  const auto max_step = static_cast<float>(vehicle.max_step_m);
+  const auto semi_step = static_cast<float>(vehicle.semi_step_m);
+  const auto radius = static_cast<float>(vehicle.step_radius_m);
+  const auto tan_max_slope = static_cast<float>(std::tan(vehicle.max_slope_deg * 3.14159265358979 / 180.0));
+  const float camera_z = world_T.translation().z();
+  const auto max_range = static_cast<float>(range_m);
+  // One column's points from the bottom row up: image row, world point, height sigma.
+  struct ColumnPoint {
+    int v;
+    Eigen::Vector3f p;
+    float sigma;
+  };
+  std::vector<ColumnPoint> column;
+  column.reserve(static_cast<std::size_t>(cloud.height()));
+  for (int u = 0; u < cloud.width(); u += stride) {
+    column.clear();
+    for (int v = cloud.height() - 1; v >= 0; --v) {
+      const Eigen::Vector3f& q = cloud(v, u);
+      if (!q.allFinite() || q.z() <= 0.0f) continue;
+      // The depth error seen vertically: sigma_Z |q . up| / Z, with sigma_Z = k Z^2.
+      const float sigma = std::max(0.005f, per_m2 * q.z() * std::abs(up.dot(q)));
+      column.push_back({v, world_T * q, sigma});
+    }
+    for (std::size_t i = 1; i < column.size(); ++i) {
+      const ColumnPoint& a = column[i];
+      const ColumnPoint& before = column[i - 1];
+      // A lies on a surface, not on a stray match: its neighbour towards the camera is near
+      // its height.
+      if (std::abs(before.p.z() - a.p.z()) > semi_step + 3.0f * std::hypot(before.sigma, a.sigma)) continue;
+      const float range_a = (a.p.head<2>() - origin).norm();
+      const float tan_ray = (camera_z - a.p.z()) / std::max(range_a, 1e-3f);
+      if (tan_ray <= 0.0f) continue;  // a ray over A that rises lands on nothing below it
+      if (i + 1 < column.size()) {
+        // The next view up the column lands beyond A and lower by more than the vehicle may
+        // step, beyond the noise of both heights.
+        const ColumnPoint& b = column[i + 1];
+        if (a.p.z() - b.p.z() <= max_step + 3.0f * std::hypot(a.sigma, b.sigma)) continue;
+        if ((b.p.head<2>() - origin).norm() <= range_a) continue;
+      } else {
+        // Nothing beyond A in this column: had a floor lain within max_step below A, the ray
+        // over A would have met it within range (before range_a + max_step / tan_ray).
+        if (a.v < 2 || range_a + max_step / tan_ray >= max_range) continue;
+      }
+      // What lies between A and where the ray lands descends more steeply than the ray, or it
+      // would be seen. A ray steeper than max_slope_deg hides a drop no wheel may take (weight
+      // 1); a flatter one may hide a drivable slope (the far side of a crest), which a nearer
+      // view shows: the suspicion weighs tan(ray) / tan(max_slope).
+      const auto weight =
+          static_cast<std::uint8_t>(std::lround(255.0f * std::clamp(tan_ray / tan_max_slope, 0.02f, 1.0f)));
+      for (std::size_t j = i + 1; j-- > 0;) {
+        if ((column[j].p.head<2>() - a.p.head<2>()).norm() > radius) break;
+        std::uint8_t& w = lip(column[j].v, u);
+        w = std::max(w, weight);
+      }
+    }
+  }
+  return lip;
+}
+
+}  // namespace ssta::internal
