@@ -4,6 +4,7 @@
 #include "ssta/mapping/traversability_map.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -59,25 +60,29 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
     cell.cls = TravClass::kUndecided;
     return cell;
   }
+  const double prior = map.options().class_prior_traversable_log_odds;
+  std::array<double, 3> evidence{};
+  for (int k = 0; k < 3; ++k) evidence[k] = static_cast<double>(l[k]) + (k == 0 ? prior : 0.0);
   int best = 0;
   for (int k = 1; k < 3; ++k) {
-    if (l[k] >= l[best]) best = k;  // ties to the worse class
+    if (evidence[k] >= evidence[best]) best = k;  // ties to the worse class
   }
   double denominator = 0.0;
-  for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
+  for (int k = 0; k < 3; ++k) denominator += std::exp(evidence[k]);
   cell.cls = static_cast<TravClass>(best + 1);
-  cell.probability = std::exp(static_cast<double>(l[best])) / denominator;
+  cell.probability = std::exp(evidence[best]) / denominator;
   cell.confidence = cell.probability;
-  cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m);
+  cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m, cell.confidence);
   return cell;
 }
 
 }  // namespace internal
 
-double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m) const {
+double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m, double confidence) const {
   const VehicleOptions& v = impl_->metadata.vehicle;
   switch (cls) {
-    case TravClass::kTraversable: return 0.0;
+    case TravClass::kTraversable:
+      return std::isfinite(confidence) ? 0.25 * std::clamp(1.5 * (1.0 - confidence), 0.0, 1.0) : 0.0;
     case TravClass::kNonTraversable: return 1.0;
     case TravClass::kSemiTraversable: {
       const double f = std::max(BandFraction(slope_deg, v.semi_slope_deg, v.max_slope_deg),

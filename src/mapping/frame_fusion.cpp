@@ -26,6 +26,7 @@ struct VoxelAccumulator {
   Eigen::Vector3d sum_p = Eigen::Vector3d::Zero();
   std::uint32_t points = 0;
   std::array<std::uint32_t, 3> votes{};  // classes 1..3
+  std::array<float, 3> vote_weights{};   // their points' vote_weight, summed
   double slope_sum = 0.0;
   std::uint32_t slope_count = 0;
   double step_sum = 0.0;
@@ -55,6 +56,7 @@ struct VoxelAccumulator {
     const int c = static_cast<int>(point.cls);
     if (c < 1 || c > 3) return;  // unknown, undecided, don't-care: occupancy only
     ++votes[c - 1];
+    vote_weights[c - 1] += point.vote_weight;
     if (std::isfinite(point.slope_deg)) {
       slope_sum += point.slope_deg;
       ++slope_count;
@@ -165,9 +167,11 @@ namespace {
 class FrameFusion {
  public:
   /// Precondition: `sensor_origin_world` is finite and inside the map.
-  FrameFusion(TravOcTree& tree, const MapOptions& options, const Eigen::Vector3d& sensor_origin_world,
+  /// `max_step_m`: the map's vehicle's, the scale of the class votes' noise weighting.
+  FrameFusion(TravOcTree& tree, const MapOptions& options, double max_step_m, const Eigen::Vector3d& sensor_origin_world,
               InsertScratch* scratch, InsertStats* stats)
-      : tree_(tree), options_(options), origin_world_(sensor_origin_world), scratch_(*scratch), stats_(*stats) {}
+      : tree_(tree), options_(options), vote_sigma_m_(options.class_vote_noise_steps * max_step_m),
+        origin_world_(sensor_origin_world), scratch_(*scratch), stats_(*stats) {}
 
   /// 1. One accumulator per voxel of the in-range points (hits), one per voxel of the points
   /// beyond range (far), keyed by the voxel's Morton code.
@@ -197,8 +201,12 @@ class FrameFusion {
   /// last_seen_ns; with a verdict also the class log-odds, the observation count and the means.
   void UpdateHit(const VoxelAccumulator& acc, std::int64_t timestamp_ns, TravNode* node) const;
 
+  /// The weight of a frame's class vote for a voxel (class_vote_noise_steps).
+  double VoteWeight(const VoxelAccumulator& acc) const;
+
   TravOcTree& tree_;
   const MapOptions& options_;
+  double vote_sigma_m_;  ///< height sigma at which a vote counts half; 0: every vote counts 1
   const Eigen::Vector3d& origin_world_;
   InsertScratch& scratch_;
   InsertStats& stats_;
@@ -342,6 +350,12 @@ inline void FrameFusion::UpdateFree(TravNode* node) const {
   node->surface_weight *= 0.5f;  // a surface seen through loses its say to the next one seen
 }
 
+inline double FrameFusion::VoteWeight(const VoxelAccumulator& acc) const {
+  if (vote_sigma_m_ <= 0.0 || acc.surface_count == 0) return 1.0;
+  const double variance = acc.surface_var_sum / acc.surface_count;
+  return 1.0 / (1.0 + variance / (vote_sigma_m_ * vote_sigma_m_));
+}
+
 inline void FrameFusion::UpdateHit(const VoxelAccumulator& acc, std::int64_t timestamp_ns, TravNode* node) const {
   const MapOptions& opt = options_;
   tree_.integrateHit(node);
@@ -361,8 +375,11 @@ inline void FrameFusion::UpdateHit(const VoxelAccumulator& acc, std::int64_t tim
   }
   const int winner = MajorityClassIndex(acc.votes);
   if (winner < 0) return;
+  // Votes for an obstacle weigh more (class_obstacle_gain); far, noisy views less (VoteWeight).
+  const double weight = VoteWeight(acc) * (winner == 2 ? opt.class_obstacle_gain : 1.0) *
+                        acc.vote_weights[winner] / acc.votes[winner];
   for (int k = 0; k < 3; ++k) {
-    const double delta = k == winner ? opt.class_hit_log_odds : opt.class_miss_log_odds;
+    const double delta = weight * (k == winner ? opt.class_hit_log_odds : opt.class_miss_log_odds);
     node->class_log_odds[k] =
         Clamp(node->class_log_odds[k] + delta, opt.class_clamp_min, opt.class_clamp_max);
   }
@@ -425,7 +442,7 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   }
 
   if (!impl_->insert_scratch) impl_->insert_scratch = std::make_shared<internal::InsertScratch>();
-  internal::FrameFusion fusion(tree, impl_->options, sensor_origin_world, impl_->insert_scratch.get(), &stats);
+  internal::FrameFusion fusion(tree, impl_->options, impl_->metadata.vehicle.max_step_m, sensor_origin_world, impl_->insert_scratch.get(), &stats);
   fusion.GroupPointsByVoxel(points);
   fusion.PlaceRayEnds();
   if (impl_->options.free_space_ray_cell > 1) fusion.MergeRayEndsPerCell();

@@ -31,6 +31,18 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                         "added to the two other classes' log-odds"));
     f.push_back(Real<O>("class_free_decay_log_odds", &O::class_free_decay_log_odds, AtLeast(0), "",
                         "a ray through a voxel moves its class log-odds this much towards 0"));
+    f.push_back(Real<O>("class_obstacle_gain", &O::class_obstacle_gain, Closed(1, 10), "",
+                        "a frame's non-traversable verdict adds this many times the hit (and miss) log-odds: "
+                        "missing an obstacle costs more than a false alarm")
+                    .AbsentMeans(1.0));
+    f.push_back(Real<O>("class_vote_noise_steps", &O::class_vote_noise_steps, Closed(0, 10), "",
+                        "a frame's vote counts 1 / (1 + (sigma / (k vehicle.max_step_m))^2), sigma the height "
+                        "noise of its points in the voxel, k this (0: every vote counts 1)")
+                    .AbsentMeans(0.0));
+    f.push_back(Real<O>("class_prior_traversable_log_odds", &O::class_prior_traversable_log_odds, Closed(0, 10), "",
+                        "added to the traversable log-odds when a column is judged: weak evidence leaves open "
+                        "ground traversable with a lower confidence instead of blocking it")
+                    .AbsentMeans(0.0));
     f.push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
     f.push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
     f.push_back(Real<O>("free_space_clearance_m", &O::free_space_clearance_m, Closed(0, 5), "m",
@@ -72,6 +84,9 @@ const OptionFields<MappingOptions>& MappingOptions::Fields() {
     f.push_back(OddOrOff<O>("subpixel_window_px", &O::subpixel_window_px, Closed(1, 31), "px",
                             "points at the disparity refined to sub-pixel precision over this window; the "
                             "classification keeps the matcher's. 0: off"));
+    f.push_back(Flag<O>("hidden_drops", &O::hidden_drops,
+                        "the lip of a drop-off whose foot a frame cannot see (a view over an edge that lands "
+                        "lower by more than vehicle.max_step_m beyond noise) is non-traversable"));
     f.push_back(Flag<O>("auto_range", &O::auto_range,
                         "the range follows the rig: the depth at which its stereo depth noise reaches "
                         "range_depth_sigma_m replaces max_range_m"));

@@ -4,6 +4,7 @@
 #include "ssta/mapping/traversability_map.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -89,9 +90,58 @@ std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::
   return samples;
 }
 
-/// A column's class from the frames' evidence and the fused surface around it: the posterior
-/// of the three classes with the frames' class probabilities (softmax of the log-odds; even
-/// without evidence) as the prior and the surface's verdict (JudgeSurface) as the likelihood.
+/// Whether every column whose square meets the disc of `radius_m` about `key`'s column centre
+/// holds a fused height: only then has the fused surface seen all the ground that the class
+/// rule judges a point of the column by (the column's points lie up to half a cell from its
+/// centre, so a jump just outside the centres' disc still counts).
+bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m) {
+  const double res = tree.getResolution();
+  const int reach = static_cast<int>(std::ceil(radius_m / res - 0.5 - 1e-9));
+  for (int dj = -reach; dj <= reach; ++dj) {
+    for (int di = -reach; di <= reach; ++di) {
+      const double gx = std::max(0.0, std::abs(di) - 0.5) * res, gy = std::max(0.0, std::abs(dj) - 0.5) * res;
+      if (gx * gx + gy * gy > radius_m * radius_m + 1e-12) continue;
+      const int kx = key[0] + di, ky = key[1] + dj;
+      if (kx < 0 || ky < 0 || kx > 0xFFFF || ky > 0xFFFF) return false;
+      octomap::OcTreeKey k(static_cast<octomap::key_type>(kx), static_cast<octomap::key_type>(ky), 0);
+      const TravNode* node = ColumnTop(tree, &k);
+      if (node == nullptr || node->surface_weight <= 0.0f) return false;
+    }
+  }
+  return true;
+}
+
+/// The probabilities of the three classes from a column's class log-odds (softmax), the
+/// traversable one raised by `prior_traversable` (MapOptions::class_prior_traversable_log_odds).
+std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>& log_odds, double prior_traversable) {
+  std::array<double, 3> p{};
+  double total = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    total += (p[k] = std::exp(static_cast<double>(log_odds[k]) + (k == 0 ? prior_traversable : 0.0)));
+  }
+  for (double& x : p) x /= total;
+  return p;
+}
+
+/// The class distribution of the worse of two independent verdicts `a` and `b`: P(class <= k)
+/// is the product of the two (as JudgeSurface combines slope and step).
+std::array<double, 3> WorseOf(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  const double at_most_trav = a[0] * b[0];
+  const double at_most_semi = (a[0] + a[1]) * (b[0] + b[1]);
+  return {at_most_trav, std::max(0.0, at_most_semi - at_most_trav), std::max(0.0, 1.0 - at_most_semi)};
+}
+
+/// A column's class from the frames' evidence and the fused surface around it. Each has its
+/// blind spot: a frame sees a lip or the ring around a rock that the fused surface lacks the
+/// columns to show (the floor below a drop-off is hidden, a rock's top is never seen), and the
+/// fused surface shows a jump between columns that no single frame saw both sides of. So:
+///  - a surface that finds a slope or a jump (its most probable class is not traversable)
+///    makes the column the worse of the two verdicts (WorseOf): either one's hazard counts;
+///  - a surface that finds open ground vouches for it only where it sees every column that
+///    meets the disc (DiscFullySeen): then its verdict is a likelihood multiplied into the
+///    frames';
+///  - otherwise the frames decide alone.
+/// An uncertain surface (stereo noise at range) so never turns open ground red by itself.
 /// The slope and step become the surface's where it has a verdict.
 void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
                       CellInfo* cell) {
@@ -103,30 +153,32 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const auto& l = node->class_log_odds;
   const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
   if (!surface.determined && !has_evidence) return;  // undecided: nothing to judge by
-  std::array<double, 3> posterior{};
-  double total = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    const double frames = has_evidence ? std::exp(static_cast<double>(l[k])) : 1.0;
-    posterior[k] = frames * (surface.determined ? surface.probability[k] : 1.0);
-    total += posterior[k];
+  const std::array<double, 3> frames = FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
+  std::array<double, 3> posterior = frames;
+  if (surface.determined && !has_evidence) {
+    posterior = surface.probability;
+  } else if (surface.determined) {
+    const auto& s = surface.probability;
+    if (s[1] >= s[0] || s[2] >= s[0]) {
+      posterior = WorseOf(frames, s);
+    } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
+      double total = 0.0;
+      for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * s[k]);
+      for (double& p : posterior) p /= total;
+    }
   }
-  if (!(total > 0.0)) return;
   int best = 0;
   for (int k = 1; k < 3; ++k) {
     if (posterior[k] >= posterior[best]) best = k;  // ties to the worse class
   }
   cell->cls = static_cast<TravClass>(best + 1);
-  cell->confidence = posterior[best] / total;
-  if (has_evidence) {
-    double denominator = 0.0;
-    for (int k = 0; k < 3; ++k) denominator += std::exp(static_cast<double>(l[k]));
-    cell->probability = std::exp(static_cast<double>(l[best])) / denominator;
-  }
+  cell->confidence = posterior[best];
+  if (has_evidence) cell->probability = frames[static_cast<std::size_t>(best)];
   if (surface.determined) {
     cell->slope_deg = surface.slope_deg;
     cell->step_m = surface.step_m;
   }
-  cell->cost = map.Cost(cell->cls, cell->slope_deg, cell->step_m);
+  cell->cost = map.Cost(cell->cls, cell->slope_deg, cell->step_m, cell->confidence);
 }
 
 int Severity(TravClass c) {

@@ -85,6 +85,15 @@ SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<Sur
   // Most of the disc must be seen: a few far columns between unobserved ones do not show a
   // surface's slope or steps.
   const double cells_in_disc = kPi * vehicle.step_radius_m * vehicle.step_radius_m / (spacing_m * spacing_m);
+  // The columns of the disc, counted as SurfaceAround visits them: lattice offsets within r.
+  const int reach = static_cast<int>(std::floor(vehicle.step_radius_m / spacing_m + 1e-9));
+  int columns = 0;
+  for (int dj = -reach; dj <= reach; ++dj) {
+    for (int di = -reach; di <= reach; ++di) {
+      columns += (di * di + dj * dj) * spacing_m * spacing_m <= vehicle.step_radius_m * vehicle.step_radius_m + 1e-12;
+    }
+  }
+  v.coverage = std::min(1.0, static_cast<double>(samples.size()) / columns);
   if (samples.size() < 4 || samples.size() < 0.5 * cells_in_disc) return v;
   // Heights that may belong a step radius away from their columns show no step or slope there.
   std::vector<double> xy_sigmas;

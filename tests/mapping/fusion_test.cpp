@@ -62,7 +62,7 @@ TEST(Fusion, RepeatedObservationsRaiseTheClassProbabilityMonotonicallyToTheClamp
   EXPECT_NEAR(previous, 0.991893, 1e-6);
   const CellInfo cell = map.CellAt(kA);
   EXPECT_NEAR(cell.occupancy, o.occupancy_clamp_max_prob, 1e-4);
-  EXPECT_EQ(cell.cost, 0.0);
+  EXPECT_NEAR(cell.cost, 0.25 * 1.5 * (1.0 - at_clamp), 1e-9);  // traversable, nearly certain
 }
 
 TEST(Fusion, AVoxelSeenThroughLosesOccupancyAndItsClass) {

@@ -14,11 +14,22 @@
 
 namespace ssta::testing {
 
+/// The class evidence of the plain log-odds model: every vote counts alike (no obstacle gain,
+/// no noise weighting) and no prior for open ground. The tests that check its formulas use it;
+/// safe_fusion_test.cpp checks what the shipped weighting adds.
+inline MapOptions PlainVotes(MapOptions o = MapOptions{}) {
+  o.class_obstacle_gain = 1.0;
+  o.class_vote_noise_steps = 0.0;
+  o.class_prior_traversable_log_odds = 0.0;
+  return o;
+}
+
 /// OctoMap's plain sensor model, which these tests are written against: every ray carves to its
 /// endpoint (no clearance, no shortening before obstacles, traversable voxels not spared), a
-/// voxel is occupied from P 0.5, and the class evidence decays by 0.4 per passing ray.
+/// voxel is occupied from P 0.5, the class evidence decays by 0.4 per passing ray, and votes
+/// count as PlainVotes.
 inline MapOptions OctoMapCarving() {
-  MapOptions o;
+  MapOptions o = PlainVotes();
   o.max_range_m = 15.0;
   o.occupancy_miss_prob = 0.4;
   o.occupied_threshold_prob = 0.5;

@@ -1,4 +1,5 @@
 #include <functional>
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <thread>
@@ -30,6 +31,8 @@ class FloorAndBoxQueries : public ::testing::Test {
   static double OneViewProbability() {
     return std::exp(0.85) / (std::exp(0.85) + 2.0 * std::exp(-0.4));
   }
+  /// A traversable column's cost after one observation: 0.25 min(1, 1.5 (1 - confidence)).
+  static double OneViewFloorCost() { return 0.25 * std::min(1.0, 1.5 * (1.0 - OneViewProbability())); }
 
  private:
   static TraversabilityMap* map_;
@@ -52,7 +55,7 @@ TEST_F(FloorAndBoxQueries, TopSurfaceOnTheFloorIsTheFloor) {
   const CellInfo floor = map().TopSurfaceAt(0.55, 2.31);
   ASSERT_TRUE(floor.observed);
   EXPECT_EQ(floor.cls, TravClass::kTraversable);
-  EXPECT_EQ(floor.cost, 0.0);
+  EXPECT_NEAR(floor.cost, OneViewFloorCost(), 1e-8);  // one view: not yet certain (float log-odds)
   EXPECT_NEAR(floor.center.z(), 0.05, 1e-9);
   EXPECT_NEAR(floor.center.y(), 2.35, 1e-9);
   EXPECT_NEAR(floor.probability, OneViewProbability(), 1e-6);
@@ -93,13 +96,13 @@ TEST_F(FloorAndBoxQueries, FootprintOverlappingTheBoxIsNonTraversable) {
   EXPECT_EQ(r.cells, 30);
   EXPECT_EQ(r.observed_cells, 30);
   EXPECT_EQ(r.worst, TravClass::kNonTraversable);
-  EXPECT_NEAR(r.mean_cost, 6.0 / 30.0, 1e-12);
+  EXPECT_NEAR(r.mean_cost, (6.0 + 24.0 * OneViewFloorCost()) / 30.0, 1e-8);
   EXPECT_EQ(r.max_cost, 1.0);
   EXPECT_DOUBLE_EQ(r.fraction_observed, 1.0);
   // The same rectangle turned by 90 degrees (length along y now).
   const FootprintResult turned = map().QueryFootprint({0.9, 1.15, kPi / 2, 0.38, 0.6});
   EXPECT_EQ(turned.cells, 30);
-  EXPECT_NEAR(turned.mean_cost, 6.0 / 30.0, 1e-12);
+  EXPECT_NEAR(turned.mean_cost, (6.0 + 24.0 * OneViewFloorCost()) / 30.0, 1e-8);
 }
 
 TEST_F(FloorAndBoxQueries, AFootprintThatOverlapsTheBoxByLessThanHalfAColumnIsBlocked) {
@@ -117,7 +120,7 @@ TEST_F(FloorAndBoxQueries, AFootprintThatOverlapsTheBoxByLessThanHalfAColumnIsBl
 TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {
   const FootprintResult floor = map().QueryFootprint({0.5, 0.5, 0.3, 0.5, 0.4});
   EXPECT_EQ(floor.worst, TravClass::kTraversable);
-  EXPECT_EQ(floor.mean_cost, 0.0);
+  EXPECT_NEAR(floor.mean_cost, OneViewFloorCost(), 1e-8);
   // x in [2.7, 3.1]: centres 2.75 .. 3.05, the last off the floor; y centres 0.45, 0.55.
   const FootprintResult edge = map().QueryFootprint({2.9, 0.5, 0.0, 0.4, 0.18});
   EXPECT_EQ(edge.cells, 8);
@@ -141,8 +144,8 @@ TEST_F(FloorAndBoxQueries, PathThroughTheBoxReportsTheFirstNonTraversablePoint) 
   EXPECT_NEAR(r.first_non_traversable.y(), 1.15, 1e-12);
   EXPECT_NEAR(r.first_non_traversable_distance_m, r.first_non_traversable.x() - 0.2, 1e-9);
   EXPECT_DOUBLE_EQ(r.fraction_observed, 1.0);
-  EXPECT_GT(r.mean_cost, 0.1);
-  EXPECT_LT(r.mean_cost, 0.25);
+  // 6 of the 37 samples on the box (x = 1.0 .. 1.25, cost 1), the rest on once-seen floor.
+  EXPECT_NEAR(r.mean_cost, (6.0 + 31.0 * OneViewFloorCost()) / 37.0, 1e-8);
   EXPECT_EQ(r.samples.front().cls, TravClass::kTraversable);
 }
 

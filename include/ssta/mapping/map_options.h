@@ -40,6 +40,21 @@ struct MapOptions {
   /// When a ray passes through a voxel, each class log-odds moves this much towards 0 (no
   /// evidence), never past it; >= 0. Free space so forgets what moved away.
   double class_free_decay_log_odds = 0.1;
+  /// A frame's non-traversable verdict for a voxel adds this many times class_hit_log_odds (and
+  /// its misses this many times class_miss_log_odds to the other two): missing an obstacle costs
+  /// a planner more than a false alarm, so one clear view of a lip or a rock's ring is not
+  /// outvoted by a few views that did not resolve it; >= 1.
+  double class_obstacle_gain = 2.0;
+  /// A frame's class vote for a voxel counts w = 1 / (1 + (sigma / (k max_step))^2), with sigma
+  /// the stereo height noise of its points there and k this value (vehicle.max_step_m from the
+  /// map's vehicle): a view that resolves a jump of max_step at k sigma counts fully, a far view
+  /// whose noise is as large as the jump it should judge counts little. 0: every vote counts 1.
+  double class_vote_noise_steps = 0.5;
+  /// Added to the traversable class's log-odds when a column is judged: open ground is most of
+  /// any terrain, so frames' evidence must beat this before a column is an obstacle. Weak,
+  /// noisy evidence leaves the column traversable with a lower confidence (and a higher cost)
+  /// instead of blocking it; >= 0.
+  double class_prior_traversable_log_odds = 0.5;
   double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
   double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
   /// A ray stops clearing free space where it comes within this height [m] of its endpoint,
@@ -91,6 +106,11 @@ struct MappingOptions {
   /// the matcher's disparity, on which they were measured; without effect when
   /// stereo.subpixel_window_px already refines it, or with a given (oracle) disparity.
   int subpixel_window_px = 7;
+  /// The lips of drop-offs whose foot a frame cannot see are non-traversable in the map: up
+  /// each image column, a view that passes over an edge and lands lower by more than
+  /// vehicle.max_step_m beyond the noise of both heights marks the ground within
+  /// vehicle.step_radius_m of the edge (src/mapping/hidden_drops.h).
+  bool hidden_drops = true;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   /// The map's range follows the rig: fusion.max_range_m becomes the depth at which the stereo
   /// depth noise reaches range_depth_sigma_m (FusionFor). false: fusion.max_range_m as given.

@@ -26,6 +26,9 @@ struct SurfaceSample {
 /// What the surface around a cell says about it.
 struct SurfaceVerdict {
   bool determined = false;  ///< enough columns around the cell to fit a surface
+  /// Share of the disc's columns that hold a fused height, in [0, 1]: below 1 the surface
+  /// cannot vouch for ground next to what it does not see (a lip's hidden side, a rock's top).
+  double coverage = 0.0;
   double slope_deg = 0.0;   ///< slope of the fitted local plane [deg]
   double slope_sigma_deg = 0.0;
   /// The largest height jump within the step radius not explained by that plane [m]: the

@@ -28,13 +28,15 @@ inline constexpr int kMapFormatVersion = 2;
 /// header); the file format is described in maps/README.md.
 ///
 /// Semantics (the exact formulas; L1..L3 are the class log-odds of a voxel):
-///  - class: for an occupied voxel, argmax_k Lk when some Lk != 0 (ties go to the worse class),
-///    kUndecided when all are 0; kUnknown for free or unobserved voxels.
-///  - probability of class c: exp(Lc) / (exp(L1) + exp(L2) + exp(L3)).
-///  - cost: traversable 0; non-traversable 1; semi-traversable 0.25 + 0.5 f with
-///    f = max(clamp01((slope - semi_slope) / (max_slope - semi_slope)),
-///            clamp01((|step| - semi_step) / (max_step - semi_step))) from the voxel's mean
-///    slope and step and the metadata's vehicle, so in [0.25, 0.75]; NaN for every other class.
+///  - class: for an occupied voxel, argmax_k (Lk + P [k = 1]) when some Lk != 0 (ties go to
+///    the worse class; P = options().class_prior_traversable_log_odds), kUndecided when all are
+///    0; kUnknown for free or unobserved voxels.
+///  - probability of class c: exp(Lc + P [c = 1]) / sum_k exp(Lk + P [k = 1]).
+///  - cost: traversable 0.25 min(1, 1.5 (1 - confidence)), so 0 when certain and up to 0.25
+///    when barely more probable than the others; non-traversable 1; semi-traversable
+///    0.25 + 0.5 f with f = max(clamp01((slope - semi_slope) / (max_slope - semi_slope)),
+///    clamp01((|step| - semi_step) / (max_step - semi_step))) from the slope and step and the
+///    metadata's vehicle, so in [0.25, 0.75]; NaN for every other class.
 ///
 /// Thread safety: const methods only read (OctoMap's search and traversal do not mutate the
 /// tree), so any number of threads may query concurrently while no thread calls a non-const
@@ -127,8 +129,9 @@ class TraversabilityMap {
   /// Bounding box of the occupied voxels' extents in W [m]; empty when there are none.
   Eigen::AlignedBox3d SurfaceBounds() const;
 
-  /// Cost of a class with the given mean slope [deg] and step [m] (formula above).
-  double Cost(TravClass cls, double slope_deg, double step_m) const;
+  /// Cost of a class with the given slope [deg], step [m] and confidence in [0, 1] (formula
+  /// above).
+  double Cost(TravClass cls, double slope_deg, double step_m, double confidence = 1.0) const;
 
   const MapOptions& options() const;
   const MapMetadata& metadata() const;

@@ -1,0 +1,229 @@
+// What a planner is told: obstacles the frames saw survive fusion, stereo noise at range does
+// not block open ground, and lips whose foot no frame sees are found. Analytic worlds whose
+// answers are known by construction.
+
+#include <cmath>
+#include <vector>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include "map_test_util.h"
+#include "mapping/hidden_drops.h"
+#include "ssta/core/units.h"
+#include "ssta/mapping/traversability_map.h"
+
+namespace ssta {
+namespace {
+
+using internal::FindHiddenDrops;
+using testing::C;
+
+/// The rock: columns on x, y in [1.8, 2.2), whose top no camera sees.
+bool Rock(int ix, int iy) { return ix >= 18 && ix < 22 && iy >= 18 && iy < 22; }
+
+/// A level floor at z = 0 over x, y in [0, 4) m around the rock, one point per 0.1 m voxel at
+/// its centre height 0 (`height(ix, iy)` where given), every point with height sigma `sigma_m`
+/// (horizontal 0.01 m); the points whose voxel column satisfies `red(ix, iy)` are labelled
+/// non-traversable, the rest traversable.
+template <typename Red, typename Height>
+std::vector<ClassifiedPoint> Floor(float sigma_m, const Red& red, const Height& height) {
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 40; ++ix) {
+    for (int iy = 0; iy < 40; ++iy) {
+      if (Rock(ix, iy)) continue;
+      ClassifiedPoint p = testing::Pt(C(ix), C(iy), height(ix, iy), red(ix, iy) ? TravClass::kNonTraversable
+                                                                                   : TravClass::kTraversable);
+      p.height_sigma_m = sigma_m;
+      p.horizontal_sigma_m = 0.01f;
+      points.push_back(p);
+    }
+  }
+  return points;
+}
+
+template <typename Red>
+std::vector<ClassifiedPoint> Floor(float sigma_m, const Red& red) {
+  return Floor(sigma_m, red, [](int, int) { return 0.0; });
+}
+
+/// The ring of a rock at the floor's centre: columns whose centre lies within 0.2 m of the
+/// 0.4 m square on x, y in [1.8, 2.2), outside it.
+bool Ring(int ix, int iy) {
+  const double dx = std::max({0.0, 1.8 - C(ix), C(ix) - 2.2}), dy = std::max({0.0, 1.8 - C(iy), C(iy) - 2.2});
+  const double d = std::hypot(dx, dy);
+  return d > 0.0 && d <= 0.2;
+}
+
+TravClass ClassAt(const TraversabilityMap& map, double x, double y) { return map.TopSurfaceAt(x, y).cls; }
+
+MapOptions Options() {
+  MapOptions o;
+  o.max_range_m = 30.0;
+  return o;
+}
+
+const Eigen::Vector3d kSensor(-3.0, 2.0, 1.0);
+
+TEST(SafeFusion, ARockRingOneClearViewSawIsKeptUnderNoisyFarViews) {
+  // One near view (height sigma 2 cm) sees the ring red; eight far views (sigma 25 cm, more
+  // than the 0.2 m step they should judge) call it traversable, as a far matcher does.
+  auto build = [](const MapOptions& options) {
+    TraversabilityMap map(options);
+    map.InsertFrame(Floor(0.02f, Ring), kSensor, 0);
+    for (int k = 1; k <= 8; ++k) map.InsertFrame(Floor(0.25f, [](int, int) { return false; }), kSensor, k);
+    return map;
+  };
+  const TraversabilityMap map = build(Options());
+  int ring = 0, kept = 0;
+  for (int ix = 0; ix < 40; ++ix) {
+    for (int iy = 0; iy < 40; ++iy) {
+      if (!Ring(ix, iy)) continue;
+      ++ring;
+      kept += ClassAt(map, C(ix), C(iy)) == TravClass::kNonTraversable;
+    }
+  }
+  EXPECT_GT(ring, 40);
+  EXPECT_EQ(kept, ring);
+  EXPECT_EQ(ClassAt(map, 0.55, 0.55), TravClass::kTraversable);  // open floor stays open
+
+  // Counting every vote alike (no obstacle gain, no noise weighting), the far views erase it.
+  MapOptions plain = Options();
+  plain.class_obstacle_gain = 1.0;
+  plain.class_vote_noise_steps = 0.0;
+  plain.class_prior_traversable_log_odds = 0.0;
+  EXPECT_EQ(ClassAt(build(plain), C(17), C(20)), TravClass::kTraversable);
+}
+
+TEST(SafeFusion, FarNoiseLeavesALevelFloorTraversableWithALowerConfidence) {
+  // Two views whose labels call a 0.3 m patch of level floor red: at a far range (height sigma
+  // 0.3 m, more than the 0.2 m step) that is what noise explains. The same two views of a
+  // 0.3 m box there, from near (2 cm), show an obstacle.
+  const auto patch = [](int ix, int iy) { return ix >= 30 && ix < 33 && iy >= 30 && iy < 33; };
+  TraversabilityMap far(Options()), near(Options());
+  for (int k = 0; k < 2; ++k) {
+    far.InsertFrame(Floor(0.3f, patch), kSensor, k);
+    near.InsertFrame(Floor(0.02f, patch, [&](int ix, int iy) { return patch(ix, iy) ? 0.3 : 0.0; }), kSensor, k);
+  }
+  const CellInfo noisy = far.TopSurfaceAt(C(31), C(31));
+  EXPECT_EQ(noisy.cls, TravClass::kTraversable);
+  const CellInfo clean = far.TopSurfaceAt(C(5), C(5));
+  EXPECT_EQ(clean.cls, TravClass::kTraversable);
+  // Less sure than the floor no one doubted, and a planner pays for it, below semi's 0.25.
+  EXPECT_LT(noisy.confidence, clean.confidence - 0.1);
+  EXPECT_GT(noisy.cost, clean.cost);
+  EXPECT_LT(noisy.cost, 0.25);
+  EXPECT_EQ(near.TopSurfaceAt(C(31), C(31)).cls, TravClass::kNonTraversable);
+}
+
+/// An organized cloud rendered by ray casting a world of height `ground(x)` (x forward, level
+/// across) from a pinhole camera at height `camera_z` pitched `pitch_deg` down (f 400 px,
+/// 32 x 240, principal point at the centre), in the rectified camera frame (x right, y down,
+/// z forward); pixels that meet no ground within 60 m have no point. `world_T_rectified`: the
+/// camera's pose in the world (x forward, z up).
+template <typename Ground>
+Image3f Render(double camera_z, double pitch_deg, const Ground& ground, Eigen::Isometry3d* world_T_rectified) {
+  const double pitch = DegToRad(pitch_deg);
+  Eigen::Matrix3d world_R_level;  // camera axes x right, y down, z forward in a world x fwd, z up
+  world_R_level << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  const Eigen::Matrix3d world_R = world_R_level * Eigen::AngleAxisd(-pitch, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  *world_T_rectified = Eigen::Isometry3d::Identity();
+  world_T_rectified->linear() = world_R;
+  world_T_rectified->translation() = Eigen::Vector3d(0, 0, camera_z);
+  Image3f cloud(32, 240, Eigen::Vector3f::Constant(std::nanf("")));
+  const Eigen::Vector3d origin = world_T_rectified->translation();
+  const auto below = [&](double t, const Eigen::Vector3d& ray_w) {
+    const Eigen::Vector3d p = origin + t * ray_w;
+    return p.z() <= ground(p.x());
+  };
+  for (int v = 0; v < 240; ++v) {
+    for (int u = 0; u < 32; ++u) {
+      const Eigen::Vector3d ray_c((u - 16) / 400.0, (v - 120) / 400.0, 1.0);
+      const Eigen::Vector3d ray_w = world_R * ray_c;
+      // March along the ray until it passes below the ground, then bisect to 0.1 mm.
+      for (double t = 0.02; t < 60.0; t += 0.02) {
+        if (!below(t, ray_w)) continue;
+        double lo = t - 0.02, hi = t;
+        while (hi - lo > 1e-4) (below(0.5 * (lo + hi), ray_w) ? hi : lo) = 0.5 * (lo + hi);
+        cloud(v, u) = (hi * ray_c).cast<float>();
+        break;
+      }
+    }
+  }
+  return cloud;
+}
+
+/// The largest lip weight in each 0.1 m of x along the image's centre column (world x of the
+/// marked points), and whether any point beyond `x_from` is marked.
+struct LipProfile {
+  double first_x = NAN, last_x = NAN;  ///< extent of the marked points [m]
+  int max_weight = 0;
+};
+
+LipProfile Profile(const Image3f& cloud, const ImageU8& lip, const Eigen::Isometry3d& world_T) {
+  LipProfile p;
+  for (int v = 0; v < cloud.height(); ++v) {
+    const int u = 16;
+    if (lip(v, u) == 0) continue;
+    const double x = (world_T * cloud(v, u).cast<double>()).x();
+    p.first_x = std::isnan(p.first_x) ? x : std::min(p.first_x, x);
+    p.last_x = std::isnan(p.last_x) ? x : std::max(p.last_x, x);
+    p.max_weight = std::max(p.max_weight, static_cast<int>(lip(v, u)));
+  }
+  return p;
+}
+
+constexpr double kNoise = 1e-4;  // depth sigma per m^2: a fine stereo rig
+
+TEST(HiddenDrops, ACliffsLipIsMarkedWhetherItsFloorIsSeenOrNot) {
+  VehicleOptions vehicle;  // max step 0.2 m, step radius 0.2 m, max slope 25 deg
+  Eigen::Isometry3d world_T;
+  // A 1 m cliff at x = 1.5 m, seen from 0.8 m up: the ray over the lip descends at 28 deg,
+  // more steeply than the 25 deg limit, and lands on the floor farther on.
+  const Image3f seen = Render(0.8, 30.0, [](double x) { return x < 1.5 ? 0.0 : -1.0; }, &world_T);
+  LipProfile p = Profile(seen, FindHiddenDrops(seen, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.last_x, 1.5, 0.02);   // the edge
+  EXPECT_NEAR(p.first_x, 1.3, 0.03);  // a step radius before it
+  EXPECT_EQ(p.max_weight, 255);
+  // A 30 m deep cliff: the floor is out of range, the rays over the lip land on nothing.
+  const Image3f hidden = Render(0.8, 30.0, [](double x) { return x < 1.5 ? 0.0 : -30.0; }, &world_T);
+  p = Profile(hidden, FindHiddenDrops(hidden, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.last_x, 1.5, 0.02);
+  EXPECT_EQ(p.max_weight, 255);
+  // Seen from 6 m, the ray over the lip descends at 7.6 deg: it could hide a drivable slope,
+  // so the lip is only suspected, by tan(7.6) / tan(25) of a full vote.
+  const Image3f far = Render(0.8, 8.0, [](double x) { return x < 6.0 ? 0.0 : -1.0; }, &world_T);
+  p = Profile(far, FindHiddenDrops(far, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.last_x, 6.0, 0.12);  // an image row spans 0.11 m of ground at 6 m
+  EXPECT_NEAR(p.max_weight, 255.0 * (0.8 / 6.0) / std::tan(DegToRad(25.0)), 4.0);
+}
+
+TEST(HiddenDrops, ARampsCrestWhoseFarSideIsSeenAndADitchsFarEdgeAreNot) {
+  VehicleOptions vehicle;
+  Eigen::Isometry3d world_T;
+  // A plateau at 0.5 m whose far side descends at 15 deg from x = 2 m: from 0.8 m above the
+  // plateau... the camera stands on it, 1.3 m up, and its rays over the crest descend at 33
+  // deg, so they see the slope: no lip.
+  const auto ramp = [](double x) { return x < 2.0 ? 0.5 : std::max(-1.0, 0.5 - (x - 2.0) * std::tan(DegToRad(15.0))); };
+  const Image3f crest = Render(1.3, 30.0, ramp, &world_T);
+  EXPECT_TRUE(std::isnan(Profile(crest, FindHiddenDrops(crest, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
+  // A ditch 0.6 m deep over x in [1.6, 2.4): its near edge is a lip, its far edge (a wall that
+  // faces the camera) is not.
+  const auto ditch = [](double x) { return x >= 1.6 && x < 2.4 ? -0.6 : 0.0; };
+  const Image3f cut = Render(0.8, 30.0, ditch, &world_T);
+  const LipProfile p = Profile(cut, FindHiddenDrops(cut, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.last_x, 1.6, 0.02);
+  EXPECT_NEAR(p.first_x, 1.4, 0.03);
+  // A level floor has no lip anywhere, and neither has noise: the same floor with 5 cm of
+  // height noise at 10 m (sigma per m^2 0.0005 at f 400 px) stays unmarked.
+  const Image3f flat = Render(0.8, 20.0, [](double) { return 0.0; }, &world_T);
+  const ImageU8 none = FindHiddenDrops(flat, world_T, 5e-4, vehicle, 20.0, 1);
+  int marked = 0;
+  for (int v = 0; v < none.height(); ++v) {
+    for (int u = 0; u < none.width(); ++u) marked += none(v, u) != 0;
+  }
+  EXPECT_EQ(marked, 0);
+}
+
+}  // namespace
+}  // namespace ssta
