@@ -40,7 +40,7 @@ struct SharedFrames {
 SharedFrames FramesShared(const RecordingFingerprint& a, const RecordingFingerprint& b);
 
 /// A 64-bit hash (FNV-1a) of an image's decoded pixels: its width, height and 16 rows evenly
-/// spaced from the first to the last (every row of a smaller image). Costs ~10 us at 752x480,
+/// spaced from the first to the last (every row of a smaller image). Costs ~16 us at 752x480,
 /// against milliseconds to decode it. Equal pixels give equal hashes whatever the container.
 std::uint64_t SampledImageHash(const ImageU8& image);
 
