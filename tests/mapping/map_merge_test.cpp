@@ -607,5 +607,23 @@ TEST(RecordingFingerprint, SurvivesTheMapFileAndAbsentMeansNone) {
   EXPECT_TRUE(TraversabilityMap::Load(dir / "old.ot").metadata().recordings.empty());
 }
 
+TEST(RecordingFingerprint, AFingerprintThatDoesNotMatchItsFramesIsRefusedNamingTheKey) {
+  const testing::TempDir dir;
+  SaveFingerprintedMap(dir, "h1", "h1", {100, 200}, {1, 2});
+  std::string bytes = ReadTextFile(dir / "h1.ot");
+  const std::size_t at = bytes.find("image_hashes: \"");
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + 15 + 15] = bytes[at + 15 + 15] == '1' ? '3' : '1';  // the first frame's hash, last digit
+  WriteTextAtomically(dir / "bad.ot", bytes);
+  try {
+    TraversabilityMap::Load(dir / "bad.ot");
+    ADD_FAILURE() << "a fingerprint that does not match its frames was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("recordings[0].fingerprint: does not match its stamps and image hashes"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace ssta
