@@ -74,6 +74,9 @@ void RegisterBuildMap(CLI::App& app) {
   cmd->add_flag("--resume", args->options.resume,
                 "continue the existing map: with another sequence, or finish an interrupted run of this one "
                 "(frames already in the map are not fused again)");
+  cmd->add_flag("--allow-overlap", args->options.allow_overlap,
+                "with --resume: fuse the sequence even when the map already holds frames of it (same time and "
+                "image, e.g. the same recording from a bag and from a folder); their evidence then counts twice");
   cmd->add_flag("--static", args->options.static_platform,
                 "the platform stands still and the sequence has no poses: every frame at the origin, levelled by gravity");
   cmd->add_option("--world-frame", args->options.world_frame,

@@ -6,6 +6,7 @@
 
 #include "commands.h"
 #include "ssta/core/error.h"
+#include "ssta/io/file_util.h"
 #include "ssta/mapping/map_merge.h"
 
 namespace ssta::cli {
@@ -14,6 +15,7 @@ namespace {
 struct MergeMapsArgs {
   std::vector<std::string> inputs;
   std::string out;
+  MergeOptions options;
   bool quiet = false;
 };
 
@@ -30,8 +32,10 @@ void Run(const MergeMapsArgs& a) {
       }
     }
   }
+  // One writer per map: held from before the inputs are read until the output is saved.
+  const MapWriteLock lock(a.out);
   MergeSummary summary;
-  const TraversabilityMap merged = MergeMaps(a.inputs, &summary);
+  const TraversabilityMap merged = MergeMaps(a.inputs, &summary, a.options);
   merged.Save(a.out);
   if (!a.quiet) std::cout << summary.BriefReport() << "map: " << a.out << "\n";
 }
@@ -50,6 +54,9 @@ void RegisterMergeMaps(CLI::App& app) {
   cmd->add_option("--out", args->out, "merged map file to write (.ot), replaced atomically")
       ->required()
       ->check(OutputFile());
+  cmd->add_flag("--allow-overlap", args->options.allow_overlap,
+                "merge maps that share frames of a recording (same time and image: the same recording twice, "
+                "every second frame of it, a bag and its folder); their evidence then counts twice");
   cmd->add_flag("--quiet,-q", args->quiet, "no report");
   cmd->callback([args] { Run(*args); });
 }

@@ -316,6 +316,15 @@ py::dict Metadata(const MapHandle& handle) {
     for (int k = 0; k < 3; ++k) path.mutable_at(i, k) = sensor_path[i][k];
   }
   out["sensor_path"] = path;
+  py::list recordings;
+  for (const RecordingFingerprint& r : meta.recordings) {
+    py::dict entry;
+    entry["sequence"] = r.sequence;
+    entry["frames"] = r.frames();
+    entry["fingerprint"] = r.Digest();
+    recordings.append(entry);
+  }
+  out["recordings"] = recordings;
   return out;
 }
 
@@ -386,7 +395,9 @@ What the map knows about how it was made, as a dict: `file`, `resolution_m` [m],
 config/default.yaml), `fusion` (the map's fusion options), `sequences` (names fused, in order),
 `calibration_summary`, `refined_mount` (None, or {'configured', 'refined'}: cam0's body_T_camera
 as 4x4 arrays), `software_version` (the ssta that saved it), `frames_inserted`,
-`last_timestamp_ns` and `sensor_path` (K x 3 float64, the sensor's origins in W [m]).
+`last_timestamp_ns`, `sensor_path` (K x 3 float64, the sensor's origins in W [m]) and
+`recordings` (the fingerprints of the recordings fused, each {'sequence', 'frames',
+'fingerprint'}; maps/README.md).
 )doc")
       .def("query", &Query, py::arg("points"), py::kw_only(), py::arg("as_exported") = false,
            py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,

@@ -553,12 +553,14 @@ in parallel.
 
 py::dict BuildMapPython(const py::object& sequence_arg, const py::object& map_arg, const py::object& config_arg,
                         const py::object& progress, bool resume, bool static_platform, int max_frames, int every,
-                        bool strict, bool sequential, bool refine, bool oracle_disparity, bool oracle_labels) {
+                        bool strict, bool sequential, bool refine, bool oracle_disparity, bool oracle_labels,
+                        bool allow_overlap) {
   const std::string sequence_path = PathArg(sequence_arg, "sequence");
   const std::string map_path = PathArg(map_arg, "map_path");
   BuildMapOptions options;
   options.map_path = map_path;
   options.resume = resume;
+  options.allow_overlap = allow_overlap;
   options.static_platform = static_platform;
   options.frames.max_frames = max_frames;
   options.frames.every = every;
@@ -656,16 +658,20 @@ Args:
         Config (taken as it is: load the sequence's vehicle.yaml into it yourself).
     progress: None or progress(done, total), called after every frame on the calling thread.
     resume, static_platform, max_frames, every, strict, sequential, refine, oracle_disparity,
-        oracle_labels: the options --resume, --static, --max-frames, --every, --strict,
-        --sequential, --refine, --oracle-disparity and --oracle-labels.
+        oracle_labels, allow_overlap: the options --resume, --static, --max-frames, --every,
+        --strict, --sequential, --refine, --oracle-disparity, --oracle-labels and
+        --allow-overlap.
 
 Ctrl-C (KeyboardInterrupt) stops the run after the current frame: the map is saved with the
 frames fused so far (continue with resume=True) and KeyboardInterrupt is raised. An exception
 raised by `progress` stops it the same way and is raised. The GIL is released while it runs.
 
 Raises FileNotFoundError naming a missing sequence, config file or map folder; ValueError
-naming a bad argument; ssta.Error with the command line's message for bad input (and when no
-frame could be fused).
+naming a bad argument; ssta.Error with the command line's message for bad input, when no
+frame could be fused, when another process (or thread) is writing the same map ("MAP: another
+process is writing this map (pid N: COMMAND) ..."; one writer per map: the lock is held for the
+whole call), and with resume=True when the map already holds frames of the sequence (same time
+and image; allow_overlap=True fuses them anyway).
 )doc";
 
 }  // namespace
@@ -704,5 +710,6 @@ PYBIND11_MODULE(_ssta, m) {
         py::arg("progress") = py::none(), py::kw_only(), py::arg("resume") = false,
         py::arg("static_platform") = false, py::arg("max_frames") = 0, py::arg("every") = 1,
         py::arg("strict") = false, py::arg("sequential") = false, py::arg("refine") = false,
-        py::arg("oracle_disparity") = false, py::arg("oracle_labels") = false, kBuildMapDoc);
+        py::arg("oracle_disparity") = false, py::arg("oracle_labels") = false, py::arg("allow_overlap") = false,
+        kBuildMapDoc);
 }

@@ -109,6 +109,7 @@ def build_map(
     refine: bool = False,
     oracle_disparity: bool = False,
     oracle_labels: bool = False,
+    allow_overlap: bool = False,
 ) -> dict[str, Any]:
     """Fuses a sequence into the map at map_path; returns the run summary (build-map --json)."""
 

@@ -1,7 +1,9 @@
 """ssta.build_map against `ssta build-map`: the same map and summary, Ctrl-C and errors."""
 
+import fcntl
 import json
 import os
+import shutil
 import signal
 
 import numpy as np
@@ -111,3 +113,32 @@ def test_errors_name_the_file_or_argument(yard, tmp_path, cli):
     assert str(e.value) == cli_error("build-map", "--sequence", yard, "--map", tmp_path / "m.ot",
                                      "--config", tmp_path / "bad.yaml", "-q")
     assert not (tmp_path / "m.ot").exists()
+
+
+def test_one_writer_per_map(yard, tmp_path):
+    # The lock build-map takes: flock(2) on MAP.lock, which names its holder.
+    ssta.build_map(yard, tmp_path / "m.ot", max_frames=2)
+    with open(tmp_path / "m.ot.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        lock.write(f"pid {os.getpid()}: a test\n")
+        lock.flush()
+        with pytest.raises(ssta.Error) as e:
+            ssta.build_map(yard, tmp_path / "m.ot", resume=True)
+        assert str(e.value).startswith(f"{tmp_path / 'm.ot'}: another process is writing this map "
+                                       f"(pid {os.getpid()}: a test)")
+    assert ssta.Map.open(tmp_path / "m.ot").metadata["frames_inserted"] == 2
+    ssta.build_map(yard, tmp_path / "m.ot", resume=True)
+    assert ssta.Map.open(tmp_path / "m.ot").metadata["frames_inserted"] == 6
+
+
+def test_a_recording_the_map_holds_is_refused_unless_allowed(yard, tmp_path):
+    shutil.copytree(yard, tmp_path / "again")
+    ssta.build_map(yard, tmp_path / "m.ot", every=2)
+    recordings = ssta.Map.open(tmp_path / "m.ot").metadata["recordings"]
+    assert [(r["sequence"], r["frames"]) for r in recordings] == [(os.path.basename(yard), 3)]
+    with pytest.raises(ssta.Error, match=r"already holds the recording .* and 'again' shares its frame at"):
+        ssta.build_map(tmp_path / "again", tmp_path / "m.ot", resume=True)
+    assert ssta.Map.open(tmp_path / "m.ot").metadata["frames_inserted"] == 3
+    ssta.build_map(tmp_path / "again", tmp_path / "m.ot", resume=True, allow_overlap=True)
+    recordings = ssta.Map.open(tmp_path / "m.ot").metadata["recordings"]
+    assert [r["frames"] for r in recordings] == [3, 6]

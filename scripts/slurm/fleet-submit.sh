@@ -6,8 +6,10 @@
 #
 #   fleet-submit.sh --conf fleet.conf --recordings LIST --out DIR [--wait]
 #
-# LIST holds one recording folder per line (its folder name names its map, so names must be
-# unique; blanks around a line and '#' comments are ignored). DIR receives maps/<name>.ot,
+# LIST holds one recording per line, anything `ssta build-map --sequence` takes: an ASL / EuRoC
+# folder, a KITTI drive, a rosbag2 folder, or a ROS 1 .bag, an .mcap or a .db3 file. Its name
+# (a folder's name, a file's name without its extension) names its map, so names must be
+# unique; blanks around a line and '#' comments are ignored. DIR receives maps/<name>.ot,
 # done/<name>.tsv (a task's record: recording and map checksums), logs/, merged.ot and
 # manifest.tsv, and submissions/<time>-<id>/ with this submission's recordings.txt and
 # todo.txt: the jobs read their lists there, so no later submission changes them. Submitting
@@ -32,6 +34,14 @@ done
 [[ -n $conf && -n $list && -n $out ]] || usage
 [[ -f $conf ]] || { echo "$conf: no such config file" >&2; exit 1; }
 [[ -f $list ]] || { echo "$list: no such recording list" >&2; exit 1; }
+# A recording's name, which names its map: a folder's name; a bag file's name without its
+# .bag, .mcap or .db3.
+recording_name() {
+  local base
+  base=$(basename "$1")
+  case $base in *.bag | *.mcap | *.db3) [[ -d $1 ]] || base=${base%.*} ;; esac
+  printf '%s\n' "$base"
+}
 here=$(cd "$(dirname "$0")" && pwd)
 conf=$(realpath "$conf")
 # shellcheck source=fleet.conf
@@ -63,11 +73,17 @@ while IFS= read -r line || [[ -n $line ]]; do
   line=${line#"${line%%[![:space:]]*}"}  # leading blanks
   line=${line%"${line##*[![:space:]]}"}  # trailing blanks
   [[ -z $line ]] && continue
-  [[ -d $line ]] || { echo "$list: recording '$line' is not a folder" >&2; exit 1; }
+  if [[ ! -d $line ]]; then
+    [[ -e $line ]] || { echo "$list: recording '$line' does not exist" >&2; exit 1; }
+    case $line in
+      *.bag | *.mcap | *.db3) [[ -f $line ]] || { echo "$list: recording '$line' is not a file" >&2; exit 1; } ;;
+      *) echo "$list: recording '$line' is neither a folder nor a .bag, .mcap or .db3 file" >&2; exit 1 ;;
+    esac
+  fi
   rec=$(realpath "$line")
-  name=$(basename "$rec")
+  name=$(recording_name "$rec")
   if [[ -n ${seen[$name]:-} ]]; then
-    echo "$list: two recordings are named '$name' ($(basename "${seen[$name]}") and $rec): the map of each is named after its folder" >&2
+    echo "$list: two recordings are named '$name' (${seen[$name]} and $rec): the map of each is named after its recording" >&2
     exit 1
   fi
   seen[$name]=$rec
@@ -86,7 +102,7 @@ map_done() {
 }
 todo=()
 for rec in "${recordings[@]}"; do
-  map_done "$(basename "$rec")" || todo+=("$rec")
+  map_done "$(recording_name "$rec")" || todo+=("$rec")
 done
 printf '%s\n' "${todo[@]+"${todo[@]}"}" | sed '/^$/d' > "$submission/todo.txt"
 echo "lists: $submission"

@@ -18,13 +18,21 @@ stop_merges() {
   wait 2> /dev/null || true
 }
 trap stop_merges EXIT
+# A recording's name, which names its map: a folder's name; a bag file's name without its
+# .bag, .mcap or .db3.
+recording_name() {
+  local base
+  base=$(basename "$1")
+  case $base in *.bag | *.mcap | *.db3) [[ -d $1 ]] || base=${base%.*} ;; esac
+  printf '%s\n' "$base"
+}
 # shellcheck source=fleet.conf
 source "$conf"
 ((MERGE_FAN_IN >= 2)) || { echo "$conf: MERGE_FAN_IN must be at least 2" >&2; exit 1; }
 
 inputs=()
 while IFS= read -r rec; do
-  name=$(basename "$rec")
+  name=$(recording_name "$rec")
   record="$out/done/$name.tsv" map="$out/maps/$name.ot"
   [[ -f $record ]] || { echo "$rec: no map was built (no $record)" >&2; exit 1; }
   [[ $(cut -f5 "$record") == $(sha256sum "$map" | cut -d' ' -f1) ]] ||
@@ -66,7 +74,7 @@ manifest="$out/manifest.tsv"
 {
   printf '# kind\tname\tpath\tsha256\n'
   while IFS= read -r rec; do
-    IFS=$'\t' read -r name rec_path rec_sum map map_sum < "$out/done/$(basename "$rec").tsv"
+    IFS=$'\t' read -r name rec_path rec_sum map map_sum < "$out/done/$(recording_name "$rec").tsv"
     printf 'recording\t%s\t%s\t%s\n' "$name" "$rec_path" "$rec_sum"
     printf 'map\t%s\t%s\t%s\n' "$name" "$map" "$map_sum"
   done < "$recordings"

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <random>
 #include <sstream>
 #include <system_error>
@@ -14,6 +15,8 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "ssta/core/error.h"
@@ -81,7 +84,78 @@ void InjectedWriteFault(const std::string& path, const std::string& tmp) {
   throw Error(path + ": write failed: " + std::strerror(ENOSPC));
 }
 
+/// This process's command line, its arguments joined by blanks, cut to `max_chars`.
+std::string OwnCommandLine(std::size_t max_chars) {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  while (!text.empty() && text.back() == '\0') text.pop_back();
+  std::replace(text.begin(), text.end(), '\0', ' ');
+  std::replace(text.begin(), text.end(), '\n', ' ');
+  if (text.size() > max_chars) text = text.substr(0, max_chars) + "...";
+  return text;
+}
+
+/// What the holder of a lock wrote into its lock file ("pid 4242: ssta build-map ..."). A
+/// holder writes it right after taking the lock: an empty file is read again for up to 0.2 s.
+std::string HolderOf(int fd) {
+  std::string text;
+  for (int attempt = 0; attempt < 20; ++attempt) {
+    char buffer[512];
+    const ssize_t n = ::pread(fd, buffer, sizeof(buffer) - 1, 0);
+    text.assign(buffer, n > 0 ? static_cast<std::size_t>(n) : 0);
+    if (!text.empty() && text.back() == '\n') break;
+    ::usleep(10000);
+  }
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  return text.empty() ? "a process that has not yet written its pid" : text;
+}
+
 }  // namespace
+
+std::string MapWriteLock::LockPath(const std::string& path) { return path + ".lock"; }
+
+MapWriteLock::MapWriteLock(const std::string& path) : lock_path_(LockPath(path)) {
+  if (path.empty()) throw Error("map: a map file is required");
+  if (const std::string problem = ParentFolderProblem(path); !problem.empty()) throw Error(path + ": " + problem);
+  // A releasing holder removes the file while it still holds the lock: a lock taken on a file
+  // that is no longer at lock_path_ is taken again on the one that is.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    const int fd = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0) throw Error(lock_path_ + ": cannot create the map's lock file: " + std::strerror(errno));
+    if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+      const int lock_errno = errno;
+      if (lock_errno == EWOULDBLOCK || lock_errno == EINTR) {
+        const std::string holder = HolderOf(fd);
+        ::close(fd);
+        throw Error(path + ": another process is writing this map (" + holder +
+                    "); one writer at a time: wait for it to end, or write another map");
+      }
+      ::close(fd);
+      throw Error(lock_path_ + ": cannot lock the map's lock file: " + std::strerror(lock_errno));
+    }
+    struct stat held {}, named {};
+    if (::fstat(fd, &held) != 0 || ::stat(lock_path_.c_str(), &named) != 0 || held.st_ino != named.st_ino ||
+        held.st_dev != named.st_dev) {
+      ::close(fd);
+      continue;
+    }
+    const std::string holder = "pid " + std::to_string(::getpid()) + ": " + OwnCommandLine(200) + "\n";
+    if (::ftruncate(fd, 0) != 0 || ::pwrite(fd, holder.data(), holder.size(), 0) != static_cast<ssize_t>(holder.size())) {
+      const int write_errno = errno;
+      ::close(fd);
+      throw Error(lock_path_ + ": cannot write the map's lock file: " + std::strerror(write_errno));
+    }
+    fd_ = fd;
+    return;
+  }
+  throw Error(lock_path_ + ": the map's lock file keeps being replaced; is another writer starting and stopping?");
+}
+
+MapWriteLock::~MapWriteLock() {
+  if (fd_ < 0) return;
+  ::unlink(lock_path_.c_str());  // while still held: a waiting writer sees the file is gone
+  ::close(fd_);
+}
 
 std::string ParentFolderProblem(const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();

@@ -117,6 +117,12 @@ void ReadFields(internal::YamlSection& section, const OptionFields<O>& fields, O
   internal::ReadOptions(section, fields, options);
 }
 
+std::string HashText(std::uint64_t hash) {
+  char text[17];
+  std::snprintf(text, sizeof(text), "%016" PRIx64, hash);
+  return text;
+}
+
 std::string MetadataYaml(const TraversabilityMap& map) {
   const MapOptions& o = map.options();
   const MapMetadata& m = map.metadata();
@@ -165,6 +171,25 @@ std::string MetadataYaml(const TraversabilityMap& map) {
       out << YAML::EndSeq;
       out << YAML::Key << "frames_inserted" << YAML::Value << source.frames_inserted;
       out << YAML::Key << "software_version" << YAML::Value << YAML::DoubleQuoted << source.software_version;
+      out << YAML::EndMap;
+    }
+    out << YAML::EndSeq;
+  }
+  if (!m.recordings.empty()) {
+    // Per recording its frames' stamps and their image hashes, 16 hex digits each, in one string.
+    out << YAML::Key << "recordings" << YAML::Value << YAML::BeginSeq;
+    for (const RecordingFingerprint& r : m.recordings) {
+      std::string hashes;
+      hashes.reserve(16 * r.image_hashes.size());
+      for (const std::uint64_t h : r.image_hashes) hashes += HashText(h);
+      out << YAML::Flow << YAML::BeginMap;
+      out << YAML::Key << "sequence" << YAML::Value << YAML::DoubleQuoted << r.sequence;
+      out << YAML::Key << "frames" << YAML::Value << r.frames();
+      out << YAML::Key << "fingerprint" << YAML::Value << r.Digest();
+      out << YAML::Key << "stamps_ns" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+      for (const std::int64_t t : r.stamps_ns) out << t;
+      out << YAML::EndSeq;
+      out << YAML::Key << "image_hashes" << YAML::Value << YAML::DoubleQuoted << hashes;
       out << YAML::EndMap;
     }
     out << YAML::EndSeq;
@@ -260,12 +285,6 @@ std::size_t ParseTrailer(const std::string& tail, std::size_t tail_offset, const
   }
   *hash = hash_text;
   return tail_offset + tag;
-}
-
-std::string HashText(std::uint64_t hash) {
-  char text[17];
-  std::snprintf(text, sizeof(text), "%016" PRIx64, hash);
-  return text;
 }
 
 void RequireHash(const std::string& recorded, std::uint64_t computed, const std::string& path, std::string* checksum) {
@@ -394,6 +413,30 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
       source.frames_inserted = entry.Require<std::uint64_t>("frames_inserted");
       source.software_version = entry.Require<std::string>("software_version");
       metadata->merged_from.push_back(std::move(source));
+    }
+  }
+  if (root.Has("recordings")) {
+    const YAML::Node list = internal::ParseYaml(yaml, path)["recordings"];
+    if (!list.IsSequence()) throw Error(root.Name("recordings") + ": must be a list");
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      internal::YamlSection entry(list[i], path, "recordings[" + std::to_string(i) + "]");
+      RecordingFingerprint r;
+      r.sequence = entry.Require<std::string>("sequence");
+      r.stamps_ns = entry.Require<std::vector<std::int64_t>>("stamps_ns");
+      const std::string hashes = entry.Require<std::string>("image_hashes");
+      const auto frames = entry.Require<std::uint64_t>("frames");
+      if (frames != r.stamps_ns.size() || hashes.size() != 16 * r.stamps_ns.size() ||
+          hashes.find_first_not_of("0123456789abcdef") != std::string::npos) {
+        throw Error(entry.Name("image_hashes") + ": needs 16 hex digits for each of the " +
+                    std::to_string(r.stamps_ns.size()) + " stamps and 'frames' their count");
+      }
+      for (std::size_t k = 0; k < hashes.size(); k += 16) {
+        r.image_hashes.push_back(std::strtoull(hashes.substr(k, 16).c_str(), nullptr, 16));
+      }
+      if (entry.Require<std::string>("fingerprint") != r.Digest()) {
+        throw Error(entry.Name("fingerprint") + ": does not match its stamps and image hashes");
+      }
+      metadata->recordings.push_back(std::move(r));
     }
   }
   sensor_path->clear();

@@ -131,6 +131,25 @@ void RefuseEvidenceMergedBefore(const std::vector<MapSource>& have,
   }
 }
 
+/// Throws when a recording of `from` (read from `from_file`) shares a frame with one of
+/// `have`, the recordings merged so far: the same frames would count twice. `input_of(i)`
+/// names the input that brought `have[i]`.
+void RefuseRecordingsMergedBefore(const std::vector<RecordingFingerprint>& have,
+                                  const std::function<std::string(std::size_t)>& input_of,
+                                  const TraversabilityMap& from, const std::string& from_file) {
+  for (const RecordingFingerprint& adding : from.metadata().recordings) {
+    for (std::size_t i = 0; i < have.size(); ++i) {
+      const SharedFrames shared = FramesShared(have[i], adding);
+      if (shared.count == 0) continue;
+      throw Error(input_of(i) + " and " + from_file + " hold frames of one recording: '" + have[i].sequence + "' (" +
+                  std::to_string(have[i].frames()) + " frames) and '" + adding.sequence + "' (" +
+                  std::to_string(adding.frames()) + " frames) share " + std::to_string(shared.count) +
+                  " (same time, same image; the first at " + std::to_string(shared.first_stamp_ns) +
+                  " ns): merging them would count that evidence twice; --allow-overlap merges them anyway");
+    }
+  }
+}
+
 }  // namespace
 
 void CheckMergeable(const TraversabilityMap& into, const std::string& into_file, const TraversabilityMap& from,
@@ -181,6 +200,7 @@ void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, 
   const auto& in = internal::TraversabilityMapAccess::Impl(from);
   MapMetadata& meta = out->metadata;
   meta.sequences.insert(meta.sequences.end(), in.metadata.sequences.begin(), in.metadata.sequences.end());
+  meta.recordings.insert(meta.recordings.end(), in.metadata.recordings.begin(), in.metadata.recordings.end());
   for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
   if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
   out->sensor_path.insert(out->sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());
@@ -190,20 +210,26 @@ void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, 
 
 }  // namespace
 
-void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into) {
+void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into,
+                  const MergeOptions& options) {
   if (into == &from) throw Error(from_file + ": a map merged into itself would count its evidence twice");
   CheckMergeable(*into, "the merged map", from, from_file);
   // A map that is not a merge holds its own evidence (when it was read from a file).
   const std::vector<MapSource> have = into->metadata().merged_from.empty() ? SourcesOf(*into, "the merged map")
                                                                            : into->metadata().merged_from;
   RefuseEvidenceMergedBefore(have, [](std::size_t) { return std::string("the merged map"); }, from, from_file);
+  if (!options.allow_overlap) {
+    RefuseRecordingsMergedBefore(into->metadata().recordings, [](std::size_t) { return std::string("the merged map"); },
+                                 from, from_file);
+  }
   auto& out = internal::TraversabilityMapAccess::Impl(*into);
   const auto& in = internal::TraversabilityMapAccess::Impl(from);
   out.tree->MergeFrom(*in.tree, CombineInto(out, in.last_timestamp_ns));
   MergeMetadata(from, from_file, &out);
 }
 
-TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary) {
+TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary,
+                            const MergeOptions& options) {
   if (map_files.empty()) throw Error("merge: no map to merge");
   const auto start = std::chrono::steady_clock::now();
   MergeSummary s;
@@ -211,7 +237,8 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
   // options, vehicle and frame, so every input enters through the same rule.
   std::optional<TraversabilityMap> merged;
   std::string first_file;
-  std::vector<std::string> input_of_source;  // the file that brought each of merged_from
+  std::vector<std::string> input_of_source;     // the file that brought each of merged_from
+  std::vector<std::string> input_of_recording;  // ... and each of recordings
   for (const std::string& file : map_files) {
     // Read node by node into the merged map: memory holds the merged map, not also this one.
     internal::MapFileReader reader(file);
@@ -228,6 +255,10 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
     }
     auto& out = internal::TraversabilityMapAccess::Impl(*merged);
     RefuseEvidenceMergedBefore(out.metadata.merged_from, [&](std::size_t i) { return input_of_source[i]; }, map, file);
+    if (!options.allow_overlap) {
+      RefuseRecordingsMergedBefore(out.metadata.recordings, [&](std::size_t i) { return input_of_recording[i]; }, map,
+                                   file);
+    }
     if (reader.nodes() > 0) {
       out.tree->MergeFromNodes([&](internal::TravNode* node, unsigned depth) { return reader.ReadNode(node, depth); },
                                CombineInto(out, map.last_timestamp_ns()));
@@ -235,6 +266,7 @@ TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSumm
     reader.Finish();
     MergeMetadata(map, file, &out);
     input_of_source.resize(out.metadata.merged_from.size(), file);
+    input_of_recording.resize(out.metadata.recordings.size(), file);
     s.largest_input_nodes = std::max<std::size_t>(s.largest_input_nodes, reader.nodes());
     ++s.inputs;
   }

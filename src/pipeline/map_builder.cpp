@@ -4,13 +4,16 @@
 #include <chrono>
 #include <filesystem>
 #include <iomanip>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
 
 #include "core/json_escape.h"
 #include "core/ordered_worker.h"
+#include "ssta/io/file_util.h"
 #include "ssta/mapping/frame_points.h"
+#include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/gravity_provider.h"
 #include "ssta/refinement/ground_evidence.h"
 
@@ -105,6 +108,7 @@ class MapBuilder {
         options_(options),
         progress_(progress),
         stop_(stop),
+        lock_(LockedMapPath(options)),
         run_(RequirePoses(sequence, options), config, options.frames, options.oracles),
         chain_(sequence.calibration().left.body_T_camera, run_.geometry()),
         map_(OpenMap(options, config, sequence_name, run_.geometry(),
@@ -114,6 +118,8 @@ class MapBuilder {
     // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
     continues_this_sequence_ = options.resume && map_.frames_inserted() > 0 && same_sequence_;
     fused_up_to_ = map_.last_timestamp_ns();
+    StartRecording(sequence_name);
+    if (options.resume && !options.allow_overlap) RefuseFramesHeld(sequence_name);
     StartRefinement();
     summary_.frames_listed = run_.frames_listed();
     summary_.gravity = run_.gravity().Describe();
@@ -154,6 +160,13 @@ class MapBuilder {
     Eigen::Isometry3d world_T_body;
   };
 
+  /// The map's path once the options are valid: its write lock is the run's first step.
+  static const std::string& LockedMapPath(const BuildMapOptions& options) {
+    std::string error;
+    if (!options.IsValid(&error)) throw Error(error);
+    return options.map_path;
+  }
+
   static const Sequence& RequirePoses(const Sequence& sequence, const BuildMapOptions& options) {
     std::string error;
     if (!options.IsValid(&error)) throw Error(error);
@@ -168,6 +181,52 @@ class MapBuilder {
     sequence.RequireFramesWithin(sequence.poses().front().timestamp_ns, sequence.poses().back().timestamp_ns,
                                  sequence.pose_path(), "poses");
     return sequence;
+  }
+
+  /// The fingerprint this run adds to: the map's last recording when this run continues it,
+  /// else a new one, entered into the metadata at the first save.
+  void StartRecording(const std::string& sequence_name) {
+    const std::vector<RecordingFingerprint>& held = map_.metadata().recordings;
+    if (continues_this_sequence_ && !held.empty() && SameSequenceName(held.back().sequence, sequence_name)) {
+      recording_ = held.back();
+      recording_index_ = held.size() - 1;
+    } else {
+      recording_.sequence = sequence_name;
+      recording_index_ = held.size();
+    }
+  }
+
+  /// Throws before anything is fused when a frame of this run is already in the map: same
+  /// timestamp and same left image as a frame of one of its recordings (the recording this
+  /// run continues excepted: its frames in the map are skipped by time). Only the frames whose
+  /// timestamp the map holds are read.
+  void RefuseFramesHeld(const std::string& sequence_name) const {
+    const std::vector<RecordingFingerprint>& held = map_.metadata().recordings;
+    const std::size_t compared = std::min(recording_index_, held.size());
+    std::multimap<std::int64_t, std::pair<std::size_t, std::uint64_t>> by_stamp;
+    for (std::size_t i = 0; i < compared; ++i) {
+      for (std::size_t k = 0; k < held[i].frames(); ++k) by_stamp.emplace(held[i].stamps_ns[k], std::make_pair(i, held[i].image_hashes[k]));
+    }
+    if (by_stamp.empty()) return;
+    for (const StereoFrame& frame : run_.frames()) {
+      const auto range = by_stamp.equal_range(frame.timestamp_ns);
+      if (range.first == range.second) continue;
+      std::uint64_t hash = 0;
+      try {
+        hash = SampledImageHash(run_.sequence().ReadImages(frame).left);
+      } catch (const Error&) {
+        continue;  // an unreadable frame is not fused either
+      }
+      for (auto it = range.first; it != range.second; ++it) {
+        if (it->second.second != hash) continue;
+        const RecordingFingerprint& r = held[it->second.first];
+        throw Error(options_.map_path + ": already holds the recording '" + r.sequence + "' (" +
+                    std::to_string(r.frames()) + " frames, " + r.Digest() + "), and '" + sequence_name +
+                    "' shares its frame at " + std::to_string(frame.timestamp_ns) +
+                    " ns (same time, same image): fusing it would count that evidence twice; "
+                    "--allow-overlap fuses it anyway");
+      }
+    }
   }
 
   /// cam0's mount: the configured one, or the online refinement's once a solve is applied. A
@@ -189,7 +248,8 @@ class MapBuilder {
     try {
       const Eigen::Isometry3d world_T_body = run_.WorldTBody(t, options_.static_platform);
       const Eigen::Vector3d up_body = UpInBody(world_T_body);
-      auto result = std::make_shared<FrameResult>(run_.Classify(frame, chain_.UpInCamera(up_body)));
+      std::uint64_t image_hash = 0;
+      auto result = std::make_shared<FrameResult>(run_.Classify(frame, chain_.UpInCamera(up_body), &image_hash));
       if (warming_up_) {
         held_.push_back({frame, world_T_body});
         Refine(*result, up_body);
@@ -197,7 +257,7 @@ class MapBuilder {
           FuseHeldFrames();
         }
       } else {
-        Fuse(result, world_T_body);
+        Fuse(result, world_T_body, image_hash);
         if (refiner_) Refine(*result, up_body);
       }
     } catch (const StrictStop&) {
@@ -207,10 +267,11 @@ class MapBuilder {
     }
   }
 
-  /// Queues the fusion of `result` seen from `world_T_body` through the mount in use now.
-  void Fuse(std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body) {
+  /// Queues the fusion of `result` seen from `world_T_body` through the mount in use now;
+  /// `image_hash` is its left image's SampledImageHash, for the map's fingerprint.
+  void Fuse(std::shared_ptr<const FrameResult> result, const Eigen::Isometry3d& world_T_body, std::uint64_t image_hash) {
     const Eigen::Isometry3d world_T_rectified = chain_.WorldTRectified(world_T_body);
-    fusion_.Submit([this, result, world_T_rectified] {
+    fusion_.Submit([this, result, world_T_rectified, image_hash] {
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
@@ -225,6 +286,7 @@ class MapBuilder {
         return;
       }
       ++summary_.frames_used;
+      recording_.Add(t, image_hash);
       summary_.points_inserted += stats.points_hit;
       if (!result->analysis.quality.passed) summary_.quality_failed.push_back({t, result->analysis.quality.reason});
     });
@@ -253,7 +315,9 @@ class MapBuilder {
     for (const HeldFrame& h : held_) {
       try {
         const Eigen::Vector3d up_body = UpInBody(h.world_T_body);
-        Fuse(std::make_shared<FrameResult>(run_.Classify(h.frame, chain_.UpInCamera(up_body))), h.world_T_body);
+        std::uint64_t image_hash = 0;
+        auto result = std::make_shared<FrameResult>(run_.Classify(h.frame, chain_.UpInCamera(up_body), &image_hash));
+        Fuse(result, h.world_T_body, image_hash);
         ++reprocessed_;
       } catch (const StrictStop&) {
         throw;
@@ -283,7 +347,16 @@ class MapBuilder {
   /// The map file is written only once this run has fused a frame: a run that fuses nothing
   /// (every frame skipped, or a strict stop at the first) leaves the file as it was.
   void SaveIfFused() {
-    if (summary_.frames_used > 0) map_.Save(options_.map_path);
+    if (summary_.frames_used == 0) return;
+    MapMetadata metadata = map_.metadata();
+    if (recording_index_ < metadata.recordings.size()) {
+      metadata.recordings[recording_index_] = recording_;
+    } else {
+      recording_index_ = metadata.recordings.size();
+      metadata.recordings.push_back(recording_);
+    }
+    map_.set_metadata(metadata);
+    map_.Save(options_.map_path);
   }
 
   void Finish(std::chrono::steady_clock::time_point start) {
@@ -303,12 +376,18 @@ class MapBuilder {
   const BuildMapOptions& options_;
   const Progress& progress_;
   const std::atomic<bool>* stop_;
+  /// One writer per map for the whole run, before the map is read (docs/robustness.md).
+  MapWriteLock lock_;
   SequenceRun run_;
   RigChain chain_;
   bool same_sequence_ = false;
   TraversabilityMap map_;
   bool continues_this_sequence_ = false;
   std::int64_t fused_up_to_ = 0;
+  /// The frames this run's recording has in the map (with those of the run it continues),
+  /// and its place in the metadata's recordings (their count until the first save).
+  RecordingFingerprint recording_;
+  std::size_t recording_index_ = 0;
   std::optional<OnlineMountRefiner> refiner_;
   bool warming_up_ = false;
   std::vector<HeldFrame> held_;

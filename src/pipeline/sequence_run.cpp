@@ -1,6 +1,7 @@
 #include "ssta/pipeline/sequence_run.h"
 
 #include "ssta/io/ground_truth.h"
+#include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/attitude_filter.h"
 
 namespace ssta {
@@ -77,8 +78,10 @@ Eigen::Isometry3d SequenceRun::WorldTBody(std::int64_t t, bool static_platform) 
   return *pose;
 }
 
-FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera) {
+FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera,
+                                  std::uint64_t* left_image_hash) {
   const StereoImages images = sequence_.ReadImages(frame);
+  if (left_image_hash != nullptr) *left_image_hash = SampledImageHash(images.left);
   FrameResult result =
       oracles_.disparity
           ? pipeline_.ProcessWithDisparity(images.left, images.right,

@@ -2,8 +2,9 @@
 # The Slurm fleet scripts (scripts/slurm/) without a cluster: sbatch, squeue and ssta are fakes
 # that record their arguments. Checks what needs no scheduler: blanks, quotes, backslashes and
 # spaces in recording paths; settings that look like globs passed as they are; one list per
-# submission, passed to the jobs by path; the refusal while this --out's jobs are pending; and
-# the merge job stopping its other merges when one fails.
+# submission, passed to the jobs by path; the refusal while this --out's jobs are pending; bag
+# files and rosbag2 folders as recordings; and the merge job stopping its other merges when
+# one fails.
 #   fleet_scripts_test.sh SOURCE_DIR
 # Writes only under TMPDIR.
 set -euo pipefail
@@ -125,6 +126,45 @@ SLURM_ARRAY_TASK_ID=1 "$src/scripts/slurm/build-map-task.sh" "$root/fleet.conf" 
 build_call=$(grep -l '^build-map$' ssta.*)
 grep -qxF "c[01].yaml" "$build_call" || fail "BUILD_MAP_CONFIG globbed: $(cat "$build_call")"
 grep -qxF "site[0-9]" "$build_call" || fail "BUILD_MAP_ARGS globbed: $(cat "$build_call")"
+
+# Every recording build-map takes: ROS 1 .bag, .mcap and .db3 files, rosbag2 folders, each
+# named after its file without the extension.
+mkdir -p bags/ros2_run
+printf 'bag1' > bags/run1.bag
+printf 'mcap' > bags/run2.mcap
+printf 'db3' > bags/run3.db3
+echo "rosbag2_bagfile_information:" > bags/ros2_run/metadata.yaml
+printf '%s\n' "$root/bags/run1.bag" "$root/bags/run2.mcap" "$root/bags/run3.db3" "$root/bags/ros2_run" > bags.txt
+log=$("$src/scripts/slurm/fleet-submit.sh" --conf fleet.conf --recordings bags.txt --out bags_out 2>&1) ||
+  fail "bag recordings refused: $log"
+bag_lists=$(sed -n 's/^lists: //p' <<< "$log")
+diff bags.txt "$bag_lists/todo.txt" > /dev/null || fail "todo.txt does not list the bags: $(cat "$bag_lists/todo.txt")"
+grep -q "4 of 4 recordings" <<< "$log" || fail "not every bag is to be mapped: $log"
+rm -f ssta.*
+SLURM_ARRAY_TASK_ID=0 "$src/scripts/slurm/build-map-task.sh" "$root/fleet.conf" "$root/bags_out" "$bag_lists/todo.txt" \
+  > task.log 2>&1 || fail "build-map-task.sh failed on a bag: $(cat task.log)"
+[[ -f bags_out/maps/run1.ot ]] || fail "the map of run1.bag is not maps/run1.ot: $(ls bags_out/maps)"
+IFS=$'\t' read -r name rec_path rec_sum _ _ < bags_out/done/run1.tsv
+[[ $name == run1 && $rec_path == "$root/bags/run1.bag" ]] || fail "run1's record: $name $rec_path"
+[[ $rec_sum == $(sha256sum bags/run1.bag | cut -d' ' -f1) ]] || fail "run1's record does not hold the bag's SHA-256"
+grep -qxF "$root/bags/run1.bag" "$(grep -l '^build-map$' ssta.*)" || fail "build-map was not given the bag"
+SLURM_ARRAY_TASK_ID=3 "$src/scripts/slurm/build-map-task.sh" "$root/fleet.conf" "$root/bags_out" "$bag_lists/todo.txt" \
+  > task.log 2>&1 || fail "build-map-task.sh failed on a rosbag2 folder: $(cat task.log)"
+[[ -f bags_out/maps/ros2_run.ot ]] || fail "the map of the rosbag2 folder is not maps/ros2_run.ot"
+# What build-map does not take is refused, naming it; so are two recordings of one name.
+echo "notes" > bags/notes.txt
+printf '%s\n' "$root/bags/notes.txt" > bad.txt
+if log=$("$src/scripts/slurm/fleet-submit.sh" --conf fleet.conf --recordings bad.txt --out bags_out 2>&1); then
+  fail "a text file was taken as a recording"
+fi
+grep -qF "recording '$root/bags/notes.txt' is neither a folder nor a .bag, .mcap or .db3 file" <<< "$log" ||
+  fail "the refusal of a text file: $log"
+mkdir -p bags/run1
+printf '%s\n' "$root/bags/run1.bag" "$root/bags/run1" > clash.txt
+if log=$("$src/scripts/slurm/fleet-submit.sh" --conf fleet.conf --recordings clash.txt --out bags_out 2>&1); then
+  fail "run1.bag and the folder run1 were both taken: their maps share a name"
+fi
+grep -qF "two recordings are named 'run1'" <<< "$log" || fail "the refusal of a name clash: $log"
 
 # merge-task.sh: when a merge fails, the merges still running are stopped.
 mkdir -p merge/maps merge/done

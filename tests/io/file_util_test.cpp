@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lock_holder.h"
 #include "ssta/core/error.h"
 #include "temp_dir.h"
 
@@ -176,6 +177,58 @@ TEST(RemoveFrameFiles, RemovesOnlyFilesNamedByATimestampWithTheExtension) {
   EXPECT_EQ(left, (std::vector<std::string>{".png", "1600000000100000000.json", "17a.png", "18.png", "a17.png",
                                             "notes.txt"}));
   EXPECT_EQ(RemoveFrameFiles((d / "missing").string(), ".png"), 0);
+}
+
+/// The message a MapWriteLock on `map` fails with ("" when it is taken).
+std::string LockRefusal(const std::string& map) {
+  try {
+    const MapWriteLock lock(map);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(MapWriteLock, ASecondWriterFailsNamingTheMapAndTheHolder) {
+  testing::TempDir dir;
+  const std::string map = dir / "r.ot";
+  {
+    const MapWriteLock first(map);
+    EXPECT_TRUE(fs::exists(MapWriteLock::LockPath(map)));
+    // In the same process too (another thread of a Python program): one writer per map.
+    const std::string refusal = LockRefusal(map);
+    EXPECT_EQ(refusal.rfind(map + ": another process is writing this map (pid " + std::to_string(::getpid()) + ": ", 0),
+              0u)
+        << refusal;
+    EXPECT_NE(refusal.find("io_test"), std::string::npos) << "the holder's command: " << refusal;
+    EXPECT_EQ(refusal.find('\n'), std::string::npos) << refusal;
+  }
+  EXPECT_FALSE(fs::exists(MapWriteLock::LockPath(map))) << "a released lock leaves its file";
+  EXPECT_EQ(LockRefusal(map), "");
+  // Another map is another lock.
+  const MapWriteLock first(map);
+  EXPECT_EQ(LockRefusal(dir / "other.ot"), "");
+}
+
+TEST(MapWriteLock, AnotherProcessHoldsItUntilKilledAndLeavesNoLockThatBlocks) {
+  testing::TempDir dir;
+  const std::string map = dir / "r.ot";
+  testing::LockHolder holder(map);
+  ASSERT_TRUE(holder.held());
+  const std::string refusal = LockRefusal(map);
+  EXPECT_EQ(refusal.rfind(map + ": another process is writing this map (pid " + std::to_string(holder.pid()) + ": ", 0),
+            0u)
+      << refusal;
+  holder.Kill();
+  EXPECT_TRUE(fs::exists(MapWriteLock::LockPath(map))) << "SIGKILL removes nothing";
+  EXPECT_EQ(LockRefusal(map), "") << "the lock of a killed writer blocks the next one";
+  EXPECT_FALSE(fs::exists(MapWriteLock::LockPath(map)));
+}
+
+TEST(MapWriteLock, AMissingFolderIsNamed) {
+  testing::TempDir dir;
+  EXPECT_EQ(LockRefusal(dir / "missing/r.ot"), (dir / "missing/r.ot") + ": the folder " + (dir / "missing") +
+                                                   " does not exist");
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
 #include "ssta/mapping/map_merge.h"
+#include "ssta/mapping/recording_fingerprint.h"
 #include "temp_dir.h"
 
 namespace ssta {
@@ -490,6 +491,138 @@ TEST(MapMerge, RecordsEverySourceAcrossATreeOfMerges) {
   EXPECT_EQ(merged.metadata().sequences, (std::vector<std::string>{"r0", "r1", "r2"}));
   EXPECT_EQ(merged.metadata().world_frame, "site");
   EXPECT_EQ(merged.frames_inserted(), 3u);
+}
+
+/// A map of one recording whose frames are `stamps` with the image hashes `hashes`, saved as
+/// dir/<file>.ot.
+void SaveFingerprintedMap(const testing::TempDir& dir, const std::string& file, const std::string& sequence,
+                          const std::vector<std::int64_t>& stamps, const std::vector<std::uint64_t>& hashes) {
+  MapMetadata metadata;
+  metadata.sequences = {sequence};
+  RecordingFingerprint recording;
+  recording.sequence = sequence;
+  for (std::size_t i = 0; i < stamps.size(); ++i) recording.Add(stamps[i], hashes[i]);
+  metadata.recordings = {recording};
+  TraversabilityMap map(MapOptions{}, metadata);
+  map.InsertFrame(testing::FloorAndBox(), testing::FloorAndBoxOrigin(), stamps.back());
+  map.Save(dir / (file + ".ot"));
+}
+
+TEST(MapMerge, RefusesARecordingThatSharesAFrameUnlessOverlapIsAllowed) {
+  const testing::TempDir dir;
+  SaveFingerprintedMap(dir, "h1", "h1", {100, 200, 300, 400}, {11, 22, 33, 44});
+  SaveFingerprintedMap(dir, "h1_every2", "h1", {100, 300}, {11, 33});
+  // The same times with other images: another recording (a render with another seed).
+  SaveFingerprintedMap(dir, "h2", "h2", {100, 200, 300, 400}, {15, 25, 35, 45});
+  auto message = [&](const std::vector<std::string>& files, const MergeOptions& options) {
+    try {
+      MergeMaps(files, nullptr, options);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("merged");
+  };
+  EXPECT_EQ(message({dir / "h1.ot", dir / "h1_every2.ot"}, {}),
+            (dir / "h1.ot") + " and " + (dir / "h1_every2.ot") +
+                " hold frames of one recording: 'h1' (4 frames) and 'h1' (2 frames) share 2 (same time, same "
+                "image; the first at 100 ns): merging them would count that evidence twice; --allow-overlap merges "
+                "them anyway");
+  EXPECT_EQ(message({dir / "h1.ot", dir / "h2.ot"}, {}), "merged");
+  // A merged map holds its inputs' recordings, and refuses them again.
+  MergeMaps({dir / "h1.ot", dir / "h2.ot"}).Save(dir / "m.ot");
+  const TraversabilityMap m = TraversabilityMap::Load(dir / "m.ot");
+  ASSERT_EQ(m.metadata().recordings.size(), 2u);
+  EXPECT_EQ(m.metadata().recordings[1].image_hashes, (std::vector<std::uint64_t>{15, 25, 35, 45}));
+  EXPECT_NE(message({dir / "h1_every2.ot", dir / "m.ot"}, {}).find("share 2"), std::string::npos);
+  TraversabilityMap in_memory = TraversabilityMap::Load(dir / "m.ot");
+  EXPECT_THROW(MergeMapInto(TraversabilityMap::Load(dir / "h1_every2.ot"), dir / "h1_every2.ot", &in_memory), Error);
+  // Allowed, the overlap is merged and both recordings are listed.
+  MergeOptions allow;
+  allow.allow_overlap = true;
+  const TraversabilityMap both = MergeMaps({dir / "h1.ot", dir / "h1_every2.ot"}, nullptr, allow);
+  EXPECT_EQ(both.metadata().recordings.size(), 2u);
+  EXPECT_EQ(both.metadata().sequences, (std::vector<std::string>{"h1", "h1"}));
+  MergeMapInto(TraversabilityMap::Load(dir / "h1_every2.ot"), dir / "h1_every2.ot", &in_memory, allow);
+  EXPECT_EQ(in_memory.metadata().recordings.size(), 3u);
+  // A copy is refused by its checksum whatever the overlap option says.
+  std::filesystem::copy_file(dir / "h1.ot", dir / "copy.ot");
+  EXPECT_NE(message({dir / "h1.ot", dir / "copy.ot"}, allow).find("both hold the recording 'h1' (checksum"),
+            std::string::npos);
+}
+
+TEST(RecordingFingerprint, SharedFramesNeedTheSameTimeAndImage) {
+  RecordingFingerprint a, b;
+  for (int i = 0; i < 6; ++i) a.Add(1000 + 100 * i, 7u * i);
+  for (int i = 1; i < 6; i += 2) b.Add(1000 + 100 * i, 7u * i);  // every second frame
+  SharedFrames shared = FramesShared(a, b);
+  EXPECT_EQ(shared.count, 3u);
+  EXPECT_EQ(shared.first_stamp_ns, 1100);
+  EXPECT_EQ(FramesShared(b, a).count, 3u);
+  b.image_hashes[0] += 1;  // frame 1100: another image at the same time
+  shared = FramesShared(a, b);
+  EXPECT_EQ(shared.count, 2u);
+  EXPECT_EQ(shared.first_stamp_ns, 1300);
+  RecordingFingerprint shifted;
+  for (int i = 0; i < 6; ++i) shifted.Add(1001 + 100 * i, 7u * i);  // same images, other times
+  EXPECT_EQ(FramesShared(a, shifted).count, 0u);
+  EXPECT_NE(a.Digest(), shifted.Digest());
+  RecordingFingerprint a_again = a;
+  a_again.sequence = "renamed";
+  EXPECT_EQ(a.Digest(), a_again.Digest());
+  EXPECT_EQ(a.Digest().size(), 8u + 16u);
+}
+
+TEST(RecordingFingerprint, ImageHashFollowsThePixelsOfTheSampledRows) {
+  ImageU8 image(64, 48);
+  for (int v = 0; v < 48; ++v) {
+    for (int u = 0; u < 64; ++u) image(v, u) = static_cast<std::uint8_t>(3 * u + 5 * v);
+  }
+  const std::uint64_t h = SampledImageHash(image);
+  ImageU8 copy = image;
+  EXPECT_EQ(SampledImageHash(copy), h);
+  copy(47, 63) ^= 1;  // the last row is sampled
+  EXPECT_NE(SampledImageHash(copy), h);
+  copy = image;
+  copy(0, 0) ^= 1;  // so is the first
+  EXPECT_NE(SampledImageHash(copy), h);
+  ImageU8 other_size(48, 64);
+  EXPECT_NE(SampledImageHash(other_size), SampledImageHash(ImageU8(64, 48)));
+}
+
+TEST(RecordingFingerprint, SurvivesTheMapFileAndAbsentMeansNone) {
+  const testing::TempDir dir;
+  SaveFingerprintedMap(dir, "h1", "h1", {1600000000100000000, 1600000000166666667}, {0xffffffffffffffffu, 0});
+  const TraversabilityMap map = TraversabilityMap::Load(dir / "h1.ot");
+  ASSERT_EQ(map.metadata().recordings.size(), 1u);
+  const RecordingFingerprint& r = map.metadata().recordings[0];
+  EXPECT_EQ(r.sequence, "h1");
+  EXPECT_EQ(r.stamps_ns, (std::vector<std::int64_t>{1600000000100000000, 1600000000166666667}));
+  EXPECT_EQ(r.image_hashes, (std::vector<std::uint64_t>{0xffffffffffffffffu, 0}));
+  // A map without fingerprints (as maps written before them) has no recordings key at all.
+  MapMetadata metadata;
+  metadata.sequences = {"old"};
+  TraversabilityMap old(MapOptions{}, metadata);
+  old.Save(dir / "old.ot");
+  EXPECT_EQ(ReadTextFile(dir / "old.ot").find("recordings"), std::string::npos);
+  EXPECT_TRUE(TraversabilityMap::Load(dir / "old.ot").metadata().recordings.empty());
+}
+
+TEST(RecordingFingerprint, AFingerprintThatDoesNotMatchItsFramesIsRefusedNamingTheKey) {
+  const testing::TempDir dir;
+  SaveFingerprintedMap(dir, "h1", "h1", {100, 200}, {1, 2});
+  std::string bytes = ReadTextFile(dir / "h1.ot");
+  const std::size_t at = bytes.find("image_hashes: \"");
+  ASSERT_NE(at, std::string::npos);
+  bytes[at + 15 + 15] = bytes[at + 15 + 15] == '1' ? '3' : '1';  // the first frame's hash, last digit
+  WriteTextAtomically(dir / "bad.ot", bytes);
+  try {
+    TraversabilityMap::Load(dir / "bad.ot");
+    ADD_FAILURE() << "a fingerprint that does not match its frames was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("recordings[0].fingerprint: does not match its stamps and image hashes"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

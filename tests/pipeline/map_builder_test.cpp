@@ -116,7 +116,19 @@ TEST(BuildMap, ResumeSkipsOnlyFramesOfTheSameSequence) {
     EXPECT_EQ(again.frames_used, 0) << name;
     EXPECT_EQ(again.frames_already_in_map, 3) << name;
   }
-  // Another sequence whose timestamps overlap: every frame is fused.
+  // The same frames under another name: refused, naming both, before anything is fused.
+  try {
+    BuildMap(Sequence::Open(kEuroc), "t", config, options);
+    ADD_FAILURE() << "the same recording under another name was fused again";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(options.map_path + ": already holds the recording 's/' (3 frames, fnv1a64:"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("and 't' shares its frame at"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(TraversabilityMap::Load(options.map_path).frames_inserted(), 3u);
+  // Allowed as an overlap, another name is another sequence: every frame is fused.
+  options.allow_overlap = true;
   const BuildMapSummary other = BuildMap(Sequence::Open(kEuroc), "t", config, options);
   EXPECT_EQ(other.frames_used, 3);
   EXPECT_EQ(other.frames_already_in_map, 0);

@@ -219,6 +219,8 @@ TEST_F(OnlineRefinementShort, CliReportsTheRefinementAndResumeStartsFromTheRecor
   options.map_path = map;
   options.resume = true;
   // Another sequence name: a resumed run of the same sequence skips the frames the map holds.
+  // The same frames again are allowed as an overlap (they would be refused otherwise).
+  options.allow_overlap = true;
   const BuildMapSummary resumed = BuildMap(sequence, "yard-again", CautiousConfig(true), options);
   EXPECT_TRUE(resumed.refinement->body_T_camera_start.isApprox(recorded->refined, 1e-12));
   EXPECT_EQ(resumed.refinement->frames_reprocessed, 0);

@@ -19,6 +19,35 @@ void WriteFileAtomically(const std::string& path, const std::function<void(const
 /// `path` has none.
 std::string ParentFolderProblem(const std::string& path);
 
+/// The one writer of the file at `path` (a map): an exclusive lock held from construction to
+/// destruction. Writers of a map (`build-map`, `merge-maps --out`, Python's `build_map`) hold
+/// it for their whole run; readers never take it and read the last complete save (saves are
+/// atomic renames). The lock is flock(2) on the sidecar file `<path>.lock`, which holds the
+/// holder's pid and command line for the message of the next writer; the kernel drops the
+/// lock when the holder's process ends in any way (SIGKILL included), so a killed writer
+/// leaves at most a lock file that blocks no one. A normal release removes the file. Locks of
+/// one process conflict too (one open file description per lock), so two threads cannot both
+/// write one map. Works on local file systems and on NFS (where Linux maps flock to fcntl
+/// locks); a file system without locks fails with ssta::Error naming the lock file.
+class MapWriteLock {
+ public:
+  /// Takes the lock without waiting. Throws ssta::Error when another writer holds it, in one
+  /// line naming `path` and the holder's pid and command ("r.ot: another process is writing
+  /// this map (pid 4242: ssta build-map ...)"), or when the lock file cannot be made (its
+  /// folder is missing or read-only), naming it.
+  explicit MapWriteLock(const std::string& path);
+  ~MapWriteLock();
+  MapWriteLock(const MapWriteLock&) = delete;
+  MapWriteLock& operator=(const MapWriteLock&) = delete;
+
+  /// The lock file of the map at `path`: `<path>.lock`.
+  static std::string LockPath(const std::string& path);
+
+ private:
+  std::string lock_path_;
+  int fd_ = -1;
+};
+
 /// Writes `text` to `path` atomically.
 void WriteTextAtomically(const std::string& path, const std::string& text);
 

@@ -8,6 +8,13 @@
 
 namespace ssta {
 
+/// How maps are merged.
+struct MergeOptions {
+  /// Merge maps that share frames of a recording (same timestamp, same image: the overlap
+  /// rule of FramesShared), whose evidence then counts twice. Off: refused, naming both.
+  bool allow_overlap = false;
+};
+
 /// Throws ssta::Error when the map `from` (read from the file `from_file`) cannot be merged
 /// into `into` (from `into_file`), naming both files and the difference: another resolution,
 /// another vehicle (its classes are that vehicle's), another world frame name, or another
@@ -39,9 +46,12 @@ void CheckMergeable(const TraversabilityMap& into, const std::string& into_file,
 /// merged, described as `from_file`), sensor path and frame count; last timestamp is the later.
 /// Throws as CheckMergeable; when `from` is `into`; and when a source of `from` (by its file
 /// checksum) is already in `into` (its `merged_from`, or `into` itself when it was read from a
-/// file and is not a merge): its evidence would count twice. Not thread safe on `into`; `from`
-/// is only read.
-void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into);
+/// file and is not a merge): its evidence would count twice; and, unless
+/// `options.allow_overlap`, when a recording of `from` shares a frame with one of `into`
+/// (MapMetadata::recordings; recordings without a fingerprint are not compared). The merged
+/// map lists the recordings of both. Not thread safe on `into`; `from` is only read.
+void MergeMapInto(const TraversabilityMap& from, const std::string& from_file, TraversabilityMap* into,
+                  const MergeOptions& options = {});
 
 /// What MergeMaps did.
 struct MergeSummary {
@@ -59,7 +69,10 @@ struct MergeSummary {
 /// memory holds the merged map and fixed buffers, whatever the inputs' sizes. Throws
 /// ssta::Error naming the file that cannot be read or merged (CheckMergeable: against the
 /// first file), and naming both files when two inputs hold the same source map (its checksum
-/// in both: a copy, or a merged map and one of its sources); the partial result is dropped.
-TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary = nullptr);
+/// in both: a copy, or a merged map and one of its sources) or, unless
+/// `options.allow_overlap`, a recording that shares a frame with one of another input (naming
+/// both files, both recordings and the shared frames); the partial result is dropped.
+TraversabilityMap MergeMaps(const std::vector<std::string>& map_files, MergeSummary* summary = nullptr,
+                            const MergeOptions& options = {});
 
 }  // namespace ssta

@@ -9,6 +9,7 @@
 
 #include "ssta/core/option_fields.h"
 #include "ssta/analysis/vehicle_options.h"
+#include "ssta/mapping/recording_fingerprint.h"
 
 namespace ssta {
 
@@ -157,6 +158,10 @@ struct MapMetadata {
   /// A merged map: the built (not merged) maps whose evidence it holds, in merge order (a
   /// merge of merged maps lists their sources). Empty for a map that was not merged.
   std::vector<MapSource> merged_from;
+  /// The fingerprints of the recordings whose frames the map holds (build-map records each
+  /// fused frame; a merge lists its inputs'), in fusion order. A sequence without one (a map
+  /// written before fingerprints) is unknown: no overlap can be found with it.
+  std::vector<RecordingFingerprint> recordings;
 };
 
 }  // namespace ssta

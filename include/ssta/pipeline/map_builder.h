@@ -23,6 +23,9 @@ namespace ssta {
 struct BuildMapOptions {
   std::string map_path;        ///< the .ot file to write (and to continue with `resume`)
   bool resume = false;         ///< continue the map at map_path with this sequence
+  /// With `resume`: fuse the sequence even when it shares frames (same time and image) with a
+  /// recording the map holds, whose evidence then counts twice. Off: such a run is refused.
+  bool allow_overlap = false;
   /// The platform stands still and the sequence has no poses: every frame is taken at the
   /// origin, levelled by gravity (IMU, else a level body), yaw 0.
   bool static_platform = false;
@@ -79,7 +82,13 @@ struct BuildMapSummary {
 /// work; with `resume`, also when the config's vehicle differs from the map's (its classes are
 /// that vehicle's) or its map.resolution_m from the map's resolution. With `resume`, when the map's last sequence is `sequence_name` (a run that was interrupted
 /// or killed), frames up to the map's last fused timestamp are already in it and are not fused
-/// again; another sequence is fused whole.
+/// again; another sequence is fused whole, unless it shares a frame (same timestamp, same
+/// SampledImageHash of the left image) with a recording in the map's fingerprints
+/// (MapMetadata::recordings): then ssta::Error names the map, both recordings and the first
+/// shared frame before anything is fused (`allow_overlap` fuses it anyway). The map records
+/// the fingerprint of every frame it fuses. The run holds the map's MapWriteLock from before
+/// it reads the map to after its last save: a second writer of the same map fails at once
+/// with ssta::Error naming the map and this process.
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
                          const BuildMapOptions& options, const Progress& progress = {},
                          const std::atomic<bool>* stop = nullptr);

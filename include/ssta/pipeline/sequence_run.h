@@ -104,7 +104,9 @@ class SequenceRun {
 
   /// Reads `frame`'s images and classifies them with `up_camera` (unit up in the original cam0
   /// frame), through the oracles asked for. Throws ssta::Error when the frame cannot be used.
-  FrameResult Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera);
+  /// `left_image_hash`, when given, receives SampledImageHash of the grey left image read.
+  FrameResult Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera,
+                       std::uint64_t* left_image_hash = nullptr);
 
   /// A frame that cannot be used: StrictStop naming it in a strict run, else nothing (the
   /// caller records the skip).
