@@ -280,6 +280,8 @@ bool NeedsRectification(const RosCameraInfo& info) {
 bool RectifierTakes(const RosCameraInfo& info) {
   const std::string& m = info.distortion_model;
   if (!(m == "plumb_bob" || m == "rational_polynomial" || m.empty() || m == "Brown Conrady")) return false;
+  const std::size_t n = info.d.size();
+  if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14) return false;  // MakeCameraModel says why
   for (std::size_t i = 4; i < info.d.size(); ++i) {
     if (info.d[i] != 0.0) return false;
   }
@@ -897,24 +899,6 @@ BagDescription DescribeBag(const std::string& path, const BagTopics& topics) {
   if (!description.problem.empty()) out << "not usable as a stereo sequence: " << description.problem << "\n";
   description.text = out.str();
   return description;
-}
-
-std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped) {
-  // By reason, in order of first appearance: a recording skips many frames for few reasons.
-  std::vector<std::pair<std::string, std::vector<std::int64_t>>> by_reason;
-  for (const SkippedFrame& f : skipped) {
-    auto it = std::find_if(by_reason.begin(), by_reason.end(), [&](const auto& r) { return r.first == f.reason; });
-    if (it == by_reason.end()) it = by_reason.insert(by_reason.end(), {f.reason, {}});
-    it->second.push_back(f.timestamp_ns);
-  }
-  constexpr std::size_t kMaxLines = 10;
-  std::ostringstream out;
-  for (std::size_t i = 0; i < by_reason.size() && i < kMaxLines; ++i) {
-    const auto& [reason, stamps] = by_reason[i];
-    out << "  skipped " << stamps.size() << " (first at " << stamps.front() << " ns): " << reason << "\n";
-  }
-  if (by_reason.size() > kMaxLines) out << "  ... and " << by_reason.size() - kMaxLines << " more reasons\n";
-  return out.str();
 }
 
 }  // namespace ssta
