@@ -2,6 +2,8 @@
 
 // The options that choose a ROS bag's topics, for every command that takes --sequence.
 
+#include <ostream>
+
 #include <CLI/CLI.hpp>
 
 #include "ssta/io/sequence.h"
@@ -20,6 +22,15 @@ inline void AddBagTopicOptions(CLI::App* cmd, BagTopics* topics) {
                   "body frame: its pose is the vehicle's, the camera mount is read from /tf_static up to it "
                   "(default: the Odometry child frame, else base_link)")
       ->group(group);
+  cmd->add_flag("--allow-truncated", topics->allow_truncated,
+                "read a truncated bag (cut off by a crash or a copy) up to its last complete message, with a "
+                "warning, instead of refusing it")
+      ->group(group);
+}
+
+/// "warning: ..." for each thing the sequence lacks (a truncated bag read with --allow-truncated).
+inline void PrintSequenceWarnings(const Sequence& sequence, std::ostream& out) {
+  for (const auto& w : sequence.warnings()) out << "warning: " << w << "\n";
 }
 
 }  // namespace ssta::cli

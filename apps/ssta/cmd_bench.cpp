@@ -70,6 +70,7 @@ void Run(BenchArgs& a) {
     source = "synthetic " + a.synth.scene;
   }
   const Sequence sequence = Sequence::Open(a.sequence, a.topics);
+  PrintSequenceWarnings(sequence, std::cerr);
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
   BenchReport report = RunPipelineBench(sequence, config, a.options);

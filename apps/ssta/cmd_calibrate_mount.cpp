@@ -44,6 +44,7 @@ void Run(const CalibrateMountArgs& a) {
   if (!a.out_cam1.empty() && a.out.empty()) throw Error("--out-cam1: only with --out");
   const auto [cam0_path, cam1_path] = OutputPaths(a);
   const Sequence sequence = Sequence::Open(a.sequence, a.topics);
+  PrintSequenceWarnings(sequence, std::cerr);
   const Config config = LoadLayeredConfig(&sequence, a.config);
   MountCalibrationOptions options = a.options;
   options.refinement = config.refinement;

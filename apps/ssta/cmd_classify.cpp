@@ -25,6 +25,7 @@ struct ClassifyArgs {
 
 void RunSequence(const ClassifyArgs& a) {
   const Sequence sequence = Sequence::Open(a.sequence, a.topics);
+  PrintSequenceWarnings(sequence, std::cerr);
   const Config config = LoadLayeredConfig(&sequence, a.config);
   ProgressLine progress("classify", !a.quiet);
   const ClassifySummary summary = ClassifySequence(

@@ -36,6 +36,7 @@ void RegisterConvert(CLI::App& app) {
       if (!sequence.skipped().empty()) std::cout << " (" << sequence.skipped().size() << " frames skipped)";
       std::cout << "\n";
       for (const auto& note : sequence.notes()) std::cout << "note: " << note << "\n";
+      PrintSequenceWarnings(sequence, std::cout);
     }
   });
 }

@@ -27,6 +27,7 @@ void DescribeFolder(const Sequence& s) {
   std::cout << "\n  imu: " << (s.imu().empty() ? "none" : std::to_string(s.imu().size()) + " samples (" + s.imu_path() + ")")
             << "\n  poses: "
             << (s.poses().empty() ? "none" : std::to_string(s.poses().size()) + " (" + s.pose_path() + ")") << "\n";
+  std::cout << DescribeSkipped(s.skipped());
   if (s.vehicle_config()) std::cout << "  vehicle config: " << *s.vehicle_config() << "\n";
 }
 
@@ -35,14 +36,22 @@ void DescribeFolder(const Sequence& s) {
 void RegisterInspect(CLI::App& app) {
   auto args = std::make_shared<InspectArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "inspect", "Show what a recording holds (a bag's topics, types, counts and rates) and what SSTA reads from it");
+      "inspect",
+      "Show what a recording holds (a bag's topics, types, counts and rates) and what SSTA reads from it; exit "
+      "status 2 when it cannot be used");
   cmd->add_option("--sequence", args->sequence, "a ROS 1 / ROS 2 bag, an ASL / EuRoC folder or a KITTI raw drive")->required();
   AddBagTopicOptions(cmd, &args->topics);
+  // Exit status 0: the recording can be used as it is; 2: it cannot, with the reason last.
   cmd->callback([args] {
     if (IsBagPath(args->sequence)) {
-      std::cout << DescribeBag(args->sequence, args->topics);
+      const BagDescription d = DescribeBag(args->sequence, args->topics);
+      std::cout << d.text << std::flush;
+      if (!d.problem.empty()) throw Error(d.problem);
     } else {
-      DescribeFolder(Sequence::Open(args->sequence));
+      const Sequence s = Sequence::Open(args->sequence, args->topics);
+      DescribeFolder(s);
+      std::cout << std::flush;
+      if (s.frames().empty()) throw Error(s.root() + ": no left and right images pair up: no frame to use");
     }
   });
 }

@@ -8,9 +8,12 @@ a picture of the map and the path.
 
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --out out/plan
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --sequence SEQ --out out/plan
+    PYTHONPATH=build/python python3 examples/python/plan_on_map.py --sequence SEQ --static --out out/plan
 
 Writes OUT/map.ot, OUT/plan.png (the picture) and OUT/plan.json (start, goal, the path's
-vertices [m, world frame] and both checks). Exits 1 when no path is found or the check fails.
+vertices [m, world frame] and both checks). Exits 1 when no path is found or the check fails,
+2 with a one-line message when the sequence cannot be mapped (a recording without poses needs
+--static, as `ssta build-map` does).
 """
 
 import argparse
@@ -37,7 +40,12 @@ def parse_args():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", type=pathlib.Path, required=True, help="output folder (created)")
     p.add_argument("--sequence", type=pathlib.Path,
-                   help="ASL / EuRoC sequence to map; default: render a yard with `ssta synth`")
+                   help="sequence to map (ASL / EuRoC folder, KITTI raw drive, ROS bag); default: render a yard "
+                        "with `ssta synth`")
+    p.add_argument("--static", action="store_true",
+                   help="the platform stands still and the sequence has no poses: every frame at the origin, "
+                        "levelled by gravity (as `ssta build-map --static`); the goal then lies along the "
+                        "camera's view (world x)")
     p.add_argument("--ssta", type=pathlib.Path, default=ROOT / "build" / "apps" / "ssta",
                    help="the ssta command line, to render the yard (default: build/apps/ssta)")
     p.add_argument("--robot-length", type=float, default=1.0, help="robot length [m]")
@@ -156,7 +164,11 @@ def main():
         subprocess.run([str(args.ssta), "synth", "--scene", "yard", "--frames", "20", "--seed", "1",
                         "--out", str(sequence)], check=True, stdout=subprocess.DEVNULL)
 
-    summary = ssta.build_map(sequence, args.out / "map.ot")
+    try:
+        summary = ssta.build_map(sequence, args.out / "map.ot", static_platform=args.static)
+    except (ssta.Error, FileNotFoundError) as e:  # bad input: the library's one-line message
+        print(f"plan_on_map.py: error: {e}", file=sys.stderr)
+        return 2
     print(f"map: {summary['frames_used']} frames fused into {args.out / 'map.ot'}")
     the_map = ssta.Map.open(args.out / "map.ot")
     meta = the_map.metadata
@@ -174,7 +186,9 @@ def main():
     # Start where the camera started, goal ahead along its drive: the nearest free cells.
     sensor = meta["sensor_path"][:, :2]
     heading = sensor[-1] - sensor[0]
-    heading /= max(np.linalg.norm(heading), 1e-9)
+    if np.linalg.norm(heading) < grid["resolution_m"]:  # a static platform: along its view, world x
+        heading = np.array([1.0, 0.0])
+    heading /= np.linalg.norm(heading)
     start = nearest_free(free, grid, sensor[0])
     right = np.array([heading[1], -heading[0]])
     goal = nearest_free(free, grid, sensor[0] + args.goal_ahead * heading + args.goal_right * right)

@@ -299,6 +299,7 @@ py::dict Metadata(const MapHandle& handle) {
   out["fusion"] = FieldsDict(map.options());
   out["sequences"] = meta.sequences;
   out["calibration_summary"] = meta.calibration_summary;
+  out["notes"] = meta.notes;
   if (meta.refined_mount) {
     py::dict mount;
     mount["configured"] = Matrix4(meta.refined_mount->configured);
@@ -393,7 +394,8 @@ naming it when it is truncated, corrupt, not an SSTA map or of a newer format: t
 What the map knows about how it was made, as a dict: `file`, `resolution_m` [m], `vehicle`
 (the vehicle section whose limits gave the classes, YAML keys and units as in
 config/default.yaml), `fusion` (the map's fusion options), `sequences` (names fused, in order),
-`calibration_summary`, `refined_mount` (None, or {'configured', 'refined'}: cam0's body_T_camera
+`calibration_summary`, `notes` (what a reader must know about the evidence: a truncated bag read
+anyway), `refined_mount` (None, or {'configured', 'refined'}: cam0's body_T_camera
 as 4x4 arrays), `software_version` (the ssta that saved it), `frames_inserted`,
 `last_timestamp_ns`, `sensor_path` (K x 3 float64, the sensor's origins in W [m]) and
 `recordings` (the fingerprints of the recordings fused, each {'sequence', 'frames',

@@ -199,6 +199,24 @@ std::vector<CsvRow> ReadAslNumericCsv(const std::string& path, int columns) {
 
 Sequence::Sequence(SequenceData data) : data_(std::move(data)) {}
 
+std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped) {
+  // By reason, in order of first appearance: a recording skips many frames for few reasons.
+  std::vector<std::pair<std::string, std::vector<std::int64_t>>> by_reason;
+  for (const SkippedFrame& f : skipped) {
+    auto it = std::find_if(by_reason.begin(), by_reason.end(), [&](const auto& r) { return r.first == f.reason; });
+    if (it == by_reason.end()) it = by_reason.insert(by_reason.end(), {f.reason, {}});
+    it->second.push_back(f.timestamp_ns);
+  }
+  constexpr std::size_t kMaxLines = 10;
+  std::ostringstream out;
+  for (std::size_t i = 0; i < by_reason.size() && i < kMaxLines; ++i) {
+    const auto& [reason, stamps] = by_reason[i];
+    out << "  skipped " << stamps.size() << " (first at " << stamps.front() << " ns): " << reason << "\n";
+  }
+  if (by_reason.size() > kMaxLines) out << "  ... and " << by_reason.size() - kMaxLines << " more reasons\n";
+  return out.str();
+}
+
 Sequence Sequence::Open(const std::string& path, const BagTopics& topics) {
   if (IsBagPath(path)) return OpenBag(path, topics);
   for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--left-topic", &topics.left},

@@ -160,6 +160,11 @@ std::string MetadataYaml(const TraversabilityMap& map) {
     out << YAML::EndMap;
   }
   if (!m.world_frame.empty()) out << YAML::Key << "world_frame" << YAML::Value << YAML::DoubleQuoted << m.world_frame;
+  if (!m.notes.empty()) {
+    out << YAML::Key << "notes" << YAML::Value << YAML::BeginSeq;
+    for (const std::string& note : m.notes) out << YAML::DoubleQuoted << note;
+    out << YAML::EndSeq;
+  }
   if (!m.merged_from.empty()) {
     out << YAML::Key << "merged_from" << YAML::Value << YAML::BeginSeq;
     for (const MapSource& source : m.merged_from) {
@@ -401,6 +406,7 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
     metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
   }
   if (root.Has("world_frame")) metadata->world_frame = root.Require<std::string>("world_frame");
+  if (root.Has("notes")) metadata->notes = root.Require<std::vector<std::string>>("notes");
   if (root.Has("merged_from")) {
     const YAML::Node list = internal::ParseYaml(yaml, path)["merged_from"];
     if (!list.IsSequence()) throw Error(root.Name("merged_from") + ": must be a list");

@@ -201,6 +201,7 @@ void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, 
   MapMetadata& meta = out->metadata;
   meta.sequences.insert(meta.sequences.end(), in.metadata.sequences.begin(), in.metadata.sequences.end());
   meta.recordings.insert(meta.recordings.end(), in.metadata.recordings.begin(), in.metadata.recordings.end());
+  meta.notes.insert(meta.notes.end(), in.metadata.notes.begin(), in.metadata.notes.end());
   for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
   if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
   out->sensor_path.insert(out->sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());

@@ -124,6 +124,8 @@ class MapBuilder {
     summary_.frames_listed = run_.frames_listed();
     summary_.gravity = run_.gravity().Describe();
     summary_.skipped = run_.sequence_skips();
+    summary_.warnings = sequence.warnings();
+    RecordWarnings(sequence_name, sequence.warnings());
   }
 
   BuildMapSummary Run() {
@@ -165,6 +167,19 @@ class MapBuilder {
     std::string error;
     if (!options.IsValid(&error)) throw Error(error);
     return options.map_path;
+  }
+
+  /// The sequence's warnings go into the map's notes (once: a resumed run repeats them).
+  void RecordWarnings(const std::string& sequence_name, const std::vector<std::string>& warnings) {
+    if (warnings.empty()) return;
+    MapMetadata metadata = map_.metadata();
+    for (const std::string& w : warnings) {
+      const std::string note = sequence_name + ": " + w;
+      if (std::find(metadata.notes.begin(), metadata.notes.end(), note) == metadata.notes.end()) {
+        metadata.notes.push_back(note);
+      }
+    }
+    map_.set_metadata(metadata);
   }
 
   static const Sequence& RequirePoses(const Sequence& sequence, const BuildMapOptions& options) {
@@ -414,6 +429,7 @@ std::string BuildMapSummary::BriefReport() const {
   r << skipped.size() << " skipped, " << quality_failed.size()
     << " failed the quality check (free space only) (of " << frames_listed << " listed)"
     << (interrupted ? "; interrupted, the map holds what was fused" : "") << "\n";
+  for (const auto& w : warnings) r << "warning: " << w << "\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  no verdicts " << s.timestamp_ns << ": " << s.reason << "\n";
   if (!gravity.empty()) r << "gravity: " << gravity << "\n";
@@ -444,6 +460,9 @@ std::string BuildMapSummary::Json() const {
   list(skipped);
   j << ",\n  \"quality_failed\": ";
   list(quality_failed);
+  j << ",\n  \"warnings\": [";
+  for (std::size_t i = 0; i < warnings.size(); ++i) j << (i ? ", " : "") << "\"" << internal::JsonEscape(warnings[i]) << "\"";
+  j << "]";
   j << ",\n  \"map_nodes\": " << map_nodes << ",\n  \"map_file_bytes\": " << map_file_bytes
     << ",\n  \"points_inserted\": " << points_inserted << ",\n  \"wall_s\": " << wall_s
     << ",\n  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n  \"gravity\": \""

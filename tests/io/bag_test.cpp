@@ -2,6 +2,7 @@
 // recorded (tests/data/bags), topic choice, image encodings, raw-camera rectification and the
 // transform tree.
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -27,6 +28,7 @@
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/pipeline/sequence_classifier.h"
+#include "ssta/stereo/rectifier.h"
 #include "ssta/synth/sequence_synthesizer.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
@@ -67,57 +69,65 @@ void ExpectSameSequence(const Sequence& a, const Sequence& b) {
   EXPECT_EQ(ca.left.width, cb.left.width);
   EXPECT_DOUBLE_EQ(ca.left.fu, cb.left.fu);
   EXPECT_DOUBLE_EQ(ca.left.cv, cb.left.cv);
+  EXPECT_DOUBLE_EQ(ca.right.cu, cb.right.cu);
+  EXPECT_EQ(ca.left.distortion, cb.left.distortion);
+  EXPECT_EQ(ca.right.distortion, cb.right.distortion);
   EXPECT_TRUE(ca.left.body_T_camera.isApprox(cb.left.body_T_camera, 1e-12));
   EXPECT_TRUE(ca.right.body_T_camera.isApprox(cb.right.body_T_camera, 1e-12));
-  EXPECT_TRUE(b.calibration().IsRectified());
+  EXPECT_EQ(ca.IsRectified(), cb.IsRectified());
   ASSERT_EQ(a.imu().size(), b.imu().size());
+  ASSERT_FALSE(a.imu().empty());
   EXPECT_EQ(a.imu().back().timestamp_ns, b.imu().back().timestamp_ns);
   EXPECT_EQ(a.imu().back().specific_force, b.imu().back().specific_force);
   EXPECT_TRUE(a.body_T_imu().isApprox(b.body_T_imu(), 1e-12));
   ASSERT_EQ(a.poses().size(), b.poses().size());
-  EXPECT_TRUE(a.poses().back().world_p_body.isApprox(b.poses().back().world_p_body, 1e-12));
-  const StereoImages ia = a.ReadImages(a.frames()[2]);
-  const StereoImages ib = b.ReadImages(b.frames()[2]);
+  if (!a.poses().empty()) EXPECT_TRUE(a.poses().back().world_p_body.isApprox(b.poses().back().world_p_body, 1e-12));
+  const std::size_t last = a.frames().size() - 1;
+  const StereoImages ia = a.ReadImages(a.frames()[std::min<std::size_t>(2, last)]);
+  const StereoImages ib = b.ReadImages(b.frames()[std::min<std::size_t>(2, last)]);
   EXPECT_TRUE(std::equal(ia.right.data(), ia.right.data() + ia.right.width() * ia.right.height(), ib.right.data()));
 }
 
-// The same rendered sequence as an ASL folder, as a ROS 1 bag (bz2 chunks) and as ROS 2 bags
-// (MCAP with zstd chunks, sqlite3) is the same sequence: frames, calibration, mounts, IMU, poses,
-// and so the same labels and the same map, byte for byte.
-TEST(Bags, GiveTheSameLabelsAndMapAsTheAslSequence) {
-  testing::TempDir dir;
-  const Sequence asl = Sequence::Open(RenderYard(dir));
+/// Writes `asl` as a ROS 1 bag (bz2 chunks), an MCAP rosbag2 folder (zstd chunks) and, with
+/// `sqlite`, an sqlite3 one; classifies and maps each and the folder with the same config, and
+/// expects the same sequence, the same label PNGs and the same map CSV, byte for byte.
+void ExpectSameLabelsAndMapInEveryContainer(const testing::TempDir& dir, const Sequence& asl, bool sqlite) {
   const testing::BagContent content = testing::ContentFromSequence(asl);
-  testing::WriteRos1Bag(content, dir / "yard.bag", testing::Ros1Compression::kBz2);
+  testing::WriteRos1Bag(content, dir / "seq.bag", testing::Ros1Compression::kBz2);
   testing::Ros2BagWriterOptions mcap;
   mcap.compression = testing::McapCompression::kZstd;
   mcap.chunk_bytes = 256 * 1024;
-  testing::WriteRos2Bag(content, dir / "yard_mcap", mcap);
-  testing::Ros2BagWriterOptions sqlite;
-  sqlite.storage = testing::Ros2Storage::kSqlite3;
-  testing::WriteRos2Bag(content, dir / "yard_db3", sqlite);
+  testing::WriteRos2Bag(content, dir / "seq_mcap", mcap);
+  std::vector<std::pair<std::string, std::string>> bags = {{"seq.bag", "ros1"}, {"seq_mcap", "ros2 mcap"}};
+  if (sqlite) {
+    testing::Ros2BagWriterOptions db3;
+    db3.storage = testing::Ros2Storage::kSqlite3;
+    testing::WriteRos2Bag(content, dir / "seq_db3", db3);
+    bags.emplace_back("seq_db3", "ros2 sqlite3");
+  }
 
   Config config;
-  ApplyConfigFile(*asl.vehicle_config(), &config);
+  if (asl.vehicle_config()) ApplyConfigFile(*asl.vehicle_config(), &config);
   const auto run = [&](const Sequence& sequence, const std::string& name) {
     ClassifyOptions classify;
     classify.out_dir = dir / ("labels-" + name);
     ClassifySequence(sequence, config, classify);
     BuildMapOptions map;
     map.map_path = dir / (name + ".ot");
-    BuildMap(sequence, name, config, map);
+    map.static_platform = sequence.poses().empty();  // EuRoC's excerpt: 3 frames, no poses
+    BuildMap(sequence, "seq", config, map);
     ExportCsv(TraversabilityMap::Load(map.map_path), dir / (name + ".csv"));
   };
   run(asl, "asl");
   const std::string map_asl = FileBytes(dir / "asl.csv");
   EXPECT_GT(map_asl.size(), 10000u);
-  for (const auto& [name, format] : {std::pair<std::string, std::string>{"yard.bag", "ros1"},
-                                     {"yard_mcap", "ros2 mcap"},
-                                     {"yard_db3", "ros2 sqlite3"}}) {
+  const TraversabilityMap asl_map = TraversabilityMap::Load(dir / "asl.ot");
+  for (const auto& [name, format] : bags) {
     SCOPED_TRACE(name);
     const Sequence bag = Sequence::Open(dir / name);
     EXPECT_EQ(bag.format(), format);
-    EXPECT_TRUE(bag.notes().empty()) << bag.notes().front();
+    // Nothing assumed (but that there are no poses, when the folder has none either).
+    EXPECT_EQ(bag.notes().size(), asl.poses().empty() ? 1u : 0u) << bag.notes().front();
     ExpectSameSequence(asl, bag);
     run(bag, name);
     int compared = 0;
@@ -128,9 +138,35 @@ TEST(Bags, GiveTheSameLabelsAndMapAsTheAslSequence) {
       EXPECT_EQ(a, FileBytes(dir / ("labels-" + name + file))) << file;
       ++compared;
     }
-    EXPECT_EQ(compared, 6);
+    EXPECT_EQ(compared, static_cast<int>(asl.frames().size()));
+    // The rectification, its crop and focal length included, is the folder's.
+    EXPECT_EQ(TraversabilityMap::Load(dir / (name + ".ot")).metadata().calibration_summary,
+              asl_map.metadata().calibration_summary);
     EXPECT_EQ(map_asl, FileBytes(dir / (name + ".csv")));
   }
+}
+
+// The same rendered sequence as an ASL folder, as a ROS 1 bag (bz2 chunks) and as ROS 2 bags
+// (MCAP with zstd chunks, sqlite3) is the same sequence: frames, calibration, mounts, IMU, poses,
+// and so the same labels and the same map, byte for byte.
+TEST(Bags, GiveTheSameLabelsAndMapAsTheAslSequence) {
+  testing::TempDir dir;
+  ExpectSameLabelsAndMapInEveryContainer(dir, Sequence::Open(RenderYard(dir)), true);
+}
+
+// A raw recording (EuRoC's distorted 752x480 cameras): its bags carry K, D, R and P as ROS's
+// camera_calibration writes them, and the pipeline rectifies them with the folder's Rectifier,
+// cropped to the common area (645x348, f 313 px): the same labels and map as the folder.
+TEST(Bags, OfARawRecordingGiveTheFoldersRectificationLabelsAndMap) {
+  testing::TempDir dir;
+  const Sequence asl = Sequence::Open(std::string(SSTA_TEST_DATA_DIR) + "/euroc-v1-01-mini");
+  ASSERT_FALSE(asl.calibration().IsRectified());
+  ExpectSameLabelsAndMapInEveryContainer(dir, asl, false);
+  const Sequence bag = Sequence::Open(dir / "seq.bag");
+  const Rectifier rectifier(bag.calibration(), RectifierOptions{});
+  EXPECT_EQ(rectifier.geometry().crop_width, 645);
+  EXPECT_EQ(rectifier.geometry().crop_height, 348);
+  EXPECT_NEAR(rectifier.geometry().f, 313.0, 1.0);
 }
 
 // convert writes the ASL layout; reading it back gives the bag's sequence.
@@ -312,7 +348,8 @@ TEST(BagTopics, ChoiceErrorsNameTheBagAndTheWayOut) {
   BagTopics t;
   t.left = "/nope";
   t.right = "/stereo/right/image_raw";
-  EXPECT_EQ(message(t), path + ": --left-topic /nope: no such topic in the bag");
+  EXPECT_EQ(message(t), path + ": --left-topic /nope: no such topic in the bag (image topics: /stereo/left/image_raw, "
+                               "/stereo/right/image_raw)");
   t.left = "/stereo/left/camera_info";
   EXPECT_EQ(message(t), path +
                             ": --left-topic /stereo/left/camera_info is sensor_msgs/CameraInfo, expected "
@@ -553,10 +590,9 @@ TEST(BagImages, ACompressedStereoPairIsASequence) {
   EXPECT_EQ(images.right(5, 7), 10);
 }
 
-// A raw camera whose CameraInfo rotates it (R) is rectified on read as image_proc does: the
-// rectified pixel (u, v) shows the raw pixel K R^T K^-1 (u, v, 1).
-TEST(BagImages, RawImagesAreRectifiedWithTheirCameraInfo) {
-  testing::TempDir dir;
+/// A 64x48 pair of raw cameras (K 50 px) whose left CameraInfo rotates it by R (0.05 rad about
+/// its y axis), 0.1 m apart; every image row is 0, 3, 6, ... (3 u).
+testing::BagContent RotatedRawContent(const Eigen::Matrix3d& r) {
   testing::BagContent c = TinyContent();
   const int w = 64, h = 48;
   for (auto* info : {&c.left_info, &c.right_info}) {
@@ -568,8 +604,6 @@ TEST(BagImages, RawImagesAreRectifiedWithTheirCameraInfo) {
     info->p[6] = 24;
   }
   c.right_info.p[3] = -50 * 0.1;
-  const double angle = 0.05;  // about the camera's y axis
-  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
   for (int i = 0; i < 9; ++i) c.left_info.r[static_cast<std::size_t>(i)] = r(i / 3, i % 3);
   for (auto* images : {&c.left, &c.right}) {
     for (auto& m : *images) {
@@ -582,9 +616,58 @@ TEST(BagImages, RawImagesAreRectifiedWithTheirCameraInfo) {
       }
     }
   }
+  return c;
+}
+
+// A raw pair the Rectifier describes (plumb_bob) reaches the pipeline raw: the calibration is K
+// and D, the right camera where R and P put it (turned by R_left^T R_right, at R_left^T
+// (baseline, 0, 0)), and the images as recorded; the Rectifier then rectifies it as a folder's.
+TEST(BagImages, ARawPairReachesTheRectifierWithItsCameraInfo) {
+  testing::TempDir dir;
+  const double angle = 0.05;  // about the left camera's y axis
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  testing::WriteRos1Bag(RotatedRawContent(r), dir / "raw.bag");
+  const Sequence s = Sequence::Open(dir / "raw.bag");
+  for (const std::string& note : s.notes()) EXPECT_EQ(note.find("image_proc"), std::string::npos) << note;
+  const StereoCalibration& c = s.calibration();
+  EXPECT_FALSE(c.IsRectified());
+  EXPECT_DOUBLE_EQ(c.left.fu, 50.0);
+  EXPECT_DOUBLE_EQ(c.left.cu, 32.0);
+  const Eigen::Isometry3d left_T_right = c.LeftTRight();
+  EXPECT_NEAR(Eigen::AngleAxisd(left_T_right.linear()).angle(), angle, 1e-12);
+  EXPECT_TRUE(left_T_right.translation().isApprox(r.transpose() * Eigen::Vector3d(0.1, 0, 0), 1e-12));
+  const StereoImages images = s.ReadImages(s.frames()[0]);
+  for (const auto& [u, v] : {std::pair<int, int>{32, 24}, {20, 10}, {40, 30}}) {
+    EXPECT_EQ(images.left(v, u), 3 * u);
+    EXPECT_EQ(images.right(v, u), 3 * u);
+  }
+  // The Rectifier's rectified x axis is the baseline, as the CameraInfo's R makes it.
+  const Rectifier rectifier(c, RectifierOptions{});
+  const Eigen::Vector3d baseline = rectifier.geometry().rectified_R_camera * left_T_right.translation();
+  EXPECT_NEAR(baseline.normalized().x(), 1.0, 1e-12);
+  EXPECT_NEAR(rectifier.geometry().baseline_m, 0.1, 1e-12);
+}
+
+// A distortion model the Rectifier does not take (rational_polynomial with k5 != 0) is
+// rectified on read as image_proc does, with a note: the rectified pixel (u, v) shows the raw
+// pixel K R^T K^-1 (u, v, 1).
+TEST(BagImages, OtherDistortionModelsAreRectifiedWithTheirCameraInfo) {
+  testing::TempDir dir;
+  const double angle = 0.05;
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  testing::BagContent c = RotatedRawContent(r);
+  for (auto* info : {&c.left_info, &c.right_info}) {
+    info->distortion_model = "rational_polynomial";
+    info->d = {0, 0, 0, 0, 0, 1e-12, 0, 0};
+  }
   testing::WriteRos1Bag(c, dir / "raw.bag");
   const Sequence s = Sequence::Open(dir / "raw.bag");
+  EXPECT_TRUE(s.calibration().IsRectified());
   EXPECT_DOUBLE_EQ(s.calibration().left.fu, 50.0);
+  ASSERT_EQ(s.notes().size(), 3u);  // the assumed mount, this, no poses
+  EXPECT_EQ(s.notes()[1], "the 'rational_polynomial' / 'rational_polynomial' distortion is rectified with "
+                          "CameraInfo's P as image_proc does, not by SSTA's rectification: "
+                          "rectification.crop_to_common_area does not apply");
   const StereoImages images = s.ReadImages(s.frames()[0]);
   const Eigen::Matrix3d k = (Eigen::Matrix3d() << 50, 0, 32, 0, 50, 24, 0, 0, 1).finished();
   for (const auto& [u, v] : {std::pair<int, int>{32, 24}, {20, 10}, {40, 30}}) {
@@ -621,6 +704,8 @@ TEST(BagMessages, TruncatedMessagesAreErrorsNamingThem) {
   }
 }
 
+// A ROS 1 bag cut short has lost the index rosbag reads: the error says it is truncated and how
+// rosbag recovers it, with or without allow_truncated (rosbag cannot read it unindexed).
 TEST(Ros1Bag, ATruncatedOrMissingBagIsAnErrorNamingIt) {
   testing::TempDir dir;
   EXPECT_THROW(Sequence::Open(dir / "none.bag"), Error);
@@ -628,12 +713,114 @@ TEST(Ros1Bag, ATruncatedOrMissingBagIsAnErrorNamingIt) {
   const std::string bytes = FileBytes(dir / "whole.bag");
   const std::string cut = dir / "cut.bag";
   std::ofstream(cut, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size() / 2));
+  for (const bool allow : {false, true}) {
+    BagTopics topics;
+    topics.allow_truncated = allow;
+    try {
+      Sequence::Open(cut, topics);
+      FAIL();
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(cut + ": truncated: the file ends at byte " + std::to_string(bytes.size() / 2) +
+                               ", before the end of its index (which starts at byte ",
+                           0),
+                0u)
+          << what;
+      const std::string tail = "; `rosbag reindex " + cut + "` recovers its complete messages (keeping the original as .orig.bag)";
+      EXPECT_EQ(what.substr(what.size() - std::min(what.size(), tail.size())), tail) << what;
+    }
+  }
+}
+
+/// "S.NNNNNNNNN" of a time in ns.
+std::string Seconds(std::int64_t ns) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%lld.%09lld", static_cast<long long>(ns / 1000000000),
+                static_cast<long long>(ns % 1000000000));
+  return text;
+}
+
+// An MCAP cut mid-chunk (a crash, an interrupted copy), with or without its summary: refused,
+// naming the file, where it ends, the last complete message's time and the way to read it
+// anyway; allow_truncated reads the frames of its complete chunks, with a warning.
+TEST(TruncatedBags, AnMcapCutMidChunkIsRefusedUnlessAllowed) {
+  testing::TempDir dir;
+  const Sequence asl = Sequence::Open(RenderYard(dir));
+  const testing::BagContent content = testing::ContentFromSequence(asl);
+  for (const bool summary : {true, false}) {
+    SCOPED_TRACE(summary ? "with a chunk index" : "without a summary");
+    testing::Ros2BagWriterOptions options;
+    options.summary = summary;
+    options.chunk_bytes = 50 * 1024;  // a chunk closes after each 320x240 image
+    const std::string folder = dir / (summary ? "indexed" : "plain");
+    const std::vector<testing::McapChunkSpan> chunks = testing::WriteRos2Bag(content, folder, options);
+    ASSERT_GE(chunks.size(), 8u);
+    const testing::McapChunkSpan& cut = chunks[7];
+    std::filesystem::resize_file(cut.file, cut.offset + cut.length / 2);
+    const std::string expected = cut.file + ": truncated: the file ends inside a Chunk record at offset " +
+                                 std::to_string(cut.offset) +
+                                 ", before the Data End record, the summary and the footer (the recording did not "
+                                 "finish); the last complete message was logged at " +
+                                 Seconds(chunks[6].last_log_time_ns) + " s";
+    for (const std::string& path : {cut.file, folder}) {
+      try {
+        Sequence::Open(path);
+        ADD_FAILURE() << path << " opened";
+      } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()), expected + "; --allow-truncated reads the complete messages");
+      }
+    }
+    BagTopics topics;
+    topics.allow_truncated = true;
+    const Sequence read = Sequence::Open(cut.file, topics);
+    ASSERT_EQ(read.warnings().size(), 1u);
+    EXPECT_EQ(read.warnings()[0], expected + ": only the complete messages were read (--allow-truncated)");
+    // The frames whose both images lie in the complete chunks, read as the folder's.
+    std::size_t complete = 0;
+    for (const StereoFrame& f : asl.frames()) complete += f.timestamp_ns < chunks[6].last_log_time_ns ? 1 : 0;
+    ASSERT_GE(complete, 2u);
+    ASSERT_GE(read.frames().size(), complete);
+    ASSERT_LE(read.frames().size(), complete + 1);
+    for (std::size_t i = 0; i < read.frames().size(); ++i) {
+      EXPECT_EQ(read.frames()[i].timestamp_ns, asl.frames()[i].timestamp_ns);
+      EXPECT_EQ(read.ReadImages(read.frames()[i]).right.data()[1000], asl.ReadImages(asl.frames()[i]).right.data()[1000]);
+    }
+  }
+}
+
+// A rosbag2 folder whose files hold fewer messages than its metadata.yaml lists (a split file
+// lost, a database's last transactions lost) is truncated too.
+TEST(TruncatedBags, ARosbag2FolderHoldingFewerMessagesThanItsMetadataListsIsRefused) {
+  testing::TempDir dir;
+  const testing::BagContent content = TinyContent();
+  const std::string folder = dir / "bag";
+  const std::vector<testing::McapChunkSpan> chunks = testing::WriteRos2Bag(content, folder);
+  std::size_t held = 0;
+  std::int64_t last = 0;
+  for (const auto& c : chunks) {
+    held += c.messages;
+    last = std::max(last, c.last_log_time_ns);
+  }
+  const std::string yaml_path = folder + "/metadata.yaml";
+  std::string yaml = FileBytes(yaml_path);
+  const std::string count = "\n  message_count: " + std::to_string(held) + "\n";
+  ASSERT_NE(yaml.find(count), std::string::npos) << yaml;
+  yaml.replace(yaml.find(count), count.size(), "\n  message_count: " + std::to_string(held + 7) + "\n");
+  std::ofstream(yaml_path) << yaml;
   try {
-    Sequence::Open(cut);
+    Sequence::Open(folder);
     FAIL();
   } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()).rfind(cut + ": ", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()), folder + ": truncated: metadata.yaml lists " + std::to_string(held + 7) +
+                                         " messages, its files hold " + std::to_string(held) +
+                                         "; the last complete message was logged at " + Seconds(last) +
+                                         " s; --allow-truncated reads the complete messages");
   }
+  BagTopics topics;
+  topics.allow_truncated = true;
+  const Sequence read = Sequence::Open(folder, topics);
+  EXPECT_EQ(read.frames().size(), 2u);
+  EXPECT_EQ(read.warnings().size(), 1u);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -791,12 +978,12 @@ TEST(RealBags, FirstImagesAndSamples) {
 
 TEST(RealBags, BagsWithoutAStereoPairSayWhy) {
   const std::string path = kBags + "robot_localization/test1.bag";
-  const std::string text = DescribeBag(path);
-  EXPECT_NE(text.find("/imu/data"), std::string::npos);
-  EXPECT_NE(text.find("11865"), std::string::npos);
-  EXPECT_NE(text.find("not usable as a stereo sequence: " + path + ": no stereo pair of image topics found"),
-            std::string::npos)
-      << text;
+  const BagDescription d = DescribeBag(path);
+  EXPECT_NE(d.text.find("/imu/data"), std::string::npos);
+  EXPECT_NE(d.text.find("11865"), std::string::npos);
+  EXPECT_EQ(d.problem, path + ": the bag has no image topics (sensor_msgs/Image or CompressedImage): it holds no "
+                              "camera recording");
+  EXPECT_NE(d.text.find("not usable as a stereo sequence: " + d.problem), std::string::npos) << d.text;
 }
 
 }  // namespace

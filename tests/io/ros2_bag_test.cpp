@@ -379,6 +379,11 @@ TEST(Ros2Bag, CutMcapKeepsItsCompleteChunks) {
   const std::size_t complete = written.chunks[0].messages + written.chunks[1].messages;
   const std::vector<Sent> sent = Recording();
   ExpectReadsBack(*bag, std::vector<Sent>(sent.begin(), sent.begin() + static_cast<std::ptrdiff_t>(complete)));
+  // Read, and said to be truncated: the sequence reader refuses it unless asked.
+  EXPECT_CONTAINS(bag->Truncation(), written.files[0] + ": truncated: the file ends inside a Chunk record at offset " +
+                                         std::to_string(third.offset));
+  const auto whole = WriteBag(dir / "whole", options, Recording());
+  EXPECT_EQ(OpenRos2Bag(dir / "whole")->Truncation(), "");
 }
 
 TEST(Ros2Bag, McapCutInsideItsFirstChunkFailsNamingTheFile) {
@@ -386,7 +391,7 @@ TEST(Ros2Bag, McapCutInsideItsFirstChunkFailsNamingTheFile) {
   const Written written = WriteBag(dir / "bag", {}, Recording());
   fs::resize_file(written.files[0], written.chunks[0].offset + 20);
   const std::string error = ErrorOf([&] { OpenRos2Bag(dir / "bag"); });
-  EXPECT_CONTAINS(error, written.files[0]);
+  EXPECT_CONTAINS(error, written.files[0] + ": truncated: ");
   EXPECT_CONTAINS(error, "before any complete message");
 }
 

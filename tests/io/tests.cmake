@@ -10,7 +10,7 @@ ssta_set_warnings(ssta_test_ros2_writer)
 # and the ROS message packages, or as a ROS 2 bag with the writer above (the bag tests and the
 # command line's).
 add_library(ssta_test_bag_support STATIC ${CMAKE_CURRENT_LIST_DIR}/support/bag_content.cpp)
-target_link_libraries(ssta_test_bag_support PUBLIC ssta::ssta ssta::rosbag ssta_test_ros2_writer)
+target_link_libraries(ssta_test_bag_support PUBLIC ssta::ssta ssta::rosbag ssta_test_ros2_writer PRIVATE ${OpenCV_LIBS})
 target_include_directories(ssta_test_bag_support PUBLIC ${PROJECT_SOURCE_DIR}/tests ${PROJECT_SOURCE_DIR}/src)
 ssta_set_warnings(ssta_test_bag_support)
 

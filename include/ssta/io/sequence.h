@@ -46,6 +46,9 @@ struct BagTopics {
   std::string imu;         ///< sensor_msgs/Imu
   std::string pose;        ///< nav_msgs/Odometry topic, or "/tf"
   std::string pose_frame;  ///< the body frame: its pose is the vehicle pose, the cameras are mounted on it
+  /// Read a truncated bag (a recording cut off by a crash or a copy) up to its last complete
+  /// message, with a warning (SequenceData::warnings), instead of refusing it.
+  bool allow_truncated = false;
 };
 
 /// A frame that cannot be used, with the reason (reported, never guessed).
@@ -86,6 +89,9 @@ struct SequenceData {
   /// What the reader assumed where the recording was silent (a bag without a camera mount in
   /// /tf_static, say), one sentence each, for reports.
   std::vector<std::string> notes;
+  /// What of the recording is missing from the sequence (a truncated bag read with
+  /// BagTopics::allow_truncated), one sentence each: runs report them and maps record them.
+  std::vector<std::string> warnings;
 };
 
 /// A recorded stereo sequence, read at open: calibration, frame list (left/right paired by
@@ -102,11 +108,16 @@ class Sequence {
   static Sequence Open(const std::string& path, const BagTopics& topics = {});
 
   /// A ROS 1 bag or a ROS 2 bag (MCAP or sqlite3) as a sequence (docs/bags.md): left and right
-  /// images with their CameraInfo as the calibration (raw images are rectified with it as ROS's
-  /// image_proc does, so the sequence's calibration is the rectified pair), Imu samples, poses
-  /// from Odometry or /tf, the camera and IMU mounts from /tf_static. Frames pair as in an ASL
+  /// images with their CameraInfo as the calibration (a raw pair as a folder's sensor.yaml holds
+  /// it: K, D and the relative pose from R and P, its images as recorded, so that the
+  /// pipeline's Rectifier rectifies them as a folder's; rectified topics, and distortion models
+  /// CameraCalibration cannot hold, as the rectified pair P describes), Imu samples, poses from
+  /// Odometry or /tf, the camera and IMU mounts from /tf_static. Frames pair as in an ASL
   /// sequence (header stamps, exact or nearest within 1 ms). Reads every message's header at
-  /// open; images are decoded as frames are read. Throws ssta::Error naming the bag and topic.
+  /// open; images are decoded as frames are read. Throws ssta::Error naming the bag and topic,
+  /// and for a truncated bag (an MCAP cut off before its end, a rosbag2 folder holding fewer
+  /// messages than its metadata.yaml lists; with topics.allow_truncated read up to its last
+  /// complete message, with a warning) or a ROS 1 bag cut off before its index.
   static Sequence OpenBag(const std::string& path, const BagTopics& topics = {});
 
   /// The ASL / EuRoC layout (the folder, or the folder holding `mav0/`). Left/right frames are
@@ -140,6 +151,8 @@ class Sequence {
   const std::optional<std::string>& vehicle_config() const { return data_.vehicle_config; }
   /// What the reader assumed where the recording was silent (bags), for reports.
   const std::vector<std::string>& notes() const { return data_.notes; }
+  /// What of the recording the sequence lacks (a truncated bag read anyway), for reports.
+  const std::vector<std::string>& warnings() const { return data_.warnings; }
 
   /// The grey images of `frame`, from its files or its bag, checked against the calibration's
   /// size. Throws ssta::Error naming the file (or bag and message).
@@ -173,15 +186,25 @@ StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration&
 /// `metadata.yaml`, a `.mcap` or `.db3` file.
 bool IsBagPath(const std::string& path);
 
+/// The skipped frames grouped by reason, one line each ("  skipped N (first at T ns): REASON"),
+/// in the order the reasons first occur, at most 10 reasons; "" when none was skipped.
+std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped);
+
+/// What DescribeBag finds.
+struct BagDescription {
+  std::string text;     ///< for a person, one line per item, each ending in a newline
+  std::string problem;  ///< why the bag cannot be used as a stereo sequence ("" when it can)
+};
+
 /// What a bag holds (topics, types, counts, rates, time span) and what OpenBag would make of it
-/// with `topics` (the topics chosen, the calibration, the mounts, the frames paired and skipped,
-/// the assumptions), as text for a person. Throws ssta::Error as OpenBag, except that a bag
-/// OpenBag cannot use is described with the reason.
-std::string DescribeBag(const std::string& path, const BagTopics& topics = {});
+/// with `topics` (the topics chosen, the calibration, the mounts, the frames paired and skipped
+/// with their reasons, the assumptions). A bag that OpenBag refuses, or that pairs no frame, is
+/// described with the reason in `problem`. Throws ssta::Error when the bag cannot be opened at all.
+BagDescription DescribeBag(const std::string& path, const BagTopics& topics = {});
 
 /// Writes `sequence` in the ASL layout under `out` (docs/interfaces.md, section 2): the images
-/// as read (grey, rectified when the bag's images were raw), both sensor.yaml, imu0 and pose0
-/// when present. `progress(done, total)` is called per frame. Throws ssta::Error naming the
+/// as read (grey; raw when the bag's images were raw, with the raw calibration), both
+/// sensor.yaml, imu0 and pose0 when present. `progress(done, total)` is called per frame. Throws ssta::Error naming the
 /// file it cannot write.
 void WriteAslSequence(const Sequence& sequence, const std::string& out,
                       const std::function<void(int, int)>& progress = {});

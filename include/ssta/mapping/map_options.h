@@ -155,6 +155,9 @@ struct MapMetadata {
   /// Name of the world frame W the poses were given in (`build-map --world-frame`); empty:
   /// unnamed. Maps merge only when they name the same frame: their voxels must share W.
   std::string world_frame;
+  /// What a reader of the map must know about its evidence, "SEQUENCE: sentence" each (a
+  /// sequence read from a truncated bag with --allow-truncated), in the order they arose.
+  std::vector<std::string> notes;
   /// A merged map: the built (not merged) maps whose evidence it holds, in merge order (a
   /// merge of merged maps lists their sources). Empty for a map that was not merged.
   std::vector<MapSource> merged_from;

@@ -54,6 +54,9 @@ struct BuildMapSummary {
   int frames_already_in_map = 0;
   std::vector<SkippedFrame> skipped;         ///< not fused, and why
   std::vector<SkippedFrame> quality_failed;  ///< fused for free space only: no class verdicts
+  /// What of the recording was missing (Sequence::warnings: a truncated bag read anyway); the
+  /// map's metadata notes record them too.
+  std::vector<std::string> warnings;
   std::string gravity;  ///< where roll and pitch came from (GravityProvider::Describe)
   std::size_t map_nodes = 0;
   std::size_t map_file_bytes = 0;

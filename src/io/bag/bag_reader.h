@@ -46,7 +46,16 @@ class BagReader {
   /// The serialized bytes of one message: ROS 1 serialization, or CDR with its 4-byte
   /// encapsulation header. Throws ssta::Error naming the file on a corrupt or truncated record.
   virtual std::vector<std::uint8_t> Read(const BagMessageRef& ref) const = 0;
+  /// Why the bag is incomplete, "" when it is whole: one sentence starting "PATH: truncated: "
+  /// that says where it ends and when its last complete message was logged (TruncationText).
+  /// List() and Read() then give the complete messages; the sequence reader refuses such a bag
+  /// unless asked to read what is there (BagTopics::allow_truncated).
+  virtual std::string Truncation() const { return ""; }
 };
+
+/// "PATH: truncated: WHAT; the last complete message was logged at S.NNNNNNNNN s" (`last_ns`
+/// the log time [ns]; "holds no complete message" when `last_ns` < 0).
+std::string TruncationText(const std::string& path, const std::string& what, std::int64_t last_ns);
 
 /// Opens a ROS 1 bag (format 2.0; bz2 and lz4 chunks) with Debian's rosbag library.
 /// Throws ssta::Error naming the file.

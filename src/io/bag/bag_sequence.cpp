@@ -108,8 +108,28 @@ struct ChosenTopics {
   bool pose_from_tf_if_moving = false;
 };
 
+/// Every Image and CompressedImage topic, sorted.
+std::vector<std::string> ImageTopics(const Topics& topics) {
+  std::vector<std::string> images = topics.OfType("sensor_msgs/Image");
+  const auto compressed = topics.OfType("sensor_msgs/CompressedImage");
+  images.insert(images.end(), compressed.begin(), compressed.end());
+  std::sort(images.begin(), images.end());
+  return images;
+}
+
 std::pair<std::string, std::string> ChooseImagePair(const Topics& topics, const BagTopics& asked, const std::string& path) {
+  const std::vector<std::string> images = ImageTopics(topics);
+  if (images.empty()) {
+    throw Error(path + ": the bag has no image topics (sensor_msgs/Image or CompressedImage): it holds no camera "
+                "recording");
+  }
   if (!asked.left.empty() || !asked.right.empty()) {
+    for (const auto& [topic, option] : {std::pair<const std::string*, const char*>{&asked.left, "--left-topic"},
+                                        {&asked.right, "--right-topic"}}) {
+      if (!topic->empty() && !topics.Has(*topic)) {
+        throw Error(path + ": " + option + " " + *topic + ": no such topic in the bag (image topics: " + Join(images) + ")");
+      }
+    }
     std::string left = asked.left.empty() ? LeftOf(asked.right) : asked.left;
     std::string right = asked.right.empty() ? RightOf(asked.left) : asked.right;
     if (left.empty() || right.empty()) {
@@ -120,9 +140,6 @@ std::pair<std::string, std::string> ChooseImagePair(const Topics& topics, const 
     topics.Require(right, {"sensor_msgs/Image", "sensor_msgs/CompressedImage"}, "--right-topic");
     return {left, right};
   }
-  std::vector<std::string> images = topics.OfType("sensor_msgs/Image");
-  const auto compressed = topics.OfType("sensor_msgs/CompressedImage");
-  images.insert(images.end(), compressed.begin(), compressed.end());
   std::vector<std::pair<std::string, std::string>> pairs;
   for (const auto& t : images) {
     const std::string r = RightOf(t);
@@ -130,8 +147,8 @@ std::pair<std::string, std::string> ChooseImagePair(const Topics& topics, const 
   }
   if (pairs.size() == 1) return pairs.front();
   if (pairs.empty()) {
-    throw Error(path + ": no stereo pair of image topics found (image topics: " +
-                (images.empty() ? std::string("none") : Join(images)) + "); give --left-topic and --right-topic");
+    throw Error(path + ": no stereo pair of image topics found (image topics: " + Join(images) +
+                "); give --left-topic and --right-topic");
   }
   std::vector<std::string> names;
   for (const auto& [l, r] : pairs) names.push_back(l + " + " + r);
@@ -226,14 +243,53 @@ Eigen::Isometry3d ForwardLookingMount() {
 }
 
 /// One camera's rectification from its CameraInfo, as ROS's image_proc does it: the raw image
-/// through K and D, rotated by R, reprojected with P.
+/// through K and D, rotated by R, reprojected with P. Used only for the distortion models the
+/// Rectifier does not take (RectifierTakes); the others reach the pipeline's Rectifier raw.
 struct CameraModel {
   RosCameraInfo info;
   bool remap = false;  ///< the images are raw: rectify them with `map1`, `map2`
   cv::Mat map1, map2;
 };
 
-CameraModel MakeCameraModel(const RosCameraInfo& info, bool images_rectified, const std::string& where) {
+bool AllZero(const std::vector<double>& v) { return std::all_of(v.begin(), v.end(), [](double d) { return d == 0.0; }); }
+
+/// R as recorded, or identity for the all-zero R of a driver that leaves it unset.
+Eigen::Matrix3d RectificationRotation(const RosCameraInfo& info) {
+  if (std::all_of(info.r.begin(), info.r.end(), [](double v) { return v == 0.0; })) return Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d r;
+  for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = info.r[static_cast<std::size_t>(i)];
+  return r;
+}
+
+/// Whether a raw image differs from the rectified one CameraInfo describes: distortion, a
+/// rotation R, or P's intrinsics other than K's.
+bool NeedsRectification(const RosCameraInfo& info) {
+  const bool distorted = !AllZero(info.d);
+  const bool rotated = !RectificationRotation(info).isIdentity(1e-12);
+  bool k_is_p = true;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      k_is_p &= std::abs(info.k[static_cast<std::size_t>(3 * row + col)] - info.p[static_cast<std::size_t>(4 * row + col)]) < 1e-9;
+    }
+  }
+  return distorted || rotated || !k_is_p;
+}
+
+/// Whether SSTA's Rectifier (CameraCalibration: pinhole K without skew, radial-tangential k1 k2
+/// p1 p2) describes the raw camera: plumb_bob (or no model) whose further coefficients are 0.
+bool RectifierTakes(const RosCameraInfo& info) {
+  const std::string& m = info.distortion_model;
+  if (!(m == "plumb_bob" || m == "rational_polynomial" || m.empty() || m == "Brown Conrady")) return false;
+  const std::size_t n = info.d.size();
+  if (n != 0 && n != 4 && n != 5 && n != 8 && n != 12 && n != 14) return false;  // MakeCameraModel says why
+  for (std::size_t i = 4; i < info.d.size(); ++i) {
+    if (info.d[i] != 0.0) return false;
+  }
+  return info.k[0] > 0 && info.k[4] > 0 && info.k[1] == 0.0 && info.k[3] == 0.0 && info.k[6] == 0.0 &&
+         info.k[7] == 0.0 && info.k[8] == 1.0;
+}
+
+CameraModel MakeCameraModel(const RosCameraInfo& info, bool remap, const std::string& where) {
   if (info.width == 0 || info.height == 0) throw Error(where + ": the image size is 0 (an uncalibrated camera?)");
   if (!(info.p[0] > 0 && info.p[5] > 0)) {
     throw Error(where + ": P has no focal length (P[0] = " + std::to_string(info.p[0]) +
@@ -241,19 +297,10 @@ CameraModel MakeCameraModel(const RosCameraInfo& info, bool images_rectified, co
   }
   CameraModel model;
   model.info = info;
-  const bool distorted = std::any_of(info.d.begin(), info.d.end(), [](double d) { return d != 0.0; });
-  bool rotated = false;
-  for (int i = 0; i < 9; ++i) rotated |= std::abs(info.r[static_cast<std::size_t>(i)] - (i % 4 == 0 ? 1.0 : 0.0)) > 1e-12;
-  const bool all_zero_r = std::all_of(info.r.begin(), info.r.end(), [](double v) { return v == 0.0; });
-  bool k_is_p = true;
-  for (int row = 0; row < 3; ++row) {
-    for (int col = 0; col < 3; ++col) {
-      k_is_p &= std::abs(info.k[static_cast<std::size_t>(3 * row + col)] - info.p[static_cast<std::size_t>(4 * row + col)]) < 1e-9;
-    }
-  }
-  model.remap = !images_rectified && (distorted || (rotated && !all_zero_r) || !k_is_p);
+  model.remap = remap;
   if (!model.remap) return model;
   if (!(info.k[0] > 0 && info.k[4] > 0)) throw Error(where + ": K has no focal length: the camera is not calibrated");
+  const bool all_zero_r = std::all_of(info.r.begin(), info.r.end(), [](double v) { return v == 0.0; });
   const cv::Mat k(3, 3, CV_64F, const_cast<double*>(info.k.data()));
   const cv::Mat r = all_zero_r ? cv::Mat::eye(3, 3, CV_64F) : cv::Mat(3, 3, CV_64F, const_cast<double*>(info.r.data()));
   const cv::Mat p(3, 4, CV_64F, const_cast<double*>(info.p.data()));
@@ -275,6 +322,20 @@ CameraModel MakeCameraModel(const RosCameraInfo& info, bool images_rectified, co
   return model;
 }
 
+/// The raw camera as the Rectifier takes it: K and the first four coefficients of D.
+CameraCalibration RawCamera(const RosCameraInfo& info, double rate_hz) {
+  CameraCalibration c;
+  c.width = static_cast<int>(info.width);
+  c.height = static_cast<int>(info.height);
+  c.fu = info.k[0];
+  c.fv = info.k[4];
+  c.cu = info.k[2];
+  c.cv = info.k[5];
+  for (std::size_t i = 0; i < 4 && i < info.d.size(); ++i) c.distortion[i] = info.d[i];
+  c.rate_hz = rate_hz;
+  return c;
+}
+
 /// The rectified camera the sequence's calibration describes (no distortion, intrinsics P).
 CameraCalibration RectifiedCamera(const RosCameraInfo& info, double rate_hz) {
   CameraCalibration c;
@@ -286,14 +347,6 @@ CameraCalibration RectifiedCamera(const RosCameraInfo& info, double rate_hz) {
   c.cv = info.p[6];
   c.rate_hz = rate_hz;
   return c;
-}
-
-/// The rotation from the rectified frame to the raw optical frame (R^T), identity when R is.
-Eigen::Matrix3d RawFromRectified(const RosCameraInfo& info) {
-  if (std::all_of(info.r.begin(), info.r.end(), [](double v) { return v == 0.0; })) return Eigen::Matrix3d::Identity();
-  Eigen::Matrix3d r;
-  for (int i = 0; i < 9; ++i) r(i / 3, i % 3) = info.r[static_cast<std::size_t>(i)];
-  return r.transpose();
 }
 
 /// Converts a decoded image message to 8-bit grey.
@@ -586,6 +639,13 @@ void PosesFromTf(const std::string& path, const TfTree& tf, const std::string& b
 
 }  // namespace
 
+std::string TruncationText(const std::string& path, const std::string& what, std::int64_t last_ns) {
+  if (last_ns < 0) return path + ": truncated: " + what + ", before any complete message";
+  std::ostringstream t;
+  t << last_ns / 1'000'000'000 << "." << std::setw(9) << std::setfill('0') << last_ns % 1'000'000'000;
+  return path + ": truncated: " + what + "; the last complete message was logged at " + t.str() + " s";
+}
+
 ImageU8 GreyImage(const RosImage& image, const std::string& where) { return ToImage(GreyFromImage(image, where)); }
 
 ImageU8 GreyImage(const RosCompressedImage& image, const std::string& where) {
@@ -606,11 +666,15 @@ std::unique_ptr<BagReader> OpenBag(const std::string& path) {
 SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const BagTopics& asked, ChosenTopics* chosen_out) {
   const std::string& path = bag->path();
   const Topics topics(*bag);
-  ChosenTopics chosen = ChooseTopics(*bag, asked);
-  if (chosen_out) *chosen_out = chosen;
   SequenceData seq;
   seq.root = path;
   seq.format = bag->format();
+  if (const std::string cut = bag->Truncation(); !cut.empty()) {
+    if (!asked.allow_truncated) throw Error(cut + "; --allow-truncated reads the complete messages");
+    seq.warnings.push_back(cut + ": only the complete messages were read (--allow-truncated)");
+  }
+  ChosenTopics chosen = ChooseTopics(*bag, asked);
+  if (chosen_out) *chosen_out = chosen;
 
   // Calibration: the first CameraInfo of each camera (drivers repeat the same one).
   const auto decode_info = [](const std::vector<std::uint8_t>& b, RosEncoding e, const std::string& w) {
@@ -624,9 +688,17 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
     if (t.size() > 11 && t.compare(t.size() - 11, 11, "/compressed") == 0) t.erase(t.size() - 11);
     return t.substr(t.rfind('/') + 1).rfind("image_rect", 0) == 0;
   };
+  // Raw images go to the pipeline raw, with K, D and the pair's relative pose from R and P, so
+  // that the Rectifier rectifies and crops them as it does a folder's: the same recording gives
+  // the same images in any container. Only distortion models it does not take are rectified
+  // here, with P, as image_proc does.
+  const std::array<bool, 2> needs = {!rectified_topic(chosen.left) && NeedsRectification(left_info),
+                                     !rectified_topic(chosen.right) && NeedsRectification(right_info)};
+  const bool raw_pair = (needs[0] || needs[1]) && !rectified_topic(chosen.left) && !rectified_topic(chosen.right) &&
+                        RectifierTakes(left_info) && RectifierTakes(right_info);
   std::array<CameraModel, 2> cameras = {
-      MakeCameraModel(left_info, rectified_topic(chosen.left), path + ": " + chosen.left_info),
-      MakeCameraModel(right_info, rectified_topic(chosen.right), path + ": " + chosen.right_info)};
+      MakeCameraModel(left_info, needs[0] && !raw_pair, path + ": " + chosen.left_info),
+      MakeCameraModel(right_info, needs[1] && !raw_pair, path + ": " + chosen.right_info)};
   if (left_info.width != right_info.width || left_info.height != right_info.height) {
     throw Error(path + ": " + chosen.left_info + " and " + chosen.right_info + " give different image sizes");
   }
@@ -700,12 +772,31 @@ SequenceData ReadBagSequence(const std::shared_ptr<const BagReader>& bag, const 
                         "' in /tf_static or /tf: the left camera is taken at the body origin, looking along body x "
                         "(the dominant ground plane and the IMU still level each frame)");
   }
-  Eigen::Isometry3d body_T_left = body_T_optical;
-  body_T_left.linear() = body_T_optical.linear() * RawFromRectified(left_info);
-  seq.calibration.left = RectifiedCamera(left_info, RateHz(left));
-  seq.calibration.right = RectifiedCamera(right_info, RateHz(right));
-  seq.calibration.left.body_T_camera = body_T_left;
-  seq.calibration.right.body_T_camera = body_T_left * Eigen::Translation3d(baseline_m, 0.0, 0.0);
+  // The optical frame in /tf is the raw camera's; R turns it into the rectified one, and the
+  // right rectified camera sits at +baseline along the left rectified x.
+  const Eigen::Matrix3d left_R = RectificationRotation(left_info);
+  const Eigen::Matrix3d right_R = RectificationRotation(right_info);
+  if (raw_pair) {
+    seq.calibration.left = RawCamera(left_info, RateHz(left));
+    seq.calibration.right = RawCamera(right_info, RateHz(right));
+    Eigen::Isometry3d left_T_right = Eigen::Isometry3d::Identity();
+    left_T_right.linear() = left_R.transpose() * right_R;
+    left_T_right.translation() = left_R.transpose() * Eigen::Vector3d(baseline_m, 0.0, 0.0);
+    seq.calibration.left.body_T_camera = body_T_optical;
+    seq.calibration.right.body_T_camera = body_T_optical * left_T_right;
+  } else {
+    Eigen::Isometry3d body_T_left = body_T_optical;
+    body_T_left.linear() = body_T_optical.linear() * left_R.transpose();
+    seq.calibration.left = RectifiedCamera(left_info, RateHz(left));
+    seq.calibration.right = RectifiedCamera(right_info, RateHz(right));
+    seq.calibration.left.body_T_camera = body_T_left;
+    seq.calibration.right.body_T_camera = body_T_left * Eigen::Translation3d(baseline_m, 0.0, 0.0);
+    if (cameras[0].remap || cameras[1].remap) {
+      seq.notes.push_back("the '" + left_info.distortion_model + "' / '" + right_info.distortion_model +
+                          "' distortion is rectified with CameraInfo's P as image_proc does, not by SSTA's "
+                          "rectification: rectification.crop_to_common_area does not apply");
+    }
+  }
   std::string error;
   if (!seq.calibration.IsValid(&error)) throw Error(path + ": " + chosen.left_info + ", " + chosen.right_info + ": " + error);
 
@@ -776,8 +867,9 @@ Sequence Sequence::OpenBag(const std::string& path, const BagTopics& topics) {
   return Sequence(internal::ReadBagSequence(bag, topics, nullptr));
 }
 
-std::string DescribeBag(const std::string& path, const BagTopics& topics) {
+BagDescription DescribeBag(const std::string& path, const BagTopics& topics) {
   std::shared_ptr<const internal::BagReader> bag = internal::OpenBag(path);
+  BagDescription description;
   std::ostringstream out;
   out << internal::DescribeTopics(*bag);
   internal::ChosenTopics chosen;
@@ -789,19 +881,24 @@ std::string DescribeBag(const std::string& path, const BagTopics& topics) {
         << "  right  " << chosen.right << " (calibration " << chosen.right_info << ")\n"
         << "  imu    " << (chosen.imu.empty() ? "none" : chosen.imu) << "\n"
         << "  poses  " << (seq.pose_path().empty() ? "none" : seq.pose_path()) << "\n"
-        << "  rectified camera: " << c.left.width << "x" << c.left.height << " px, f " << c.left.fu << " px, baseline "
-        << c.LeftTRight().translation().norm() << " m\n"
+        << "  camera: " << c.left.width << "x" << c.left.height << " px, f " << c.left.fu << " px, baseline "
+        << c.LeftTRight().translation().norm() << " m, "
+        << (c.IsRectified() ? "rectified" : "raw (rectified on read)") << "\n"
         << "  frames: " << seq.frames().size() << " paired, " << seq.skipped().size() << " skipped";
     if (!seq.frames().empty()) {
       out << ", " << 1e-9 * static_cast<double>(seq.frames().back().timestamp_ns - seq.frames().front().timestamp_ns)
           << " s";
     }
-    out << "\n";
+    out << "\n" << DescribeSkipped(seq.skipped());
     for (const auto& note : seq.notes()) out << "  note: " << note << "\n";
+    for (const auto& warning : seq.warnings()) out << "  warning: " << warning << "\n";
+    if (seq.frames().empty()) description.problem = path + ": no left and right images pair up: no frame to use";
   } catch (const Error& e) {
-    out << "not usable as a stereo sequence: " << e.what() << "\n";
+    description.problem = e.what();
   }
-  return out.str();
+  if (!description.problem.empty()) out << "not usable as a stereo sequence: " << description.problem << "\n";
+  description.text = out.str();
+  return description;
 }
 
 }  // namespace ssta

@@ -251,6 +251,7 @@ class McapBag : public BagReader {
   const std::vector<BagConnection>& connections() const override { return connections_; }
   std::vector<BagMessageRef> List(const std::vector<int>& connections) const override;
   std::vector<std::uint8_t> Read(const BagMessageRef& ref) const override;
+  std::string Truncation() const override { return truncation_; }
 
  private:
   std::string Where(const char* record, std::uint64_t offset) const {
@@ -289,6 +290,7 @@ class McapBag : public BagReader {
   bool indexed_ = false;
   std::vector<IndexedChunk> chunks_;
   std::vector<BagMessageRef> scanned_;  ///< `connection` holds the channel id until ResolveConnections
+  std::string truncation_;              ///< BagReader::Truncation
 
   mutable std::mutex mutex_;
   mutable std::deque<std::pair<std::uint64_t, std::shared_ptr<const std::vector<std::uint8_t>>>> cache_;
@@ -436,6 +438,7 @@ void McapBag::ScanData(std::uint64_t begin, std::uint64_t end, ScanEnd scan_end)
   const bool may_be_cut = scan_end == ScanEnd::kMayBeCut;
   std::uint64_t pos = begin;
   bool cut = false;
+  std::string last_record;  // the record the file ends in or after
   while (pos < end) {
     if (may_be_cut && IsCutAt(pos, end)) {
       cut = true;
@@ -443,6 +446,8 @@ void McapBag::ScanData(std::uint64_t begin, std::uint64_t end, ScanEnd scan_end)
     }
     const RecordHeader h = HeaderAt(pos, end);
     pos = h.end();
+    last_record = RecordName(h.opcode);
+    // The data section ends here: every message is in the file, whatever follows it.
     if (h.opcode == kDataEnd || h.opcode == kFooter) return;
     if (h.opcode == kSchema || h.opcode == kChannel) {
       const std::vector<std::uint8_t> content = Content(h);
@@ -470,10 +475,17 @@ void McapBag::ScanData(std::uint64_t begin, std::uint64_t end, ScanEnd scan_end)
       scanned_.insert(scanned_.end(), records.messages.begin(), records.messages.end());
     }
   }
-  if (may_be_cut && scanned_.empty()) {
-    throw Error(path_ + ": cut off at offset " + std::to_string(pos) +
-                (cut ? " inside a record" : "") + " (the recording did not finish) before any complete message");
-  }
+  if (!may_be_cut) return;
+  // The file stops before its Data End record: the recording did not finish.
+  std::string what = cut ? "the file ends inside a " + std::string(end - pos >= 1 ? RecordName(Bytes(pos, 1)[0]) : "record") +
+                               " record at offset " + std::to_string(pos)
+                         : "the file ends after a " + (last_record.empty() ? std::string("Header") : last_record) +
+                               " record at offset " + std::to_string(pos);
+  what += ", before the Data End record, the summary and the footer (the recording did not finish)";
+  std::int64_t last = -1;
+  for (const BagMessageRef& ref : scanned_) last = std::max(last, ref.log_time_ns);
+  truncation_ = TruncationText(path_, what, last);
+  if (scanned_.empty()) throw Error(truncation_);
 }
 
 bool McapBag::IsCutAt(std::uint64_t pos, std::uint64_t end) const {

@@ -2,6 +2,8 @@
 // and lz4 compression, the connection and chunk indexes); ros_messages.cpp decodes the bytes.
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 
@@ -14,6 +16,48 @@
 
 namespace ssta::internal {
 namespace {
+
+/// The bag header record's index_pos: where the index that rosbag reads at open starts (0 while
+/// the recorder has not closed the bag). -1 when the file does not start as a bag 2.0 does.
+std::int64_t IndexPosition(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string magic(13, '\0');
+  if (!in.read(&magic[0], 13) || magic != "#ROSBAG V2.0\n") return -1;
+  const auto u32 = [&in]() -> std::int64_t {
+    unsigned char b[4];
+    if (!in.read(reinterpret_cast<char*>(b), 4)) return -1;
+    return b[0] | (b[1] << 8) | (b[2] << 16) | (static_cast<std::int64_t>(b[3]) << 24);
+  };
+  std::int64_t header_left = u32();
+  while (header_left > 4) {
+    const std::int64_t field_bytes = u32();
+    if (field_bytes < 0 || field_bytes > header_left - 4) return -1;
+    std::string field(static_cast<std::size_t>(field_bytes), '\0');
+    if (!in.read(&field[0], field_bytes)) return -1;
+    header_left -= 4 + field_bytes;
+    if (field.rfind("index_pos=", 0) == 0 && field.size() == 18) {
+      std::uint64_t v = 0;
+      for (int i = 7; i >= 0; --i) v = (v << 8) | static_cast<unsigned char>(field[10 + static_cast<std::size_t>(i)]);
+      return static_cast<std::int64_t>(v);
+    }
+  }
+  return -1;
+}
+
+/// The error for a bag rosbag cannot open: a truncated one is said to be, with the way to
+/// recover it.
+Error OpenError(const std::string& path, const std::string& rosbag_says) {
+  std::error_code ec;
+  const auto size = static_cast<std::int64_t>(std::filesystem::file_size(path, ec));
+  const std::int64_t index = IndexPosition(path);
+  const bool cut = !ec && (index == 0 || index >= size || rosbag_says.find("wanted") != std::string::npos);
+  if (!cut) return Error(path + ": not a readable ROS 1 bag (" + rosbag_says + ")");
+  const std::string where = index == 0 ? "before the recorder closed it, so it has no index"
+                                       : "at byte " + std::to_string(size) + ", before the end of its index" +
+                                             (index > 0 ? " (which starts at byte " + std::to_string(index) + ")" : "");
+  return Error(path + ": truncated: the file ends " + where + " (rosbag: " + rosbag_says +
+               "); `rosbag reindex " + path + "` recovers its complete messages (keeping the original as .orig.bag)");
+}
 
 class Ros1Bag final : public BagReader {
  public:
@@ -31,7 +75,7 @@ class Ros1Bag final : public BagReader {
         }
       }
     } catch (const rosbag::BagException& e) {
-      throw Error(path + ": not a readable ROS 1 bag (" + e.what() + ")");
+      throw OpenError(path, e.what());
     }
   }
 

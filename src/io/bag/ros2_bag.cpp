@@ -30,25 +30,30 @@ enum class Storage { kMcap, kSqlite3 };
 /// connections merged by (topic, type, encoding), their messages listed in one time order.
 class Ros2Bag : public BagReader {
  public:
-  Ros2Bag(std::string path, Storage storage, std::vector<std::unique_ptr<BagReader>> files);
+  /// `metadata_count`: the messages metadata.yaml says the files hold (0: not said).
+  Ros2Bag(std::string path, Storage storage, std::vector<std::unique_ptr<BagReader>> files,
+          std::uint64_t metadata_count = 0);
 
   const std::string& path() const override { return path_; }
   std::string format() const override { return storage_ == Storage::kMcap ? "ros2 mcap" : "ros2 sqlite3"; }
   const std::vector<BagConnection>& connections() const override { return connections_; }
   std::vector<BagMessageRef> List(const std::vector<int>& connections) const override;
   std::vector<std::uint8_t> Read(const BagMessageRef& ref) const override;
+  std::string Truncation() const override;
 
  private:
   std::string path_;
   Storage storage_;
+  std::uint64_t metadata_count_ = 0;
   std::vector<std::unique_ptr<BagReader>> files_;
   std::vector<BagConnection> connections_;
   /// [file][merged connection] -> the file's own connection, or -1 where it has none.
   std::vector<std::vector<int>> local_connection_;
 };
 
-Ros2Bag::Ros2Bag(std::string path, Storage storage, std::vector<std::unique_ptr<BagReader>> files)
-    : path_(std::move(path)), storage_(storage), files_(std::move(files)) {
+Ros2Bag::Ros2Bag(std::string path, Storage storage, std::vector<std::unique_ptr<BagReader>> files,
+                 std::uint64_t metadata_count)
+    : path_(std::move(path)), storage_(storage), metadata_count_(metadata_count), files_(std::move(files)) {
   std::map<std::tuple<std::string, std::string, std::string>, int> merged;
   std::vector<std::vector<int>> to_merged(files_.size());
   for (std::size_t f = 0; f < files_.size(); ++f) {
@@ -110,6 +115,23 @@ std::vector<std::uint8_t> Ros2Bag::Read(const BagMessageRef& ref) const {
   local.connection = local_connection_[f][static_cast<std::size_t>(ref.connection)];
   SSTA_CHECK(local.connection >= 0, "BagMessageRef of another bag");
   return files_[f]->Read(local);
+}
+
+std::string Ros2Bag::Truncation() const {
+  for (const auto& file : files_) {
+    if (std::string cut = file->Truncation(); !cut.empty()) return cut;
+  }
+  if (metadata_count_ == 0) return "";
+  // A file can be whole and yet hold fewer messages than the recorder wrote (a split file cut
+  // at a record boundary, a database whose last transactions were lost).
+  std::vector<int> all(connections_.size());
+  for (std::size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(i);
+  const std::vector<BagMessageRef> held = List(all);
+  if (held.size() >= metadata_count_) return "";
+  return TruncationText(path_,
+                        "metadata.yaml lists " + std::to_string(metadata_count_) + " messages, its files hold " +
+                            std::to_string(held.size()),
+                        held.empty() ? -1 : held.back().log_time_ns);
 }
 
 std::unique_ptr<BagReader> OpenStorageFile(const std::string& path, Storage storage) {
@@ -174,7 +196,9 @@ std::unique_ptr<BagReader> OpenBagFolder(const std::string& folder) {
   for (const std::string& relative : relative_paths) {
     files.push_back(OpenStorageFile(BagFilePath(folder, relative, info.Name("relative_file_paths")), storage));
   }
-  return std::make_unique<Ros2Bag>(folder, storage, std::move(files));
+  std::uint64_t message_count = 0;
+  info.Read("message_count", &message_count);
+  return std::make_unique<Ros2Bag>(folder, storage, std::move(files), message_count);
 }
 
 }  // namespace

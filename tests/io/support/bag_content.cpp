@@ -2,6 +2,9 @@
 
 #include <limits>
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
 #include <rosbag/bag.h>
 #include <nav_msgs/Odometry.h>
 #include <sensor_msgs/CameraInfo.h>
@@ -139,13 +142,54 @@ internal::RosCameraInfo RectifiedInfo(const CameraCalibration& c, double tx, con
   return info;
 }
 
+std::array<internal::RosCameraInfo, 2> RawInfos(const StereoCalibration& c, std::int64_t stamp) {
+  // R and P as ROS's camera_calibration computes them for a stereo pair: cv::stereoRectify with
+  // zero disparity at infinity, alpha 0.
+  const auto k = [](const CameraCalibration& cam) -> cv::Mat {
+    return (cv::Mat_<double>(3, 3) << cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1);
+  };
+  const auto d = [](const CameraCalibration& cam) -> cv::Mat {
+    return (cv::Mat_<double>(1, 5) << cam.distortion[0], cam.distortion[1], cam.distortion[2], cam.distortion[3], 0.0);
+  };
+  const Eigen::Isometry3d right_T_left = c.LeftTRight().inverse();
+  cv::Mat r, t, r1, r2, p1, p2, q;
+  cv::eigen2cv(Eigen::Matrix3d(right_T_left.rotation()), r);
+  cv::eigen2cv(Eigen::Vector3d(right_T_left.translation()), t);
+  const cv::Size size(c.left.width, c.left.height);
+  cv::stereoRectify(k(c.left), d(c.left), k(c.right), d(c.right), size, r, t, r1, r2, p1, p2, q,
+                    cv::CALIB_ZERO_DISPARITY, 0.0, size);
+  std::array<internal::RosCameraInfo, 2> out;
+  const CameraCalibration* cams[2] = {&c.left, &c.right};
+  const cv::Mat* rs[2] = {&r1, &r2};
+  const cv::Mat* ps[2] = {&p1, &p2};
+  for (int i = 0; i < 2; ++i) {
+    internal::RosCameraInfo& info = out[static_cast<std::size_t>(i)];
+    const CameraCalibration& cam = *cams[i];
+    info.header = {stamp, i == 0 ? kLeftFrame : kRightFrame};
+    info.width = static_cast<std::uint32_t>(cam.width);
+    info.height = static_cast<std::uint32_t>(cam.height);
+    info.distortion_model = "plumb_bob";
+    info.d = {cam.distortion[0], cam.distortion[1], cam.distortion[2], cam.distortion[3], 0.0};
+    info.k = {cam.fu, 0, cam.cu, 0, cam.fv, cam.cv, 0, 0, 1};
+    for (int j = 0; j < 9; ++j) info.r[static_cast<std::size_t>(j)] = rs[i]->at<double>(j / 3, j % 3);
+    for (int j = 0; j < 12; ++j) info.p[static_cast<std::size_t>(j)] = ps[i]->at<double>(j / 4, j % 4);
+  }
+  return out;
+}
+
 BagContent ContentFromSequence(const Sequence& asl) {
   BagContent out;
   const auto& calib = asl.calibration();
   const std::int64_t first = asl.frames().front().timestamp_ns;
-  const double baseline = calib.LeftTRight().translation().x();
-  out.left_info = RectifiedInfo(calib.left, 0.0, kLeftFrame, first);
-  out.right_info = RectifiedInfo(calib.right, -calib.right.fu * baseline, kRightFrame, first);
+  if (calib.IsRectified()) {
+    const double baseline = calib.LeftTRight().translation().x();
+    out.left_info = RectifiedInfo(calib.left, 0.0, kLeftFrame, first);
+    out.right_info = RectifiedInfo(calib.right, -calib.right.fu * baseline, kRightFrame, first);
+  } else {
+    const auto infos = RawInfos(calib, first);
+    out.left_info = infos[0];
+    out.right_info = infos[1];
+  }
   for (const StereoFrame& f : asl.frames()) {
     const StereoImages images = asl.ReadImages(f);
     out.left.push_back(Mono8(images.left, kLeftFrame, f.timestamp_ns));
@@ -214,11 +258,13 @@ void WriteRos1Bag(const BagContent& content, const std::string& path, Ros1Compre
   bag.close();
 }
 
-void WriteRos2Bag(const BagContent& content, const std::string& folder, const Ros2BagWriterOptions& options) {
+std::vector<McapChunkSpan> WriteRos2Bag(const BagContent& content, const std::string& folder,
+                                        const Ros2BagWriterOptions& options) {
   Ros2BagWriter writer(folder, options);
-  writer.AddTopic("/tf_static", "tf2_msgs/msg/TFMessage");
-  writer.AddTopic(kImu, "sensor_msgs/msg/Imu");
-  writer.AddTopic(kOdometry, "nav_msgs/msg/Odometry");
+  // The topics the content has messages on, as a recorder that subscribed to what was published.
+  if (!content.tf_static.empty()) writer.AddTopic("/tf_static", "tf2_msgs/msg/TFMessage");
+  if (!content.imu.empty()) writer.AddTopic(kImu, "sensor_msgs/msg/Imu");
+  if (!content.odometry.empty()) writer.AddTopic(kOdometry, "nav_msgs/msg/Odometry");
   writer.AddTopic(kLeftInfo, "sensor_msgs/msg/CameraInfo");
   writer.AddTopic(kRightInfo, "sensor_msgs/msg/CameraInfo");
   writer.AddTopic(kLeftImage, "sensor_msgs/msg/Image");
@@ -227,6 +273,7 @@ void WriteRos2Bag(const BagContent& content, const std::string& folder, const Ro
     writer.Write(topic, t, EncodeCdr(message));
   });
   writer.Close();
+  return writer.chunks();
 }
 
 }  // namespace ssta::testing

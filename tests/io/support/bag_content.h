@@ -4,6 +4,7 @@
 // with rosbag's own C++ API and the ROS message packages, or as a ROS 2 bag with the tests'
 // rosbag2 writer (independent writers for the readers in src/io/bag).
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -36,9 +37,14 @@ struct BagContent {
   std::vector<internal::RosTransform> tf_static;  ///< base_link -> left camera, base_link -> imu
 };
 
-/// A rectified ASL sequence as messages: mono8 images, CameraInfo with the ROS stereo convention
-/// (P[3] = -fx * baseline on the right), IMU, Odometry, the mounts on /tf_static.
+/// An ASL sequence as messages: mono8 images as the files hold them, CameraInfo with the ROS
+/// stereo convention (P[3] = -fx * baseline on the right; a raw pair's K, D, and R, P as ROS's
+/// camera_calibration computes them), IMU, Odometry, the mounts on /tf_static.
 BagContent ContentFromSequence(const Sequence& asl);
+
+/// The CameraInfo of both cameras of a raw (distorted, unrectified) pair: K, plumb_bob D, and
+/// R, P from cv::stereoRectify (zero disparity, alpha 0), as camera_calibration writes them.
+std::array<internal::RosCameraInfo, 2> RawInfos(const StereoCalibration& c, std::int64_t stamp);
 
 /// The CameraInfo of a rectified camera (D all zero, R identity, K = P's left 3x3).
 internal::RosCameraInfo RectifiedInfo(const CameraCalibration& c, double tx, const std::string& frame, std::int64_t stamp);
@@ -49,7 +55,9 @@ enum class Ros1Compression { kNone, kBz2, kLz4 };
 /// CameraInfo written with every image, as drivers do).
 void WriteRos1Bag(const BagContent& content, const std::string& path, Ros1Compression compression = Ros1Compression::kNone);
 
-/// Writes `content` as a ROS 2 bag folder (Ros2BagWriter, messages as CDR), in the same order.
-void WriteRos2Bag(const BagContent& content, const std::string& folder, const Ros2BagWriterOptions& options = {});
+/// Writes `content` as a ROS 2 bag folder (Ros2BagWriter, messages as CDR), in the same order;
+/// returns where the MCAP chunks landed (none for sqlite3).
+std::vector<McapChunkSpan> WriteRos2Bag(const BagContent& content, const std::string& folder,
+                                        const Ros2BagWriterOptions& options = {});
 
 }  // namespace ssta::testing

@@ -193,7 +193,7 @@ class McapFile : public Ros2BagWriter::StorageFile {
     const std::uint64_t chunk_offset = offset_;
     Put(Record(kChunk, c));
     spans_->push_back(McapChunkSpan{path_, chunk_offset, offset_ - chunk_offset, chunk_offset + 9 + records_field,
-                                    records.size(), chunk_messages_});
+                                    records.size(), chunk_messages_, static_cast<std::int64_t>(chunk_end_)});
 
     const std::uint64_t index_start = offset_;
     Bytes index_offsets;

@@ -38,6 +38,7 @@ struct McapChunkSpan {
   std::uint64_t records_offset = 0;  ///< of its (compressed) records field [bytes]
   std::uint64_t records_size = 0;    ///< of the (compressed) records field [bytes]
   std::size_t messages = 0;
+  std::int64_t last_log_time_ns = 0;  ///< the latest log time of its messages [ns]
 };
 
 /// Writes one rosbag2 bag. Topics are registered before their first message; every storage file
