@@ -81,10 +81,11 @@ void RegisterCalibrateMount(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "calibrate-mount", "Refine cam0's mount pitch and roll from the ground seen over a sequence (Ceres)");
   cmd->footer(
-      "The dominant ground plane of each frame is taken as parallel, on average, to the plane under\n"
-      "the wheels; the mount rotation that makes this true over all frames is estimated with its\n"
-      "1-sigma uncertainty. Yaw is not observable from the ground and is kept. Drive on flat or\n"
-      "uniformly sloped ground. Writes the refined cam0 sensor.yaml and the cam1 one that follows\n"
+      "The ground each frame sees where the vehicle later drives is taken as parallel to the plane\n"
+      "under the wheels there (from the poses); the mount rotation that makes this true over all\n"
+      "frames is estimated, frames weighed by their agreement, with a 1-sigma from the measured\n"
+      "scatter. Yaw is not observable from the ground and is kept. Drive a few metres straight on\n"
+      "at walking pace. Writes the refined cam0 sensor.yaml and the cam1 one that follows\n"
       "from the rig only when the estimate is determined; when there are too few frames, the result\n"
       "is not better determined than its prior, or the terrain is too rough for the model, it exits\n"
       "with status 2 and writes nothing but --report. See docs/mount_calibration.md.");
@@ -97,10 +98,12 @@ void RegisterCalibrateMount(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.frames.max_frames, "use at most N frames (0: all)");
   cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_option("--ground-reference", args->ground_reference,
+                  "path: the ground a later pose's body stands on is parallel to its wheel plane (needs "
+                  "poses and a drive over the ground seen; else body); "
                   "body: the ground is parallel to the plane under the wheels (body x-y; a z-up body); "
                   "gravity: the ground is level, its normal is up from the IMU-corrected pose "
-                  "(default: refinement.ground_reference in the config, body)")
-      ->check(CLI::IsMember({"body", "gravity"}));
+                  "(default: refinement.ground_reference in the config, path)")
+      ->check(CLI::IsMember({"path", "body", "gravity"}));
   cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON")
       ->check(OutputFile());
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");

@@ -62,25 +62,32 @@ struct GroundPointResidual {
   double inverse_sigma;
 };
 
-/// (x[first + i] - mean[i]) / sigma for the N components from `first` of an M-vector block.
+/// (x[first + i] - mean[i]) / sigma[i] for the N components from `first` of an M-vector block.
 template <int N, int M>
 struct GaussianPrior {
-  GaussianPrior(int first_component, const Eigen::Matrix<double, N, 1>& m, double sigma)
-      : first(first_component), mean(m), inverse_sigma(1.0 / sigma) {}
+  GaussianPrior(int first_component, const Eigen::Matrix<double, N, 1>& m, const Eigen::Matrix<double, N, 1>& sigma)
+      : first(first_component), mean(m), inverse_sigma(sigma.cwiseInverse()) {}
   template <typename T>
   bool operator()(const T* x, T* residual) const {
-    for (int i = 0; i < N; ++i) residual[i] = (x[first + i] - T(mean[i])) * T(inverse_sigma);
+    for (int i = 0; i < N; ++i) residual[i] = (x[first + i] - T(mean[i])) * T(inverse_sigma[i]);
     return true;
   }
   int first;
   Eigen::Matrix<double, N, 1> mean;
-  double inverse_sigma;
+  Eigen::Matrix<double, N, 1> inverse_sigma;
 };
 
-/// A Gaussian prior on components [first, first + N) of a block of size M.
+/// A Gaussian prior on components [first, first + N) of a block of size M, one sigma for each.
+template <int N, int M>
+ceres::CostFunction* MakePrior(int first, const Eigen::Matrix<double, N, 1>& mean,
+                               const Eigen::Matrix<double, N, 1>& sigma) {
+  return new ceres::AutoDiffCostFunction<GaussianPrior<N, M>, N, M>(new GaussianPrior<N, M>(first, mean, sigma));
+}
+
+/// The same with one sigma for every component.
 template <int N, int M>
 ceres::CostFunction* MakePrior(int first, const Eigen::Matrix<double, N, 1>& mean, double sigma) {
-  return new ceres::AutoDiffCostFunction<GaussianPrior<N, M>, N, M>(new GaussianPrior<N, M>(first, mean, sigma));
+  return MakePrior<N, M>(first, mean, Eigen::Matrix<double, N, 1>::Constant(sigma));
 }
 
 /// Sigma of a ground point about its plane [m]: point_sigma_m, growing with the range beyond
@@ -90,7 +97,12 @@ double PointSigma(const Eigen::Vector3d& p_camera, const RefinementOptions& opti
 }
 
 Eigen::Vector3d ReferenceNormal(const GroundEvidence& frame, GroundReference reference) {
-  return reference == GroundReference::kBody ? Eigen::Vector3d::UnitZ() : frame.up_body.normalized();
+  switch (reference) {
+    case GroundReference::kBody: return Eigen::Vector3d::UnitZ();
+    case GroundReference::kGravity: return frame.up_body.normalized();
+    case GroundReference::kPath: return frame.path_up_body.normalized();
+  }
+  return Eigen::Vector3d::UnitZ();
 }
 
 /// Two unit axes perpendicular to the unit vector `up`, the rotations about which tilt it: for
@@ -150,29 +162,43 @@ Eigen::Matrix<double, 3, 2> CorrectionAxes(const std::deque<GroundEvidence>& win
   return TiltAxes(mean_up.normalized());
 }
 
+/// What one solve assumes about the noise: the 1-sigma of the frames' tilt prior [rad], whether
+/// that prior sits under a Cauchy loss (frames weighed by their agreement), and the factor on
+/// every point's sigma.
+struct NoiseModel {
+  Eigen::Vector2d tilt_sigma_rad = Eigen::Vector2d::Zero();  ///< about the frame's two tilt axes
+  bool robust_frames = false;
+  double point_sigma_scale = 1.0;
+};
+
 /// One frame's part of the problem: a residual per ground point under the shared `loss`, the
 /// priors on its plane `block` (tilt, and height when body_height_m is known), and the block in
-/// the Schur elimination group. The plane starts through the points' mean along the reference
-/// normal.
+/// the Schur elimination group. The plane keeps its values (a warm start) unless `initialize`,
+/// which puts it through the points' mean along the reference normal.
 void AddFrame(const GroundEvidence& frame, const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera,
-              ceres::LossFunction* loss, FramePlane* block, MountProblem* mount) {
+              const NoiseModel& noise, bool initialize, ceres::LossFunction* loss, FramePlane* block,
+              MountProblem* mount) {
   const Eigen::Matrix3d body_R_camera = body_T_camera.linear();
   const Eigen::Vector3d body_t_camera = body_T_camera.translation();
   ceres::Problem& problem = mount->problem;
   const Eigen::Vector3d n_ref = ReferenceNormal(frame, options.ground_reference);
   const Eigen::Matrix<double, 3, 2> tilt_axes = TiltAxes(n_ref);
-  // Start each plane through the points' mean along the reference normal.
-  double mean = 0.0;
-  for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
-  block->offset() = -mean / static_cast<double>(frame.camera_points.size());
-  for (const Eigen::Vector3d& p : frame.camera_points) {
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
-                                 new GroundPointResidual(body_R_camera * p, body_t_camera, mount->correction_axes,
-                                                         n_ref, tilt_axes, PointSigma(p, options))),
-                             loss, mount->correction, mount->height, block->values);
+  if (initialize) {
+    double mean = 0.0;
+    for (const auto& p : frame.camera_points) mean += n_ref.dot(body_R_camera * p + body_t_camera);
+    block->offset() = -mean / static_cast<double>(frame.camera_points.size());
   }
-  problem.AddResidualBlock(MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), DegToRad(options.terrain_tilt_sigma_deg)),
-                           nullptr, block->values);
+  for (const Eigen::Vector3d& p : frame.camera_points) {
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<GroundPointResidual, 1, 2, 1, 3>(
+            new GroundPointResidual(body_R_camera * p, body_t_camera, mount->correction_axes, n_ref, tilt_axes,
+                                    noise.point_sigma_scale * PointSigma(p, options))),
+        loss, mount->correction, mount->height, block->values);
+  }
+  // Each frame its own loss (Problem takes ownership of each).
+  ceres::LossFunction* frame_loss = noise.robust_frames ? new ceres::CauchyLoss(options.frame_loss_scale) : nullptr;
+  problem.AddResidualBlock(MakePrior<2, 3>(0, Eigen::Vector2d::Zero(), noise.tilt_sigma_rad), frame_loss,
+                           block->values);
   if (options.body_height_m >= 0.0) {
     problem.AddResidualBlock(MakePrior<1, 3>(2, Eigen::Matrix<double, 1, 1>(options.body_height_m),
                                              options.terrain_height_sigma_m),
@@ -183,16 +209,24 @@ void AddFrame(const GroundEvidence& frame, const RefinementOptions& options, con
 
 /// The whole problem: every frame's points and plane, then the priors on the correction and the
 /// height correction (held constant unless estimate_height). Frame planes are eliminated first.
+/// With `start`, the unknowns start from its solution (a warm start); otherwise from zero.
 void BuildProblem(const std::deque<GroundEvidence>& window, const RefinementOptions& options,
-                  const Eigen::Isometry3d& body_T_camera, MountProblem* mount) {
+                  const Eigen::Isometry3d& body_T_camera, const NoiseModel& noise, const MountProblem* start,
+                  MountProblem* mount) {
   mount->correction_axes = CorrectionAxes(window, options.ground_reference);
   mount->blocks.resize(window.size());
+  if (start) {
+    mount->blocks = start->blocks;
+    mount->correction[0] = start->correction[0];
+    mount->correction[1] = start->correction[1];
+    mount->height[0] = start->height[0];
+  }
   // One loss shared by every point residual; the problem deletes it once.
   ceres::LossFunction* loss = options.robust_loss == RobustLoss::kHuber
                                   ? static_cast<ceres::LossFunction*>(new ceres::HuberLoss(options.loss_scale))
                                   : new ceres::CauchyLoss(options.loss_scale);
   for (std::size_t i = 0; i < window.size(); ++i) {
-    AddFrame(window[i], options, body_T_camera, loss, &mount->blocks[i], mount);
+    AddFrame(window[i], options, body_T_camera, noise, start == nullptr, loss, &mount->blocks[i], mount);
   }
   ceres::Problem& problem = mount->problem;
   problem.AddResidualBlock(MakePrior<2, 2>(0, Eigen::Vector2d::Zero(), DegToRad(options.prior_sigma_deg)), nullptr,
@@ -218,14 +252,21 @@ ceres::Solver::Summary RunSolver(const RefinementOptions& options, MountProblem*
 
 /// Per-frame planes and robust statistics at the solution [m], into `result` (whose
 /// body_R_correction is the solved one): each point's distance to its frame's plane, the
-/// outliers beyond the loss scale, each frame's tilt and height, their RMS and median.
+/// outliers beyond the loss scale, each frame's tilt, height and weight under `noise`, their RMS
+/// and median, the frames' tilt scatter and the points' sigma scale.
 void MeasureFit(const std::deque<GroundEvidence>& window, const RefinementOptions& options,
-                const Eigen::Isometry3d& body_T_camera, const MountProblem& mount, MountRefinementResult* result) {
+                const Eigen::Isometry3d& body_T_camera, const MountProblem& mount, const NoiseModel& noise,
+                MountRefinementResult* result) {
   const Eigen::Matrix3d body_R_camera = body_T_camera.linear();
   const Eigen::Vector3d body_t_camera = body_T_camera.translation();
-  std::vector<double> distances;
+  std::vector<double> distances, normalized;
   distances.reserve(result->points_used);
+  normalized.reserve(result->points_used);
   double sum_sq = 0.0;
+  result->frames.clear();
+  result->outlier_points = 0;
+  result->frames_downweighted = 0;
+  result->ground_tilt_rms_deg = 0.0;
   for (std::size_t i = 0; i < window.size(); ++i) {
     const GroundEvidence& frame = window[i];
     const FramePlane& block = mount.blocks[i];
@@ -236,22 +277,60 @@ void MeasureFit(const std::deque<GroundEvidence>& window, const RefinementOption
           result->body_R_correction * (body_R_camera * p) + body_t_camera + Eigen::Vector3d(0, 0, mount.height[0]);
       const double d = std::abs(n.dot(p_body) + block.offset());
       distances.push_back(d);
+      normalized.push_back(d / PointSigma(p, options));
       sum_sq += d * d;
-      if (d > options.loss_scale * PointSigma(p, options)) ++result->outlier_points;
+      if (d > options.loss_scale * noise.point_sigma_scale * PointSigma(p, options)) ++result->outlier_points;
     }
     FrameGroundEstimate estimate;
     estimate.timestamp_ns = frame.timestamp_ns;
     estimate.points = static_cast<int>(frame.camera_points.size());
     estimate.tilt_deg = RadToDeg(std::acos(std::clamp(n.dot(n_ref), -1.0, 1.0)));
+    if (noise.robust_frames) {
+      // Ceres' CauchyLoss(a) on s = |tilt / sigma|^2: rho'(s) = 1 / (1 + s / a^2).
+      const double a = options.frame_loss_scale;
+      const Eigen::Vector2d s(block.tilt()[0] / noise.tilt_sigma_rad[0], block.tilt()[1] / noise.tilt_sigma_rad[1]);
+      estimate.weight = 1.0 / (1.0 + s.squaredNorm() / (a * a));
+    }
+    if (estimate.weight < 0.5) ++result->frames_downweighted;
     result->ground_tilt_rms_deg += estimate.tilt_deg * estimate.tilt_deg;
     estimate.height_m = block.offset();
     result->frames.push_back(estimate);
   }
   result->ground_tilt_rms_deg = std::sqrt(result->ground_tilt_rms_deg / static_cast<double>(window.size()));
+  // Each axis's scatter from its median |tilt| (|N(0, s^2)| has median 0.6745 s): the median
+  // keeps the frames on a slope of their own out of it.
+  for (int k = 0; k < 2; ++k) {
+    std::vector<double> tilts;
+    for (const FramePlane& block : mount.blocks) tilts.push_back(std::abs(block.tilt()[k]));
+    result->tilt_scatter_axes_deg[k] =
+        std::max(options.min_tilt_scatter_deg, RadToDeg(Median(tilts) / 0.6744897501960817));
+  }
+  result->tilt_scatter_deg = result->tilt_scatter_axes_deg.maxCoeff();
   if (!distances.empty()) {
     result->residual_rms_m = std::sqrt(sum_sq / static_cast<double>(distances.size()));
     result->residual_median_m = Median(distances);
+    // |r| / sigma ~ |N(0, s^2)|: median 0.6745 s.
+    result->point_sigma_scale = std::max(1e-3, Median(normalized) / 0.6744897501960817);
   }
+}
+
+/// Lag-1 correlation of the frames' tilts in window order (both axes pooled), clamped to
+/// [0, max_rho]: consecutive frames see overlapping ground, so their tilts are not independent.
+double TiltCorrelation(const MountProblem& mount, const MountRefinementResult& result) {
+  constexpr double kMaxRho = 0.9;
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < mount.blocks.size(); ++i) {
+    const double w = result.frames[i].weight;
+    for (int k = 0; k < 2; ++k) {
+      const double a = mount.blocks[i].tilt()[k];
+      den += w * a * a;
+      if (i + 1 < mount.blocks.size()) {
+        num += std::sqrt(w * result.frames[i + 1].weight) * a * mount.blocks[i + 1].tilt()[k];
+      }
+    }
+  }
+  if (den <= 0.0) return 0.0;
+  return std::clamp(num / den, 0.0, kMaxRho);
 }
 
 /// Posterior 1-sigma of the correction (and of the height correction when estimated) into
@@ -267,12 +346,16 @@ bool ComputeSigmas(const RefinementOptions& options, MountProblem* mount, MountR
   if (!covariance.Compute(wanted, &mount->problem)) return false;
   double c[4];
   covariance.GetCovarianceBlock(correction, correction, c);
-  result->roll_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[0])));
-  result->pitch_sigma_deg = RadToDeg(std::sqrt(std::max(0.0, c[3])));
+  const double f = result->sigma_inflation;
+  auto total = [&](double variance_rad2) {
+    return std::hypot(f * RadToDeg(std::sqrt(std::max(0.0, variance_rad2))), options.systematic_sigma_deg);
+  };
+  result->roll_sigma_deg = total(c[0]);
+  result->pitch_sigma_deg = total(c[3]);
   if (options.estimate_height) {
     double h = 0.0;
     covariance.GetCovarianceBlock(height, height, &h);
-    result->height_sigma_m = std::sqrt(std::max(0.0, h));
+    result->height_sigma_m = f * std::sqrt(std::max(0.0, h));
   }
   return true;
 }
@@ -295,13 +378,11 @@ Verdict JudgeSolution(const RefinementOptions& options, const MountRefinementRes
       << " deg (applied only below " << limit_deg << " deg); the configured mount is kept";
     return {RefinementStatus::kNotBetterThanPrior, m.str()};
   }
-  // Two tilt angles per frame, each N(0, sigma^2) under the model: RMS tilt ~ sqrt(2) sigma.
-  const double tilt_limit_deg = std::sqrt(2.0) * options.terrain_tilt_sigma_deg;
-  if (result.ground_tilt_rms_deg > tilt_limit_deg) {
+  if (result.tilt_scatter_deg > options.terrain_tilt_sigma_deg) {
     std::ostringstream m;
-    m << std::setprecision(3) << "the ground is not flat enough: the frames' ground planes tilt by "
-      << result.ground_tilt_rms_deg << " deg RMS about the reference, more than terrain_tilt_sigma_deg allows ("
-      << tilt_limit_deg << " deg); the configured mount is kept (drive on flatter ground)";
+    m << std::setprecision(3) << "the ground is not flat enough: the frames' ground planes scatter by "
+      << result.tilt_scatter_deg << " deg (1 sigma, the larger axis) about the reference, more than terrain_tilt_sigma_deg ("
+      << options.terrain_tilt_sigma_deg << " deg); the configured mount is kept (drive on flatter ground)";
     return {RefinementStatus::kTerrainTooRough, m.str()};
   }
   return {RefinementStatus::kDetermined,
@@ -351,17 +432,48 @@ MountRefinementResult MountRefiner::Solve() const {
     return result;
   }
 
-  MountProblem mount;
-  BuildProblem(window_, options_, body_T_camera_, &mount);
-  const ceres::Solver::Summary summary = RunSolver(options_, &mount);
+  result.reference = GroundReferenceName(options_.ground_reference);
+  if (options_.ground_reference == GroundReference::kPath) {
+    const bool any_path = std::any_of(window_.begin(), window_.end(), [](const GroundEvidence& f) {
+      return !f.path_up_body.isApprox(Eigen::Vector3d::UnitZ());
+    });
+    if (!any_path) result.reference = "body";
+  }
+
+  // First solve: the configured tilt prior, the assumed point sigmas. Then solves whose noise
+  // is what the last one measured: the frames' tilt scatter as their prior, under a Cauchy loss
+  // that weighs each frame by its agreement with the others, and the points' actual scatter.
+  constexpr int kReweightings = 3;
+  NoiseModel noise;
+  noise.tilt_sigma_rad = Eigen::Vector2d::Constant(DegToRad(options_.terrain_tilt_sigma_deg));
+  auto mount = std::make_unique<MountProblem>();
+  BuildProblem(window_, options_, body_T_camera_, noise, nullptr, mount.get());
+  ceres::Solver::Summary summary = RunSolver(options_, mount.get());
   result.initial_cost = summary.initial_cost;
+  int iterations = static_cast<int>(summary.iterations.size());
+  auto take = [&](const MountProblem& m) {
+    result.roll_correction_deg = RadToDeg(m.correction[0]);
+    result.pitch_correction_deg = RadToDeg(m.correction[1]);
+    result.height_correction_m = options_.estimate_height ? m.height[0] : 0.0;
+    result.body_R_correction = TiltRotation(m.correction_axes, m.correction[0], m.correction[1]);
+    MeasureFit(window_, options_, body_T_camera_, m, noise, &result);
+  };
+  take(*mount);
+  for (int pass = 0; pass < kReweightings && summary.IsSolutionUsable(); ++pass) {
+    noise.tilt_sigma_rad = DegToRad(1.0) * result.tilt_scatter_axes_deg;
+    noise.robust_frames = true;
+    noise.point_sigma_scale = result.point_sigma_scale;
+    auto next = std::make_unique<MountProblem>();
+    BuildProblem(window_, options_, body_T_camera_, noise, mount.get(), next.get());
+    summary = RunSolver(options_, next.get());
+    iterations += static_cast<int>(summary.iterations.size());
+    mount = std::move(next);
+    take(*mount);
+  }
   result.final_cost = summary.final_cost;
-  result.iterations = static_cast<int>(summary.iterations.size());
-  result.roll_correction_deg = RadToDeg(mount.correction[0]);
-  result.pitch_correction_deg = RadToDeg(mount.correction[1]);
-  result.height_correction_m = options_.estimate_height ? mount.height[0] : 0.0;
-  result.body_R_correction = TiltRotation(mount.correction_axes, mount.correction[0], mount.correction[1]);
-  MeasureFit(window_, options_, body_T_camera_, mount, &result);
+  result.iterations = iterations;
+  const double rho = TiltCorrelation(*mount, result);
+  result.sigma_inflation = std::sqrt((1.0 + rho) / (1.0 - rho));
 
   auto finish = [&](RefinementStatus status, const std::string& message) {
     result.status = status;
@@ -370,7 +482,7 @@ MountRefinementResult MountRefiner::Solve() const {
     return result;
   };
   if (!summary.IsSolutionUsable()) return finish(RefinementStatus::kFailed, "solver failed: " + summary.message);
-  if (!ComputeSigmas(options_, &mount, &result)) {
+  if (!ComputeSigmas(options_, mount.get(), &result)) {
     return finish(RefinementStatus::kFailed, "the covariance of the correction could not be computed (rank deficient)");
   }
   const Verdict verdict = JudgeSolution(options_, result);
@@ -383,6 +495,43 @@ MountRefinementResult MountRefiner::Solve() const {
   return finish(verdict.status, verdict.message);
 }
 
+MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera,
+                                     const std::vector<std::optional<Eigen::Isometry3d>>& world_T_body,
+                                     const std::vector<GroundEvidence>& frames, int* frames_on_path) {
+  SSTA_CHECK(frames.size() == world_T_body.size(), "SolveAlongPath: one pose per frame");
+  RefinementOptions path_options = options;
+  path_options.ground_reference = GroundReference::kPath;
+  constexpr int kRounds = 2;
+  Eigen::Isometry3d through = body_T_camera;  // the mount the points are chosen through
+  MountRefinementResult result;
+  for (int round = 0; round < kRounds; ++round) {
+    MountRefiner refiner(path_options, body_T_camera);
+    int on_path = 0;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (!frames[i].usable) continue;
+      const DrivenOverGround driven(world_T_body, i, through, options);
+      std::vector<Eigen::Vector3d> kept;
+      for (const Eigen::Vector3d& p : frames[i].camera_points) {
+        if (driven.Contains(p)) kept.push_back(p);
+      }
+      if (static_cast<int>(kept.size()) < options.min_points_per_frame) continue;
+      GroundEvidence e = frames[i];
+      e.camera_points.clear();
+      const std::size_t n = std::min<std::size_t>(kept.size(), static_cast<std::size_t>(options.points_per_frame));
+      const double step = static_cast<double>(kept.size()) / static_cast<double>(n);
+      for (std::size_t k = 0; k < n; ++k) e.camera_points.push_back(kept[static_cast<std::size_t>(k * step)]);
+      e.path_up_body = driven.MeanUp(e.camera_points);
+      refiner.AddFrame(std::move(e));
+      ++on_path;
+    }
+    if (frames_on_path) *frames_on_path = on_path;
+    result = refiner.Solve();
+    if (result.status == RefinementStatus::kTooFewFrames || result.status == RefinementStatus::kFailed) break;
+    through.linear() = result.body_R_correction * body_T_camera.linear();
+  }
+  return result;
+}
+
 std::string MountRefinementResult::BriefReport() const {
   std::ostringstream r;
   r << std::fixed << std::setprecision(3);
@@ -392,9 +541,11 @@ std::string MountRefinementResult::BriefReport() const {
     r << "  pitch correction " << pitch_correction_deg << " +- " << pitch_sigma_deg << " deg, roll correction "
       << roll_correction_deg << " +- " << roll_sigma_deg << " deg (1 sigma; prior " << prior_sigma_deg << " deg)";
     if (std::isfinite(height_sigma_m)) r << ", height " << height_correction_m << " +- " << height_sigma_m << " m";
-    r << "\n  evidence: " << frames_used << " frames, " << points_used << " ground points; residual rms "
-      << residual_rms_m << " m, median " << residual_median_m << " m, " << outlier_points
-      << " beyond the loss scale; ground tilt rms " << ground_tilt_rms_deg << " deg\n";
+    r << "\n  evidence: " << frames_used << " frames, " << points_used << " ground points (reference " << reference
+      << "); residual rms " << residual_rms_m << " m, median " << residual_median_m << " m, " << outlier_points
+      << " beyond the loss scale (point sigma x " << point_sigma_scale << ")\n  ground tilt: rms "
+      << ground_tilt_rms_deg << " deg, scatter " << tilt_scatter_deg << " deg, " << frames_downweighted
+      << " frames down-weighted; sigma x " << sigma_inflation << " for correlated frames\n";
     r << "  solver: cost " << initial_cost << " -> " << final_cost << " in " << iterations << " iterations, "
       << solve_ms << " ms\n";
   } else {
@@ -443,14 +594,22 @@ void WriteRefinementJson(const MountRefinementResult& r, JsonWriter* json) {
       {"roll_sigma_deg", r.roll_sigma_deg},             {"height_sigma_m", r.height_sigma_m},
       {"prior_sigma_deg", r.prior_sigma_deg},           {"residual_rms_m", r.residual_rms_m},
       {"residual_median_m", r.residual_median_m},       {"ground_tilt_rms_deg", r.ground_tilt_rms_deg},
+      {"tilt_scatter_deg", r.tilt_scatter_deg},
+      {"tilt_scatter_roll_deg", r.tilt_scatter_axes_deg[0]}, {"tilt_scatter_pitch_deg", r.tilt_scatter_axes_deg[1]},
+      {"point_sigma_scale", r.point_sigma_scale},
+      {"sigma_inflation", r.sigma_inflation},
       {"initial_cost", r.initial_cost},
       {"final_cost", r.final_cost},                     {"solve_ms", r.solve_ms}};
   for (const auto& [key, value] : numbers) {
     json->Key(key);
     json->Number(value);
   }
+  json->Key("reference");
+  json->String(r.reference);
   json->Key("frames_used");
   json->Integer(r.frames_used);
+  json->Key("frames_downweighted");
+  json->Integer(r.frames_downweighted);
   json->Key("points_used");
   json->Integer(r.points_used);
   json->Key("outlier_points");
@@ -473,6 +632,8 @@ void WriteRefinementJson(const MountRefinementResult& r, JsonWriter* json) {
     json->Number(f.tilt_deg);
     json->Key("height_m");
     json->Number(f.height_m);
+    json->Key("weight");
+    json->Number(f.weight);
     json->EndObject();
   }
   json->EndArray();

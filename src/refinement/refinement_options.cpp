@@ -8,11 +8,17 @@ namespace ssta {
 GroundReference ParseGroundReference(const std::string& name) {
   if (name == "body") return GroundReference::kBody;
   if (name == "gravity") return GroundReference::kGravity;
-  throw Error("refinement.ground_reference: '" + name + "' is not one of body, gravity");
+  if (name == "path") return GroundReference::kPath;
+  throw Error("refinement.ground_reference: '" + name + "' is not one of path, body, gravity");
 }
 
 std::string GroundReferenceName(GroundReference reference) {
-  return reference == GroundReference::kBody ? "body" : "gravity";
+  switch (reference) {
+    case GroundReference::kBody: return "body";
+    case GroundReference::kGravity: return "gravity";
+    case GroundReference::kPath: return "path";
+  }
+  return "body";
 }
 
 RobustLoss ParseRobustLoss(const std::string& name) {
@@ -42,12 +48,24 @@ const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
     f.push_back(Choice<O>("robust_loss", &O::robust_loss, {RobustLoss::kHuber, RobustLoss::kCauchy}, RobustLossName,
                           "huber | cauchy"));
     f.push_back(Real<O>("loss_scale", &O::loss_scale, Above(0), "sigmas", "robust loss scale"));
-    f.push_back(Choice<O>("ground_reference", &O::ground_reference, {GroundReference::kBody, GroundReference::kGravity},
+    f.push_back(Choice<O>("ground_reference", &O::ground_reference,
+                          {GroundReference::kPath, GroundReference::kBody, GroundReference::kGravity},
                           GroundReferenceName,
-                          "body: the ground is parallel to the wheel plane (z-up body) | gravity: the ground "
-                          "is level, its normal the IMU-corrected up"));
+                          "path: ground later driven over is parallel to the wheel plane standing on it (needs "
+                          "poses; online and without poses: body) | body: the ground is parallel to the wheel "
+                          "plane (z-up body) | gravity: the ground is level, its normal the IMU-corrected up"));
+    f.push_back(Real<O>("path_half_length_m", &O::path_half_length_m, Above(0), "m",
+                        "path: ground within this far ahead or behind a later pose's body is driven over"));
+    f.push_back(Real<O>("path_half_width_m", &O::path_half_width_m, Above(0), "m",
+                        "path: ... and within this far to its side"));
     f.push_back(Real<O>("terrain_tilt_sigma_deg", &O::terrain_tilt_sigma_deg, OpenClosed(0, 45), "deg",
-                        "prior on each frame's ground tilt against the reference"));
+                        "prior on each frame's ground tilt against the reference; limit on their scatter"));
+    f.push_back(Real<O>("frame_loss_scale", &O::frame_loss_scale, Above(0), "sigmas",
+                        "frames weighed by a Cauchy loss on their tilt, in sigmas of the tilts' scatter"));
+    f.push_back(Real<O>("min_tilt_scatter_deg", &O::min_tilt_scatter_deg, OpenClosed(0, 45), "deg",
+                        "floor on the measured scatter of the frames' tilts"));
+    f.push_back(Real<O>("systematic_sigma_deg", &O::systematic_sigma_deg, Closed(0, 45), "deg",
+                        "added in quadrature to the sigma of pitch and roll: errors every frame shares"));
     f.push_back(Real<O>("prior_sigma_deg", &O::prior_sigma_deg, OpenClosed(0, 45), "deg",
                         "prior on the mount correction (zero mean)"));
     f.push_back(Real<O>("max_sigma_ratio", &O::max_sigma_ratio, Open(0, 1), "",

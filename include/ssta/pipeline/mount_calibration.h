@@ -32,6 +32,11 @@ struct MountCalibration {
   /// (body_T_cam1 = body_T_cam0_refined * cam0_T_cam1); equal to the input unless applied.
   StereoCalibration refined;
   double pipeline_s = 0.0;  ///< wall time of the per-frame pipeline over all frames [s]
+  /// Empty, or why the path reference gave way to the body reference (too few frames whose
+  /// ground the drive goes over, e.g. a short drive or no poses).
+  std::string reference_note;
+  /// Path reference: frames with enough ground that a later frame's body stands on.
+  int frames_on_path = 0;
 
   /// The refinement's report, then the frames skipped with their reasons.
   std::string BriefReport() const;
@@ -41,7 +46,8 @@ struct MountCalibration {
 
 /// Runs the per-frame pipeline (stereo, segmentation, dominant ground plane) over the selected
 /// frames of `sequence` with `config`, collects each frame's ground evidence (up in the body
-/// from GravityProvider) and solves for cam0's mount correction over all of them.
+/// from GravityProvider; with the path reference, only the ground a later frame's body stands
+/// on, through the sequence's poses) and solves for cam0's mount correction over all of them.
 /// Throws ssta::Error on invalid options or config, and when no frame has a usable ground
 /// plane (the message says why the first frames were skipped). Too few frames or a result not
 /// better determined than its prior are statuses in the result, not exceptions.

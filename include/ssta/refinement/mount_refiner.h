@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <deque>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,9 +19,9 @@ enum class RefinementStatus {
   kDetermined,          ///< solved and better determined than the prior: apply it
   kTooFewFrames,        ///< fewer than min_frames usable frames: not determined, not solved
   kNotBetterThanPrior,  ///< solved, but the posterior sigma is not below max_sigma_ratio * prior
-  /// solved, but the frames' ground planes scatter about the reference more than
-  /// terrain_tilt_sigma_deg allows (RMS tilt > sqrt(2) sigma): the ground is not flat enough
-  /// for the model, and the estimate would be biased by the terrain (e.g. on rolling hills)
+  /// solved, but the frames' ground tilts about the reference scatter more than
+  /// terrain_tilt_sigma_deg allows (robust scatter per axis): the ground is not flat enough for
+  /// the model, and the estimate would be biased by the terrain
   kTerrainTooRough,
   kFailed,              ///< the solver or the covariance failed (message says why)
 };
@@ -33,6 +34,9 @@ struct FrameGroundEstimate {
   int points = 0;
   double tilt_deg = 0.0;  ///< angle between its normal and the reference direction [deg]
   double height_m = 0.0;  ///< distance of the body origin above the plane [m]
+  /// Weight of the frame's tilt prior in the final solve, in (0, 1]: the Cauchy loss's
+  /// derivative at its tilt; a frame whose tilt the others do not share comes near 0.
+  double weight = 1.0;
 };
 
 /// A mount refinement's estimate, uncertainty and statistics.
@@ -72,8 +76,25 @@ struct MountRefinementResult {
   double residual_rms_m = 0.0;
   double residual_median_m = 0.0;
   /// RMS over the frames of the angle between each frame's ground normal and the reference at
-  /// the solution [deg]; compared with sqrt(2) * terrain_tilt_sigma_deg.
+  /// the solution [deg].
   double ground_tilt_rms_deg = 0.0;
+  /// Robust scatter (1-sigma) of the frames' tilts about the reference, about the first (roll)
+  /// and second (pitch) tilt axis [deg], from the median |tilt|; at least min_tilt_scatter_deg.
+  /// The final solve's tilt prior.
+  Eigen::Vector2d tilt_scatter_axes_deg = Eigen::Vector2d::Zero();
+  /// The larger of the two [deg]; compared with terrain_tilt_sigma_deg.
+  double tilt_scatter_deg = 0.0;
+  /// Robust scale of the point residuals in their assumed sigmas (1.4826 x median); the final
+  /// solve multiplies every point sigma by it.
+  double point_sigma_scale = 1.0;
+  /// Frames whose weight is below 0.5 (their tilt is beyond frame_loss_scale scatters).
+  int frames_downweighted = 0;
+  /// Factor on the covariance's 1-sigma for frames that see overlapping ground, so their tilts
+  /// are not independent: sqrt((1 + rho) / (1 - rho)), rho the lag-1 correlation of the tilts.
+  double sigma_inflation = 1.0;
+  /// The reference the solve used: "path", "body" or "gravity" (path acts as body for evidence
+  /// without a path).
+  std::string reference = "body";
   double initial_cost = 0.0, final_cost = 0.0;
   int iterations = 0;
   double solve_ms = 0.0;  ///< solve + covariance wall time [ms]
@@ -121,5 +142,17 @@ class MountRefiner {
   Eigen::Isometry3d body_T_camera_;
   std::deque<GroundEvidence> window_;
 };
+
+/// The path reference over a whole drive (GroundReference::kPath): `frames[i]` holds frame i's
+/// ground points (usable or not; thinned generously, the driven-over ones are chosen here) and
+/// `world_T_body[i]` its pose. Each frame keeps the points a later body stands on (at most
+/// points_per_frame, evenly) with that ground's expected normal, and the mount is solved; then
+/// the points are chosen again through the refined mount and solved once more (a mount error of
+/// degrees moves far points along the path by centimetres, onto the wrong later body, and on
+/// curved ground that is a tilt). `*frames_on_path` (optional) receives how many frames kept
+/// enough points in the last round. Fewer than min_frames: kTooFewFrames, as Solve().
+MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera,
+                                     const std::vector<std::optional<Eigen::Isometry3d>>& world_T_body,
+                                     const std::vector<GroundEvidence>& frames, int* frames_on_path = nullptr);
 
 }  // namespace ssta

@@ -16,6 +16,14 @@ enum class GroundReference {
   /// IMU-corrected pose (GravityProvider::UpInBody). Better when the body rocks on rough terrain
   /// over level ground.
   kGravity,
+  /// "path": only ground that the vehicle later drives over is used, and it is expected parallel
+  /// to the wheel plane of the later pose that stands on it (body z of that pose, seen from the
+  /// frame's body through the sequence's poses). Holds on rolling ground, where the ground ahead
+  /// is not parallel to the plane under the wheels now. Needs poses; used by the offline
+  /// calibration (`ssta calibrate-mount`). Without poses, when the drive covers fewer than
+  /// min_frames frames' ground, and online (build-map, whose later poses are not known yet) it
+  /// acts as "body".
+  kPath,
 };
 
 /// Parses "body" or "gravity"; throws ssta::Error naming `refinement.ground_reference` otherwise.
@@ -58,10 +66,29 @@ struct RefinementOptions {
   RobustLoss robust_loss = RobustLoss::kHuber;
   double loss_scale = 2.0;
   /// Expected direction of the ground normal in the body frame; see GroundReference.
-  GroundReference ground_reference = GroundReference::kBody;
+  GroundReference ground_reference = GroundReference::kPath;
+  /// Path reference: a ground point counts as driven over when a later pose's body has it within
+  /// this far ahead or behind (along body x) [m]: about half the wheelbase.
+  double path_half_length_m = 0.3;
+  /// Path reference: ... and within this far to the side (along body y) [m]: about half the
+  /// track, plus a margin that keeps enough points to see the roll.
+  double path_half_width_m = 0.6;
   /// How far each frame's ground plane may tilt away from the reference (terrain, suspension,
-  /// IMU error): 1-sigma of the prior on the per-frame tilt [deg].
+  /// IMU error) [deg]: the 1-sigma of the first solve's per-frame tilt prior, and the limit on
+  /// the measured scatter of the frames' tilts (larger: "terrain_too_rough").
   double terrain_tilt_sigma_deg = 1.0;
+  /// The second solve weighs each frame by how its ground tilt agrees with the others: the tilt
+  /// prior's sigma becomes the frames' measured tilt scatter (robust, per axis), under a Cauchy
+  /// loss with this scale in those sigmas, so a frame on a slope the others do not share (a
+  /// ramp, a hill's flank) pulls little [sigmas].
+  double frame_loss_scale = 2.0;
+  /// Floor on that measured scatter [deg]: below it the frames agree better than the disparity
+  /// bias and the poses can be trusted, and a sigma from it would be overconfident.
+  double min_tilt_scatter_deg = 0.05;
+  /// Added in quadrature to the 1-sigma of pitch and of roll [deg]: errors that every frame
+  /// shares, so no scatter shows them (a disparity bias tilts every frame's ground alike, the
+  /// poses' own roll and pitch errors, a body that does not sit parallel to its wheel plane).
+  double systematic_sigma_deg = 0.08;
   /// Prior on the mount correction: zero with this 1-sigma per angle [deg].
   double prior_sigma_deg = 5.0;
   /// The correction is applied only when the posterior 1-sigma of pitch and of roll is at most
