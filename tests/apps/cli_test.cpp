@@ -178,7 +178,9 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   auto lines = Lines(r.output);
   EXPECT_EQ(lines.size(), 1u + 31u + 1u) << r.output;  // header, a sample every 0.05 m, verdict
   EXPECT_EQ(lines[0], "distance_m,x,y,class,cost,fraction_observed");
-  EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0000,1.0000");
+  // Floor seen once: traversable, confidence 0.742 (one view and the open-ground prior), so
+  // cost 0.25 * 1.5 * (1 - 0.742).
+  EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0967,1.0000");
   EXPECT_NE(r.output.find("blocked at 0.50 m"), std::string::npos) << r.output;  // x = 0.55 (0.5 rounds below)
   r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 0.4 --as-exported --local-ground 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -279,16 +281,17 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   auto r = RunSsta(eval + " --length 0.3 --yaws 0 --json " + (dir / "f.json"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("poses: 900, partly unseen in the truth (unscored): 116"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("answered traversable or semi): 25 (0.0319)"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("answered non-traversable): 25 (0.0319)"), std::string::npos) << r.output;
+  // Shares of the truly blocked and of the truly free footprints.
+  EXPECT_NE(r.output.find("answered traversable or semi): 25 of 25 (1.0000)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered non-traversable): 25 of 759 (0.0329)"), std::string::npos) << r.output;
   const std::string json = ReadTextFile(dir / "f.json");
   EXPECT_NE(json.find("\"unsafe\": 25"), std::string::npos) << json;
   EXPECT_NE(json.find("\"accuracy\": " + std::to_string(734.0 / 784.0).substr(0, 6)), std::string::npos) << json;
   r = RunSsta(eval + " --length 0.3 --yaws 0,90 --as-exported --local-ground 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("poses: 1800, partly unseen in the truth (unscored): 232"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("answered traversable or semi): 50 (0.0319)"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("answered non-traversable): 0 (0.0000)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered traversable or semi): 50 of 50 (1.0000)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered non-traversable): 0 of 1518 (0.0000)"), std::string::npos) << r.output;
 
   r = RunSsta(eval + " --length 0");
   EXPECT_EQ(r.exit_code, 2);
