@@ -2,6 +2,7 @@
 
 #include "core/run_both.h"
 #include "ssta/analysis/label_refinements.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/error.h"
 #include "ssta/stereo/stereo_matcher.h"
@@ -43,14 +44,20 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
                                 &slope_classes_);
             }
           });
+  // Each step's changes go to a.rules; only the first lambda and the steps after both touch it.
+  LabelRuleTracker& track = rule_tracker_;
   RunBoth(
       [&] {
+        track.Begin(a.labels);
         if (options.pixel_slopes && a.quality.passed) {
           // Under the local rule a segment's verdict is its slope's alone, so a gentler pixel may relax it.
           ApplyPixelSlopeClasses(slope_classes_, &a.labels, options.step_reference == StepReference::kLocal);
+          track.Mark(a.labels, LabelRule::kPixelSlope, &a.rules);
         }
         RefineByGroundDisparity(cloud, segment_ids, focal_times_baseline, options, &a);
+        track.Mark(a.labels, LabelRule::kGroundDisparity, &a.rules);
         RefineByFragmentPlanes(cloud, segment_ids, focal_times_baseline, options, &a);
+        track.Mark(a.labels, LabelRule::kFragmentPlane, &a.rules);
       },
       [&] {
         // Only for a frame that passed the quality check (known from here on): on the others
@@ -64,13 +71,19 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
       });
   if (options.step_reference == StepReference::kLocal && a.quality.passed) {
     ApplyLocalStepClasses(step_classes_, &a.labels);
+    track.Mark(a.labels, LabelRule::kLocalStep, &a.rules);
   }
   if (a.quality.passed) {
-    ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);  // nothing when the test is off
+    if (options.face_window_px > 0) {
+      ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);
+      track.Mark(a.labels, LabelRule::kDisparityFace, &a.rules);
+    }
     FillUndecidedByConsensus(options, &a.labels);
+    track.Mark(a.labels, LabelRule::kConsensusFill, &a.rules);
     // Heights above the dominant plane are eq. 5's steps: the local rule has its own.
     if (options.step_reference != StepReference::kLocal) {
       FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
+      track.Mark(a.labels, LabelRule::kHeightFill, &a.rules);
     }
   }
   return a;

@@ -4,6 +4,7 @@
 
 #include "core/run_both.h"
 #include "ssta/analysis/frame_analysis.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/stereo/rectifier.h"
@@ -136,17 +137,24 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
     const ImageU8 textured = SupportedPixels(pair.left_full, g, config_.stereo.block_size,
                                              config_.analysis.label_min_texture, out.up_rectified);
     ImageU8& labels = out.analysis.labels;
+    ImageU8& rules = out.analysis.rules;
     for (std::size_t i = 0; i < labels.size(); ++i) {
-      if (textured[i] == 0) labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
+      if (textured[i] == 0 && labels[i] != static_cast<std::uint8_t>(TravClass::kUnknown)) {
+        labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
+        rules[i] = static_cast<std::uint8_t>(LabelRule::kTexture);
+      }
     }
   }
   out.timings.analyze_ms = clock.LapMs();
 
   // Labels keep the full rectified size; outside the common area they stay unknown (0).
   out.labels = ImageU8(g.full_width, g.full_height, static_cast<std::uint8_t>(TravClass::kUnknown));
+  out.rules = ImageU8(g.full_width, g.full_height, static_cast<std::uint8_t>(LabelRule::kOutside));
   for (int v = 0; v < g.crop_height; ++v) {
     const std::uint8_t* src = out.analysis.labels.row(v);
     std::copy(src, src + g.crop_width, out.labels.row(v + g.crop_v0) + g.crop_u0);
+    const std::uint8_t* rule = out.analysis.rules.row(v);
+    std::copy(rule, rule + g.crop_width, out.rules.row(v + g.crop_v0) + g.crop_u0);
   }
   out.left_rectified = std::move(pair.left_full);
   out.texture_block_px = config_.stereo.block_size;

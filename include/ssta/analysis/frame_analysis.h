@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include "ssta/analysis/label_refinements.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/image.h"
 #include "ssta/stereo/rectifier.h"
@@ -35,7 +36,8 @@ struct FrameAnalysisInput {
 /// steps 1, 4 and 5 read inputs no other step changes; they run beside the steps before them, and
 /// their results are applied at their places in the chain, so the labels are those of the steps
 /// one after the other (the texture mask of analysis.label_min_texture needs the full image and
-/// is applied by FramePipeline after this).
+/// is applied by FramePipeline after this). AnalysisResult::rules names the step that set each
+/// pixel's class (LabelRule).
 /// Not thread-safe: Analyze reuses the analyzer's buffers; use one analyzer per thread.
 class FrameAnalyzer {
  public:
@@ -54,6 +56,7 @@ class FrameAnalyzer {
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
   ImageU8 step_classes_;    // the local steps' classes, kept between frames
+  LabelRuleTracker rule_tracker_;  // the labels before each step, for AnalysisResult::rules
 };
 
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
