@@ -1,5 +1,8 @@
 #include "ssta/analysis/frame_analysis.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/run_both.h"
 #include "ssta/analysis/label_refinements.h"
 #include "ssta/analysis/label_rule.h"
@@ -66,7 +69,7 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
           FindDisparityFaces(*in.disparity, g.f, g.cu, g.cv, up, options, &faces_);
         }
         if (options.step_reference == StepReference::kLocal && a.quality.passed) {
-          LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_);
+          LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_, in.supported);
         }
       });
   if (options.step_reference == StepReference::kLocal && a.quality.passed) {
@@ -102,6 +105,78 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
     for (int u = 0; u < g.crop_width; ++u) {
       const Eigen::Vector3d ray((u - g.cu) / g.f, (v - g.cv) / g.f, 1.0);
       if (ray.dot(up_rectified) < 0.0) row[u] = 1;
+    }
+  }
+  return supported;
+}
+
+namespace {
+
+/// The texture a matcher can use at (u, v) of `image`: the grey-level standard deviation along
+/// each row of the `block` x `block` window (clipped at the border), pooled over its rows. A
+/// horizontal edge has a large standard deviation over the window but none along the epipolar
+/// lines, where the matcher searches: it fixes no disparity.
+double RowTexture(const ImageU8& image, int u, int v, int block) {
+  const int r = block / 2;
+  const int u0 = std::max(0, u - r), u1 = std::min(image.width() - 1, u + r);
+  const int v0 = std::max(0, v - r), v1 = std::min(image.height() - 1, v + r);
+  const int n = u1 - u0 + 1;
+  if (n < 2) return 0.0;
+  double sum_squares = 0.0;
+  for (int y = v0; y <= v1; ++y) {
+    const std::uint8_t* row = image.row(y);
+    double sum = 0.0, sum_sq = 0.0;
+    for (int x = u0; x <= u1; ++x) {
+      sum += row[x];
+      sum_sq += static_cast<double>(row[x]) * row[x];
+    }
+    sum_squares += sum_sq - sum * sum / n;
+  }
+  return std::sqrt(sum_squares / ((v1 - v0 + 1) * n));
+}
+
+}  // namespace
+
+ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g, int block, double min_std,
+                        const Eigen::Vector3d& up_rectified, const ImageF& disparity) {
+  SSTA_CHECK(disparity.width() == g.crop_width && disparity.height() == g.crop_height,
+             "SupportedPixels: the disparity must have the common area's size");
+  const ImageU8 textured = TexturedPixels(left_rectified, g, block, min_std);
+  ImageU8 supported = textured;
+  for (int v = 0; v < g.crop_height; ++v) {
+    std::uint8_t* row = supported.row(v);
+    for (int u = 0; u < g.crop_width; ++u) {
+      const Eigen::Vector3d ray((u - g.cu) / g.f, (v - g.cv) / g.f, 1.0);
+      if (ray.dot(up_rectified) < 0.0) row[u] = 1;
+    }
+  }
+  // Floating pieces, column by column from the bottom up: a pixel is on one when it has no
+  // texture and is nearer than the closest valid pixel below it (within kMaxGapRows), or when
+  // the pixel below it is on one and has its disparity within kSameSurface.
+  constexpr int kMaxGapRows = 32;
+  constexpr float kSameSurface = 0.1f;  // relative disparity (depth) difference of one surface
+  constexpr float kMinJumpPx = 1.0f;    // least jump nearer that starts a piece [px]
+  for (int u = 0; u < g.crop_width; ++u) {
+    float below_d = 0.0f;
+    int below_v = -1;
+    bool below_floating = false;
+    for (int v = g.crop_height - 1; v >= 0; --v) {
+      const float d = disparity(v, u);
+      if (!(d > 0.0f)) continue;
+      bool floating = false;
+      if (below_v >= 0 && below_v - v <= kMaxGapRows) {
+        const float tolerance = std::max(kMinJumpPx, kSameSurface * d);
+        if (below_floating && std::abs(d - below_d) <= tolerance) {
+          floating = true;
+        } else if (d > below_d + tolerance &&
+                   RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {
+          floating = true;
+        }
+      }
+      if (floating) supported(v, u) = 0;
+      below_d = d;
+      below_v = v;
+      below_floating = floating;
     }
   }
   return supported;

@@ -129,13 +129,18 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
-  out.analysis = stages_->analyzer.Analyze(
-      {&g, &out.disparity, &cloud, &normals, &segmentation.labels, out.num_segments, out.up_rectified});
-  if (config_.analysis.label_min_texture > 0.0) {
-    // The same test as the map's min_texture, on the full rectified image (the block reaches
-    // past the common area's border as the matcher's does).
-    const ImageU8 textured = SupportedPixels(pair.left_full, g, config_.stereo.block_size,
-                                             config_.analysis.label_min_texture, out.up_rectified);
+  // The texture test on the full rectified image (the block reaches past the common area's border
+  // as the matcher's does), less the matcher's floating noise: such points stay out of the local
+  // steps' grid and their labels are unknown.
+  const bool masked = config_.analysis.label_min_texture > 0.0;
+  if (masked) {
+    supported_ = SupportedPixels(pair.left_full, g, config_.stereo.block_size, config_.analysis.label_min_texture,
+                                 out.up_rectified, out.disparity);
+  }
+  out.analysis = stages_->analyzer.Analyze({&g, &out.disparity, &cloud, &normals, &segmentation.labels,
+                                            out.num_segments, out.up_rectified, masked ? &supported_ : nullptr});
+  if (masked) {
+    const ImageU8& textured = supported_;
     ImageU8& labels = out.analysis.labels;
     ImageU8& rules = out.analysis.rules;
     for (std::size_t i = 0; i < labels.size(); ++i) {

@@ -20,6 +20,10 @@ struct FrameAnalysisInput {
   const ImageI32* segment_ids = nullptr;        ///< segment per pixel in [0, num_segments), -1 none
   int num_segments = 0;
   Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< unit up in the rectified cam0 frame
+  /// Optional, of the cloud's size: 0 where a point has no support in the image
+  /// (SupportedPixels); the local steps leave such points out of their height grid. nullptr:
+  /// every point is used.
+  const ImageU8* supported = nullptr;
 };
 
 /// The analysis of one frame after segmentation: the paper's SSTA (AnalyzeSurfaces, eq. 2-5;
@@ -71,5 +75,17 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
 /// with range); 0 above the horizon without texture: the sky, where matching finds noise.
 ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
                         const Eigen::Vector3d& up_rectified);
+
+/// SupportedPixels, less the pieces of the matcher's noise that float: scanning each column of
+/// `disparity` (the common area's, [px], 0 invalid) from the bottom up, a pixel without texture
+/// along its row (the standard deviation along the rows of the block, pooled, below `min_std`:
+/// a horizontal edge fixes no disparity) that is nearer (its disparity larger by over max(1 px, 10 %)) than the closest valid pixel
+/// within 32 rows below it starts a floating piece, and the pixels above it with a disparity
+/// within max(1 px, 10 %) of the one below continue it, with or without texture. A surface
+/// standing on the ground is never nearer than what is seen just below it; in a blank band near
+/// the horizon the matcher finds disparities of nearby things that hang in the air above far
+/// ground.
+ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
+                        const Eigen::Vector3d& up_rectified, const ImageF& disparity);
 
 }  // namespace ssta
