@@ -142,41 +142,54 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
   SSTA_CHECK(disparity.width() == g.crop_width && disparity.height() == g.crop_height,
              "SupportedPixels: the disparity must have the common area's size");
   const ImageU8 textured = TexturedPixels(left_rectified, g, block, min_std);
-  ImageU8 supported = textured;
-  for (int v = 0; v < g.crop_height; ++v) {
-    std::uint8_t* row = supported.row(v);
-    for (int u = 0; u < g.crop_width; ++u) {
-      const Eigen::Vector3d ray((u - g.cu) / g.f, (v - g.cv) / g.f, 1.0);
-      if (ray.dot(up_rectified) < 0.0) row[u] = 1;
-    }
-  }
-  // Floating pieces, column by column from the bottom up: a pixel is on one when it has no
-  // texture and is nearer than the closest valid pixel below it (within kMaxGapRows), or when
-  // the pixel below it is on one and has its disparity within kSameSurface.
+  ImageU8 supported(g.crop_width, g.crop_height, 0);
+  // Column by column from the bottom up, against the closest valid pixel below (within
+  // kMaxGapRows): a pixel without texture along its row that is nearer than it starts a floating
+  // piece, which the pixels above on the same surface continue; a pixel without texture above
+  // the horizon is supported when it continues a supported surface.
   constexpr int kMaxGapRows = 32;
-  constexpr float kSameSurface = 0.1f;  // relative disparity (depth) difference of one surface
+  constexpr float kSameSurface = 0.1f;  // relative disparity (depth) difference within a piece
   constexpr float kMinJumpPx = 1.0f;    // least jump nearer that starts a piece [px]
+  constexpr float kWallSurface = 0.05f; // relative disparity step of a wall's rows
+  // A blank wall is kept where its depth is known to 5 % (20 times SGBM's 0.25 px noise); a
+  // blank sky taking the disparity of the far ground or skyline below it is not.
+  constexpr float kMinWallDisparityPx = 5.0f;
   for (int u = 0; u < g.crop_width; ++u) {
     float below_d = 0.0f;
     int below_v = -1;
-    bool below_floating = false;
+    bool below_floating = false, below_supported = false;
+    bool jumped = false;  // the current run of one surface began nearer than the pixel below it
     for (int v = g.crop_height - 1; v >= 0; --v) {
+      const Eigen::Vector3d ray((u - g.cu) / g.f, (v - g.cv) / g.f, 1.0);
+      const bool below_horizon = ray.dot(up_rectified) < 0.0;
+      const bool has_texture = textured(v, u) != 0;
       const float d = disparity(v, u);
-      if (!(d > 0.0f)) continue;
-      bool floating = false;
-      if (below_v >= 0 && below_v - v <= kMaxGapRows) {
-        const float tolerance = std::max(kMinJumpPx, kSameSurface * d);
-        if (below_floating && std::abs(d - below_d) <= tolerance) {
-          floating = true;
-        } else if (d > below_d + tolerance &&
-                   RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {
-          floating = true;
+      if (!(d > 0.0f)) {
+        supported(v, u) = has_texture || below_horizon;  // no point: nothing to label
+        continue;
+      }
+      const bool near_below = below_v >= 0 && below_v - v <= kMaxGapRows;
+      bool floating = false, ok = has_texture || below_horizon;
+      const float tolerance = std::max(kMinJumpPx, kSameSurface * d);
+      const bool same_surface = near_below && std::abs(d - below_d) <= tolerance;
+      if (!same_surface) jumped = near_below && d > below_d + tolerance;
+      if (same_surface && below_floating) {
+        floating = true;
+      } else if (jumped && RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {
+        floating = true;  // the first pixel of the run without texture along its row
+      }
+      if (near_below) {
+        if (!ok && below_supported && d >= kMinWallDisparityPx &&
+            std::abs(d - below_d) <= std::max(kMinJumpPx, kWallSurface * d)) {
+          ok = true;
         }
       }
-      if (floating) supported(v, u) = 0;
+      if (floating) ok = false;
+      supported(v, u) = ok;
       below_d = d;
       below_v = v;
       below_floating = floating;
+      below_supported = ok;
     }
   }
   return supported;

@@ -76,15 +76,20 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
 ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
                         const Eigen::Vector3d& up_rectified);
 
-/// SupportedPixels, less the pieces of the matcher's noise that float: scanning each column of
-/// `disparity` (the common area's, [px], 0 invalid) from the bottom up, a pixel without texture
-/// along its row (the standard deviation along the rows of the block, pooled, below `min_std`:
-/// a horizontal edge fixes no disparity) that is nearer (its disparity larger by over max(1 px, 10 %)) than the closest valid pixel
-/// within 32 rows below it starts a floating piece, and the pixels above it with a disparity
-/// within max(1 px, 10 %) of the one below continue it, with or without texture. A surface
-/// standing on the ground is never nearer than what is seen just below it; in a blank band near
-/// the horizon the matcher finds disparities of nearby things that hang in the air above far
-/// ground.
+/// SupportedPixels judged with the disparity (the common area's, [px], 0 invalid), column by
+/// column from the bottom up against the closest valid pixel within 32 rows below:
+/// - a floating piece of the matcher's noise is not supported: on a run of one surface (each
+///   pixel's disparity within max(1 px, 10 %) of the one below) that begins nearer than the pixel
+///   below it (its disparity larger by more than that), it starts at the first pixel without
+///   texture along its row (the standard deviation along the rows of the block, pooled, below
+///   `min_std`: a horizontal edge fixes no disparity) and takes the rest of the run, with or
+///   without texture. A surface standing on the ground is
+///   never nearer than what is seen just below it; in a blank band near the horizon the matcher
+///   finds disparities of nearby things hanging in the air above far ground;
+/// - a pixel without texture above the horizon is supported where it continues a supported
+///   surface below it (its disparity within max(1 px, 5 %) of the one below) and lies near
+///   enough for its depth to be known to 5 % (disparity >= 5 px): a blank wall above a textured
+///   base or window, not a blank sky.
 ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
                         const Eigen::Vector3d& up_rectified, const ImageF& disparity);
 
