@@ -175,7 +175,8 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
       if (!same_surface) jumped = near_below && d > below_d + tolerance;
       if (same_surface && below_floating) {
         floating = true;
-      } else if (jumped && RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {
+      } else if (jumped && below_horizon &&
+                 RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {
         floating = true;  // the first pixel of the run without texture along its row
       }
       if (near_below) {

@@ -80,10 +80,11 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
 /// column from the bottom up against the closest valid pixel within 32 rows below:
 /// - a floating piece of the matcher's noise is not supported: on a run of one surface (each
 ///   pixel's disparity within max(1 px, 10 %) of the one below) that begins nearer than the pixel
-///   below it (its disparity larger by more than that), it starts at the first pixel without
-///   texture along its row (the standard deviation along the rows of the block, pooled, below
-///   `min_std`: a horizontal edge fixes no disparity) and takes the rest of the run, with or
-///   without texture. A surface standing on the ground is
+///   below it (its disparity larger by more than that), it starts at the first pixel below the
+///   horizon without texture along its row (the standard deviation along the rows of the block,
+///   pooled, below `min_std`: a horizontal edge fixes no disparity) and takes the rest of the
+///   run, with or without texture. (Above the horizon a leaning trunk crosses a column above the far ground
+///   it hides nothing of; points there are above the camera.) A surface standing on the ground is
 ///   never nearer than what is seen just below it; in a blank band near the horizon the matcher
 ///   finds disparities of nearby things hanging in the air above far ground;
 /// - a pixel without texture above the horizon is supported where it continues a supported
