@@ -173,7 +173,7 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
       const float tolerance = std::max(kMinJumpPx, kSameSurface * d);
       const bool same_surface = near_below && std::abs(d - below_d) <= tolerance;
       if (!same_surface) jumped = near_below && d > below_d + tolerance;
-      if (same_surface && below_floating) {
+      if (same_surface && below_floating && below_horizon) {
         floating = true;
       } else if (jumped && below_horizon &&
                  RowTexture(left_rectified, u + g.crop_u0, v + g.crop_v0, block) < min_std) {

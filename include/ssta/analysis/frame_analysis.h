@@ -83,7 +83,7 @@ ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& 
 ///   below it (its disparity larger by more than that), it starts at the first pixel below the
 ///   horizon without texture along its row (the standard deviation along the rows of the block,
 ///   pooled, below `min_std`: a horizontal edge fixes no disparity) and takes the rest of the
-///   run, with or without texture. (Above the horizon a leaning trunk crosses a column above the far ground
+///   run below the horizon, with or without texture. (Above the horizon a leaning trunk crosses a column above the far ground
 ///   it hides nothing of; points there are above the camera.) A surface standing on the ground is
 ///   never nearer than what is seen just below it; in a blank band near the horizon the matcher
 ///   finds disparities of nearby things hanging in the air above far ground;
