@@ -54,7 +54,10 @@ void RunPair(const ClassifyArgs& a) {
   const FrameResult result = pipeline.Process(ReadGreyImage(a.left), ReadGreyImage(a.right), up.normalized());
   const std::string name = std::filesystem::path(a.left).stem().string();
   WriteRunConfig(config, a.options.out_dir);  // as for a sequence
-  WriteFrameOutputs(result, a.options.out_dir, name, a.options.write_disparity);
+  FrameOutputExtras extras;
+  extras.disparity = a.options.write_disparity;
+  extras.explain = a.options.write_explain;
+  WriteFrameOutputs(result, a.options.out_dir, name, extras);
   if (!a.quiet) {
     const auto& q = result.analysis.quality;
     std::cout << "quality check: " << (q.passed ? "passed" : "failed: " + q.reason) << "\n"
@@ -89,6 +92,9 @@ void RegisterClassify(CLI::App& app) {
   cmd->add_option("--max-frames", args->options.frames.max_frames, "classify at most N frames (0: all)");
   cmd->add_option("--every", args->options.frames.every, "use every N-th frame");
   cmd->add_flag("--disparity", args->options.write_disparity, "also write disparity/<ts>.png (16 bit, disparity * 256, 0 = none: KITTI's and gt/'s convention) and disparity_colour/<ts>.png");
+  cmd->add_flag("--explain", args->options.write_explain,
+                "also write explain/<ts>.png (the id of the rule that set each pixel's class, docs/interfaces.md) and "
+                "explain_colour/<ts>.png (the rules in colour, with a legend)");
   cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
                 "use the sequence's gt/disparity instead of stereo matching (synthetic sequences)");
   cmd->add_flag("--strict", args->options.frames.strict, "any frame that cannot be used is an error, not a skip with a reason");

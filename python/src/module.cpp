@@ -17,6 +17,7 @@
 #include <pybind11/stl.h>
 
 #include "bindings.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/io/camera_calibration.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/sequence.h"
@@ -450,6 +451,7 @@ py::dict FrameDict(const FrameResult& r) {
 
   py::dict out;
   out["labels"] = image(r.labels);
+  out["rules"] = image(r.rules);
   out["disparity"] = image(r.disparity);
   out["segment_ids"] = image(r.segment_ids);
   out["segments"] = segments;
@@ -502,6 +504,8 @@ Args:
 
 Returns a dict:
     labels: uint8 class ids at the rectified image size (0 outside the common area);
+    rules: uint8 id of the rule that set each label, at the labels' size (ssta.LABEL_RULES
+        names them; docs/interfaces.md);
     disparity: float32 [px] of the rectified common area, 0 invalid;
     segment_ids: int32 segment id per pixel of the common area, -1 none;
     segments: a structured array, one row per segment id: id, inliers [px], centroid,
@@ -683,6 +687,11 @@ PYBIND11_MODULE(_ssta, m) {
   using namespace ssta::python;
   m.doc() = "SSTA: stereo traversability maps for ground robots (the C++ library's Python binding).";
   m.attr("__version__") = SSTA_VERSION;
+  {
+    py::list names;  // index = the rule id of classify's "rules"
+    for (const ssta::LabelRuleInfo& info : ssta::LabelRules()) names.append(std::string(info.name));
+    m.attr("LABEL_RULES") = py::tuple(names);
+  }
 
   py::register_exception<ssta::Error>(m, "Error", PyExc_ValueError);
   m.attr("Error").attr("__doc__") =

@@ -8,6 +8,8 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+#: Rule names by id: classify's "rules" image holds these ids (docs/interfaces.md).
+LABEL_RULES: Tuple[str, ...]
 
 _Path = Union[str, os.PathLike]
 _Array = npt.ArrayLike

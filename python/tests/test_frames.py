@@ -34,6 +34,20 @@ def cli_frame(cli, yard, pair, tmp_path_factory):
     return read_u8(out / "labels" / f"{stem}.png"), json.loads((out / "frames" / f"{stem}.json").read_text())
 
 
+def test_rules_count_as_the_cli_report_says(pair, calibration, cli_frame):
+    _, report = cli_frame
+    result = ssta.classify(read_u8(pair[0]), read_u8(pair[1]), calibration)
+    labels, rules = result["labels"], result["rules"]
+    assert rules.shape == labels.shape and rules.dtype == np.uint8
+    assert ssta.LABEL_RULES[3] == "segment" and len(set(ssta.LABEL_RULES)) == len(ssta.LABEL_RULES)
+    # The frame JSON's pixels_by_rule are the counts of these two images, rule by rule.
+    classes = ["unknown", "traversable", "semi-traversable", "non-traversable", "undecided"]
+    for rule_id, name in enumerate(ssta.LABEL_RULES):
+        for class_id, class_name in enumerate(classes):
+            count = int(np.count_nonzero((rules == rule_id) & (labels == class_id)))
+            assert report["pixels_by_rule"][name][class_name] == count, (name, class_name)
+
+
 def test_labels_and_segments_equal_cli(pair, calibration, cli_frame):
     labels, report = cli_frame
     result = ssta.classify(read_u8(pair[0]), read_u8(pair[1]), calibration)

@@ -140,9 +140,12 @@ class HeightGrid {
 }  // namespace
 
 void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
-                      const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes) {
+                      const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes,
+                      const ImageU8* supported) {
   SSTA_CHECK(step_classes != nullptr && normals.width() == cloud.width() && normals.height() == cloud.height(),
              "LocalStepClasses: cloud and normals differ in size");
+  SSTA_CHECK(supported == nullptr || (supported->width() == cloud.width() && supported->height() == cloud.height()),
+             "LocalStepClasses: supported pixels and cloud differ in size");
   if (step_classes->width() != cloud.width() || step_classes->height() != cloud.height()) {
     *step_classes = ImageU8(cloud.width(), cloud.height(), 0);
   } else {
@@ -159,7 +162,7 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
   points.clear();
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3f& p = cloud[i];
-    if (!IsFinite(p)) continue;
+    if (!IsFinite(p) || (supported != nullptr && (*supported)[i] == 0)) continue;
     const float relative_sigma = per_m2 * p.z();
     const float smear_squared = relative_sigma * relative_sigma * p.squaredNorm();
     if (smear_squared > 4.0f * radius * radius) continue;

@@ -26,6 +26,7 @@
 
 #include "analysis/reachable_steps.h"
 #include "analysis/reason_format.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
 
@@ -389,16 +390,23 @@ void DecideVerdict(int inliers_min, const AnalysisOptions& options, SegmentResul
 }
 
 /// Class per pixel: unknown without a point, undecided without a segment, else its segment's
-/// verdict.
-ImageU8 PixelLabels(const Image3f& cloud, const ImageI32& segment_ids, const std::vector<SegmentResult>& segments) {
-  ImageU8 labels(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
+/// verdict; and the rule behind each (LabelRule).
+void PixelLabels(const Image3f& cloud, const ImageI32& segment_ids, const std::vector<SegmentResult>& segments,
+                 bool quality_passed, AnalysisResult* result) {
+  ImageU8& labels = result->labels;
+  ImageU8& rules = result->rules;
+  labels = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
+  rules = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(LabelRule::kNoDepth));
+  const auto segment_rule = static_cast<std::uint8_t>(quality_passed ? LabelRule::kSegment : LabelRule::kQualityCheck);
+  const auto small_rule =
+      static_cast<std::uint8_t>(quality_passed ? LabelRule::kSmallSegment : LabelRule::kQualityCheck);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!IsFinite(cloud[i])) continue;
     const int id = segment_ids[i];
     const TravClass c = id >= 0 ? segments[id].verdict : TravClass::kUndecided;
     labels[i] = static_cast<std::uint8_t>(c);
+    rules[i] = id < 0 ? static_cast<std::uint8_t>(LabelRule::kNoSegment) : segments[id].small ? small_rule : segment_rule;
   }
-  return labels;
 }
 
 }  // namespace
@@ -452,7 +460,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     DecideVerdict(result.inliers_min, options, &s);
   }
 
-  result.labels = PixelLabels(cloud, segment_ids, result.segments);
+  PixelLabels(cloud, segment_ids, result.segments, result.quality.passed, &result);
   return result;
 }
 

@@ -4,6 +4,7 @@
 
 #include "core/run_both.h"
 #include "ssta/analysis/frame_analysis.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/stereo/rectifier.h"
@@ -128,25 +129,37 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
-  out.analysis = stages_->analyzer.Analyze(
-      {&g, &out.disparity, &cloud, &normals, &segmentation.labels, out.num_segments, out.up_rectified});
-  if (config_.analysis.label_min_texture > 0.0) {
-    // The same test as the map's min_texture, on the full rectified image (the block reaches
-    // past the common area's border as the matcher's does).
-    const ImageU8 textured = SupportedPixels(pair.left_full, g, config_.stereo.block_size,
-                                             config_.analysis.label_min_texture, out.up_rectified);
+  // The texture test on the full rectified image (the block reaches past the common area's border
+  // as the matcher's does), less the matcher's floating noise: such points stay out of the local
+  // steps' grid and their labels are unknown.
+  const bool masked = config_.analysis.label_min_texture > 0.0;
+  if (masked) {
+    supported_ = SupportedPixels(pair.left_full, g, config_.stereo.block_size, config_.analysis.label_min_texture,
+                                 out.up_rectified, out.disparity);
+  }
+  out.analysis = stages_->analyzer.Analyze({&g, &out.disparity, &cloud, &normals, &segmentation.labels,
+                                            out.num_segments, out.up_rectified, masked ? &supported_ : nullptr});
+  if (masked) {
+    const ImageU8& textured = supported_;
     ImageU8& labels = out.analysis.labels;
+    ImageU8& rules = out.analysis.rules;
     for (std::size_t i = 0; i < labels.size(); ++i) {
-      if (textured[i] == 0) labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
+      if (textured[i] == 0 && labels[i] != static_cast<std::uint8_t>(TravClass::kUnknown)) {
+        labels[i] = static_cast<std::uint8_t>(TravClass::kUnknown);
+        rules[i] = static_cast<std::uint8_t>(LabelRule::kTexture);
+      }
     }
   }
   out.timings.analyze_ms = clock.LapMs();
 
   // Labels keep the full rectified size; outside the common area they stay unknown (0).
   out.labels = ImageU8(g.full_width, g.full_height, static_cast<std::uint8_t>(TravClass::kUnknown));
+  out.rules = ImageU8(g.full_width, g.full_height, static_cast<std::uint8_t>(LabelRule::kOutside));
   for (int v = 0; v < g.crop_height; ++v) {
     const std::uint8_t* src = out.analysis.labels.row(v);
     std::copy(src, src + g.crop_width, out.labels.row(v + g.crop_v0) + g.crop_u0);
+    const std::uint8_t* rule = out.analysis.rules.row(v);
+    std::copy(rule, rule + g.crop_width, out.rules.row(v + g.crop_v0) + g.crop_u0);
   }
   out.left_rectified = std::move(pair.left_full);
   out.texture_block_px = config_.stereo.block_size;

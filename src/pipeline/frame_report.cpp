@@ -9,6 +9,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "core/json_escape.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 
@@ -52,6 +53,56 @@ ImageRgb FalseColourDisparity(const ImageF& disparity) {
   return out;
 }
 
+/// Pixels per rule and class over the frame's full-size labels and rules.
+std::array<std::array<long, kNumClasses>, kNumLabelRules> PixelsByRule(const FrameResult& f) {
+  std::array<std::array<long, kNumClasses>, kNumLabelRules> counts{};
+  if (f.rules.width() != f.labels.width() || f.rules.height() != f.labels.height()) return counts;
+  for (std::size_t i = 0; i < f.labels.size(); ++i) {
+    const int rule = f.rules[i], c = f.labels[i];
+    if (rule < kNumLabelRules && c < kNumClasses) ++counts[rule][c];
+  }
+  return counts;
+}
+
+/// The rule image in colour over the left image, with a legend of the rules present: a swatch,
+/// the name and the pixel count per line, in the top left corner.
+ImageRgb ExplainPicture(const ImageU8& grey, const ImageU8& rules) {
+  cv::Mat picture(rules.height(), rules.width(), CV_8UC3);
+  std::array<long, kNumLabelRules> count{};
+  for (int v = 0; v < rules.height(); ++v) {
+    for (int u = 0; u < rules.width(); ++u) {
+      const int rule = std::min<int>(rules(v, u), kNumLabelRules - 1);
+      ++count[rule];
+      const Rgb8 c = LabelRules()[rule].colour;
+      const int g = grey.width() == rules.width() && grey.height() == rules.height() ? grey(v, u) : 128;
+      auto mix = [&](int channel) { return static_cast<std::uint8_t>((2 * channel + g) / 3); };
+      picture.at<cv::Vec3b>(v, u) = cv::Vec3b(mix(c.r), mix(c.g), mix(c.b));  // RGB order in the Mat
+    }
+  }
+  const double scale = 0.4;
+  const int line = 14;
+  int y = 4;
+  for (const LabelRuleInfo& info : LabelRules()) {
+    const long n = count[static_cast<int>(info.rule)];
+    if (n == 0) continue;
+    const std::string text = std::string(info.name) + " " + std::to_string(n);
+    cv::rectangle(picture, cv::Rect(2, y, 150, line), cv::Scalar(0, 0, 0), cv::FILLED);
+    cv::rectangle(picture, cv::Rect(4, y + 2, 10, line - 4), cv::Scalar(info.colour.r, info.colour.g, info.colour.b),
+                  cv::FILLED);
+    cv::putText(picture, text, cv::Point(18, y + line - 3), cv::FONT_HERSHEY_SIMPLEX, scale,
+                cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+    y += line;
+  }
+  ImageRgb out(rules.width(), rules.height());
+  for (int v = 0; v < rules.height(); ++v) {
+    for (int u = 0; u < rules.width(); ++u) {
+      const auto px = picture.at<cv::Vec3b>(v, u);
+      out(v, u) = Rgb8{px[0], px[1], px[2]};
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string FrameReportJson(const FrameResult& f, const std::string& name) {
@@ -90,6 +141,19 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
     j << (c ? ", " : "") << "\"" << ClassName(static_cast<TravClass>(c)) << "\": " << fragment_pixels[c];
   }
   j << "}},\n";
+  // Which rule set how many pixels of each class (LabelRule; the rules' pixels add up to the
+  // labels' per class).
+  const auto by_rule = PixelsByRule(f);
+  j << "  \"pixels_by_rule\": {";
+  for (const LabelRuleInfo& info : LabelRules()) {
+    const auto& counts = by_rule[static_cast<int>(info.rule)];
+    j << (info.rule == LabelRule::kNoDepth ? "\n" : ",\n") << "    \"" << info.name << "\": {";
+    for (int c = 0; c < kNumClasses; ++c) {
+      j << (c ? ", " : "") << "\"" << ClassName(static_cast<TravClass>(c)) << "\": " << counts[c];
+    }
+    j << "}";
+  }
+  j << "\n  },\n";
   j << "  \"segments\": [";
   bool first = true;
   for (const SegmentResult& s : a.segments) {
@@ -110,7 +174,7 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
 
 int RemoveFrameOutputs(const std::string& out_dir) {
   int removed = 0;
-  for (const char* dir : {"labels", "overlay", "disparity", "disparity_colour"}) {
+  for (const char* dir : {"labels", "overlay", "disparity", "disparity_colour", "explain", "explain_colour"}) {
     removed += RemoveFrameFiles(out_dir + "/" + dir, ".png");
   }
   return removed + RemoveFrameFiles(out_dir + "/frames", ".json");
@@ -124,7 +188,8 @@ void WriteRunConfig(const Config& config, const std::string& out_dir) {
 }
 
 void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, const std::string& name,
-                       bool disparity) {
+                       const FrameOutputExtras& extras) {
+  const bool disparity = extras.disparity;
   for (const char* sub : {"labels", "overlay", "frames"}) MakeDirectories(out_dir + "/" + sub);
   WriteImage(frame.labels, out_dir + "/labels/" + name + ".png");
   WriteImage(MakeOverlay(frame.left_rectified, frame.labels), out_dir + "/overlay/" + name + ".png");
@@ -140,6 +205,12 @@ void WriteFrameOutputs(const FrameResult& frame, const std::string& out_dir, con
     }
     WriteImage(fixed, out_dir + "/disparity/" + name + ".png");
     WriteImage(FalseColourDisparity(frame.disparity), out_dir + "/disparity_colour/" + name + ".png");
+  }
+  if (extras.explain) {
+    MakeDirectories(out_dir + "/explain");
+    MakeDirectories(out_dir + "/explain_colour");
+    WriteImage(frame.rules, out_dir + "/explain/" + name + ".png");
+    WriteImage(ExplainPicture(frame.left_rectified, frame.rules), out_dir + "/explain_colour/" + name + ".png");
   }
 }
 

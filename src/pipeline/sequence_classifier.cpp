@@ -55,7 +55,10 @@ ClassifySummary ClassifySequence(const Sequence& sequence, const Config& config,
   for (const StereoFrame& frame : run.frames()) {
     try {
       const FrameResult result = run.Classify(frame, run.gravity().UpInCamera(frame.timestamp_ns));
-      WriteFrameOutputs(result, options.out_dir, std::to_string(frame.timestamp_ns), options.write_disparity);
+      FrameOutputExtras extras;
+      extras.disparity = options.write_disparity;
+      extras.explain = options.write_explain;
+      WriteFrameOutputs(result, options.out_dir, std::to_string(frame.timestamp_ns), extras);
       summary.Add(result);
     } catch (const StrictStop&) {
       throw;

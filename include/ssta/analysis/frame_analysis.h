@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include "ssta/analysis/label_refinements.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/image.h"
 #include "ssta/stereo/rectifier.h"
@@ -19,6 +20,10 @@ struct FrameAnalysisInput {
   const ImageI32* segment_ids = nullptr;        ///< segment per pixel in [0, num_segments), -1 none
   int num_segments = 0;
   Eigen::Vector3d up_rectified = Eigen::Vector3d::Zero();  ///< unit up in the rectified cam0 frame
+  /// Optional, of the cloud's size: 0 where a point has no support in the image
+  /// (SupportedPixels); the local steps leave such points out of their height grid. nullptr:
+  /// every point is used.
+  const ImageU8* supported = nullptr;
 };
 
 /// The analysis of one frame after segmentation: the paper's SSTA (AnalyzeSurfaces, eq. 2-5;
@@ -35,7 +40,8 @@ struct FrameAnalysisInput {
 /// steps 1, 4 and 5 read inputs no other step changes; they run beside the steps before them, and
 /// their results are applied at their places in the chain, so the labels are those of the steps
 /// one after the other (the texture mask of analysis.label_min_texture needs the full image and
-/// is applied by FramePipeline after this).
+/// is applied by FramePipeline after this). AnalysisResult::rules names the step that set each
+/// pixel's class (LabelRule).
 /// Not thread-safe: Analyze reuses the analyzer's buffers; use one analyzer per thread.
 class FrameAnalyzer {
  public:
@@ -54,6 +60,7 @@ class FrameAnalyzer {
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
   ImageU8 step_classes_;    // the local steps' classes, kept between frames
+  LabelRuleTracker rule_tracker_;  // the labels before each step, for AnalysisResult::rules
 };
 
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
@@ -68,5 +75,23 @@ ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& g
 /// with range); 0 above the horizon without texture: the sky, where matching finds noise.
 ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
                         const Eigen::Vector3d& up_rectified);
+
+/// SupportedPixels judged with the disparity (the common area's, [px], 0 invalid), column by
+/// column from the bottom up against the closest valid pixel within 32 rows below:
+/// - a floating piece of the matcher's noise is not supported: on a run of one surface (each
+///   pixel's disparity within max(1 px, 10 %) of the one below) that begins nearer than the pixel
+///   below it (its disparity larger by more than that), it starts at the first pixel below the
+///   horizon without texture along its row (the standard deviation along the rows of the block,
+///   pooled, below `min_std`: a horizontal edge fixes no disparity) and takes the rest of the
+///   run below the horizon, with or without texture. (Above the horizon a leaning trunk crosses a column above the far ground
+///   it hides nothing of; points there are above the camera.) A surface standing on the ground is
+///   never nearer than what is seen just below it; in a blank band near the horizon the matcher
+///   finds disparities of nearby things hanging in the air above far ground;
+/// - a pixel without texture above the horizon is supported where it continues a supported
+///   surface below it (its disparity within max(1 px, 5 %) of the one below) and lies near
+///   enough for its depth to be known to 5 % (disparity >= 5 px): a blank wall above a textured
+///   base or window, not a blank sky.
+ImageU8 SupportedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std,
+                        const Eigen::Vector3d& up_rectified, const ImageF& disparity);
 
 }  // namespace ssta

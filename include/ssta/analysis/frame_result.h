@@ -26,6 +26,9 @@ struct FrameResult {
   AnalysisResult analysis;  ///< on the cropped area
   /// Class ids at the full rectified size; 0 (unknown) outside the common area.
   ImageU8 labels;
+  /// The LabelRule (label_rule.h) that set each label, at the labels' size; `outside` outside
+  /// the common area.
+  ImageU8 rules;
   /// The matcher's inputs (rectified, cropped to the common area), kept for the map's sub-pixel
   /// refinement (map.subpixel_window_px > 0, stereo.subpixel_window_px 0, matched frames only);
   /// empty otherwise.

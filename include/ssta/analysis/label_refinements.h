@@ -154,8 +154,11 @@ void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eige
 /// it: LocalStepClasses reads the cloud and normals only and writes, per pixel, the step class of
 /// its point (0: none, its point is missing or too smeared); ApplyLocalStepClasses then changes
 /// the labels. The two in turn give exactly RefineByLocalSteps' labels.
+/// `supported` (optional, the cloud's size): points where it is 0 stay out of the grid and get
+/// no step class.
 void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
-                      const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes);
+                      const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes,
+                      const ImageU8* supported = nullptr);
 void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels);
 
 }  // namespace ssta

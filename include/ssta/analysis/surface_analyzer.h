@@ -230,6 +230,10 @@ struct AnalysisResult {
   int depth_pixels = 0;      ///< pixels with a valid 3D point
   /// Class per pixel (image size): 0 without depth, 4 undecided, else the segment's verdict.
   ImageU8 labels;
+  /// The LabelRule (label_rule.h) that set each pixel's class, as a uint8 (image size):
+  /// AnalyzeSurfaces writes no_depth, quality_check, no_segment, segment or small_segment; each
+  /// later step writes its rule where it changes a label.
+  ImageU8 rules;
 };
 
 /// Superpixel Surface Traversability Analysis of one frame.

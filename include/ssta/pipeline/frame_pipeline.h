@@ -54,6 +54,7 @@ class FramePipeline {
   Config config_;
   StereoCalibration calibration_;
   std::unique_ptr<Stages> stages_;
+  ImageU8 supported_;  // the frame's supported pixels (analysis.label_min_texture), reused
 };
 
 }  // namespace ssta

@@ -22,6 +22,7 @@ struct ClassifyOptions {
   /// unreadable image, wrong size) is an error instead of a skip with a reason.
   FrameSelection frames;
   bool write_disparity = false; ///< also write disparity/<ts>.png in false colour
+  bool write_explain = false;   ///< also write explain/<ts>.png (rule ids) and explain_colour/<ts>.png
   /// Use the sequence's gt/disparity/<ts>.png (16-bit, disparity * 256) instead of stereo
   /// matching: measures the analysis alone on synthetic sequences.
   bool oracle_disparity = false;
