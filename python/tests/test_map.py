@@ -45,7 +45,7 @@ def the_map(yard_map):
 def points(the_map):
     """A grid over the map's bounds and a margin beyond them (unobserved columns too)."""
     x0, y0, _, x1, y1, _ = the_map.bounds
-    xs, ys = np.meshgrid(np.linspace(x0 - 1, x1 + 1, 23), np.linspace(y0 - 1, y1 + 1, 17))
+    xs, ys = np.meshgrid(np.linspace(x0 - 1, x1 + 1, 61), np.linspace(y0 - 1, y1 + 1, 45))
     return np.column_stack([xs.ravel(), ys.ravel()])
 
 
