@@ -60,17 +60,13 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
     cell.cls = TravClass::kUndecided;
     return cell;
   }
-  const double prior = map.options().class_prior_traversable_log_odds;
-  std::array<double, 3> evidence{};
-  for (int k = 0; k < 3; ++k) evidence[k] = static_cast<double>(l[k]) + (k == 0 ? prior : 0.0);
+  const std::array<double, 3> p = FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
   int best = 0;
   for (int k = 1; k < 3; ++k) {
-    if (evidence[k] >= evidence[best]) best = k;  // ties to the worse class
+    if (p[k] >= p[best]) best = k;  // ties to the worse class
   }
-  double denominator = 0.0;
-  for (int k = 0; k < 3; ++k) denominator += std::exp(evidence[k]);
   cell.cls = static_cast<TravClass>(best + 1);
-  cell.probability = std::exp(evidence[best]) / denominator;
+  cell.probability = p[static_cast<std::size_t>(best)];
   cell.confidence = cell.probability;
   cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m, cell.confidence);
   return cell;

@@ -442,7 +442,8 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   }
 
   if (!impl_->insert_scratch) impl_->insert_scratch = std::make_shared<internal::InsertScratch>();
-  internal::FrameFusion fusion(tree, impl_->options, impl_->metadata.vehicle.max_step_m, sensor_origin_world, impl_->insert_scratch.get(), &stats);
+  internal::FrameFusion fusion(tree, impl_->options, impl_->metadata.vehicle.max_step_m, sensor_origin_world,
+                               impl_->insert_scratch.get(), &stats);
   fusion.GroupPointsByVoxel(points);
   fusion.PlaceRayEnds();
   if (impl_->options.free_space_ray_cell > 1) fusion.MergeRayEndsPerCell();

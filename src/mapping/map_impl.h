@@ -4,6 +4,8 @@
 // queries, file I/O) and reachable from the exporters and tests through
 // TraversabilityMapAccess.
 
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -49,6 +51,18 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
                       const octomap::OcTreeKey& key);
 
 /// Whether `node` is occupied: its occupancy at or above the tree's threshold.
+/// The probabilities of the three classes from a voxel's class log-odds (softmax), the
+/// traversable one raised by `prior_traversable` (MapOptions::class_prior_traversable_log_odds).
+inline std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>& log_odds, double prior_traversable) {
+  std::array<double, 3> p{};
+  double total = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    total += (p[k] = std::exp(static_cast<double>(log_odds[k]) + (k == 0 ? prior_traversable : 0.0)));
+  }
+  for (double& x : p) x /= total;
+  return p;
+}
+
 inline bool NodeOccupied(const TravOcTree& tree, const TravNode& node) {
   return node.getLogOdds() >= tree.getOccupancyThresLog();
 }

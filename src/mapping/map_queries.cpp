@@ -111,32 +111,12 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
   return true;
 }
 
-/// The probabilities of the three classes from a column's class log-odds (softmax), the
-/// traversable one raised by `prior_traversable` (MapOptions::class_prior_traversable_log_odds).
-std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>& log_odds, double prior_traversable) {
-  std::array<double, 3> p{};
-  double total = 0.0;
-  for (int k = 0; k < 3; ++k) {
-    total += (p[k] = std::exp(static_cast<double>(log_odds[k]) + (k == 0 ? prior_traversable : 0.0)));
-  }
-  for (double& x : p) x /= total;
-  return p;
-}
-
-/// The class distribution of the worse of two independent verdicts `a` and `b`: P(class <= k)
-/// is the product of the two (as JudgeSurface combines slope and step).
-std::array<double, 3> WorseOf(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-  const double at_most_trav = a[0] * b[0];
-  const double at_most_semi = (a[0] + a[1]) * (b[0] + b[1]);
-  return {at_most_trav, std::max(0.0, at_most_semi - at_most_trav), std::max(0.0, 1.0 - at_most_semi)};
-}
-
 /// A column's class from the frames' evidence and the fused surface around it. Each has its
 /// blind spot: a frame sees a lip or the ring around a rock that the fused surface lacks the
 /// columns to show (the floor below a drop-off is hidden, a rock's top is never seen), and the
 /// fused surface shows a jump between columns that no single frame saw both sides of. So:
 ///  - a surface that finds a slope or a jump (its most probable class is not traversable)
-///    makes the column the worse of the two verdicts (WorseOf): either one's hazard counts;
+///    makes the column the worse of the two verdicts (WorseOfClasses): either one's hazard counts;
 ///  - a surface that finds open ground vouches for it only where it sees every column that
 ///    meets the disc (DiscFullySeen): then its verdict is a likelihood multiplied into the
 ///    frames';
@@ -153,14 +133,14 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const auto& l = node->class_log_odds;
   const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
   if (!surface.determined && !has_evidence) return;  // undecided: nothing to judge by
-  const std::array<double, 3> frames = FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
+  const std::array<double, 3> frames = internal::FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
   std::array<double, 3> posterior = frames;
   if (surface.determined && !has_evidence) {
     posterior = surface.probability;
   } else if (surface.determined) {
     const auto& s = surface.probability;
     if (s[1] >= s[0] || s[2] >= s[0]) {
-      posterior = WorseOf(frames, s);
+      posterior = WorseOfClasses(frames, s);
     } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
       double total = 0.0;
       for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * s[k]);

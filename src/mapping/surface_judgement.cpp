@@ -129,11 +129,14 @@ SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<Sur
       ClassProbabilities(v.slope_deg, v.slope_sigma_deg, vehicle.semi_slope_deg, vehicle.max_slope_deg);
   const std::array<double, 3> step = ClassProbabilities(v.step_m, std::max(0.01, v.step_sigma_m),
                                                         vehicle.semi_step_m, vehicle.max_step_m);
-  // The worse of two independent classes: P(class <= k) is the product of the two.
-  const double trav = slope[0] * step[0];
-  const double at_most_semi = (slope[0] + slope[1]) * (step[0] + step[1]);
-  v.probability = {trav, std::max(0.0, at_most_semi - trav), std::max(0.0, 1.0 - at_most_semi)};
+  v.probability = WorseOfClasses(slope, step);
   return v;
+}
+
+std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+  const double at_most_trav = a[0] * b[0];
+  const double at_most_semi = (a[0] + a[1]) * (b[0] + b[1]);
+  return {at_most_trav, std::max(0.0, at_most_semi - at_most_trav), std::max(0.0, 1.0 - at_most_semi)};
 }
 
 }  // namespace ssta

@@ -40,6 +40,10 @@ struct SurfaceVerdict {
   std::array<double, 3> probability{1.0 / 3, 1.0 / 3, 1.0 / 3};
 };
 
+/// The class distribution of the worse of two independent verdicts `a` and `b` (probabilities
+/// of traversable, semi-traversable, non-traversable): P(class <= k) is the product of the two.
+std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::array<double, 3>& b);
+
 /// Judges the cell at `centre` from the `samples` of the columns (a grid `spacing_m` apart)
 /// whose centres lie within `vehicle.step_radius_m` of it, the cell's own included. A plane is
 /// fitted by iteratively reweighted least squares (weights 1 / sigma^2, Huber on the residuals)
