@@ -36,6 +36,8 @@ if [ -d "$seq/gt" ] || [ -d "$seq/mav0/gt" ]; then
   echo "== scoring against the ground truth"
   "$ssta" eval labels --pred "$out/classified" --gt "$seq" --json "$out/eval.json" --pictures "$out/compare"
   "$ssta" eval grid --pred "$out/grid" --gt "$seq" --json "$out/eval_map.json" --picture "$out/eval_map.png"
+  # What a planner is told: a 1.0 x 0.6 m robot every 0.5 m, unsafe and falsely blocked.
+  "$ssta" eval footprints --map "$out/map.ot" --gt "$seq" --as-exported --json "$out/eval_footprints.json"
 fi
 
 cat <<MSG
@@ -51,4 +53,5 @@ Done. Look at:
   $out/map.ot                the map (ssta query / ssta export read it; maps/README.md)
   $out/grid.png              the map's top-down grid in class colours (grid.yaml for map_server)
   $out/eval_map.png          truth | map | errors; eval_map.json the map's scores
+  $out/eval_footprints.json  what a planner is told: unsafe and falsely blocked robot footprints
 MSG
