@@ -11,6 +11,9 @@
 #include "ssta/core/error.h"
 
 int main(int argc, char** argv) {
+  // OpenCV reads OPENCV_FOR_THREADS_NUM only when asked for its default: with it set, the default
+  // thread count (no --threads) is that number, as OpenCV documents; without it, every core.
+  cv::setNumThreads(-1);
   CLI::App app{"ssta: stereo superpixel surface traversability analysis (SSTA) and maps"};
   app.name("ssta");
   app.set_version_flag("--version", std::string("ssta ") + SSTA_VERSION);
