@@ -5,8 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <iostream>
 #include <vector>
 
+#include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/mapping/map_export.h"
@@ -66,6 +70,25 @@ ConfusionMatrix MapGridScore(const std::string& seq_dir, const Config& config, c
   BuildMap(Sequence::Open(seq_dir), "yard", config, options);
   ExportGrid(TraversabilityMap::Load(options.map_path), dir / "grid");
   return EvaluateExportedGrid(dir / "grid", seq_dir).matrix;
+}
+
+// What a planner is told about the truth's footprints (1.0 x 0.6 m, every 0.5 m, four headings)
+// by the map MapGridScore left in `dir`, answered as exported: `ssta eval footprints
+// --as-exported`.
+FootprintEvalSummary FootprintScore(const std::string& seq_dir, const testing::TempDir& dir) {
+  const ClassGrid truth = ReadGroundTruthGrid(seq_dir);
+  const TraversabilityMap map = TraversabilityMap::Load(dir / "m.ot");
+  const FootprintEvalOptions footprint;
+  const double reach = 0.5 * std::hypot(footprint.length_m, footprint.width_m);
+  const Eigen::Vector2d size(truth.classes.width() * truth.resolution_m, truth.classes.height() * truth.resolution_m);
+  const ExportedSurface exported(map, Eigen::AlignedBox2d(truth.origin_m - Eigen::Vector2d::Constant(reach),
+                                                          truth.origin_m + size + Eigen::Vector2d::Constant(reach)));
+  const auto oracle = [&](const FootprintPose& pose) {
+    const FootprintResult r =
+        map.QueryFootprint({pose.x_m, pose.y_m, pose.yaw_rad, footprint.length_m, footprint.width_m}, exported);
+    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
+  };
+  return ScoreFootprints(truth, footprint, oracle, ReadDrivenPath(seq_dir).points);
 }
 
 TEST(EndToEnd, YardClassifiedWithSgbm) {
@@ -167,6 +190,18 @@ TEST(EndToEnd, DropOffAndForestMapsHoldTheirAccuracy) {
     RecordProperty(scene.scene + "_accuracy", std::to_string(m.Accuracy()));
     EXPECT_GE(m.Accuracy(), 0.88);
     EXPECT_GT(m.Coverage(), 0.90);
+    const FootprintEvalSummary footprints = FootprintScore(seq / "seq", out);
+    const double unsafe = footprints.matrix.UnsafeRate(), blocked = footprints.matrix.FalselyBlockedRate();
+    RecordProperty(scene.scene + "_footprints_unsafe", std::to_string(unsafe));
+    RecordProperty(scene.scene + "_footprints_falsely_blocked", std::to_string(blocked));
+    std::cout << scene.scene << " footprints: unsafe " << unsafe << ", falsely blocked " << blocked << " of " << footprints.matrix.Scored() << " scored\n";
+    // Floors, not the targets of docs/accuracy.md (unsafe <= 5 %, falsely blocked <= 10 %):
+    // measured unsafe 0.45 (drop-off: its lip) and 0.21 (forest), falsely blocked 0.027 and
+    // 0.085. A change that loses obstacles or blocks free ground beyond these fails.
+    const bool dropoff = scene.scene == "dropoff";
+    EXPECT_LE(unsafe, dropoff ? 0.50 : 0.26);
+    EXPECT_LE(blocked, dropoff ? 0.06 : 0.12);
+    EXPECT_GT(footprints.matrix.Scored(), 200);
   }
 }
 
