@@ -136,7 +136,7 @@ TEST(McapExport, ReadBackHoldsTheGridOfThePgmExportTheLayersTheVoxelsAndThePath)
   ASSERT_EQ(h, pgm.height());
   EXPECT_NEAR(occupancy.Get<double>(), grid.origin.x(), 1e-12);
   EXPECT_NEAR(occupancy.Get<double>(), grid.origin.y(), 1e-12);
-  for (int k = 0; k < 5; ++k) occupancy.Get<double>();  // z, orientation x y z
+  for (int k = 0; k < 4; ++k) occupancy.Get<double>();  // z, orientation x y z
   EXPECT_EQ(occupancy.Get<double>(), 1.0);                // orientation w
   ASSERT_EQ(occupancy.Get<std::uint32_t>(), static_cast<std::uint32_t>(w * h));
   int occupied = 0, differing = 0;
