@@ -15,12 +15,16 @@ packages=(
   python3-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest python3-matplotlib
   # the fleet recipe and its test: a one-node Slurm cluster
   slurm-wlm slurmctld slurmd munge
+  # the MCAP export's test: an independent reader on node (its npm packages: tests/mcap_reader/)
+  nodejs
 )
 
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
+# Debian's npm, unless an npm is there already (a nodejs package from elsewhere brings its own).
+command -v npm > /dev/null || missing+=(npm)
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages already installed"
   exit 0

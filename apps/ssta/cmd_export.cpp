@@ -26,6 +26,8 @@ struct ExportArgs {
   int fill_min_neighbours = GridExportOptions{}.fill_min_neighbours;
   double local_ground_radius_m = GridExportOptions{}.local_ground_radius_m;
   bool flat = false;
+  std::string compression = "zstd";
+  std::string frame = McapExportOptions{}.map_frame;
 };
 
 // True when `a` and `b` name the same file (or would, once written).
@@ -97,39 +99,57 @@ void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_n
 
 void RegisterExport(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
-  CLI::App* cmd = app.add_subcommand("export", "Export a map: a navigation grid, an octovis tree, point clouds or CSV");
+  CLI::App* cmd = app.add_subcommand(
+      "export", "Export a map: a navigation grid, a ROS 2 bag, an octovis tree, point clouds or CSV");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   AddMapConfig(cmd, &args->config);
   cmd->add_option("--format", args->format,
                   "grid (PREFIX.png, PREFIX_classes.png, PREFIX.pgm, PREFIX.yaml for map_server) | picture "
-                  "(PREFIX.png for people: the grid with legend, scale, axes, sensor path, relief) | octovis "
-                  "(PREFIX.ot ColorOcTree) | ply | pcd | csv")
+                  "(PREFIX.png for people: the grid with legend, scale, axes, sensor path, relief) | mcap "
+                  "(PREFIX.mcap, a ROS 2 bag: /map OccupancyGrid, /traversability GridMap, /traversability/voxels "
+                  "PointCloud2, /sensor_path, /tf_static; latched) | octovis (PREFIX.ot ColorOcTree) | ply | pcd | csv")
       ->required()
-      ->check(CLI::IsMember({"grid", "picture", "octovis", "ply", "pcd", "csv"}));
-  cmd->add_option("--out", args->out, "output prefix (the extension is added)")->required()->check(OutputPrefix());
+      ->check(CLI::IsMember({"grid", "picture", "mcap", "octovis", "ply", "pcd", "csv"}));
+  cmd->add_option("--out", args->out, "output prefix (the extension is added; mcap also takes FILE.mcap)")
+      ->required()
+      ->check(OutputPrefix());
   cmd->add_option("--resolution", args->resolution_m,
-                  "grid, picture: pixel edge [m] (default: the map's; a picture of a large map coarsens to 1500 "
+                  "grid, picture, mcap: pixel edge [m] (default: the map's; a picture of a large map coarsens to 1500 "
                   "cells along its longer side); a coarser pixel takes the worst class of the map columns it holds");
-  cmd->add_option("--region", args->region, "grid, picture: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
+  cmd->add_option("--region", args->region, "grid, picture, mcap: XMIN,YMIN,XMAX,YMAX [m] (default: the observed surface)")
       ->delimiter(',')
       ->expected(4);
-  AddGridExportSteps(cmd, "grid, picture: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
+  AddGridExportSteps(cmd, "grid, picture, mcap: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
   cmd->add_flag("--flat", args->flat, "picture: flat class colours, without the relief shading");
+  cmd->add_option("--compression", args->compression, "mcap: how its chunks are compressed")
+      ->check(CLI::IsMember({"zstd", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--frame", args->frame,
+                  "mcap: the frame of its messages; /tf_static places the map's world frame in it (identity)")
+      ->capture_default_str();
   cmd->callback([args, cmd] {
     const std::string& f = args->format;
-    const bool gridded = f == "grid" || f == "picture";
+    const bool gridded = f == "grid" || f == "picture" || f == "mcap";
     if (!gridded) {  // the grid's options would be ignored: say so instead
       for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
-        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid or picture");
+        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid, picture or mcap");
       }
     }
     if (f != "picture" && args->flat) throw Error("--flat: only for --format picture");
+    for (const char* option : {"--compression", "--frame"}) {
+      if (f != "mcap" && cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
+    }
+    if (args->frame.empty()) throw Error("--frame: must not be empty");
+    // mcap: `--out map.mcap` names the file itself.
+    const bool named_mcap = f == "mcap" && args->out.size() > 5 && args->out.substr(args->out.size() - 5) == ".mcap";
+    if (named_mcap) args->out.resize(args->out.size() - 5);
     if (cmd->count("--resolution") > 0 && !(args->resolution_m > 0.0 && std::isfinite(args->resolution_m))) {
       throw Error("--resolution: must be a positive number of metres");
     }
     const std::vector<std::string> suffixes =
         f == "grid"      ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
         : f == "picture" ? std::vector<std::string>{".png"}
+        : f == "mcap"    ? std::vector<std::string>{".mcap"}
                          : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
     for (const std::string& suffix : suffixes) {
       if (SameFile(args->out + suffix, args->map)) {
@@ -166,6 +186,15 @@ void RegisterExport(CLI::App& app) {
                 std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
                 " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
                 " holes filled)";
+    } else if (f == "mcap") {
+      McapExportOptions mcap;
+      mcap.grid = options;
+      mcap.zstd = args->compression == "zstd";
+      mcap.map_frame = args->frame;
+      const McapExportSummary s = ExportMcap(map, args->out + ".mcap", mcap);
+      written = args->out + ".mcap (" + std::to_string(s.bytes) + " bytes in " + std::to_string(s.chunks) +
+                " chunks; " + std::to_string(s.grid_width) + "x" + std::to_string(s.grid_height) + " cells, " +
+                std::to_string(s.voxels) + " voxels, " + std::to_string(s.path_poses) + " path poses)";
     } else if (f == "octovis") {
       ExportOctovis(map, args->out + ".ot");
       written = args->out + ".ot";

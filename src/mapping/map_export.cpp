@@ -160,6 +160,7 @@ int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolera
       if (std::abs(z - *mid) > tolerance_m + 1e-6) continue;
       grid->classes(v, u) = kTrav;
       grid->cost(v, u) = 0.0f;
+      if (grid->confidence.size() == in.size()) grid->confidence(v, u) = std::numeric_limits<float>::quiet_NaN();
       ++changed;
     }
   }

@@ -430,7 +430,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
   const Eigen::Vector2d cells = (region.sizes() / resolution_m).array() - 1e-9;
   const double w = std::max(1.0, std::ceil(cells.x()));
   const double h = std::max(1.0, std::ceil(cells.y()));
-  if (w * h > static_cast<double>(1 << 26)) {  // 17 bytes a pixel: ~1.1 GB (819 m square at 0.1 m)
+  if (w * h > static_cast<double>(1 << 26)) {  // 21 bytes a pixel: ~1.1 GB (819 m square at 0.1 m)
     throw Error("grid projection: more than 2^26 pixels; use a coarser resolution or a smaller region");
   }
   GridProjection grid;
@@ -443,6 +443,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
   grid.height_m = ImageF(width, height, nan);
   grid.slope_deg = ImageF(width, height, nan);
   grid.step_m = ImageF(width, height, nan);
+  grid.confidence = ImageF(width, height, nan);
   // A pixel coarser than the map's columns takes the worst of the columns whose centres it
   // holds (a planner must not read an obstacle's pixel as free); at the map's resolution or
   // finer, the column under the pixel's centre.
@@ -471,6 +472,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
       grid.height_m(v, u) = static_cast<float>(cell.center.z());
       grid.slope_deg(v, u) = static_cast<float>(cell.slope_deg);
       grid.step_m(v, u) = static_cast<float>(cell.step_m);
+      grid.confidence(v, u) = static_cast<float>(cell.confidence);
     }
   }
   return grid;

@@ -3,6 +3,7 @@
 // Exports of a TraversabilityMap for other tools. Every file is written atomically (temporary
 // file + rename); failures throw ssta::Error naming the file.
 
+#include <cstdint>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -122,6 +123,56 @@ CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{},
                           GridExportChanges* changes = nullptr);
+
+/// The value of a grid pixel in the `mcap` export's nav_msgs/OccupancyGrid, from its class id
+/// and cost: non-traversable 100; traversable and semi-traversable round(100 cost) (0..75), or,
+/// for a filled hole (no cost), the top of its class's cost range (25, 75); unknown and
+/// undecided -1. So map_server's reading of the `grid` export's PGM (0 occupied, 254 free, 205
+/// unknown) is this value thresholded: 100 occupied, -1 unknown, free otherwise.
+std::int8_t OccupancyGridValue(std::uint8_t cls, float cost);
+
+struct McapExportOptions {
+  /// The grid of /map and /traversability, as the `grid` export makes it (ProjectAsExported).
+  GridExportOptions grid;
+  /// Chunks compressed with zstd; false: uncompressed.
+  bool zstd = true;
+  /// The frame the messages are given in (their header.frame_id). Must not be empty.
+  std::string map_frame = "map";
+  /// The world frame W the map's coordinates are in, the child of map_frame on /tf_static
+  /// (identity transform). Empty: the map's metadata().world_frame, or "world" when unnamed.
+  /// When it equals map_frame, /tf_static holds no transform.
+  std::string world_frame;
+};
+
+/// What ExportMcap wrote.
+struct McapExportSummary {
+  int grid_width = 0, grid_height = 0;  ///< cells of /map and /traversability
+  std::size_t voxels = 0;               ///< points of /traversability/voxels
+  std::size_t path_poses = 0;           ///< poses of /sensor_path
+  std::uint64_t bytes = 0;              ///< the file's size [bytes]
+  std::uint32_t chunks = 0;             ///< MCAP chunks
+  GridExportChanges changes;            ///< what the grid's export steps changed
+};
+
+/// The `mcap` export: a ROS 2 bag in one MCAP file (`ros2 bag play`, Foxglove, rviz2), written
+/// with SSTA's MCAP writer (chunked, zstd or uncompressed, chunk and section CRCs, a summary
+/// with statistics and chunk indexes), messages in CDR with their ros2msg schemas. One message
+/// on each channel, all latched (offered QoS: reliable, transient local, keep last 1), stamped
+/// with the map's last frame time:
+///  - /map, nav_msgs/msg/OccupancyGrid: the `grid` export's grid (same region, resolution and
+///    origin as its YAML), values OccupancyGridValue, row 0 the smallest y (ROS's convention).
+///  - /traversability, grid_map_msgs/msg/GridMap: layers class (ids, NaN unknown), cost,
+///    confidence, elevation (top surface voxel centre z [m]), slope [deg], step [m]; grid_map's
+///    conventions: index (i, j) grows towards -x and -y from the cell at the largest x and y,
+///    column-major Float32MultiArray (labels "column_index", "row_index"), pose the grid's centre.
+///  - /traversability/voxels, sensor_msgs/msg/PointCloud2: every occupied voxel's centre (x, y, z
+///    float32), class (uint8), cost and confidence (float32), as SurfaceCells.
+///  - /sensor_path, nav_msgs/msg/Path: sensor_path(), each pose facing the next.
+///  - /tf_static, tf2_msgs/msg/TFMessage: map_frame -> world_frame, identity.
+/// Written atomically. Throws ssta::Error as ExportGrid, for an empty map_frame, or naming the
+/// file when it cannot be written.
+McapExportSummary ExportMcap(const TraversabilityMap& map, const std::string& path,
+                             const McapExportOptions& options = McapExportOptions{});
 
 /// The `octovis` export: an OctoMap ColorOcTree file `path` (.ot) of the occupied voxels with
 /// their occupancy, coloured by class (undecided grey 128), which octovis opens.

@@ -148,6 +148,9 @@ struct GridProjection {
   ImageF height_m;    ///< z of the top surface voxel centre [m]; NaN where unobserved
   ImageF slope_deg;   ///< mean slope [deg]; NaN where unobserved
   ImageF step_m;      ///< mean step [m]; NaN where unobserved
+  /// The pixel's CellInfo::confidence in [0, 1]; NaN where there is no class 1..3 (and where an
+  /// export step, not the map's evidence, set the class).
+  ImageF confidence;
 
   int width() const { return classes.width(); }
   int height() const { return classes.height(); }

@@ -120,7 +120,7 @@ class TraversabilityMap {
   /// map's resolution or finer, TopSurfaceAt of each pixel centre; coarser, the worst class
   /// among the map columns whose centres the pixel holds (its cost, height, slope, step). The
   /// grid starts at region.min() and covers the region (ceil). Throws ssta::Error for an
-  /// empty region, resolution <= 0, or more than 2^26 pixels (~1.1 GB).
+  /// empty region, resolution <= 0, or more than 2^26 pixels (~1.4 GB).
   GridProjection Project(const Eigen::AlignedBox2d& region, double resolution_m) const;
 
   /// Every occupied voxel at map resolution (pruned blocks expanded), in OctoMap key order.
