@@ -78,8 +78,8 @@ analyse() {
         exit 1
       }
       d_nodes = nodes[n] - nodes[1]
-      printf "verdict: OK: resident memory grew %.1f MB from frame %d to %d while the map gained %d nodes (%s B/node; allowed %.1f MB)\n",
-             (rss[n] - rss[1]) / 1024.0, f[1], f[n], d_nodes,
+      printf "verdict: OK: resident memory grew %.1f MB from frame %d to %d while the map went from %d to %d nodes (%s B/node gained; allowed %.1f MB)\n",
+             (rss[n] - rss[1]) / 1024.0, f[1], f[n], nodes[1], nodes[n],
              (d_nodes > 0 ? sprintf("%.1f", (rss[n] - rss[1]) * 1024.0 / d_nodes) : "-"),
              (node_bytes * (d_nodes > 0 ? d_nodes : 0) + frame_bytes * (f[n] - f[1]) + slack_mb * 1048576.0) / 1048576.0
     }' "$samples"

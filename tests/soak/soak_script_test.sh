@@ -36,7 +36,7 @@ allowed_kb() { echo $(((160 * $1 + 256 * $2 + 16 * 1048576) / 1024)); }
   done
 } > "$root/ok.tsv"
 run --analyse "$root/ok.tsv"
-expect 0 '^verdict: OK: resident memory grew 76\.3 MB from frame 1000 to 5000 while the map gained 800000 nodes \(100\.0 B/node' "nodes explain"
+expect 0 '^verdict: OK: resident memory grew 76\.3 MB from frame 1000 to 5000 while the map went from 100000 to 900000 nodes \(100\.0 B/node gained' "nodes explain"
 expect 0 '^start +1000 +97\.7 ' "start row"
 expect 0 '^middle +3000 ' "middle row (the sample nearest halfway)"
 expect 0 '^end +5000 +174\.0 +174\.4 +900000 ' "end row: frames, RSS, HWM, nodes"
