@@ -88,6 +88,13 @@ std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, con
 
 }  // namespace
 
+InsertStats FuseFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points,
+                      TraversabilityMap* map) {
+  MapPointsOfFrame(frame, world_T_rectified, config.map, geometry, config.vehicle, points);
+  return map->InsertFrame(*points, world_T_rectified.translation(), frame.timestamp_ns);
+}
+
 bool BuildMapOptions::IsValid(std::string* error) const {
   if (map_path.empty()) return Fail(error, "map: a map file is required");
   return frames.IsValid(error);
@@ -290,8 +297,7 @@ class MapBuilder {
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
-        MapPointsOfFrame(*result, world_T_rectified, config_.map, run_.geometry(), config_.vehicle, &map_points_);
-        stats = map_.InsertFrame(map_points_, world_T_rectified.translation(), t);
+        stats = FuseFrame(*result, world_T_rectified, config_, run_.geometry(), &map_points_, &map_);
       } catch (const Error& e) {
         RecordSkip(t, e.what());
         return;

@@ -70,6 +70,14 @@ struct BuildMapSummary {
   std::string Json() const;
 };
 
+/// Fuses one classified frame into `map` the way BuildMap does: its points (MapPointsOfFrame with
+/// config.map and config.vehicle, written into `*points`, which is cleared first and keeps its
+/// capacity from frame to frame) inserted from the origin of `world_T_rectified` (the rectified
+/// cam0 frame in the world) at frame.timestamp_ns. Throws ssta::Error as InsertFrame does.
+InsertStats FuseFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points,
+                      TraversabilityMap* map);
+
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and
 /// pitch corrected by the IMU attitude filter where there is an IMU (GravityProvider); frames
