@@ -78,6 +78,7 @@ void AddWholeRun(const Sequence& sequence, const Config& config, int warmup, int
   using Clock = std::chrono::steady_clock;
   const int frames = warmup + measured;
   SequenceRun run(sequence, config, {1, frames, false});
+  run.set_read_ahead(true);
   const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
   const RigChain chain(body_T_camera, run.geometry());
   MapMetadata metadata;

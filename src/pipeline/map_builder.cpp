@@ -125,6 +125,7 @@ class MapBuilder {
     // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
     continues_this_sequence_ = options.resume && map_.frames_inserted() > 0 && same_sequence_;
     fused_up_to_ = map_.last_timestamp_ns();
+    run_.set_read_ahead(options.pipelined);  // the next frame's images decoded while this one is classified
     StartRecording(sequence_name);
     if (options.resume && !options.allow_overlap) RefuseFramesHeld(sequence_name);
     StartRefinement();

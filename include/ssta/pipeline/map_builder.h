@@ -37,7 +37,9 @@ struct BuildMapOptions {
   /// image, ...) is an error, and the map keeps what was fused before it.
   FrameSelection frames;
   /// Fuse frame k into the map on a second thread while frame k+1 is classified (one frame
-  /// waits at most). The map and the summary are the same as without; only the time differs.
+  /// waits at most), and read frame k+1's images while frame k is classified
+  /// (SequenceRun::set_read_ahead). The map and the summary are the same as without; only the
+  /// time differs.
   bool pipelined = true;
   /// The true disparity measures the analysis and the fusion apart from the matcher; the true
   /// labels with it the fusion alone, with the matcher what the matcher's geometry costs the
