@@ -58,28 +58,43 @@ std::uint64_t Fnv1a(std::uint64_t h, const char* data, std::size_t n) {
   return h;
 }
 
-/// Forwards everything to `sink` while counting bytes and hashing them (FNV-1a, 64 bit).
+/// Forwards everything to `sink` while counting bytes and hashing them (FNV-1a, 64 bit), in
+/// blocks of kBlock bytes: a map is written in millions of small pieces.
 class HashingStreamBuf : public std::streambuf {
  public:
-  explicit HashingStreamBuf(std::streambuf* sink) : sink_(sink) {}
-  std::uint64_t bytes() const { return bytes_; }
-  std::uint64_t hash() const { return hash_; }
+  explicit HashingStreamBuf(std::streambuf* sink) : sink_(sink), block_(kBlock) {
+    setp(block_.data(), block_.data() + block_.size());
+  }
+  HashingStreamBuf(const HashingStreamBuf&) = delete;
+  HashingStreamBuf& operator=(const HashingStreamBuf&) = delete;
+  /// Bytes and hash of everything written so far (the block not yet forwarded included).
+  std::uint64_t bytes() const { return bytes_ + static_cast<std::uint64_t>(pptr() - pbase()); }
+  std::uint64_t hash() const { return Fnv1a(hash_, pbase(), static_cast<std::size_t>(pptr() - pbase())); }
 
  protected:
   int_type overflow(int_type c) override {
+    if (!Forward()) return traits_type::eof();
     if (traits_type::eq_int_type(c, traits_type::eof())) return traits_type::not_eof(c);
-    const char ch = traits_type::to_char_type(c);
-    return xsputn(&ch, 1) == 1 ? c : traits_type::eof();
+    *pptr() = traits_type::to_char_type(c);
+    pbump(1);
+    return c;
   }
-  std::streamsize xsputn(const char* s, std::streamsize n) override {
-    hash_ = Fnv1a(hash_, s, static_cast<std::size_t>(n));
-    bytes_ += static_cast<std::uint64_t>(n);
-    return sink_->sputn(s, n);
-  }
-  int sync() override { return sink_->pubsync(); }
+  int sync() override { return Forward() ? sink_->pubsync() : -1; }
 
  private:
+  static constexpr std::size_t kBlock = 1 << 16;
+  /// Hashes the block and hands it to the sink; false when the sink takes less.
+  bool Forward() {
+    const std::streamsize n = pptr() - pbase();
+    hash_ = Fnv1a(hash_, pbase(), static_cast<std::size_t>(n));
+    bytes_ += static_cast<std::uint64_t>(n);
+    const bool ok = sink_->sputn(pbase(), n) == n;
+    setp(block_.data(), block_.data() + block_.size());
+    return ok;
+  }
+
   std::streambuf* sink_;
+  std::vector<char> block_;
   std::uint64_t bytes_ = 0;
   std::uint64_t hash_ = kFnvOffset;
 };

@@ -10,11 +10,6 @@ namespace ssta::internal {
 namespace {
 
 template <typename T>
-void WriteRaw(std::ostream& s, const T& v) {
-  s.write(reinterpret_cast<const char*>(&v), sizeof(T));
-}
-
-template <typename T>
 void ReadRaw(std::istream& s, T* v) {
   s.read(reinterpret_cast<char*>(v), sizeof(T));
 }
@@ -84,16 +79,26 @@ std::istream& TravNode::readData(std::istream& s) {
 }
 
 std::ostream& TravNode::writeData(std::ostream& s) const {
-  WriteRaw(s, value);
-  for (const float l : class_log_odds) WriteRaw(s, l);
-  WriteRaw(s, slope_deg);
-  WriteRaw(s, step_m);
-  WriteRaw(s, max_step_m);
-  WriteRaw(s, observations);
-  WriteRaw(s, last_seen_ns);
-  WriteRaw(s, surface_z);
-  WriteRaw(s, surface_weight);
-  WriteRaw(s, surface_xy_sigma_m);
+  // The fields packed one after the other, then one write: a map holds millions of nodes.
+  char bytes[sizeof(value) + sizeof(class_log_odds) + 6 * sizeof(float) + sizeof(observations) +
+             sizeof(last_seen_ns)];
+  char* at = bytes;
+  const auto put = [&at](const auto& v) {
+    std::memcpy(at, &v, sizeof(v));
+    at += sizeof(v);
+  };
+  put(value);
+  for (const float l : class_log_odds) put(l);
+  put(slope_deg);
+  put(step_m);
+  put(max_step_m);
+  put(observations);
+  put(last_seen_ns);
+  put(surface_z);
+  put(surface_weight);
+  put(surface_xy_sigma_m);
+  SSTA_CHECK(at == bytes + sizeof(bytes), "TravNode::writeData: the fields do not fill the record");
+  s.write(bytes, sizeof(bytes));
   return s;
 }
 

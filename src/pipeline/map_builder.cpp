@@ -88,6 +88,13 @@ std::optional<Eigen::Isometry3d> RecordedMount(const TraversabilityMap& map, con
 
 }  // namespace
 
+InsertStats FuseFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points,
+                      TraversabilityMap* map) {
+  MapPointsOfFrame(frame, world_T_rectified, config.map, geometry, config.vehicle, points);
+  return map->InsertFrame(*points, world_T_rectified.translation(), frame.timestamp_ns);
+}
+
 bool BuildMapOptions::IsValid(std::string* error) const {
   if (map_path.empty()) return Fail(error, "map: a map file is required");
   return frames.IsValid(error);
@@ -118,6 +125,7 @@ class MapBuilder {
     // Continuing an interrupted run of this sequence: what the map holds is not fused twice.
     continues_this_sequence_ = options.resume && map_.frames_inserted() > 0 && same_sequence_;
     fused_up_to_ = map_.last_timestamp_ns();
+    run_.set_read_ahead(options.pipelined);  // the next frame's images decoded while this one is classified
     StartRecording(sequence_name);
     if (options.resume && !options.allow_overlap) RefuseFramesHeld(sequence_name);
     StartRefinement();
@@ -290,8 +298,7 @@ class MapBuilder {
       const std::int64_t t = result->timestamp_ns;
       InsertStats stats;
       try {
-        MapPointsOfFrame(*result, world_T_rectified, config_.map, run_.geometry(), config_.vehicle, &map_points_);
-        stats = map_.InsertFrame(map_points_, world_T_rectified.translation(), t);
+        stats = FuseFrame(*result, world_T_rectified, config_, run_.geometry(), &map_points_, &map_);
       } catch (const Error& e) {
         RecordSkip(t, e.what());
         return;

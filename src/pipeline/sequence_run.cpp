@@ -80,7 +80,7 @@ Eigen::Isometry3d SequenceRun::WorldTBody(std::int64_t t, bool static_platform) 
 
 FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera,
                                   std::uint64_t* left_image_hash) {
-  const StereoImages images = sequence_.ReadImages(frame);
+  const StereoImages images = ReadImages(frame);
   if (left_image_hash != nullptr) *left_image_hash = SampledImageHash(images.left);
   FrameResult result =
       oracles_.disparity
@@ -90,6 +90,41 @@ FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3
   result.timestamp_ns = frame.timestamp_ns;
   if (oracles_.labels) ApplyTrueLabels(sequence_, frame.timestamp_ns, geometry(), &result.analysis.labels);
   return result;
+}
+
+void SequenceRun::set_read_ahead(bool on) {
+  read_ahead_ = on;
+  if (!on && ahead_.valid()) ahead_.wait();  // its images are dropped with it at the next read
+}
+
+StereoImages SequenceRun::ReadImages(const StereoFrame& frame) {
+  std::future<StereoImages> ahead = std::move(ahead_);
+  const bool ahead_is_this = ahead.valid() && frames_[ahead_index_].timestamp_ns == frame.timestamp_ns &&
+                             frames_[ahead_index_].left_path == frame.left_path &&
+                             frames_[ahead_index_].right_path == frame.right_path;
+  if (ahead.valid() && !ahead_is_this) ahead.wait();  // another frame's: one read at a time
+  StereoImages images = ahead_is_this ? ahead.get() : sequence_.ReadImages(frame);  // throws as a read in turn
+  if (read_ahead_) {
+    // The next frame in frames(): after the one read ahead, else after `frame`'s place.
+    std::size_t next = frames_.size();
+    if (ahead_is_this) {
+      next = ahead_index_ + 1;
+    } else {
+      for (std::size_t i = 0; i < frames_.size(); ++i) {
+        if (frames_[i].timestamp_ns == frame.timestamp_ns && frames_[i].left_path == frame.left_path) {
+          next = i + 1;
+          break;
+        }
+      }
+    }
+    if (next < frames_.size()) {
+      ahead_index_ = next;
+      const Sequence* sequence = &sequence_;
+      const StereoFrame* to_read = &frames_[next];
+      ahead_ = std::async(std::launch::async, [sequence, to_read] { return sequence->ReadImages(*to_read); });
+    }
+  }
+  return images;
 }
 
 void SequenceRun::RequireNotStrict(std::int64_t t, const std::string& reason) const {

@@ -53,6 +53,9 @@ BenchReport KnownReport() {
   r.with_map = true;
   r.series = {{0, 4, 100, 1000, 50}, {1, 5, 100, 1300, 51}, {2, 6, 100, 1500, 52}, {3, 5, 100, 1900, 52.5}};
   r.peak_rss_mib = 123.45;
+  r.whole_run_frames = 4;
+  r.whole_run_wall_ms = 160.0;
+  r.whole_run_cpu_ms = 250.0;
   return r;
 }
 
@@ -68,6 +71,11 @@ TEST(Bench, TablePrintsOneFixedWidthLinePerRow) {
       << table;
   EXPECT_NE(table.find("640x480, sgbm, 4 frames measured (1 warm-up not counted), 2 hardware threads"),
             std::string::npos);
+  // 4 frames in 160 ms: 25 frames/s, 40 ms each.
+  EXPECT_NE(table.find("whole run (images read, classified, fused as build-map does): 4 frames in 160.0 ms "
+                       "(CPU 250.0 ms): 25.0 frames/s, 40.00 ms per frame\n"),
+            std::string::npos)
+      << table;
   EXPECT_NE(table.find("peak memory (max RSS): 123.5 MiB; resident 50.0 MiB after the first measured frame, "
                        "52.5 MiB after the last\n"),
             std::string::npos)
@@ -88,6 +96,19 @@ TEST(Bench, JsonHoldsTheStatisticsOfEveryRow) {
   EXPECT_NE(json.find("\"cpu_ms\": null"), std::string::npos) << json;
   EXPECT_NE(json.find("[3, 5, 100, 1900, 52.5]"), std::string::npos) << json;
   EXPECT_NE(json.find("\"frames\": 4"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"whole_run\": {\n    \"frames\": 4,\n    \"wall_ms\": 160,\n    \"cpu_ms\": 250,\n    "
+                      "\"frames_per_s\": 25\n  }"),
+            std::string::npos)
+      << json;
+}
+
+TEST(Bench, WholeRunFramesPerSecondIsFramesOverWallTime) {
+  BenchReport r;
+  EXPECT_TRUE(std::isnan(r.WholeRunFramesPerSecond()));
+  EXPECT_EQ(r.Table().find("whole run"), std::string::npos);
+  r.whole_run_frames = 3;
+  r.whole_run_wall_ms = 120.0;
+  EXPECT_DOUBLE_EQ(r.WholeRunFramesPerSecond(), 25.0);
 }
 
 TEST(Bench, OptionsNameTheBadKey) {
@@ -104,15 +125,18 @@ TEST(Bench, CommandRendersFramesAndReportsEveryStageWithTheMap) {
   const testing::RunResult r = testing::RunSsta(
       "bench --frames 2 --warmup 1 --width 320 --height 240 --focal 210 --map --json " + dir / "bench.json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  for (const char* row : {"rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)",
-                          "map update", "end to end", "pipelined interval", "pipelined latency", "peak memory",
-                          "map: "}) {
+  for (const char* row : {"read images", "rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)",
+                          "map update", "end to end", "pipelined interval", "pipelined latency",
+                          "whole run (images read, classified, fused as build-map does): 2 frames in ",
+                          "peak memory", "map: "}) {
     EXPECT_NE(r.output.find(row), std::string::npos) << row << "\n" << r.output;
   }
   const std::string json = ReadTextFile(dir / "bench.json");
   EXPECT_NE(json.find("\"frames\": 2"), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"end to end\""), std::string::npos) << json;
   EXPECT_NE(json.find("\"name\": \"pipelined interval\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"name\": \"read images\""), std::string::npos) << json;
+  EXPECT_NE(json.find("\"whole_run\": {\n    \"frames\": 2,"), std::string::npos) << json;
 }
 
 TEST(Bench, CommandRunsOnARecordedSequenceWithoutTheMap) {
@@ -123,6 +147,9 @@ TEST(Bench, CommandRunsOnARecordedSequenceWithoutTheMap) {
   EXPECT_NE(r.output.find("kitti-street-pair: 1241x376, sgbm, 1 frames measured"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("frame (Process)"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("map update"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("whole run (images read, classified, fused as build-map does): 1 frames in "),
+            std::string::npos)
+      << r.output;
   EXPECT_EQ(r.output.find("refine (online)"), std::string::npos) << r.output;
 }
 

@@ -155,6 +155,31 @@ TEST(MapFile, SaveThenLoadKeepsEveryNodeAndTheMetadata) {
   EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 2);
 }
 
+// The writer hashes and forwards the file in blocks; the trailer must still count and hash
+// every byte before it, and each node take its 52 payload bytes and its child mask.
+TEST(MapFile, TheTrailerCountsAndHashesEveryByteBeforeIt) {
+  const TempDir dir;
+  const TraversabilityMap map = BuildMap(4);
+  const std::string path = dir / "map.ot";
+  map.Save(path);
+  const std::string bytes = ReadBytes(path);
+  ASSERT_GT(bytes.size(), 3u * 65536u);  // several of the writer's blocks
+  const std::size_t trailer = bytes.rfind("\n# ssta-map-end bytes ");
+  ASSERT_NE(trailer, std::string::npos);
+  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64 bit
+  for (std::size_t i = 0; i < trailer; ++i) {
+    hash ^= static_cast<unsigned char>(bytes[i]);
+    hash *= 1099511628211ull;
+  }
+  char expected[96];
+  std::snprintf(expected, sizeof(expected), "\n# ssta-map-end bytes %zu fnv1a64 %016llx\n", trailer,
+                static_cast<unsigned long long>(hash));
+  EXPECT_EQ(bytes.substr(trailer), expected);
+  const std::size_t data = bytes.find("\ndata\n");
+  ASSERT_NE(data, std::string::npos);
+  EXPECT_EQ(trailer - (data + 6), Tree(map).size() * 53u);
+}
+
 TEST(MapFile, RefinedMountRoundTripsExactlyAndIsOptional) {
   const TempDir dir;
   TraversabilityMap map = BuildMap(2);

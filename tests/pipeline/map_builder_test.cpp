@@ -11,6 +11,7 @@
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
+#include "ssta/pipeline/sequence_run.h"
 #include "ssta/synth/sequence_synthesizer.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
@@ -191,6 +192,55 @@ TEST(BuildMap, PipelinedStrictRunStopsAtTheFirstUnusableFrameLikeTheSequentialOn
   }
   EXPECT_GT(maps[0].size(), 1000u);
   EXPECT_TRUE(maps[0] == maps[1]);
+}
+
+// Read-ahead changes when a frame's images are read, never what Classify returns: the same
+// results for frames asked for in order, out of order (the refinement's held frames) and again,
+// and an unreadable frame's error at its own turn, the frames after it classified.
+TEST(SequenceRun, ReadAheadClassifiesAsReadingInTurn) {
+  testing::TempDir dir;
+  synth::SynthOptions o;
+  o.scene = "yard";
+  o.frames = 4;
+  o.rig.width = 160;
+  o.rig.height = 120;
+  o.rig.focal_px = 105.0;
+  const fs::path seq = dir / "seq";
+  synth::WriteSyntheticSequence(o, seq);
+  std::vector<fs::path> right;
+  for (const auto& e : fs::directory_iterator(seq / "cam1" / "data")) right.push_back(e.path());
+  ASSERT_EQ(right.size(), 4u);
+  std::sort(right.begin(), right.end());
+  std::ofstream(right[2], std::ios::binary) << "not a png";
+  const Sequence sequence = Sequence::Open(seq.string());
+  const Eigen::Vector3d up(0.0, -1.0, 0.0);
+  const std::size_t order[] = {0, 1, 2, 3, 1, 0, 0, 3};
+  std::vector<std::string> seen[2];
+  for (const bool ahead : {false, true}) {
+    SequenceRun run(sequence, Config{}, FrameSelection{});
+    run.set_read_ahead(ahead);
+    ASSERT_EQ(run.frames().size(), 4u);
+    for (const std::size_t k : order) {
+      const StereoFrame frame = run.frames()[k];  // a copy, as the held frames are
+      try {
+        std::uint64_t hash = 0;
+        const FrameResult r = run.Classify(frame, up, &hash);
+        const ImageF& d = r.disparity;
+        seen[ahead].push_back(std::to_string(hash) + " " +
+                              std::string(reinterpret_cast<const char*>(d.data()), d.size() * sizeof(float)));
+        EXPECT_GT(d.size(), 1000u);
+      } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(right[2].string()), std::string::npos) << e.what();
+        seen[ahead].push_back(std::string("error: ") + e.what());
+      }
+    }
+  }
+  ASSERT_EQ(seen[1].size(), seen[0].size());
+  for (std::size_t i = 0; i < seen[0].size(); ++i) {
+    EXPECT_TRUE(seen[1][i] == seen[0][i]) << "frame " << order[i] << " at turn " << i;
+  }
+  EXPECT_EQ(seen[0][2].rfind("error: ", 0), 0u);
+  EXPECT_NE(seen[0][0], seen[0][1]);
 }
 
 TEST(BuildMap, ResumeRefusesAnotherResolutionOrVehicleAndLeavesTheMapAsItWas) {

@@ -58,17 +58,27 @@ struct BenchReport {
   bool with_map = false;              ///< the frames were fused into a map
   std::vector<FrameSample> series;    ///< one per measured frame
   double peak_rss_mib = 0.0;  ///< peak resident memory of the process at the end [MiB]
+  /// The whole run (RunPipelineBench): frames measured, and their wall and process CPU time
+  /// from the first one's image read to the last one's map update [ms]; 0 frames: not run.
+  int whole_run_frames = 0;
+  double whole_run_wall_ms = std::numeric_limits<double>::quiet_NaN();
+  double whole_run_cpu_ms = std::numeric_limits<double>::quiet_NaN();
+
+  /// Frames per second of the whole run: whole_run_frames / whole_run_wall_ms; NaN when not run.
+  double WholeRunFramesPerSecond() const;
 
   /// Frames measured (the sample count of the first row; 0 without rows).
   int frames() const;
 
   /// A fixed-width text table, one line per row: median and p90 wall ms, median CPU ms (or
-  /// "-"), and frames/s = 1000 / median wall ms; then peak memory, resident memory at the first
-  /// and last frame and, with a map, its growth and update time in the first and second half.
+  /// "-"), and frames/s = 1000 / median wall ms; then the whole run (frames, wall and CPU ms,
+  /// frames/s, wall ms per frame), peak memory, resident memory at the first and last frame
+  /// and, with a map, its growth and update time in the first and second half.
   std::string Table() const;
 
   /// The same as JSON: per row the SampleStats of wall and CPU times and frames/s (from the
-  /// median), peak memory, and the per-frame series (memory and map growth).
+  /// median), the whole run ("whole_run": frames, wall_ms, cpu_ms, frames_per_s), peak memory,
+  /// and the per-frame series (memory and map growth).
   std::string Json() const;
 };
 
@@ -82,29 +92,31 @@ struct PipelineBenchOptions {
   bool IsValid(std::string* error) const;
 };
 
-/// Runs the FramePipeline over the frames of `sequence` (images are read before the clock
-/// starts), recording per frame each stage's wall time (StageTimings), the whole Process call's
-/// wall and CPU time and, with `with_map`, the map update (MapPointsOfFrame at
-/// config.map.pixel_stride + InsertFrame into a new map at config.map.fusion) and the map's size.
-/// Rows: rectify, match, triangulate, normals, segment, analyze, frame (Process), and with the
-/// map: map update, end to end (frame + map update: the latency of the sequential loop); with
-/// config.refinement.online: refine (online), the ground evidence and window update with the
-/// solves when due.
-/// With the map, a second pass then runs the same frames as `ssta build-map` does by default
-/// (BuildMapOptions::pipelined: the map update of frame k on a second thread while frame k+1 is
-/// classified) into a fresh map, with the images of at most kMaxPipelinedFrames frames read
-/// beforehand, and adds the rows "pipelined interval" (wall time between two frames' map
-/// updates finishing; its frames/s is the pipeline's throughput) and "pipelined latency"
-/// (from the start of a frame's Process to the end of its map update). Peak memory is taken
-/// before that pass. Poses and gravity as `ssta build-map` takes them (a frame without a pose
-/// is put at the origin, levelled by gravity).
-/// Throws ssta::Error on invalid options or config, an unreadable image, or when the sequence
-/// has fewer frames than the warm-up needs plus one.
+/// Runs the FramePipeline over the frames of `sequence` in two passes.
+///
+/// The first pass times each stage of each frame: rows read images (Sequence::ReadImages: the
+/// files read and decoded), rectify, match, triangulate, normals, segment, analyze
+/// (StageTimings), frame (Process, wall and CPU) and, with `with_map`, map update (FuseFrame,
+/// as build-map fuses a frame: MapPointsOfFrame + InsertFrame into a new map at config.map) and
+/// end to end (read + frame + map update: the latency of the sequential loop), with the map's
+/// size per frame; with config.refinement.online, refine (online): the ground evidence and
+/// window update with the solves when due (the configured mount is kept). Peak memory is taken
+/// after this pass.
+///
+/// The second pass, the whole run, runs the same frames the way `ssta build-map` does by default
+/// into a fresh map: each frame's images read, classified (SequenceRun::Classify), and fused
+/// (FuseFrame) on a second thread while the next frame is read and classified
+/// (BuildMapOptions::pipelined), with the online refinement fed when configured. Its clock
+/// starts at the first measured frame (the warm-up frames' fusion done) and stops when the last
+/// frame's map update ends; the map is not saved. It adds the rows "pipelined interval" (wall
+/// time between two frames' map updates ending) and "pipelined latency" (from the start of a
+/// frame's image read to the end of its map update), and the whole_run_* figures.
+///
+/// Poses and gravity as `ssta build-map` takes them (a frame without a pose is put at the
+/// origin, levelled by gravity). Throws ssta::Error on invalid options or config, an unreadable
+/// image, or when the sequence has fewer frames than the warm-up needs plus one.
 BenchReport RunPipelineBench(const Sequence& sequence, const Config& config,
                              const PipelineBenchOptions& options);
-
-/// Frames measured by RunPipelineBench's pipelined pass (their images are held in memory).
-constexpr int kMaxPipelinedFrames = 100;
 
 /// Peak resident set size of this process so far [MiB] (getrusage's ru_maxrss).
 double PeakResidentMib();

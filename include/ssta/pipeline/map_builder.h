@@ -37,7 +37,9 @@ struct BuildMapOptions {
   /// image, ...) is an error, and the map keeps what was fused before it.
   FrameSelection frames;
   /// Fuse frame k into the map on a second thread while frame k+1 is classified (one frame
-  /// waits at most). The map and the summary are the same as without; only the time differs.
+  /// waits at most), and read frame k+1's images while frame k is classified
+  /// (SequenceRun::set_read_ahead). The map and the summary are the same as without; only the
+  /// time differs.
   bool pipelined = true;
   /// The true disparity measures the analysis and the fusion apart from the matcher; the true
   /// labels with it the fusion alone, with the matcher what the matcher's geometry costs the
@@ -69,6 +71,14 @@ struct BuildMapSummary {
   std::string BriefReport() const;
   std::string Json() const;
 };
+
+/// Fuses one classified frame into `map` the way BuildMap does: its points (MapPointsOfFrame with
+/// config.map and config.vehicle, written into `*points`, which is cleared first and keeps its
+/// capacity from frame to frame) inserted from the origin of `world_T_rectified` (the rectified
+/// cam0 frame in the world) at frame.timestamp_ns. Throws ssta::Error as InsertFrame does.
+InsertStats FuseFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, const Config& config,
+                      const RectifiedGeometry& geometry, std::vector<ClassifiedPoint>* points,
+                      TraversabilityMap* map);
 
 /// Classifies every usable frame of `sequence` and fuses it into the map at options.map_path
 /// (a new map, or the existing one with `resume`). Poses come from the sequence with roll and

@@ -4,7 +4,9 @@
 // choose the frames, give each its gravity and pose, run it through the per-frame pipeline (or
 // its oracles), and skip a frame that cannot be used with its reason, or stop on it when strict.
 
+#include <cstddef>
 #include <cstdint>
+#include <future>
 #include <string>
 #include <vector>
 
@@ -108,6 +110,13 @@ class SequenceRun {
   FrameResult Classify(const StereoFrame& frame, const Eigen::Vector3d& up_camera,
                        std::uint64_t* left_image_hash = nullptr);
 
+  /// With read-ahead on, each Classify, once it has its frame's images, starts reading (and
+  /// decoding) the images of the next frame of frames() on a second thread, so that they are
+  /// ready when that frame is classified. The images, results and errors are those of reading
+  /// in turn: a frame asked for out of order is read then, and never two reads at once (a bag
+  /// is read from one thread at a time). Off by default.
+  void set_read_ahead(bool on);
+
   /// A frame that cannot be used: StrictStop naming it in a strict run, else nothing (the
   /// caller records the skip).
   void RequireNotStrict(std::int64_t t, const std::string& reason) const;
@@ -119,6 +128,13 @@ class SequenceRun {
   FramePipeline pipeline_;
   GravityProvider gravity_;
   std::vector<StereoFrame> frames_;
+  /// `frame`'s images: the ones read ahead when they are that frame's, else read now; then,
+  /// with read-ahead, the next frame's read is started.
+  StereoImages ReadImages(const StereoFrame& frame);
+  bool read_ahead_ = false;
+  /// The read under way, of frames_[ahead_index_] (valid() when there is one).
+  std::future<StereoImages> ahead_;
+  std::size_t ahead_index_ = 0;
 };
 
 }  // namespace ssta
