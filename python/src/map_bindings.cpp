@@ -116,7 +116,7 @@ py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_e
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   const auto points = MatrixArg(points_arg, "points", 2, 3);
   const py::ssize_t n = points.shape(0), cols = points.shape(1);
-  py::array out(QueryRowDtype(), {n});
+  py::array out(QueryRowDtype(), std::vector<py::ssize_t>{n});
   const double* p = points.data();
   QueryRow* rows = static_cast<QueryRow*>(out.mutable_data());
   {
@@ -142,7 +142,7 @@ py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_e
       rows[i] = MakeQueryRow(cell, at);
     }
   }
-  return std::move(out);
+  return out;
 }
 
 py::array Footprints(const MapHandle& handle, const py::object& poses_arg, double length_m, double width_m,
