@@ -189,6 +189,7 @@ TEST(Cli, QueryRowsGiveTheSlopeAndStepThatDecidedTheClassAndTheFramesMeans) {
   }
   MapOptions options;
   options.max_range_m = 30.0;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
   TraversabilityMap map(options);
   map.InsertFrame(points, {2.0, 2.0, 15.0}, 1);
   testing::TempDir dir;

@@ -300,6 +300,7 @@ TraversabilityMap Ramp(double ramp_deg, TravClass cls, float point_slope_deg, fl
   }
   MapOptions options;
   options.max_range_m = 30.0;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
   TraversabilityMap map(options);
   for (int k = 0; k < frames; ++k) map.InsertFrame(points, {2.0, 2.0, 15.0}, k);
   return map;
