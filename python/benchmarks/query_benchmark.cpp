@@ -43,8 +43,7 @@ int main(int argc, char** argv) {
         const ssta::CellInfo c = map.TopSurfaceAt(points[2 * i], points[2 * i + 1]);
         const Eigen::Vector3d at =
             c.observed ? c.center : Eigen::Vector3d(points[2 * i], points[2 * i + 1], std::nan(""));
-        rows[i] = QueryRow{at.x(), at.y(), at.z(), static_cast<std::uint8_t>(c.cls), c.cost, c.probability,
-                           c.slope_deg, c.step_m, c.observations, c.confidence, c.surface_z_m, c.observed};
+        rows[i] = ssta::python::MakeQueryRow(c, at);
       }
       best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     }

@@ -3,6 +3,7 @@
 // map's const methods are safe to call concurrently: traversability_map.h).
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -77,14 +78,47 @@ std::unique_ptr<ExportedSurface> ExportedOver(const TraversabilityMap& map, Eige
   return std::make_unique<ExportedSurface>(map, box, options);
 }
 
+// The NumPy dtype of QueryRow: its fields under the names of `ssta query`'s columns, decided_by
+// as a string ('<U7'), which PYBIND11_NUMPY_DTYPE cannot describe.
+py::dtype QueryRowDtype() {
+  static_assert(sizeof(char32_t) == 4, "decided_by is UTF-32");
+  py::list names, formats, offsets;
+  auto field = [&](const char* name, const std::string& format, std::size_t offset) {
+    names.append(name);
+    formats.append(format);
+    offsets.append(offset);
+  };
+  field("x", "<f8", offsetof(QueryRow, x));
+  field("y", "<f8", offsetof(QueryRow, y));
+  field("z", "<f8", offsetof(QueryRow, z));
+  field("class", "u1", offsetof(QueryRow, cls));
+  field("cost", "<f8", offsetof(QueryRow, cost));
+  field("probability", "<f8", offsetof(QueryRow, probability));
+  field("slope_deg", "<f8", offsetof(QueryRow, slope_deg));
+  field("step_m", "<f8", offsetof(QueryRow, step_m));
+  field("observations", "<u4", offsetof(QueryRow, observations));
+  field("confidence", "<f8", offsetof(QueryRow, confidence));
+  field("decided_by", "<U" + std::to_string(kDecidedByChars), offsetof(QueryRow, decided_by));
+  field("frame_mean_slope_deg", "<f8", offsetof(QueryRow, frame_mean_slope_deg));
+  field("frame_mean_step_m", "<f8", offsetof(QueryRow, frame_mean_step_m));
+  field("height_m", "<f8", offsetof(QueryRow, height_m));
+  field("observed", "?", offsetof(QueryRow, observed));
+  py::dict spec;
+  spec["names"] = names;
+  spec["formats"] = formats;
+  spec["offsets"] = offsets;
+  spec["itemsize"] = sizeof(QueryRow);
+  return py::dtype::from_args(spec);
+}
+
 py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_exported, int fill_holes,
                 double local_ground_radius_m) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   const auto points = MatrixArg(points_arg, "points", 2, 3);
   const py::ssize_t n = points.shape(0), cols = points.shape(1);
-  py::array_t<QueryRow> out(n);
+  py::array out(QueryRowDtype(), std::vector<py::ssize_t>{n});
   const double* p = points.data();
-  QueryRow* rows = out.mutable_data();
+  QueryRow* rows = static_cast<QueryRow*>(out.mutable_data());
   {
     py::gil_scoped_release release;
     RequireFinite(p, n, cols, "points");
@@ -105,21 +139,10 @@ py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_e
                                        : map.TopSurfaceAt(q[0], q[1]);
       // An unobserved cell answers at the point asked, z NaN for (x, y) (`ssta query`).
       const Eigen::Vector3d at = cell.observed ? cell.center : Eigen::Vector3d(q[0], q[1], cols == 3 ? q[2] : kNaN);
-      rows[i] = QueryRow{at.x(),
-                         at.y(),
-                         at.z(),
-                         static_cast<std::uint8_t>(cell.cls),
-                         cell.cost,
-                         cell.probability,
-                         cell.slope_deg,
-                         cell.step_m,
-                         cell.observations,
-                         cell.confidence,
-                         cell.surface_z_m,
-                         cell.observed};
+      rows[i] = MakeQueryRow(cell, at);
     }
   }
-  return std::move(out);
+  return out;
 }
 
 py::array Footprints(const MapHandle& handle, const py::object& poses_arg, double length_m, double width_m,
@@ -332,9 +355,6 @@ py::dict Metadata(const MapHandle& handle) {
 }  // namespace
 
 void BindMap(py::module_& m) {
-  PYBIND11_NUMPY_DTYPE_EX(QueryRow, x, "x", y, "y", z, "z", cls, "class", cost, "cost", probability, "probability",
-                          slope_deg, "slope_deg", step_m, "step_m", observations, "observations", confidence,
-                          "confidence", height_m, "height_m", observed, "observed");
   PYBIND11_NUMPY_DTYPE_EX(FootprintRow, worst, "worst", mean_cost, "mean_cost", max_cost, "max_cost",
                           fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells");
   PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
@@ -419,11 +439,20 @@ Returns:
     cost (float64): planning cost in [0, 1]: 0 traversable, 0.25..0.75 semi-traversable by
         its slope and step, 1 non-traversable; NaN for classes 0 and 4;
     probability (float64): the class's probability from the frames' evidence;
-    slope_deg (float64): mean surface slope [deg];
-    step_m (float64): mean signed step [m];
+    slope_deg (float64): the slope that decided the class [deg]: the fused surface's where
+        decided_by is "surface" or "both", the frames' mean where "frames"; NaN where no class
+        1..3 was decided from the map's evidence;
+    step_m (float64): the step that decided the class [m], likewise: the fused surface's
+        largest height jump within the step radius, or the frames' mean signed step;
     observations (uint32): frames that gave the cell a class;
     confidence (float64): posterior probability of the class from the frames and the fused
         surface around the column, in [0, 1];
+    decided_by (str): which evidence decided the class: "frames" (the frames' class votes;
+        always for an (x, y, z) voxel), "surface" (the fused surface around the column),
+        "both", "export" (as_exported: the export's step or hole filling); "" where none;
+    frame_mean_slope_deg (float64): the mean slope of the frames that gave the cell a class
+        [deg]; NaN where none did;
+    frame_mean_step_m (float64): their mean signed step [m];
     height_m (float64): the fused surface height (world z) [m];
     observed (bool): the map has a surface there.
 
@@ -492,7 +521,8 @@ Args:
 Returns:
     A dict of H x W arrays, row 0 the largest y, column 0 the smallest x (an image; pass
     `extent` and origin='upper' to matplotlib's imshow): class (uint8), cost, height_m,
-    slope_deg, step_m (float32, NaN where unknown); and origin ((x, y) of the lower-left
+    slope_deg, step_m (float32: the slope and step that decided the class, as query's; NaN
+    where unknown); and origin ((x, y) of the lower-left
     corner [m]), resolution_m, extent ((x_min, x_max, y_min, y_max) [m]).
 
 Raises:

@@ -42,11 +42,17 @@ def cli_error(*args):
     return line[len("ssta: error: "):]
 
 
+# The query CSV's text columns; every other column is a number.
+TEXT_COLUMNS = {"decided_by"}
+
+
 def read_csv(text):
-    """CSV text with a header -> {column: float64 array}; "nan" reads as NaN."""
+    """CSV text with a header -> {column: array}: float64 ("nan" reads as NaN), str for the
+    TEXT_COLUMNS."""
     rows = list(csv.reader(io.StringIO(text)))
     header, body = rows[0], rows[1:]
-    return {name: np.array([float(r[i]) for r in body]) for i, name in enumerate(header)}
+    return {name: np.array([r[i] if name in TEXT_COLUMNS else float(r[i]) for r in body])
+            for i, name in enumerate(header)}
 
 
 @pytest.fixture(scope="session")

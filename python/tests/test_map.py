@@ -14,7 +14,7 @@ from conftest import cli_error, read_csv
 
 # The CSV's precision per column (QueryCsvRow): compare to half its last digit.
 CSV_DECIMALS = {"x": 4, "y": 4, "z": 4, "cost": 4, "probability": 4, "slope_deg": 2, "step_m": 3,
-                "confidence": 4, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4}
+                "confidence": 4, "frame_mean_slope_deg": 2, "frame_mean_step_m": 3, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4}
 
 
 def assert_rows_match_csv(rows, csv_columns, columns_of_rows=None):
@@ -22,6 +22,9 @@ def assert_rows_match_csv(rows, csv_columns, columns_of_rows=None):
     the CSV's precision, NaN where the CSV says nan."""
     for name, expected in csv_columns.items():
         field = (columns_of_rows or {}).get(name, name)
+        if expected.dtype.kind == "U":  # text: the same strings
+            np.testing.assert_array_equal(rows[field], expected, err_msg=name)
+            continue
         got = rows[field].astype(np.float64)
         assert got.shape == expected.shape, name
         np.testing.assert_array_equal(np.isnan(got), np.isnan(expected), err_msg=name)
@@ -58,12 +61,43 @@ def cli_query(cli, tmp_path, map_path, points, *extra):
 def test_query_xy_equals_cli(the_map, yard_map, points, cli, tmp_path):
     rows = the_map.query(points)
     assert rows.dtype.names == ("x", "y", "z", "class", "cost", "probability", "slope_deg", "step_m",
-                                "observations", "confidence", "height_m", "observed")
+                                "observations", "confidence", "decided_by", "frame_mean_slope_deg",
+                                "frame_mean_step_m", "height_m", "observed")
     expected = cli_query(cli, tmp_path, yard_map, points)
     assert_rows_match_csv(rows, expected)
     # The test would pass on an empty map: the grid must reach every class the map holds.
     assert {1, 2, 3} <= set(rows["class"]) and 0 in rows["class"]
     assert np.array_equal(rows["observed"], ~np.isnan(rows["z"]))
+
+
+def test_query_slope_and_step_are_those_that_decided_the_class(the_map, points):
+    rows = the_map.query(points)
+    vehicle = the_map.metadata["vehicle"]
+    classified = np.isin(rows["class"], [1, 2, 3])
+    assert set(rows["decided_by"][classified]) <= {"frames", "surface", "both"}
+    assert set(rows["decided_by"][~classified]) == {""}
+    # Where the fused surface decided or co-decided, the row's slope and step are its plane's,
+    # so they lie in the class's band: a traversable cell is not steep nor a step, a
+    # non-traversable one not level ground (the surface's class weighs their sigmas, so the
+    # bands are the outer ones).
+    surface = classified & np.isin(rows["decided_by"], ["surface", "both"])
+    assert surface.sum() >= 20, "the grid must meet columns the surface judged"
+    slope, step = rows["slope_deg"][surface], np.abs(rows["step_m"][surface])
+    cls = rows["class"][surface]
+    assert np.all(np.isfinite(slope)) and np.all(np.isfinite(step))
+    assert np.all((slope[cls == 1] <= vehicle["max_slope_deg"]) & (step[cls == 1] <= vehicle["max_step_m"]))
+    assert np.all((slope[cls == 3] > vehicle["semi_slope_deg"]) | (step[cls == 3] > vehicle["semi_step_m"]))
+    # Where the frames decided alone, the slope and step are their means.
+    frames = rows["decided_by"] == "frames"
+    assert frames.any()
+    np.testing.assert_array_equal(rows["slope_deg"][frames], rows["frame_mean_slope_deg"][frames])
+    np.testing.assert_array_equal(rows["step_m"][frames], rows["frame_mean_step_m"][frames])
+    # The frames' means of a column are those of its top voxel, which the frames judge.
+    voted = classified & np.isfinite(rows["frame_mean_slope_deg"])
+    voxels = the_map.query(np.column_stack([rows["x"], rows["y"], rows["z"]])[voted])
+    assert set(voxels["decided_by"]) == {"frames"}
+    np.testing.assert_array_equal(voxels["frame_mean_slope_deg"], rows["frame_mean_slope_deg"][voted])
+    np.testing.assert_array_equal(voxels["slope_deg"], voxels["frame_mean_slope_deg"])
 
 
 def test_query_xyz_equals_cli(the_map, yard_map, points, cli, tmp_path):

@@ -48,8 +48,8 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
     cell.height_sigma_m = resolution / std::sqrt(12.0);  // somewhere in the voxel
   }
   if (node->observations > 0) {
-    cell.slope_deg = node->slope_deg;
-    cell.step_m = node->step_m;
+    cell.frame_mean_slope_deg = node->slope_deg;
+    cell.frame_mean_step_m = node->step_m;
     cell.max_step_m = node->max_step_m;
   }
   if (!cell.occupied) return cell;  // free space has no class
@@ -66,6 +66,9 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
     if (p[k] >= p[best]) best = k;  // ties to the worse class
   }
   cell.cls = static_cast<TravClass>(best + 1);
+  cell.decided_by = ClassJudge::kFrames;
+  cell.slope_deg = cell.frame_mean_slope_deg;
+  cell.step_m = cell.frame_mean_step_m;
   cell.probability = p[static_cast<std::size_t>(best)];
   cell.confidence = cell.probability;
   cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m, cell.confidence);
@@ -73,6 +76,16 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
 }
 
 }  // namespace internal
+
+const char* ClassJudgeName(ClassJudge judge) {
+  switch (judge) {
+    case ClassJudge::kFrames: return "frames";
+    case ClassJudge::kSurface: return "surface";
+    case ClassJudge::kBoth: return "both";
+    case ClassJudge::kExport: return "export";
+    default: return "";
+  }
+}
 
 double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m, double confidence) const {
   const VehicleOptions& v = impl_->metadata.vehicle;

@@ -177,7 +177,9 @@ std::string QueryCsvRow(const CellInfo& cell) {
   row += std::to_string(static_cast<int>(cell.cls)) + ',';
   row += Format("%.4f", cell.cost) + ',' + Format("%.4f", cell.probability) + ',';
   row += Format("%.2f", cell.slope_deg) + ',' + Format("%.3f", cell.step_m) + ',';
-  row += std::to_string(cell.observations) + ',' + Format("%.4f", cell.confidence);
+  row += std::to_string(cell.observations) + ',' + Format("%.4f", cell.confidence) + ',';
+  row += std::string(ClassJudgeName(cell.decided_by)) + ',';
+  row += Format("%.2f", cell.frame_mean_slope_deg) + ',' + Format("%.3f", cell.frame_mean_step_m);
   return row;
 }
 
@@ -232,7 +234,15 @@ CellInfo ExportedSurface::Answer(double x, double y, bool reproject_outside) con
   const auto exported = static_cast<TravClass>(grid_.classes(v, u));
   // A class the export decided (a step judged by the local ground, a filled hole) has no
   // probability under the map's evidence, which was for the other class.
-  if (!cell.observed || exported != cell.cls) cell.probability = std::numeric_limits<double>::quiet_NaN();
+  // Nor a slope and step that decided it.
+  if (!cell.observed || exported != cell.cls) {
+    cell.probability = std::numeric_limits<double>::quiet_NaN();
+    if (exported != cell.cls) {
+      const int c = static_cast<int>(exported);
+      cell.decided_by = c >= 1 && c <= 3 ? ClassJudge::kExport : ClassJudge::kNone;
+      cell.slope_deg = cell.step_m = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
   cell.cls = exported;
   cell.cost = grid_.cost(v, u);
   return cell;

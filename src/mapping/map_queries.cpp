@@ -28,6 +28,16 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+/// The index (0: traversable .. 2: non-traversable) of the most probable of three classes, ties
+/// to the worse.
+int MostProbableClass(const std::array<double, 3>& p) {
+  int best = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (p[k] >= p[best]) best = k;
+  }
+  return best;
+}
+
 /// The highest occupied voxel of column (kx, ky) below `node`, which covers z keys
 /// [z_base, z_base + 2^(16 - depth)). Inner occupancy is the max over the children, so a
 /// subtree whose root is not occupied holds no occupied voxel and is skipped.
@@ -122,7 +132,9 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 ///    frames';
 ///  - otherwise the frames decide alone.
 /// An uncertain surface (stereo noise at range) so never turns open ground red by itself.
-/// The slope and step become the surface's where it has a verdict.
+/// `decided_by` names the judge whose own most probable class the verdict is (both: each's, or
+/// neither's after combining), and the slope and step are that judge's: the surface's where it
+/// decided or co-decided, the frames' means where they decided alone.
 void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
                       CellInfo* cell) {
   const TravNode* node = tree.search(key);
@@ -134,27 +146,36 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
   if (!surface.determined && !has_evidence) return;  // undecided: nothing to judge by
   const std::array<double, 3> frames = internal::FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
+  const std::array<double, 3>& s = surface.probability;
   std::array<double, 3> posterior = frames;
+  ClassJudge judge = ClassJudge::kFrames;
   if (surface.determined && !has_evidence) {
-    posterior = surface.probability;
+    posterior = s;
+    judge = ClassJudge::kSurface;
   } else if (surface.determined) {
-    const auto& s = surface.probability;
     if (s[1] >= s[0] || s[2] >= s[0]) {
       posterior = WorseOfClasses(frames, s);
+      judge = ClassJudge::kBoth;
     } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
       double total = 0.0;
       for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * s[k]);
       for (double& p : posterior) p /= total;
+      judge = ClassJudge::kBoth;
     }
   }
-  int best = 0;
-  for (int k = 1; k < 3; ++k) {
-    if (posterior[k] >= posterior[best]) best = k;  // ties to the worse class
+  const int best = MostProbableClass(posterior);
+  if (judge == ClassJudge::kBoth) {
+    const bool frames_class = MostProbableClass(frames) == best, surface_class = MostProbableClass(s) == best;
+    if (frames_class != surface_class) judge = frames_class ? ClassJudge::kFrames : ClassJudge::kSurface;
   }
   cell->cls = static_cast<TravClass>(best + 1);
+  cell->decided_by = judge;
   cell->confidence = posterior[best];
-  if (has_evidence) cell->probability = frames[static_cast<std::size_t>(best)];
-  if (surface.determined) {
+  cell->probability = has_evidence ? frames[static_cast<std::size_t>(best)] : kNaN;
+  if (judge == ClassJudge::kFrames) {
+    cell->slope_deg = cell->frame_mean_slope_deg;
+    cell->step_m = cell->frame_mean_step_m;
+  } else {
     cell->slope_deg = surface.slope_deg;
     cell->step_m = surface.step_m;
   }

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -14,6 +15,7 @@
 #include <vector>
 
 #include "cli_runner.h"
+#include "ssta/core/units.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/traversability_map.h"
@@ -59,7 +61,7 @@ TEST(Cli, MapRoundTripBuildQueryExport) {
   ASSERT_EQ(r.exit_code, 0);
   auto lines = Lines(r.output);
   ASSERT_EQ(lines.size(), 2u) << r.output;
-  EXPECT_EQ(lines[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence");
+  EXPECT_EQ(lines[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence,decided_by,frame_mean_slope_deg,frame_mean_step_m");
   EXPECT_EQ(lines[1].substr(0, lines[1].find(',')), "500.0000");
   EXPECT_NE(lines[1].find(",0,"), std::string::npos) << lines[1];
 
@@ -157,6 +159,62 @@ void SaveFloorWithPatch(const std::string& path) {
   TraversabilityMap map(options);
   map.InsertFrame(points, {1.5, 1.5, 3.0}, 1);
   map.Save(path);
+}
+
+// Splits a CSV line at its commas (empty fields kept).
+std::vector<std::string> Fields(const std::string& line) {
+  std::vector<std::string> out;
+  std::stringstream s(line);
+  std::string field;
+  while (std::getline(s, field, ',')) out.push_back(field);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+TEST(Cli, QueryRowsGiveTheSlopeAndStepThatDecidedTheClassAndTheFramesMeans) {
+  // A 30 deg ramp (steeper than the default vehicle's 25) whose points the frame calls
+  // traversable at 5 deg, 0.01 m: the fused surface decides non-traversable by its slope.
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 40; ++ix) {
+    for (int iy = 0; iy < 40; ++iy) {
+      ClassifiedPoint p;
+      const double x = 0.05 + 0.1 * ix;
+      p.world_p = Eigen::Vector3f(static_cast<float>(x), 0.05f + 0.1f * iy, static_cast<float>(std::tan(kPi / 6) * x));
+      p.cls = TravClass::kTraversable;
+      p.slope_deg = 5.0f;
+      p.step_m = 0.01f;
+      p.height_sigma_m = p.horizontal_sigma_m = 0.01f;
+      points.push_back(p);
+    }
+  }
+  MapOptions options;
+  options.max_range_m = 30.0;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
+  TraversabilityMap map(options);
+  map.InsertFrame(points, {2.0, 2.0, 15.0}, 1);
+  testing::TempDir dir;
+  map.Save(dir / "ramp.ot");
+  const CellInfo expected = TraversabilityMap::Load(dir / "ramp.ot").TopSurfaceAt(2.05, 2.05);
+
+  const auto r = RunSsta("query --map " + (dir / "ramp.ot") + " --at 2.05,2.05", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto lines = Lines(r.output);
+  ASSERT_EQ(lines.size(), 2u) << r.output;
+  const std::vector<std::string> header = Fields(lines[0]), row = Fields(lines[1]);
+  ASSERT_EQ(header.size(), row.size()) << r.output;
+  auto column = [&](const std::string& name) {
+    const auto at = std::find(header.begin(), header.end(), name);
+    EXPECT_NE(at, header.end()) << name << " in " << lines[0];
+    return at == header.end() ? std::string() : row[static_cast<std::size_t>(at - header.begin())];
+  };
+  EXPECT_EQ(column("class"), "3");
+  EXPECT_EQ(column("decided_by"), "surface");
+  EXPECT_EQ(expected.decided_by, ClassJudge::kSurface);
+  EXPECT_GT(std::stod(column("slope_deg")), 25.0);  // the surface's slope, which made it class 3
+  EXPECT_NEAR(std::stod(column("slope_deg")), expected.slope_deg, 0.005);
+  EXPECT_NEAR(std::stod(column("step_m")), expected.step_m, 0.0005);
+  EXPECT_EQ(column("frame_mean_slope_deg"), "5.00");
+  EXPECT_EQ(column("frame_mean_step_m"), "0.010");
 }
 
 TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {

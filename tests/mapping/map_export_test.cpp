@@ -326,6 +326,10 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
   EXPECT_NEAR(patch.center.z(), testing::C(0), 1e-9);
   // The map's evidence there was for non-traversable: no probability for the export's class.
   EXPECT_TRUE(std::isnan(patch.probability));
+  // Nor a slope and step that decided it: the export did.
+  EXPECT_EQ(patch.decided_by, ClassJudge::kExport);
+  EXPECT_TRUE(std::isnan(patch.slope_deg) && std::isnan(patch.step_m));
+  EXPECT_NEAR(patch.frame_mean_step_m, 0.3, 1e-6);  // the frames' mean stays
   const CellInfo floor = TopSurfaceAsExported(map, testing::C(2), testing::C(2), LocalGround());  // kept as it is
   EXPECT_EQ(floor.cls, TravClass::kTraversable);
   EXPECT_EQ(floor.probability, map.TopSurfaceAt(testing::C(2), testing::C(2)).probability);
@@ -336,6 +340,7 @@ TEST(MapExport, QueriesAsExportedAnswerEveryCellAsTheExportedGridShowsIt) {
   EXPECT_EQ(hole.cls, TravClass::kTraversable);
   EXPECT_TRUE(std::isnan(hole.cost));
   EXPECT_TRUE(std::isnan(hole.center.z()));
+  EXPECT_EQ(hole.decided_by, ClassJudge::kExport);
   EXPECT_EQ(TopSurfaceAsExported(map, testing::C(21), testing::C(21)).cls, TravClass::kNonTraversable);  // box
   GridExportOptions off;  // without the two steps: the map as observed
   off.local_ground_radius_m = 0.0;
@@ -406,12 +411,12 @@ TEST(MapExport, CsvPlyAndPcdListEveryOccupiedVoxel) {
 
   const auto csv = Lines(ReadTextFile(dir / "m.csv"));
   ASSERT_EQ(csv.size(), 15u);
-  EXPECT_EQ(csv[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence");
+  EXPECT_EQ(csv[0], "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence,decided_by,frame_mean_slope_deg,frame_mean_step_m");
   int non_traversable = 0;
   for (std::size_t i = 1; i < csv.size(); ++i) {
     if (csv[i].find(",3,1.0000,") != std::string::npos) {
       ++non_traversable;
-      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1,0.6357");
+      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1,0.6357,frames,18.00,0.050");
     }
   }
   EXPECT_EQ(non_traversable, 1);
@@ -466,7 +471,7 @@ TEST(MapExport, ErrorsNameTheFile) {
 TEST(MapExport, QueryCsvRowPrintsUnknownAsNaN) {
   CellInfo unknown;
   unknown.center = {1.0, 2.0, std::nan("")};
-  EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0,nan");
+  EXPECT_EQ(QueryCsvRow(unknown), "1.0000,2.0000,nan,0,nan,nan,nan,nan,0,nan,,nan,nan");
 }
 
 TEST(MapExport, QueryCsvRowPrintsFarPointsWholeInExponentForm) {
@@ -474,7 +479,7 @@ TEST(MapExport, QueryCsvRowPrintsFarPointsWholeInExponentForm) {
   CellInfo far;
   far.center = Eigen::Vector3d(1e308, -2.5e12, 999999999.0);
   const std::string row = QueryCsvRow(far);
-  EXPECT_EQ(row, "1.000000e+308,-2.500000e+12,999999999.0000,0,nan,nan,nan,nan,0,nan");
+  EXPECT_EQ(row, "1.000000e+308,-2.500000e+12,999999999.0000,0,nan,nan,nan,nan,0,nan,,nan,nan");
   EXPECT_DOUBLE_EQ(std::stod(row.substr(0, row.find(','))), 1e308);
 }
 

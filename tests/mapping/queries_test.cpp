@@ -284,5 +284,99 @@ TEST(TraversabilityMapCost, SemiTraversableCostGrowsThroughTheBand) {
   EXPECT_TRUE(std::isnan(map.Cost(TravClass::kUndecided, 0.0, 0.0)));
 }
 
+/// A plane rising along x at `ramp_deg` over x, y in [0, 4) m, one point per 0.1 m column at its
+/// centre's height, seen `frames` times with height sigma 1 cm; every point is classed `cls` and
+/// carries the per-point slope and step given: what the frames' means will be.
+TraversabilityMap Ramp(double ramp_deg, TravClass cls, float point_slope_deg, float point_step_m, int frames = 1) {
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 40; ++ix) {
+    for (int iy = 0; iy < 40; ++iy) {
+      ClassifiedPoint p = testing::Pt(testing::C(ix), testing::C(iy), std::tan(ramp_deg * kPi / 180.0) * testing::C(ix),
+                                      cls, point_slope_deg, point_step_m);
+      p.height_sigma_m = 0.01f;
+      p.horizontal_sigma_m = 0.01f;
+      points.push_back(p);
+    }
+  }
+  MapOptions options;
+  options.max_range_m = 30.0;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
+  TraversabilityMap map(options);
+  for (int k = 0; k < frames; ++k) map.InsertFrame(points, {2.0, 2.0, 15.0}, k);
+  return map;
+}
+
+/// The slope and step of `cell` lie in its class's band of the map's vehicle (docs/interfaces.md,
+/// section 3): the row tells the same story as its class.
+void ExpectSlopeAndStepAgreeWithClass(const CellInfo& cell, const VehicleOptions& v) {
+  const double slope = cell.slope_deg, step = std::abs(cell.step_m);
+  ASSERT_TRUE(std::isfinite(slope) && std::isfinite(step));
+  switch (cell.cls) {
+    case TravClass::kTraversable:
+      EXPECT_LE(slope, v.semi_slope_deg);
+      EXPECT_LE(step, v.semi_step_m);
+      break;
+    case TravClass::kSemiTraversable:
+      EXPECT_LE(slope, v.max_slope_deg);
+      EXPECT_LE(step, v.max_step_m);
+      EXPECT_TRUE(slope > v.semi_slope_deg || step > v.semi_step_m);
+      break;
+    case TravClass::kNonTraversable: EXPECT_TRUE(slope > v.max_slope_deg || step > v.max_step_m); break;
+    default: ADD_FAILURE() << "class " << static_cast<int>(cell.cls);
+  }
+}
+
+TEST(ColumnVerdict, SlopeAndStepAreThoseThatDecidedTheClassAndTheFramesMeansAreKept) {
+  const VehicleOptions vehicle;  // the maps' (MapMetadata's default)
+  const double x = testing::C(20), y = testing::C(20);
+  {
+    // Level ground the frames call traversable, their points' slope and step noisy (35 deg,
+    // 0.6 m): the surface, seen all round, agrees on traversable and its level plane decides.
+    const TraversabilityMap map = Ramp(0.0, TravClass::kTraversable, 35.0f, 0.6f);
+    const CellInfo cell = map.TopSurfaceAt(x, y);
+    EXPECT_EQ(cell.cls, TravClass::kTraversable);
+    EXPECT_EQ(cell.decided_by, ClassJudge::kBoth);
+    EXPECT_NEAR(cell.slope_deg, 0.0, 0.5);
+    EXPECT_NEAR(cell.step_m, 0.0, 0.02);
+    ExpectSlopeAndStepAgreeWithClass(cell, vehicle);
+    EXPECT_NEAR(cell.frame_mean_slope_deg, 35.0, 1e-4);
+    EXPECT_NEAR(cell.frame_mean_step_m, 0.6, 1e-6);
+  }
+  {
+    // A 30 deg ramp (steeper than max_slope_deg 25) the frames call traversable at 5 deg: the
+    // surface makes it non-traversable, by its slope.
+    const TraversabilityMap map = Ramp(30.0, TravClass::kTraversable, 5.0f, 0.01f);
+    const CellInfo cell = map.TopSurfaceAt(x, y);
+    EXPECT_EQ(cell.cls, TravClass::kNonTraversable);
+    EXPECT_EQ(cell.decided_by, ClassJudge::kSurface);
+    EXPECT_NEAR(cell.slope_deg, 30.0, 0.5);
+    ExpectSlopeAndStepAgreeWithClass(cell, vehicle);
+    EXPECT_EQ(cell.cost, 1.0);
+    EXPECT_NEAR(cell.frame_mean_slope_deg, 5.0, 1e-4);
+    EXPECT_NEAR(cell.frame_mean_step_m, 0.01, 1e-6);
+  }
+  {
+    // A 20 deg ramp (semi-traversable to the surface) whose every point three frames call
+    // non-traversable with a 0.5 m step (a lip the fused surface does not show): the worse of
+    // the two verdicts is the frames', so are the slope and step.
+    const TraversabilityMap map = Ramp(20.0, TravClass::kNonTraversable, 20.0f, 0.5f, 3);
+    const CellInfo cell = map.TopSurfaceAt(x, y);
+    EXPECT_EQ(cell.cls, TravClass::kNonTraversable);
+    EXPECT_EQ(cell.decided_by, ClassJudge::kFrames);
+    EXPECT_NEAR(cell.slope_deg, 20.0, 1e-4);
+    EXPECT_NEAR(cell.step_m, 0.5, 1e-6);
+    ExpectSlopeAndStepAgreeWithClass(cell, vehicle);
+    // A voxel's class is the frames' alone.
+    const CellInfo voxel = map.CellAt(cell.center);
+    EXPECT_EQ(voxel.decided_by, ClassJudge::kFrames);
+    EXPECT_EQ(voxel.slope_deg, voxel.frame_mean_slope_deg);
+    EXPECT_EQ(voxel.step_m, voxel.frame_mean_step_m);
+  }
+  // An unobserved column: no judge, no values.
+  const CellInfo none = Ramp(0.0, TravClass::kTraversable, 0.0f, 0.0f).TopSurfaceAt(50.0, 50.0);
+  EXPECT_EQ(none.decided_by, ClassJudge::kNone);
+  EXPECT_TRUE(std::isnan(none.slope_deg) && std::isnan(none.frame_mean_slope_deg));
+}
+
 }  // namespace
 }  // namespace ssta

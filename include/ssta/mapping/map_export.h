@@ -12,15 +12,17 @@
 
 namespace ssta {
 
-/// Header of the query CSV (docs/interfaces.md, section 5, with the confidence appended) and of
-/// the `csv` export.
+/// Header of the query CSV (docs/interfaces.md, section 5, with the confidence, the judge that
+/// decided the class and the frames' means appended) and of the `csv` export.
 inline constexpr char kQueryCsvHeader[] =
-    "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence";
+    "x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence,decided_by,frame_mean_slope_deg,"
+    "frame_mean_step_m";
 
 /// One CSV row (no newline) for `cell` under kQueryCsvHeader: centre x, y, z [m] with 4
 /// decimals (in exponent form from 1e9 m on), class id, cost and probability with 4 decimals,
-/// slope [deg] with 2, step [m] with 3, observations, confidence with 4 decimals. Unknown values
-/// print as "nan".
+/// slope [deg] with 2, step [m] with 3 (those that decided the class), observations, confidence
+/// with 4 decimals, decided_by (ClassJudgeName: empty where no class was decided), the frames'
+/// mean slope [deg] with 2 and mean step [m] with 3. Unknown values print as "nan".
 std::string QueryCsvRow(const CellInfo& cell);
 
 struct GridExportOptions {
@@ -44,11 +46,12 @@ struct GridExportOptions {
   double local_ground_radius_m = 0.0;
 };
 
-/// One pass over a projection: each non-traversable pixel (3) whose mean slope is below
+/// One pass over a projection: each non-traversable pixel (3) whose slope (the one that decided
+/// its class) is below
 /// `level_slope_deg` and whose height lies within `tolerance_m` of the median height of the
 /// traversable pixels (1) within `radius_m` of it (at least 5 of them, read from the input, so a
 /// changed pixel never counts for another) becomes traversable, with cost 0; its height, slope
-/// and step stay as observed. Why: a frame calls a surface a step by its height over that
+/// and step stay as observed (ExportedSurface answers such a column with slope and step NaN). Why: a frame calls a surface a step by its height over that
 /// frame's dominant ground plane (the paper's eq. 5), which does not pass through ground beyond
 /// a rise, a hollow or a ditch; the map knows the ground around each cell. Obstacles and
 /// steep cells are kept: an obstacle's top stands above the ground around it. Returns the

@@ -51,6 +51,19 @@ struct InsertStats {
   std::string reason;                  ///< why the frame was skipped; empty otherwise
 };
 
+/// Which evidence decided a cell's class (CellInfo::decided_by).
+enum class ClassJudge : std::uint8_t {
+  kNone = 0,     ///< no class 1..3: unobserved, free space or undecided
+  kFrames = 1,   ///< the frames' class votes in the voxel
+  kSurface = 2,  ///< the fused surface around the column (its slope and step)
+  kBoth = 3,     ///< the two together, agreeing on the class, or combined into it
+  kExport = 4,   ///< an export step (a step judged by the local ground, a filled hole)
+};
+
+/// Lower-case name as printed in query CSV rows and Python's `decided_by`: "" (kNone),
+/// "frames", "surface", "both", "export".
+const char* ClassJudgeName(ClassJudge judge);
+
 /// What the map knows about one voxel (or, for column queries, the top surface voxel).
 /// Unknown numeric values are NaN.
 struct CellInfo {
@@ -80,9 +93,22 @@ struct CellInfo {
   /// 1-sigma of surface_z_m [m]; NaN unobserved.
   double height_sigma_m = std::numeric_limits<double>::quiet_NaN();
   double occupancy = std::numeric_limits<double>::quiet_NaN();  ///< P(occupied); NaN unobserved
-  double slope_deg = std::numeric_limits<double>::quiet_NaN();  ///< mean slope [deg]
-  double step_m = std::numeric_limits<double>::quiet_NaN();     ///< mean (signed) step [m]
-  double max_step_m = std::numeric_limits<double>::quiet_NaN(); ///< largest |step| seen [m]
+  /// Which evidence decided `cls`: for a voxel (CellAt) the frames; for a column's top surface
+  /// (TopSurfaceAt) the frames, the fused surface around it, or both (see slope_deg).
+  ClassJudge decided_by = ClassJudge::kNone;
+  /// The slope that decided `cls` [deg]: the fused surface's (the local plane's slope) where
+  /// decided_by is kSurface or kBoth, the frames' mean (frame_mean_slope_deg) where kFrames;
+  /// NaN where no class 1..3 was decided from the map's evidence. The cost uses it.
+  double slope_deg = std::numeric_limits<double>::quiet_NaN();
+  /// The step that decided `cls` [m], as slope_deg: the fused surface's largest height jump
+  /// within the vehicle's step radius (>= 0), or the frames' mean signed step.
+  double step_m = std::numeric_limits<double>::quiet_NaN();
+  /// Mean over the frames that gave the voxel a class of their points' slope [deg]; NaN when
+  /// none did.
+  double frame_mean_slope_deg = std::numeric_limits<double>::quiet_NaN();
+  /// Mean over those frames of their points' signed step to the ground [m]; NaN when none did.
+  double frame_mean_step_m = std::numeric_limits<double>::quiet_NaN();
+  double max_step_m = std::numeric_limits<double>::quiet_NaN(); ///< largest |step| a frame saw [m]
   std::uint32_t observations = 0;  ///< frames that gave this voxel a class verdict
   std::int64_t last_seen_ns = 0;   ///< timestamp of the last frame that hit it; 0 if never
 };
@@ -146,8 +172,10 @@ struct GridProjection {
   ImageU8 classes;    ///< class ids (0 where no surface was observed)
   ImageF cost;        ///< cost in [0, 1]; NaN where unknown
   ImageF height_m;    ///< z of the top surface voxel centre [m]; NaN where unobserved
-  ImageF slope_deg;   ///< mean slope [deg]; NaN where unobserved
-  ImageF step_m;      ///< mean step [m]; NaN where unobserved
+  /// The slope that decided the pixel's class [deg] (CellInfo::slope_deg of its column); NaN
+  /// where unobserved or no class 1..3 was decided.
+  ImageF slope_deg;
+  ImageF step_m;      ///< the step that decided the class [m] (CellInfo::step_m), NaN likewise
   /// The pixel's CellInfo::confidence in [0, 1]; NaN where there is no class 1..3 (and where an
   /// export step, not the map's evidence, set the class).
   ImageF confidence;
