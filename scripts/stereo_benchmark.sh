@@ -10,7 +10,8 @@
 # Every setting is config/sensors/kitti.yaml (search range 96 px, block 7) plus the keys in its
 # row. Columns: D1 over all truth pixels (bad: off by more than 3 px and 5 %, or no disparity),
 # D1 over matched pixels, end-point error over matched pixels, density (share of truth pixels
-# with a disparity), and the median wall time of the matcher per pair (images read untimed).
+# with a disparity), and the median wall and CPU (both cores) time of the matcher per pair
+# (images read untimed).
 # Pixels of all pairs are pooled. JSON per setting in out/stereo_benchmark/ (OUT= changes it).
 # SETTINGS="shipped realtime" runs those rows only. Needs a built tree (build/apps/ssta; SSTA=
 # names another binary). docs/performance.md shows a run.
@@ -38,7 +39,9 @@ settings=(
   "bm|stereo.algorithm: bm"
   "pcl_bb|stereo.algorithm: pcl_bb"
   "pcl_acso|stereo.algorithm: pcl_acso"
+  "pcl_acso_no_ratio|stereo.algorithm: pcl_acso; stereo.pcl_ratio_filter: 0"
   "sgbm_hh4|stereo.sgbm_mode: hh4"
+  "sgbm_p8_64|stereo.sgbm_p2: 64"
   "sgbm_p16_64|stereo.sgbm_p1: 16; stereo.sgbm_p2: 64"
   "realtime|stereo.downscale: 2; stereo.subpixel_window_px: 7"
   "half_no_subpixel|stereo.downscale: 2"
@@ -52,6 +55,7 @@ settings=(
   "half_lr2|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.left_right_max_diff: 2"
   "half_hh4|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.sgbm_mode: hh4"
   "half_block9|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.block_size: 9"
+  "half_hh4_p8_64|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.sgbm_mode: hh4; stereo.sgbm_p2: 64"
 )
 if [ -n "${SETTINGS:-}" ]; then
   wanted=" $SETTINGS "
@@ -75,8 +79,8 @@ write_overlay() {
 
 field() { sed -n "s/^ *\"$1\": \([^,]*\),\{0,1\}$/\1/p" "$2"; }
 
-echo "| setting | keys over config/sensors/kitti.yaml | D1 all | D1 matched | EPE [px] | density | ms / pair |"
-echo "|---|---|---:|---:|---:|---:|---:|"
+echo "| setting | keys over config/sensors/kitti.yaml | D1 all | D1 matched | EPE [px] | density | ms / pair | CPU ms / pair |"
+echo "|---|---|---:|---:|---:|---:|---:|---:|"
 for s in "${settings[@]}"; do
   name=${s%%|*}
   keys=${s#*|}
@@ -91,7 +95,7 @@ for s in "${settings[@]}"; do
   awk -v name="$name" -v keys="${keys:-(shipped defaults)}" \
       -v d1="$(field d1_all "$json")" -v d1m="$(field d1_matched "$json")" \
       -v epe="$(field epe_px "$json")" -v dens="$(field density "$json")" \
-      -v ms="$(field median_match_ms "$json")" \
-      'BEGIN { printf "| %s | %s | %.1f %% | %.1f %% | %.2f | %.1f %% | %.0f |\n",
-               name, keys, 100 * d1, 100 * d1m, epe, 100 * dens, ms }'
+      -v ms="$(field median_match_ms "$json")" -v cpu="$(field median_match_cpu_ms "$json")" \
+      'BEGIN { printf "| %s | %s | %.1f %% | %.1f %% | %.2f | %.1f %% | %.0f | %.0f |\n",
+               name, keys, 100 * d1, 100 * d1m, epe, 100 * dens, ms, cpu }'
 done

@@ -199,6 +199,7 @@ TEST(eval_Disparity, StereoBenchScoresTheMatcherOnARenderedPair) {
   const StereoBenchReport report = RunStereoBench(dir / "data", matcher, options);
   EXPECT_EQ(report.score.pairs, 1);
   EXPECT_EQ(report.match_ms.size(), 1u);
+  EXPECT_EQ(report.match_cpu_ms.size(), 1u);
   EXPECT_EQ(report.width, 200);
   EXPECT_EQ(report.score.truth_pixels, truth_pixels);
   EXPECT_LT(report.score.D1All(), 0.05);

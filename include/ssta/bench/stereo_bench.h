@@ -25,13 +25,18 @@ struct StereoBenchReport {
   int width = 0, height = 0;      ///< size of the first pair [px]
   DisparityEvalSummary score;     ///< pixels of all pairs pooled
   std::vector<double> match_ms;   ///< wall time of StereoMatcher::Compute per pair [ms]
+  /// Process CPU time of StereoMatcher::Compute per pair [ms] (std::clock: all threads, so
+  /// CPU above wall means both cores worked; on a loaded machine it grows less than wall).
+  std::vector<double> match_cpu_ms;
 
   /// Median of match_ms (Quantile 0.5) [ms].
   double MedianMatchMs() const;
+  /// Median of match_cpu_ms [ms].
+  double MedianMatchCpuMs() const;
   /// The score's report and the matching time.
   std::string BriefReport() const;
   /// The score's JSON with "kind": "stereo_bench", "data", "matcher", "width", "height",
-  /// "median_match_ms" and "match_ms" (per pair) added.
+  /// "median_match_ms", "median_match_cpu_ms", "match_ms" and "match_cpu_ms" (per pair) added.
   std::string ToJson() const;
 };
 
