@@ -41,7 +41,6 @@ settings=(
   "pcl_acso|stereo.algorithm: pcl_acso"
   "pcl_acso_no_ratio|stereo.algorithm: pcl_acso; stereo.pcl_ratio_filter: 0"
   "sgbm_hh4|stereo.sgbm_mode: hh4"
-  "sgbm_p8_64|stereo.sgbm_p2: 64"
   "sgbm_p16_64|stereo.sgbm_p1: 16; stereo.sgbm_p2: 64"
   "realtime|stereo.downscale: 2; stereo.subpixel_window_px: 7"
   "half_no_subpixel|stereo.downscale: 2"
@@ -51,11 +50,9 @@ settings=(
   "half_p16_128|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.sgbm_p1: 16; stereo.sgbm_p2: 128"
   "half_uniq5|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.uniqueness_ratio: 5"
   "half_uniq15|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.uniqueness_ratio: 15"
-  "half_no_lr|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.left_right_check: false"
   "half_lr2|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.left_right_max_diff: 2"
   "half_hh4|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.sgbm_mode: hh4"
   "half_block9|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.block_size: 9"
-  "half_hh4_p8_64|stereo.downscale: 2; stereo.subpixel_window_px: 7; stereo.sgbm_mode: hh4; stereo.sgbm_p2: 64"
 )
 if [ -n "${SETTINGS:-}" ]; then
   wanted=" $SETTINGS "

@@ -45,15 +45,8 @@ int OpenCvMode(SgbmMode mode) {
   return cv::StereoSGBM::MODE_SGBM_3WAY;
 }
 
-/// OpenCV's disp12MaxDiff for `o`. StereoSGBM takes any value <= 0 as 1, so its check is
-/// turned off by a disagreement larger than any two disparities can have.
-int LeftRightMaxDiff(const StereoMatcherOptions& o) {
-  if (o.left_right_check) return o.left_right_max_diff;
-  return o.algorithm == MatcherType::kSemiGlobal ? 1 << 20 : -1;
-}
-
 ImageF ComputeOpenCv(const ImageU8& left, const ImageU8& right, const StereoMatcherOptions& o) {
-  const int lr_max_diff = LeftRightMaxDiff(o);
+  const int lr_max_diff = o.left_right_check ? o.left_right_max_diff : -1;
   cv::Ptr<cv::StereoMatcher> matcher;
   if (o.algorithm == MatcherType::kBlockMatching) {
     auto bm = cv::StereoBM::create(o.num_disparities, o.block_size);
