@@ -73,8 +73,7 @@ struct StereoMatcherOptions {
   int sgbm_p1 = 8;
   int sgbm_p2 = 32;  ///< see sgbm_p1; must exceed it
   int uniqueness_ratio = 10;   ///< [%] bm/sgbm: best cost must beat the second best by this margin
-  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (all;
-                               ///< SGBM always checks: OpenCV takes "off" as 1 px)
+  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (SGBM: always)
   int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check (SGBM: >= 1)
   int speckle_window_size = 100;  ///< [px] blobs smaller than this are removed (all); 0 disables
   int speckle_range = 2;          ///< [px] max disparity step between neighbours of one blob
