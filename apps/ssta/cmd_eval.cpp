@@ -186,7 +186,8 @@ void Report(const Summary& summary, const EvalArguments& args) {
 
 void RegisterEval(CLI::App& app) {
   CLI::App* eval = app.add_subcommand(
-      "eval", "Score labels, an exported grid or query answers against synthetic ground truth");
+      "eval", "Score labels, an exported grid or query answers against synthetic ground truth, and disparities "
+              "against disparity truth");
   eval->require_subcommand(1);
   eval->footer(
       "Scored samples have truth 1..3 (255 = don't care, 0 and 4 are not scored). accuracy = "
@@ -277,6 +278,8 @@ void RegisterEval(CLI::App& app) {
       "non-traversable footprints answered traversable or semi-traversable; falsely blocked: truly "
       "traversable ones answered non-traversable.");
   footprints->callback([fp_args] { Report(EvaluateMapFootprints(*fp_args), fp_args->eval); });
+
+  AddDisparityEval(eval);
 }
 
 }  // namespace ssta::cli

@@ -26,6 +26,8 @@ void RegisterConfig(CLI::App& app);
 void RegisterInspect(CLI::App& app);
 void RegisterConvert(CLI::App& app);
 void RegisterMergeMaps(CLI::App& app);
+/// `eval disparity` and `eval stereo` (cmd_eval_disparity.cpp), added to the `eval` command.
+void AddDisparityEval(CLI::App* eval);
 
 /// Validators for the paths a command writes, checked while the command line is parsed, so a
 /// run fails before its work and not after it. A file needs an existing folder and must not be

@@ -412,6 +412,12 @@ TEST(StereoMatcher, InvalidOptionsNameTheKey) {
   o.uniqueness_ratio = 101;
   EXPECT_EQ(error_of(o).rfind("uniqueness_ratio:", 0), 0u);
   o = StereoMatcherOptions{};
+  o.sgbm_p2 = o.sgbm_p1;
+  EXPECT_EQ(error_of(o).rfind("sgbm_p2: must be greater than sgbm_p1", 0), 0u) << error_of(o);
+  o = StereoMatcherOptions{};
+  o.sgbm_p1 = 0;
+  EXPECT_EQ(error_of(o).rfind("sgbm_p1:", 0), 0u);
+  o = StereoMatcherOptions{};
   o.pcl_ratio_filter = 100;
   EXPECT_EQ(error_of(o).rfind("pcl_ratio_filter:", 0), 0u);
   o = StereoMatcherOptions{};
@@ -432,6 +438,21 @@ TEST(StereoMatcher, InvalidOptionsNameTheKey) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()).rfind("num_disparities:", 0), 0u) << e.what();
   }
+}
+
+TEST(StereoMatcher, SgbmPenaltiesReachTheMatcher) {
+  // The same pair with OpenCV's usual penalties and with much larger ones: both recover the
+  // plane and the square, but the disparities differ somewhere (the penalties are used).
+  const SyntheticPair pair = MakePair(200, 120, 20, 36, 90, 30, 60, 8, 72);
+  StereoMatcherOptions o = OptionsFor(MatcherType::kSemiGlobal);
+  const ImageF usual = StereoMatcher(o).Compute(pair.left, pair.right);
+  o.sgbm_p1 = 64;
+  o.sgbm_p2 = 128;
+  const ImageF smooth = StereoMatcher(o).Compute(pair.left, pair.right);
+  long differ = 0;
+  for (std::size_t i = 0; i < usual.size(); ++i) differ += usual[i] != smooth[i] ? 1 : 0;
+  EXPECT_GT(differ, 0);
+  EXPECT_GT(ScoreDisparity(smooth, pair).correct, 0.85);
 }
 
 TEST(StereoMatcher, ParsesAlgorithmNames) {

@@ -65,9 +65,16 @@ struct StereoMatcherOptions {
   int block_size = 9;          ///< matching window side [px], odd, >= 3 (>= 5 for bm); for
                                ///< pcl_acso the length of the aggregation column
   SgbmMode sgbm_mode = SgbmMode::kThreeWay;  ///< sgbm only: cost aggregation directions
+  /// sgbm only: SGBM's smoothness penalties per pixel of the matching window. A disparity step
+  /// of 1 px between neighbours costs sgbm_p1 * block_size^2 (OpenCV's P1), a larger jump
+  /// sgbm_p2 * block_size^2 (P2, > P1). Higher values give smoother, denser disparities and
+  /// blur small objects into their background. 8 and 32 are OpenCV's usual grey-image values;
+  /// what others do on real road images is in docs/performance.md.
+  int sgbm_p1 = 8;
+  int sgbm_p2 = 32;  ///< see sgbm_p1; must exceed it
   int uniqueness_ratio = 10;   ///< [%] bm/sgbm: best cost must beat the second best by this margin
-  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (all)
-  int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check
+  bool left_right_check = true;///< reject pixels whose right-to-left match disagrees (SGBM: always)
+  int left_right_max_diff = 1; ///< [px] allowed disagreement of the left-right check (SGBM: >= 1)
   int speckle_window_size = 100;  ///< [px] blobs smaller than this are removed (all); 0 disables
   int speckle_range = 2;          ///< [px] max disparity step between neighbours of one blob
   /// [grey levels] pixels whose left-image standard deviation over the block window is below

@@ -1,0 +1,73 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "ssta/core/image.h"
+
+namespace ssta {
+
+/// The bad-pixel rule of a disparity score (KITTI's D1): a pixel with a truth disparity is bad
+/// when its estimate is off by more than `max_error_px` AND by more than `max_error_ratio` of
+/// the truth, or when it has no estimate.
+struct DisparityEvalOptions {
+  double max_error_px = 3.0;      ///< [px] absolute part of the rule, >= 0
+  double max_error_ratio = 0.05;  ///< relative part of the rule (0.05 = 5 % of the truth), >= 0
+
+  /// "max_error_px: ..." or "max_error_ratio: ..." in `*error` when a value is negative or not finite.
+  bool IsValid(std::string* error) const;
+};
+
+/// Pixel counts of a disparity score, summed over one or more pairs (every truth pixel of every
+/// pair weighs the same). Only pixels with a truth disparity (> 0) are counted; an estimate of
+/// 0 (or not finite, or negative) is "no disparity".
+struct DisparityEvalSummary {
+  std::string prediction;         ///< the estimate (file or folder), for the report
+  std::string truth;              ///< the truth (file or folder), for the report
+  int pairs = 0;                  ///< pairs (images) scored
+  std::int64_t truth_pixels = 0;  ///< pixels with a truth disparity
+  std::int64_t matched_pixels = 0;       ///< of those, with an estimate
+  std::int64_t bad_matched_pixels = 0;   ///< of the matched ones, bad by the rule
+  double sum_abs_error_px = 0.0;         ///< sum of |estimate - truth| over matched pixels [px]
+  DisparityEvalOptions rule;             ///< the bad-pixel rule used
+
+  /// Share of truth pixels that are bad, the ones without an estimate included (NaN when
+  /// there are no truth pixels).
+  double D1All() const;
+  /// Share of matched pixels that are bad (NaN when none is matched).
+  double D1Matched() const;
+  /// Mean |estimate - truth| over matched pixels [px] (NaN when none is matched).
+  double EndPointErrorPx() const;
+  /// Share of truth pixels with an estimate (NaN when there are no truth pixels).
+  double Density() const;
+
+  /// Adds the counts of `other` (the same rule) to these.
+  void Add(const DisparityEvalSummary& other);
+  /// A few lines: what was scored, D1 over all and over matched pixels, EPE, density.
+  std::string BriefReport() const;
+  /// {"kind": "disparity", "prediction", "truth", "pairs", "truth_pixels", "matched_pixels",
+  ///  "bad_matched_pixels", "max_error_px", "max_error_ratio", "d1_all", "d1_matched",
+  ///  "epe_px", "density"}.
+  std::string ToJson() const;
+};
+
+/// Scores `estimate` against `truth` (both disparities in px, the same size; 0 = none) with
+/// the rule of `options`. Throws ssta::Error giving both sizes when they differ, and the
+/// IsValid message when `options` are invalid.
+DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
+                                    const DisparityEvalOptions& options = {});
+
+/// Reads a disparity PNG in KITTI's convention (16 bit, disparity = value / 256, 0 = none), as
+/// `ssta classify --disparity` and `ssta synth` write them. Throws ssta::Error naming the file
+/// when it is missing, cannot be decoded or is not 16-bit single-channel.
+ImageF ReadDisparityPng(const std::string& path);
+
+/// Scores disparity PNGs: `prediction` and `truth` are both files, or both folders (a folder's
+/// `disparity/` subfolder is taken when there is one, so a `classify --disparity` output folder
+/// and a synthetic sequence's `gt/` work as they are). Folders are paired by file name: every
+/// truth PNG needs an estimate of the same name. Throws ssta::Error naming the file that is
+/// missing, unreadable or of another size than its truth.
+DisparityEvalSummary EvaluateDisparityFiles(const std::string& prediction, const std::string& truth,
+                                            const DisparityEvalOptions& options = {});
+
+}  // namespace ssta

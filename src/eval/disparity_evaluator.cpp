@@ -1,0 +1,209 @@
+#include "ssta/eval/disparity_evaluator.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <map>
+
+#include "core/json_writer.h"
+#include "ssta/core/error.h"
+#include "ssta/io/image_io.h"
+
+namespace ssta {
+namespace fs = std::filesystem;
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string SizeText(const ImageF& image) {
+  return std::to_string(image.width()) + "x" + std::to_string(image.height());
+}
+
+double Share(std::int64_t part, std::int64_t whole) {
+  return whole > 0 ? static_cast<double>(part) / static_cast<double>(whole) : kNaN;
+}
+
+std::string Percent(double share) {
+  if (std::isnan(share)) return "n/a";
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f %%", 100.0 * share);
+  return text;
+}
+
+// The PNGs of a folder by file name (its disparity/ subfolder when it has one).
+std::map<std::string, fs::path> DisparityPngs(const std::string& folder) {
+  fs::path dir(folder);
+  if (fs::is_directory(dir / "disparity")) dir /= "disparity";
+  std::map<std::string, fs::path> files;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    if (!entry.is_regular_file()) continue;
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (ext == ".png") files.emplace(entry.path().filename().string(), entry.path());
+  }
+  if (ec) throw Error(dir.string() + ": cannot list folder: " + ec.message());
+  return files;
+}
+
+DisparityEvalSummary ScoreFiles(const std::string& predicted_path, const std::string& truth_path,
+                                const DisparityEvalOptions& options) {
+  const ImageF truth = ReadDisparityPng(truth_path);
+  const ImageF estimate = ReadDisparityPng(predicted_path);
+  if (truth.width() != estimate.width() || truth.height() != estimate.height()) {
+    throw Error(predicted_path + ": size " + SizeText(estimate) + " differs from the truth " + truth_path + " (" +
+                SizeText(truth) + ")");
+  }
+  return ScoreDisparity(truth, estimate, options);
+}
+
+}  // namespace
+
+bool DisparityEvalOptions::IsValid(std::string* error) const {
+  if (!(std::isfinite(max_error_px) && max_error_px >= 0)) {
+    return Fail(error, "max_error_px: must be finite and >= 0");
+  }
+  if (!(std::isfinite(max_error_ratio) && max_error_ratio >= 0)) {
+    return Fail(error, "max_error_ratio: must be finite and >= 0");
+  }
+  return true;
+}
+
+double DisparityEvalSummary::D1All() const {
+  return Share(truth_pixels - matched_pixels + bad_matched_pixels, truth_pixels);
+}
+
+double DisparityEvalSummary::D1Matched() const { return Share(bad_matched_pixels, matched_pixels); }
+
+double DisparityEvalSummary::EndPointErrorPx() const {
+  return matched_pixels > 0 ? sum_abs_error_px / static_cast<double>(matched_pixels) : kNaN;
+}
+
+double DisparityEvalSummary::Density() const { return Share(matched_pixels, truth_pixels); }
+
+void DisparityEvalSummary::Add(const DisparityEvalSummary& other) {
+  pairs += other.pairs;
+  truth_pixels += other.truth_pixels;
+  matched_pixels += other.matched_pixels;
+  bad_matched_pixels += other.bad_matched_pixels;
+  sum_abs_error_px += other.sum_abs_error_px;
+}
+
+std::string DisparityEvalSummary::BriefReport() const {
+  char rule_text[96];
+  std::snprintf(rule_text, sizeof rule_text, "off by more than %g px and %g %%, or no disparity", rule.max_error_px,
+                100.0 * rule.max_error_ratio);
+  char epe[32];
+  std::snprintf(epe, sizeof epe, "%.3f px", EndPointErrorPx());
+  std::string out = "eval disparity: " + prediction + " against " + truth + "\n";
+  out += "pairs: " + std::to_string(pairs) + ", truth pixels: " + std::to_string(truth_pixels) +
+         ", matched: " + std::to_string(matched_pixels) + "\n";
+  out += "D1 (bad: " + std::string(rule_text) + "): " + Percent(D1All()) + " of truth pixels, " +
+         Percent(D1Matched()) + " of matched pixels\n";
+  out += "end-point error (matched): " + std::string(std::isnan(EndPointErrorPx()) ? "n/a" : epe) +
+         ", density: " + Percent(Density()) + "\n";
+  return out;
+}
+
+std::string DisparityEvalSummary::ToJson() const {
+  internal::JsonWriter json;
+  json.BeginObject();
+  json.Key("kind");
+  json.String("disparity");
+  json.Key("prediction");
+  json.String(prediction);
+  json.Key("truth");
+  json.String(truth);
+  json.Key("pairs");
+  json.Integer(pairs);
+  json.Key("truth_pixels");
+  json.Integer(truth_pixels);
+  json.Key("matched_pixels");
+  json.Integer(matched_pixels);
+  json.Key("bad_matched_pixels");
+  json.Integer(bad_matched_pixels);
+  json.Key("max_error_px");
+  json.Number(rule.max_error_px);
+  json.Key("max_error_ratio");
+  json.Number(rule.max_error_ratio);
+  json.Key("d1_all");
+  json.Number(D1All());
+  json.Key("d1_matched");
+  json.Number(D1Matched());
+  json.Key("epe_px");
+  json.Number(EndPointErrorPx());
+  json.Key("density");
+  json.Number(Density());
+  json.EndObject();
+  return json.Take();
+}
+
+DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate, const DisparityEvalOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw Error(why);
+  if (truth.width() != estimate.width() || truth.height() != estimate.height()) {
+    throw Error("the estimate is " + SizeText(estimate) + " but the truth is " + SizeText(truth));
+  }
+  DisparityEvalSummary s;
+  s.rule = options;
+  s.pairs = 1;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const double t = truth[i];
+    if (!(t > 0.0) || !std::isfinite(t)) continue;
+    ++s.truth_pixels;
+    const double e = estimate[i];
+    if (!(e > 0.0) || !std::isfinite(e)) continue;
+    ++s.matched_pixels;
+    const double error = std::abs(e - t);
+    s.sum_abs_error_px += error;
+    if (error > options.max_error_px && error > options.max_error_ratio * t) ++s.bad_matched_pixels;
+  }
+  return s;
+}
+
+ImageF ReadDisparityPng(const std::string& path) {
+  if (!fs::is_regular_file(path)) throw Error(path + ": disparity file not found");
+  const ImageU16 fixed = ReadImageU16(path);
+  ImageF disparity(fixed.width(), fixed.height(), 0.0f);
+  for (std::size_t i = 0; i < fixed.size(); ++i) disparity[i] = static_cast<float>(fixed[i]) / 256.0f;
+  return disparity;
+}
+
+DisparityEvalSummary EvaluateDisparityFiles(const std::string& prediction, const std::string& truth,
+                                            const DisparityEvalOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw Error(why);
+  const bool truth_is_folder = fs::is_directory(truth), prediction_is_folder = fs::is_directory(prediction);
+  if (!truth_is_folder && !fs::is_regular_file(truth)) throw Error(truth + ": truth not found");
+  if (!prediction_is_folder && !fs::is_regular_file(prediction)) throw Error(prediction + ": prediction not found");
+  if (truth_is_folder != prediction_is_folder) {
+    throw Error(prediction + ": give two files or two folders (the truth " + truth + " is a " +
+                (truth_is_folder ? "folder" : "file") + ")");
+  }
+  DisparityEvalSummary total;
+  total.rule = options;
+  total.prediction = prediction;
+  total.truth = truth;
+  if (!truth_is_folder) {
+    total.Add(ScoreFiles(prediction, truth, options));
+    return total;
+  }
+  const auto truth_files = DisparityPngs(truth);
+  if (truth_files.empty()) throw Error(truth + ": no PNG files in the truth folder");
+  const auto predicted_files = DisparityPngs(prediction);
+  for (const auto& [name, truth_file] : truth_files) {
+    const auto found = predicted_files.find(name);
+    if (found == predicted_files.end()) {
+      fs::path dir(prediction);
+      if (fs::is_directory(dir / "disparity")) dir /= "disparity";
+      throw Error((dir / name).string() + ": no estimate for the truth " + truth_file.string());
+    }
+    total.Add(ScoreFiles(found->second.string(), truth_file.string(), options));
+  }
+  return total;
+}
+
+}  // namespace ssta
