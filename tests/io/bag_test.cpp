@@ -81,7 +81,9 @@ void ExpectSameSequence(const Sequence& a, const Sequence& b) {
   EXPECT_EQ(a.imu().back().specific_force, b.imu().back().specific_force);
   EXPECT_TRUE(a.body_T_imu().isApprox(b.body_T_imu(), 1e-12));
   ASSERT_EQ(a.poses().size(), b.poses().size());
-  if (!a.poses().empty()) EXPECT_TRUE(a.poses().back().world_p_body.isApprox(b.poses().back().world_p_body, 1e-12));
+  if (!a.poses().empty()) {
+    EXPECT_TRUE(a.poses().back().world_p_body.isApprox(b.poses().back().world_p_body, 1e-12));
+  }
   const std::size_t last = a.frames().size() - 1;
   const StereoImages ia = a.ReadImages(a.frames()[std::min<std::size_t>(2, last)]);
   const StereoImages ib = b.ReadImages(b.frames()[std::min<std::size_t>(2, last)]);
