@@ -10,6 +10,7 @@
 
 #include "core/json_writer.h"
 #include "ssta/core/error.h"
+#include "eval/png_folder.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {
@@ -37,16 +38,7 @@ std::string Percent(double share) {
 std::map<std::string, fs::path> DisparityPngs(const std::string& folder) {
   fs::path dir(folder);
   if (fs::is_directory(dir / "disparity")) dir /= "disparity";
-  std::map<std::string, fs::path> files;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (!entry.is_regular_file()) continue;
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".png") files.emplace(entry.path().filename().string(), entry.path());
-  }
-  if (ec) throw Error(dir.string() + ": cannot list folder: " + ec.message());
-  return files;
+  return internal::ListPngs(dir);
 }
 
 DisparityEvalSummary ScoreFiles(const std::string& predicted_path, const std::string& truth_path,

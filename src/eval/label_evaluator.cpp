@@ -10,6 +10,7 @@
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
+#include "eval/png_folder.h"
 #include "ssta/eval/class_grid.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
@@ -28,20 +29,6 @@ void CheckSameSize(const ImageU8& truth, const ImageU8& predicted, const std::st
     throw Error(predicted_name + ": size " + SizeText(predicted) + " differs from the truth " +
                 truth_name + " (" + SizeText(truth) + ")");
   }
-}
-
-// PNG files of a folder by file name.
-std::map<std::string, fs::path> ListPngs(const fs::path& dir) {
-  std::map<std::string, fs::path> files;
-  std::error_code ec;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    if (!entry.is_regular_file()) continue;
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    if (ext == ".png") files.emplace(entry.path().filename().string(), entry.path());
-  }
-  if (ec) throw Error(dir.string() + ": cannot list folder: " + ec.message());
-  return files;
 }
 
 fs::path PredictionFolder(const std::string& prediction) {
@@ -96,8 +83,8 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
   summary.prediction_dir = pred_dir.string();
   summary.truth_dir = truth_dir.string();
 
-  const auto predicted_files = ListPngs(pred_dir);
-  const auto truth_files = ListPngs(truth_dir);
+  const auto predicted_files = internal::ListPngs(pred_dir);
+  const auto truth_files = internal::ListPngs(truth_dir);
   if (truth_files.empty()) throw Error(truth_dir.string() + ": no truth label PNGs in the folder");
   if (predicted_files.empty()) {
     throw Error(prediction + ": no label PNGs (looked in " + pred_dir.string() +
