@@ -16,12 +16,14 @@
 
 #include "io/bag/chunk_decompression.h"
 #include "io/bag/crc32.h"
+#include "io/bag/mcap_records.h"
 #include "ssta/core/error.h"
 
 namespace ssta::internal {
 namespace {
 
-constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
+using namespace mcap;  // NOLINT: the record opcodes and magic
+
 constexpr std::uint64_t kMagicBytes = 8;
 constexpr std::uint64_t kRecordHeaderBytes = 9;  // opcode uint8 + content length uint64
 constexpr std::uint64_t kFooterBytes = kRecordHeaderBytes + 20;
@@ -32,19 +34,6 @@ constexpr std::uint64_t kChunkHeadBytes = 4096;
 /// BagMessageRef::offset of a Message record that sits in the data section, outside any chunk.
 constexpr std::uint64_t kOutsideChunks = ~std::uint64_t{0};
 constexpr std::size_t kCachedChunks = 2;
-
-enum Opcode : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kDataEnd = 0x0F,
-};
 
 const char* RecordName(std::uint8_t opcode) {
   switch (opcode) {

@@ -3,26 +3,14 @@
 #include <zstd.h>
 
 #include "io/bag/crc32.h"
+#include "io/bag/mcap_records.h"
 #include "ssta/core/error.h"
 
 namespace ssta::internal {
 namespace {
 
-constexpr std::uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', 0x30, '\r', '\n'};
+using namespace mcap;  // NOLINT: the record opcodes and magic
 
-enum Opcode : std::uint8_t {
-  kHeader = 0x01,
-  kFooter = 0x02,
-  kSchema = 0x03,
-  kChannel = 0x04,
-  kMessage = 0x05,
-  kChunk = 0x06,
-  kMessageIndex = 0x07,
-  kChunkIndex = 0x08,
-  kStatistics = 0x0B,
-  kSummaryOffset = 0x0E,
-  kDataEnd = 0x0F,
-};
 
 /// Little-endian MCAP fields appended to a buffer.
 class Fields {
