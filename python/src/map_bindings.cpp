@@ -437,13 +437,13 @@ Returns:
         for an (x, y) point);
     class (uint8): the class id; 0 where unobserved;
     cost (float64): planning cost in [0, 1]: 0 traversable, 0.25..0.75 semi-traversable by
-        its slope and step, 1 non-traversable; NaN for classes 0 and 4;
+        its slope and step (0.5 decided by the frames), 1 non-traversable; NaN for classes 0 and 4;
     probability (float64): the class's probability from the frames' evidence;
     slope_deg (float64): the slope that decided the class [deg]: the fused surface's where
-        decided_by is "surface" or "both", the frames' mean where "frames"; NaN where no class
-        1..3 was decided from the map's evidence;
+        decided_by is "surface" or "both"; NaN where the frames' votes decided alone
+        ("frames") and where no class 1..3 was decided from the map's evidence;
     step_m (float64): the step that decided the class [m], likewise: the fused surface's
-        largest height jump within the step radius, or the frames' mean signed step;
+        largest height jump within the step radius; NaN where the frames decided;
     observations (uint32): frames that gave the cell a class;
     confidence (float64): posterior probability of the class from the frames and the fused
         surface around the column, in [0, 1];

@@ -66,9 +66,7 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
     if (p[k] >= p[best]) best = k;  // ties to the worse class
   }
   cell.cls = static_cast<TravClass>(best + 1);
-  cell.decided_by = ClassJudge::kFrames;
-  cell.slope_deg = cell.frame_mean_slope_deg;
-  cell.step_m = cell.frame_mean_step_m;
+  cell.decided_by = ClassJudge::kFrames;  // slope_deg and step_m stay NaN: the votes decided
   cell.probability = p[static_cast<std::size_t>(best)];
   cell.confidence = cell.probability;
   cell.cost = map.Cost(cell.cls, cell.slope_deg, cell.step_m, cell.confidence);
@@ -94,6 +92,8 @@ double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m, d
       return std::isfinite(confidence) ? 0.25 * std::clamp(1.5 * (1.0 - confidence), 0.0, 1.0) : 0.0;
     case TravClass::kNonTraversable: return 1.0;
     case TravClass::kSemiTraversable: {
+      // Without a slope or step that decided the class (the frames' votes did): mid-band.
+      if (!std::isfinite(slope_deg) && !std::isfinite(step_m)) return 0.5;
       const double f = std::max(BandFraction(slope_deg, v.semi_slope_deg, v.max_slope_deg),
                                 BandFraction(std::abs(step_m), v.semi_step_m, v.max_step_m));
       return 0.25 + 0.5 * f;

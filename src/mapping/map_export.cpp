@@ -143,7 +143,7 @@ int JudgeStepsByLocalGround(GridProjection* grid, double radius_m, double tolera
     for (int u = 0; u < w; ++u) {
       if (in(v, u) != kNon) continue;
       const float z = grid->height_m(v, u), slope = grid->slope_deg(v, u);
-      if (!std::isfinite(z) || !(slope < level_slope_deg)) continue;
+      if (!std::isfinite(z) || slope >= level_slope_deg) continue;  // NaN: the frames' votes decided
       heights.clear();
       for (int dv = -r; dv <= r; ++dv) {
         for (int du = -r; du <= r; ++du) {
@@ -315,10 +315,11 @@ void ForEachSurfaceCell(const TraversabilityMap& map, Row&& row) {
   for (const CellInfo& cell : map.SurfaceCells()) row(cell, ExportColour(cell.cls));
 }
 
+/// A voxel's numbers; its slope and step are the frames' means (a voxel's class is their vote).
 std::string Numbers(const CellInfo& cell) {
   return std::to_string(static_cast<int>(cell.cls)) + ' ' + Format("%.6g", cell.cost) + ' ' +
-         Format("%.6g", cell.probability) + ' ' + Format("%.6g", cell.slope_deg) + ' ' +
-         Format("%.6g", cell.step_m) + ' ' + std::to_string(cell.observations);
+         Format("%.6g", cell.probability) + ' ' + Format("%.6g", cell.frame_mean_slope_deg) + ' ' +
+         Format("%.6g", cell.frame_mean_step_m) + ' ' + std::to_string(cell.observations);
 }
 
 std::string Xyz(const CellInfo& cell) {

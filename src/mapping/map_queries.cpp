@@ -133,8 +133,10 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 ///  - otherwise the frames decide alone.
 /// An uncertain surface (stereo noise at range) so never turns open ground red by itself.
 /// `decided_by` names the judge whose own most probable class the verdict is (both: each's, or
-/// neither's after combining), and the slope and step are that judge's: the surface's where it
-/// decided or co-decided, the frames' means where they decided alone.
+/// neither's after combining). The slope and step are the surface's where it decided or
+/// co-decided, and NaN where the frames decided alone: a frame classes its pixels by its own
+/// rules, so their mean slope and step (kept as frame_mean_*) mix the votes of every class and
+/// did not decide it.
 void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
                       CellInfo* cell) {
   const TravNode* node = tree.search(key);
@@ -173,8 +175,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   cell->confidence = posterior[best];
   cell->probability = has_evidence ? frames[static_cast<std::size_t>(best)] : kNaN;
   if (judge == ClassJudge::kFrames) {
-    cell->slope_deg = cell->frame_mean_slope_deg;
-    cell->step_m = cell->frame_mean_step_m;
+    cell->slope_deg = cell->step_m = kNaN;
   } else {
     cell->slope_deg = surface.slope_deg;
     cell->step_m = surface.step_m;

@@ -237,8 +237,8 @@ TEST(Fusion, OneUpdatePerVoxelPerFrameByMajority) {
   EXPECT_EQ(cell.cls, TravClass::kTraversable);
   EXPECT_EQ(cell.observations, 1u);
   EXPECT_NEAR(cell.probability, Softmax(ExpectedLogOdds({0}, map.options()), 0), 1e-12);
-  EXPECT_NEAR(cell.slope_deg, (7 * 10.0 + 3 * 40.0) / 10.0, 1e-4);
-  EXPECT_NEAR(cell.step_m, (7 * 0.02 - 3 * 0.3) / 10.0, 1e-6);
+  EXPECT_NEAR(cell.frame_mean_slope_deg, (7 * 10.0 + 3 * 40.0) / 10.0, 1e-4);
+  EXPECT_NEAR(cell.frame_mean_step_m, (7 * 0.02 - 3 * 0.3) / 10.0, 1e-6);
   EXPECT_NEAR(cell.max_step_m, 0.3, 1e-6);
   // A tie goes to the worse class.
   TraversabilityMap tie(OctoMapCarving());
@@ -254,11 +254,12 @@ TEST(Fusion, SlopeAndStepAreRunningMeansOverFrames) {
   map.InsertFrame(At(kA, TravClass::kSemiTraversable, NAN, NAN), kOrigin, 3);  // not averaged
   const CellInfo cell = map.CellAt(kA);
   EXPECT_EQ(cell.observations, 3u);
-  EXPECT_NEAR(cell.slope_deg, 15.0, 1e-5);
-  EXPECT_NEAR(cell.step_m, 0.10, 1e-6);
+  EXPECT_NEAR(cell.frame_mean_slope_deg, 15.0, 1e-5);
+  EXPECT_NEAR(cell.frame_mean_step_m, 0.10, 1e-6);
   EXPECT_NEAR(cell.max_step_m, 0.15, 1e-6);
-  // Semi cost: 0.25 + 0.5 max((15 - 15) / 10, (0.10 - 0.10) / 0.10) = 0.25.
-  EXPECT_NEAR(cell.cost, 0.25, 1e-5);
+  // The frames' votes decided the voxel's class, not a slope or step: the semi band's middle.
+  EXPECT_TRUE(std::isnan(cell.slope_deg) && std::isnan(cell.step_m));
+  EXPECT_NEAR(cell.cost, 0.5, 1e-12);
 }
 
 TEST(Fusion, UndecidedPointsUpdateOccupancyButNotClasses) {

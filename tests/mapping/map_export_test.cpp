@@ -416,7 +416,7 @@ TEST(MapExport, CsvPlyAndPcdListEveryOccupiedVoxel) {
   for (std::size_t i = 1; i < csv.size(); ++i) {
     if (csv[i].find(",3,1.0000,") != std::string::npos) {
       ++non_traversable;
-      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,18.00,0.050,1,0.6357,frames,18.00,0.050");
+      EXPECT_EQ(csv[i], "-0.5500,2.2500,0.0500,3,1.0000,0.6357,nan,nan,1,0.6357,frames,18.00,0.050");
     }
   }
   EXPECT_EQ(non_traversable, 1);

@@ -198,9 +198,10 @@ TEST(McapExport, ReadBackHoldsTheGridOfThePgmExportTheLayersTheVoxelsAndThePath)
   EXPECT_EQ(at("cost", C(11), C(12)), 1.0f);
   EXPECT_EQ(at("class", C(25), C(3)), 1.0f);  // the floor
   EXPECT_NEAR(at("elevation", C(25), C(3)), C(0), 1e-6);
-  EXPECT_NEAR(at("slope", C(25), C(3)), 2.0, 1e-5);
-  EXPECT_NEAR(at("step", C(25), C(3)), 0.01, 1e-6);
   const CellInfo floor = map.TopSurfaceAt(C(25), C(3));
+  // The slope and step that decided the class: none where the frames' votes did (NaN).
+  ASSERT_EQ(floor.decided_by, ClassJudge::kFrames);
+  EXPECT_TRUE(std::isnan(at("slope", C(25), C(3))) && std::isnan(at("step", C(25), C(3))));
   EXPECT_NEAR(at("confidence", C(25), C(3)), floor.confidence, 1e-6);
   EXPECT_NEAR(at("cost", C(25), C(3)), floor.cost, 1e-6);
   int classified = 0, with_class = 0;

@@ -1,6 +1,7 @@
 #include <functional>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <thread>
 #include <vector>
@@ -12,6 +13,8 @@
 
 namespace ssta {
 namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 using testing::OctoMapCarving;
 
@@ -47,7 +50,7 @@ TEST_F(FloorAndBoxQueries, TopSurfaceOverTheBoxIsTheBoxTop) {
   EXPECT_NEAR(top.center.x(), 1.15, 1e-9);
   EXPECT_NEAR(top.center.y(), 1.15, 1e-9);
   EXPECT_NEAR(top.center.z(), 0.25, 1e-9);  // voxel [0.2, 0.3): the top of the 0.3 m box
-  EXPECT_NEAR(top.slope_deg, 80.0, 1e-4);
+  EXPECT_NEAR(top.frame_mean_slope_deg, 80.0, 1e-4);
   EXPECT_NEAR(top.probability, OneViewProbability(), 1e-6);
 }
 
@@ -358,19 +361,25 @@ TEST(ColumnVerdict, SlopeAndStepAreThoseThatDecidedTheClassAndTheFramesMeansAreK
   {
     // A 20 deg ramp (semi-traversable to the surface) whose every point three frames call
     // non-traversable with a 0.5 m step (a lip the fused surface does not show): the worse of
-    // the two verdicts is the frames', so are the slope and step.
+    // the two verdicts is the frames'. Their votes decided, not a slope or step: those are NaN,
+    // and the frames' means stay under their own names.
     const TraversabilityMap map = Ramp(20.0, TravClass::kNonTraversable, 20.0f, 0.5f, 3);
     const CellInfo cell = map.TopSurfaceAt(x, y);
     EXPECT_EQ(cell.cls, TravClass::kNonTraversable);
     EXPECT_EQ(cell.decided_by, ClassJudge::kFrames);
-    EXPECT_NEAR(cell.slope_deg, 20.0, 1e-4);
-    EXPECT_NEAR(cell.step_m, 0.5, 1e-6);
-    ExpectSlopeAndStepAgreeWithClass(cell, vehicle);
+    EXPECT_TRUE(std::isnan(cell.slope_deg) && std::isnan(cell.step_m));
+    EXPECT_EQ(cell.cost, 1.0);
+    EXPECT_NEAR(cell.frame_mean_slope_deg, 20.0, 1e-4);
+    EXPECT_NEAR(cell.frame_mean_step_m, 0.5, 1e-6);
     // A voxel's class is the frames' alone.
     const CellInfo voxel = map.CellAt(cell.center);
     EXPECT_EQ(voxel.decided_by, ClassJudge::kFrames);
-    EXPECT_EQ(voxel.slope_deg, voxel.frame_mean_slope_deg);
-    EXPECT_EQ(voxel.step_m, voxel.frame_mean_step_m);
+    EXPECT_TRUE(std::isnan(voxel.slope_deg) && std::isnan(voxel.step_m));
+    EXPECT_NEAR(voxel.frame_mean_step_m, 0.5, 1e-6);
+    // Semi-traversable by the frames' votes: the middle of the band, 0.25 + 0.5 * 0.5; by a
+    // slope at the band's top (max_slope_deg): 0.75.
+    EXPECT_EQ(map.Cost(TravClass::kSemiTraversable, kNaN, kNaN), 0.5);
+    EXPECT_NEAR(map.Cost(TravClass::kSemiTraversable, vehicle.max_slope_deg, 0.0), 0.75, 1e-12);
   }
   // An unobserved column: no judge, no values.
   const CellInfo none = Ramp(0.0, TravClass::kTraversable, 0.0f, 0.0f).TopSurfaceAt(50.0, 50.0);

@@ -47,8 +47,7 @@ struct GridExportOptions {
 };
 
 /// One pass over a projection: each non-traversable pixel (3) whose slope (the one that decided
-/// its class) is below
-/// `level_slope_deg` and whose height lies within `tolerance_m` of the median height of the
+/// its class) is below `level_slope_deg`, or NaN (the frames' votes decided), and whose height lies within `tolerance_m` of the median height of the
 /// traversable pixels (1) within `radius_m` of it (at least 5 of them, read from the input, so a
 /// changed pixel never counts for another) becomes traversable, with cost 0; its height, slope
 /// and step stay as observed (ExportedSurface answers such a column with slope and step NaN). Why: a frame calls a surface a step by its height over that

@@ -97,11 +97,13 @@ struct CellInfo {
   /// (TopSurfaceAt) the frames, the fused surface around it, or both (see slope_deg).
   ClassJudge decided_by = ClassJudge::kNone;
   /// The slope that decided `cls` [deg]: the fused surface's (the local plane's slope) where
-  /// decided_by is kSurface or kBoth, the frames' mean (frame_mean_slope_deg) where kFrames;
-  /// NaN where no class 1..3 was decided from the map's evidence. The cost uses it.
+  /// decided_by is kSurface or kBoth; NaN where the frames' votes decided alone (kFrames: a
+  /// frame classes its pixels by its own rules, so the frames' mean slope mixes the votes of
+  /// every class; it is frame_mean_slope_deg) and where no class 1..3 was decided. The cost
+  /// uses it.
   double slope_deg = std::numeric_limits<double>::quiet_NaN();
   /// The step that decided `cls` [m], as slope_deg: the fused surface's largest height jump
-  /// within the vehicle's step radius (>= 0), or the frames' mean signed step.
+  /// within the vehicle's step radius (>= 0); NaN where the frames decided alone.
   double step_m = std::numeric_limits<double>::quiet_NaN();
   /// Mean over the frames that gave the voxel a class of their points' slope [deg]; NaN when
   /// none did.
