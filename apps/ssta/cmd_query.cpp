@@ -175,7 +175,7 @@ void RegisterQuery(CLI::App& app) {
       "Output header: x,y,z,class,cost,probability,slope_deg,step_m,observations,confidence,decided_by,\n"
       "frame_mean_slope_deg,frame_mean_step_m (confidence: the posterior probability of the class from the\n"
       "frames and the fused surface; decided_by: frames, surface, both, or export with --as-exported;\n"
-      "slope_deg and step_m: those that decided the class, the surface's or the frames' means).\n"
+      "slope_deg and step_m: those that decided the class, the fused surface's; nan where the frames' votes did).\n"
       "X,Y answers for the top observed surface of that column, X,Y,Z for the voxel at that point;\n"
       "x,y,z are then that voxel's centre. An unobserved cell is the point asked (z nan for X,Y), class 0\n"
       "with cost nan: the planner decides. --as-exported gives X,Y the class\n"

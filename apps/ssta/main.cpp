@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterSynth(app);
   ssta::cli::RegisterBuildMap(app);
   ssta::cli::RegisterQuery(app);
+  ssta::cli::RegisterExplain(app);
   ssta::cli::RegisterExport(app);
   ssta::cli::RegisterMergeMaps(app);
   ssta::cli::RegisterEval(app);

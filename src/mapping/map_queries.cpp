@@ -15,6 +15,7 @@
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/surface_judgement.h"
 
 namespace ssta {
@@ -138,31 +139,40 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 /// rules, so their mean slope and step (kept as frame_mean_*) mix the votes of every class and
 /// did not decide it.
 void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
-                      CellInfo* cell) {
+                      CellInfo* cell, ColumnExplanation* why = nullptr) {
   const TravNode* node = tree.search(key);
   if (node == nullptr || !NodeOccupied(tree, *node)) return;
   const VehicleOptions& vehicle = map.metadata().vehicle;
-  const SurfaceVerdict surface =
-      JudgeSurface(cell->center.head<2>(), SurfaceAround(tree, key, vehicle.step_radius_m), tree.getResolution(), vehicle);
+  const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, vehicle.step_radius_m);
+  const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
   const auto& l = node->class_log_odds;
   const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
+  if (why != nullptr) {
+    why->surface = surface;
+    why->surface_columns = static_cast<int>(samples.size());
+    why->disc_fully_seen = DiscFullySeen(tree, key, vehicle.step_radius_m);
+  }
   if (!surface.determined && !has_evidence) return;  // undecided: nothing to judge by
   const std::array<double, 3> frames = internal::FrameClassProbabilities(l, map.options().class_prior_traversable_log_odds);
   const std::array<double, 3>& s = surface.probability;
   std::array<double, 3> posterior = frames;
   ClassJudge judge = ClassJudge::kFrames;
+  JudgeRule rule = surface.determined ? JudgeRule::kFramesSurfacePartial : JudgeRule::kFramesAlone;
   if (surface.determined && !has_evidence) {
     posterior = s;
     judge = ClassJudge::kSurface;
+    rule = JudgeRule::kSurfaceAlone;
   } else if (surface.determined) {
     if (s[1] >= s[0] || s[2] >= s[0]) {
       posterior = WorseOfClasses(frames, s);
       judge = ClassJudge::kBoth;
+      rule = JudgeRule::kWorseOfTwo;
     } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
       double total = 0.0;
       for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * s[k]);
       for (double& p : posterior) p /= total;
       judge = ClassJudge::kBoth;
+      rule = JudgeRule::kProduct;
     }
   }
   const int best = MostProbableClass(posterior);
@@ -181,6 +191,11 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
     cell->step_m = surface.step_m;
   }
   cell->cost = map.Cost(cell->cls, cell->slope_deg, cell->step_m, cell->confidence);
+  if (why != nullptr) {
+    why->rule = rule;
+    why->posterior = posterior;
+    if (has_evidence) why->frame_probability = frames;
+  }
 }
 
 int Severity(TravClass c) {
@@ -371,6 +386,35 @@ CellInfo TraversabilityMap::TopSurfaceAt(double x, double y) const {
   CellInfo cell = internal::DescribeCell(*this, tree, node, key);
   JudgeFromSurface(*this, tree, key, &cell);
   return cell;
+}
+
+const char* JudgeRuleName(JudgeRule rule) {
+  switch (rule) {
+    case JudgeRule::kSurfaceAlone: return "surface alone";
+    case JudgeRule::kFramesAlone: return "frames alone";
+    case JudgeRule::kFramesSurfacePartial: return "frames (surface partial)";
+    case JudgeRule::kWorseOfTwo: return "worse of two";
+    case JudgeRule::kProduct: return "product";
+    default: return "none";
+  }
+}
+
+ColumnExplanation TraversabilityMap::ExplainColumn(double x, double y) const {
+  ColumnExplanation why;
+  why.cell = TopSurfaceAt(x, y);
+  if (!why.cell.observed) return why;
+  const TravOcTree& tree = *impl_->tree;
+  octomap::OcTreeKey key;
+  if (!tree.CoordToKeyChecked(x, y, 0.0, &key)) return why;
+  const TravNode* node = ColumnTop(tree, &key);  // the voxel TopSurfaceAt described
+  if (node == nullptr) return why;
+  for (int k = 0; k < 3; ++k) why.frame_log_odds[static_cast<std::size_t>(k)] = node->class_log_odds[static_cast<std::size_t>(k)];
+  why.occupancy_log_odds = node->getLogOdds();
+  why.occupancy = node->getOccupancy();
+  why.occupied_threshold = tree.getOccupancyThres();
+  CellInfo judged = internal::DescribeCell(*this, tree, node, key);
+  JudgeFromSurface(*this, tree, key, &judged, &why);
+  return why;
 }
 
 FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const SurfaceSource& surface) const {

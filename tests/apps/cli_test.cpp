@@ -18,6 +18,7 @@
 #include "ssta/core/units.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"
@@ -215,6 +216,32 @@ TEST(Cli, QueryRowsGiveTheSlopeAndStepThatDecidedTheClassAndTheFramesMeans) {
   EXPECT_NEAR(std::stod(column("step_m")), expected.step_m, 0.0005);
   EXPECT_EQ(column("frame_mean_slope_deg"), "5.00");
   EXPECT_EQ(column("frame_mean_step_m"), "0.010");
+}
+
+TEST(Cli, ExplainNamesTheRuleAndTheEvidenceOfAColumn) {
+  // SaveFloorWithPatch's patch: the frame called it non-traversable. Its points carry no height
+  // sigma, so no height was fused and the frames decided alone.
+  testing::TempDir dir;
+  SaveFloorWithPatch(dir / "m.ot");
+  const std::string explain = "explain --map " + (dir / "m.ot");
+  auto r = RunSsta(explain + " --at 0.65,0.65", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const ColumnExplanation why = TraversabilityMap::Load(dir / "m.ot").ExplainColumn(0.65, 0.65);
+  EXPECT_EQ(why.rule, JudgeRule::kFramesAlone);
+  EXPECT_EQ(why.cell.cls, TravClass::kNonTraversable);
+  EXPECT_NE(r.output.find("column 0.6500, 0.6500"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("class: " + std::to_string(static_cast<int>(why.cell.cls)) + " ("), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("rule: frames alone: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("frames: 1 gave a class"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("surface: 0 columns within 0.20 m"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("; too few to judge"), std::string::npos) << r.output;
+  r = RunSsta(explain + " --at 40,40", false);  // outside the floor
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("class: 0 (unknown)"), std::string::npos) << r.output;
+  r = RunSsta(explain + " --at 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--at: give X,Y"), std::string::npos) << r.output;
 }
 
 TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {

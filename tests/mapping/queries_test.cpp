@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "map_test_util.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/map_export.h"
 
 namespace ssta {
@@ -385,6 +386,64 @@ TEST(ColumnVerdict, SlopeAndStepAreThoseThatDecidedTheClassAndTheFramesMeansAreK
   const CellInfo none = Ramp(0.0, TravClass::kTraversable, 0.0f, 0.0f).TopSurfaceAt(50.0, 50.0);
   EXPECT_EQ(none.decided_by, ClassJudge::kNone);
   EXPECT_TRUE(std::isnan(none.slope_deg) && std::isnan(none.frame_mean_slope_deg));
+}
+
+}  // namespace
+}  // namespace ssta
+
+namespace ssta {
+namespace {
+
+TEST(ExplainColumn, GivesEachJudgesEvidenceAndTheRuleThatCombinedThem) {
+  const double x = testing::C(20), y = testing::C(20);
+  {
+    // The 30 deg ramp the frames call traversable: the surface finds the slope (30 deg within its
+    // sigma) and the worse of the two verdicts counts.
+    const TraversabilityMap map = Ramp(30.0, TravClass::kTraversable, 5.0f, 0.01f);
+    const ColumnExplanation why = map.ExplainColumn(x, y);
+    EXPECT_EQ(why.cell.cls, TravClass::kNonTraversable);
+    EXPECT_EQ(why.rule, JudgeRule::kWorseOfTwo);
+    ASSERT_TRUE(why.surface.determined);
+    EXPECT_NEAR(why.surface.slope_deg, 30.0, 0.5);
+    EXPECT_GT(why.frame_log_odds[0], why.frame_log_odds[1]);  // the frames' vote: traversable
+    EXPECT_GT(why.frame_log_odds[0], why.frame_log_odds[2]);
+    EXPECT_GT(why.frame_probability[0], 0.5);
+    // Worse of two: P(class <= k) is the product of the two judges'.
+    const auto& f = why.frame_probability;
+    const auto& s = why.surface.probability;
+    EXPECT_NEAR(why.posterior[0], f[0] * s[0], 1e-9);
+    EXPECT_NEAR(why.posterior[0] + why.posterior[1], (f[0] + f[1]) * (s[0] + s[1]), 1e-9);
+    EXPECT_NEAR(why.cell.confidence, why.posterior[2], 1e-12);
+    EXPECT_GE(why.occupancy, why.occupied_threshold);
+    EXPECT_NEAR(why.occupancy, 1.0 / (1.0 + std::exp(-why.occupancy_log_odds)), 1e-6);
+    EXPECT_TRUE(why.disc_fully_seen);
+    EXPECT_GE(why.surface_columns, 9);  // a 0.2 m disc at 0.1 m columns: at least the 3 x 3
+  }
+  {
+    // Level ground the frames call traversable, seen all round: the product rule, whose posterior
+    // is the normalised product of the two judges' probabilities.
+    const TraversabilityMap map = Ramp(0.0, TravClass::kTraversable, 2.0f, 0.01f);
+    const ColumnExplanation why = map.ExplainColumn(x, y);
+    EXPECT_EQ(why.rule, JudgeRule::kProduct);
+    EXPECT_EQ(why.cell.cls, TravClass::kTraversable);
+    const auto& f = why.frame_probability;
+    const auto& s = why.surface.probability;
+    const double total = f[0] * s[0] + f[1] * s[1] + f[2] * s[2];
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(why.posterior[k], f[k] * s[k] / total, 1e-9) << k;
+    // At the map's corner the disc reaches unseen columns: the surface cannot vouch, the frames
+    // decide.
+    const ColumnExplanation corner = map.ExplainColumn(testing::C(0), testing::C(0));
+    EXPECT_FALSE(corner.disc_fully_seen);
+    EXPECT_TRUE(corner.rule == JudgeRule::kFramesSurfacePartial || corner.rule == JudgeRule::kFramesAlone)
+        << JudgeRuleName(corner.rule);
+    EXPECT_EQ(corner.cell.decided_by, ClassJudge::kFrames);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(corner.posterior[k], corner.frame_probability[k], 1e-12);
+  }
+  // Nothing observed: no rule, no class.
+  const ColumnExplanation none = Ramp(0.0, TravClass::kTraversable, 0.0f, 0.0f).ExplainColumn(50.0, 50.0);
+  EXPECT_FALSE(none.cell.observed);
+  EXPECT_EQ(none.rule, JudgeRule::kNone);
+  EXPECT_TRUE(std::isnan(none.posterior[0]) && std::isnan(none.occupancy));
 }
 
 }  // namespace

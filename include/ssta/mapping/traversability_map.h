@@ -18,6 +18,8 @@ namespace internal {
 struct TraversabilityMapAccess;  // private door for the exporters and tests (src/mapping)
 }  // namespace internal
 
+struct ColumnExplanation;  // include/ssta/mapping/column_explanation.h
+
 /// Version of the map file layout this build writes; it reads this version and older ones.
 inline constexpr int kMapFormatVersion = 2;
 
@@ -90,6 +92,9 @@ class TraversabilityMap {
   /// robot drives on (an overhang above the ground counts as the top). When the column holds
   /// no occupied voxel: observed false, class kUnknown, cost NaN, center (column x, y, NaN).
   CellInfo TopSurfaceAt(double x, double y) const;
+  /// The evidence behind TopSurfaceAt(x, y) and the rule that combined it
+  /// (include/ssta/mapping/column_explanation.h); for `ssta explain` and people asking why.
+  ColumnExplanation ExplainColumn(double x, double y) const;
 
   /// Where the footprint and path queries read each column's top surface: TopSurfaceAt by
   /// default, or another view of it such as ExportedSurface (ssta/mapping/map_export.h: the

@@ -1,0 +1,112 @@
+// ssta explain: why a map cell has its class, for people (docs/interfaces.md, CLI).
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "ssta/core/classes.h"
+#include "ssta/mapping/column_explanation.h"
+#include "ssta/mapping/traversability_map.h"
+
+namespace ssta::cli {
+namespace {
+
+struct ExplainArgs {
+  std::string map;
+  std::vector<double> at;
+  std::vector<std::string> config;
+};
+
+std::string Fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "nan";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
+  return buffer;
+}
+
+std::string Three(const std::array<double, 3>& v, int decimals) {
+  return Fixed(v[0], decimals) + " / " + Fixed(v[1], decimals) + " / " + Fixed(v[2], decimals);
+}
+
+/// What the combining rule did, in a sentence.
+const char* RuleSentence(JudgeRule rule) {
+  switch (rule) {
+    case JudgeRule::kSurfaceAlone: return "no frame gave the voxel a class; the fused surface judged alone";
+    case JudgeRule::kFramesAlone:
+      return "too few columns around it hold a fused height for the surface to judge; the frames decided";
+    case JudgeRule::kFramesSurfacePartial:
+      return "the surface found open ground but does not see every column of the disc, so it cannot vouch "
+             "for it; the frames decided";
+    case JudgeRule::kWorseOfTwo: return "the surface found a slope or a jump: the worse of the two verdicts counts";
+    case JudgeRule::kProduct:
+      return "the surface sees the whole disc and found open ground: its probabilities multiply the frames'";
+    default: return "no class: nothing observed here, or no evidence to judge by";
+  }
+}
+
+void Explain(const ExplainArgs& args) {
+  if (args.at.size() != 2) throw Error("--at: give X,Y (a column of the map)");
+  for (double v : args.at) {
+    if (!std::isfinite(v)) throw Error("--at: NaN or infinite value");
+  }
+  const TraversabilityMap map = LoadMapForConfig(args.map, args.config);
+  const ColumnExplanation why = map.ExplainColumn(args.at[0], args.at[1]);
+  const CellInfo& c = why.cell;
+  std::cout << "column " << Fixed(c.center.x(), 4) << ", " << Fixed(c.center.y(), 4) << " (asked "
+            << Fixed(args.at[0], 4) << ", " << Fixed(args.at[1], 4) << ")\n";
+  if (!c.observed) {
+    std::cout << "class: 0 (unknown): no surface observed in this column\n";
+    return;
+  }
+  std::cout << "top voxel: z " << Fixed(c.center.z(), 3) << " m, fused height " << Fixed(c.surface_z_m, 3)
+            << " +- " << Fixed(c.height_sigma_m, 3) << " m\n";
+  std::cout << "class: " << static_cast<int>(c.cls) << " (" << ClassName(c.cls) << "), confidence "
+            << Fixed(c.confidence, 3) << ", cost " << Fixed(c.cost, 3) << ", decided by: "
+            << (c.decided_by == ClassJudge::kNone ? "nothing" : ClassJudgeName(c.decided_by)) << "\n";
+  std::cout << "rule: " << JudgeRuleName(why.rule) << ": " << RuleSentence(why.rule) << "\n";
+  std::cout << "posterior (traversable / semi / non-traversable): " << Three(why.posterior, 3) << "\n";
+  std::cout << "frames: " << c.observations << " gave a class; votes as class log-odds " << Three(why.frame_log_odds, 2)
+            << "; probabilities " << Three(why.frame_probability, 3) << " (with the open-ground prior "
+            << Fixed(map.options().class_prior_traversable_log_odds, 2) << ")\n";
+  std::cout << "frames' means: slope " << Fixed(c.frame_mean_slope_deg, 2) << " deg, step "
+            << Fixed(c.frame_mean_step_m, 3) << " m; largest step a frame saw " << Fixed(c.max_step_m, 3) << " m\n";
+  std::cout << "free space: occupancy log-odds " << Fixed(why.occupancy_log_odds, 2) << " (probability "
+            << Fixed(why.occupancy, 3) << "; a surface from " << Fixed(why.occupied_threshold, 3)
+            << "): hits raise it, rays passing through lower it\n";
+  const SurfaceVerdict& s = why.surface;
+  const double radius = map.metadata().vehicle.step_radius_m;
+  std::cout << "surface: " << why.surface_columns << " columns within " << Fixed(radius, 2)
+            << " m hold a fused height (coverage " << Fixed(s.coverage, 2) << ", whole disc seen: "
+            << (why.disc_fully_seen ? "yes" : "no") << ")";
+  if (s.determined) {
+    std::cout << "; slope " << Fixed(s.slope_deg, 2) << " +- " << Fixed(s.slope_sigma_deg, 2) << " deg, step "
+              << Fixed(s.step_m, 3) << " +- " << Fixed(s.step_sigma_m, 3) << " m; probabilities "
+              << Three(s.probability, 3) << "\n";
+  } else {
+    std::cout << "; too few to judge\n";
+  }
+}
+
+}  // namespace
+
+void RegisterExplain(CLI::App& app) {
+  auto args = std::make_shared<ExplainArgs>();
+  CLI::App* cmd = app.add_subcommand("explain", "Why a map column has its class: the evidence and the rule");
+  cmd->footer(
+      "Prints the column's class, confidence and cost, which judge decided and by which rule, the frames'\n"
+      "class votes, the free-space evidence and the fused surface's slope and step with their sigmas\n"
+      "(maps/README.md, \"top surface\").");
+  cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
+  AddMapConfig(cmd, &args->config);
+  cmd->add_option("--at", args->at, "the column: X,Y [m, world frame]")
+      ->delimiter(',')
+      ->expected(1, 2)
+      ->type_name("X,Y")
+      ->required();
+  cmd->callback([args] { Explain(*args); });
+}
+
+}  // namespace ssta::cli

@@ -1,0 +1,57 @@
+#pragma once
+
+// Why a column of the map has its class: the frames' votes, the free-space evidence, the fused
+// surface's verdict and the rule that combined them (TraversabilityMap::ExplainColumn,
+// `ssta explain`).
+
+#include <array>
+#include <cstdint>
+#include <limits>
+
+#include "ssta/mapping/map_types.h"
+#include "ssta/mapping/surface_judgement.h"
+
+namespace ssta {
+
+/// How a column's class came from its two judges, the frames' class votes and the fused
+/// surface around it (maps/README.md, "top surface").
+enum class JudgeRule : std::uint8_t {
+  kNone,           ///< no class: the column is unobserved, or neither judge has evidence
+  kSurfaceAlone,   ///< no frame gave the voxel a class; the fused surface judged alone
+  kFramesAlone,    ///< too few columns around it hold a fused height for the surface to judge
+  /// The surface found open ground but does not hold a height in every column that meets the
+  /// disc of the step radius, so it cannot vouch for it: the frames decided.
+  kFramesSurfacePartial,
+  kWorseOfTwo,  ///< the surface found a slope or a jump: the worse of the two verdicts
+  /// The surface, seeing the whole disc, found open ground: its class probabilities multiplied
+  /// the frames'.
+  kProduct,
+};
+
+/// Lower-case name, as `ssta explain` prints it: "none", "surface alone", "frames alone",
+/// "frames (surface partial)", "worse of two", "product".
+const char* JudgeRuleName(JudgeRule rule);
+
+/// The evidence behind TopSurfaceAt(x, y).
+struct ColumnExplanation {
+  static constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  CellInfo cell;                  ///< TopSurfaceAt's answer (class, confidence, decided_by, ...)
+  JudgeRule rule = JudgeRule::kNone;
+  /// The top voxel's class log-odds for classes 1..3: the frames' weighted votes (a lip or an
+  /// obstacle counts more than open ground; docs: maps/README.md, "fusion"). 0 without votes.
+  std::array<double, 3> frame_log_odds{0.0, 0.0, 0.0};
+  /// The frames' class probabilities (with the open-ground prior); NaN without votes.
+  std::array<double, 3> frame_probability{kNaN, kNaN, kNaN};
+  /// Free-space evidence: the top voxel's occupancy log-odds (hits raise it, rays that pass
+  /// through lower it) and its probability; NaN unobserved.
+  double occupancy_log_odds = kNaN;
+  double occupancy = kNaN;
+  double occupied_threshold = kNaN;  ///< the occupancy at and above which a voxel is a surface
+  SurfaceVerdict surface;            ///< the fused surface's verdict around the column
+  int surface_columns = 0;           ///< columns within the step radius holding a fused height
+  bool disc_fully_seen = false;      ///< every column meeting the disc holds a fused height
+  /// The combined class probabilities (traversable, semi, non-traversable); NaN without a class.
+  std::array<double, 3> posterior{kNaN, kNaN, kNaN};
+};
+
+}  // namespace ssta
