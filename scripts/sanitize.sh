@@ -7,8 +7,11 @@
 #     threads (pipelined build-map and its CLI, online refinement, concurrent queries, the stereo
 #     and frame pipelines called from several threads); any race report fails the script. The
 #     test binaries run two at a time, each with its own threads.
-# Both build without the Python module: an instrumented extension would need the sanitizer's
-# runtime preloaded into the Python interpreter (python/tests run in scripts/test.sh).
+# Both build without the Python module: an instrumented extension needs the sanitizer's runtime
+# preloaded into the interpreter, and Debian 12's python3.11 dies at start with libtsan.so.2
+# preloaded (a segfault before `print`). Python's GIL release is tested in scripts/test.sh
+# (test_query_releases_the_gil, concurrent queries); the C++ it runs unlocked is under TSan here
+# (mapping_test's concurrent queries).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
