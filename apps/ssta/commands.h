@@ -26,6 +26,7 @@ void RegisterConfig(CLI::App& app);
 void RegisterInspect(CLI::App& app);
 void RegisterConvert(CLI::App& app);
 void RegisterMergeMaps(CLI::App& app);
+void RegisterDiffMaps(CLI::App& app);
 /// `eval disparity` and `eval stereo` (cmd_eval_disparity.cpp), added to the `eval` command.
 void AddDisparityEval(CLI::App* eval);
 

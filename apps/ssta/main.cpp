@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterQuery(app);
   ssta::cli::RegisterExport(app);
   ssta::cli::RegisterMergeMaps(app);
+  ssta::cli::RegisterDiffMaps(app);
   ssta::cli::RegisterEval(app);
   ssta::cli::RegisterCalibrateStereo(app);
   ssta::cli::RegisterCalibrateMount(app);
