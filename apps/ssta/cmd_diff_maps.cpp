@@ -40,8 +40,9 @@ void RegisterDiffMaps(CLI::App& app) {
       "class changed) and OUT/diff.png, and prints the count of each change. Changes: new_obstacle,\n"
       "cleared, harder (traversable -> semi), easier (semi -> traversable), newly_seen, no_longer_seen,\n"
       "and uncertain: a change where a map holds its class below --min-confidence, saw a surface it could\n"
-      "not judge (undecided), or a change to or from semi-traversable whose slope and step moved less\n"
-      "than --slope-noise-deg and --step-noise-m.");
+      "not judge (undecided), a change to or from semi-traversable whose slope and step moved less\n"
+      "than --slope-noise-deg and --step-noise-m, or a boundary between two classes that moved by up to\n"
+      "--boundary-shift columns (the rim of an obstacle seen in both).");
   cmd->add_option("map_a", args->a, "the earlier map (.ot)")->required()->check(CLI::ExistingFile);
   cmd->add_option("map_b", args->b, "the later map (.ot)")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", args->out, "folder to write diff.csv and diff.png into (created)")
@@ -54,6 +55,10 @@ void RegisterDiffMaps(CLI::App& app) {
                   "a change to or from semi-traversable counts where the slope moved more than this [deg]")
       ->capture_default_str();
   cmd->add_option("--step-noise-m", args->options.step_noise_m, "... or the step more than this [m]")
+      ->capture_default_str();
+  cmd->add_option("--boundary-shift", args->options.boundary_shift_columns,
+                  "a change where each map holds the other's class within this many columns is uncertain: a\n"
+                  "boundary that moved (0: off)")
       ->capture_default_str();
   cmd->add_flag("--quiet,-q", args->quiet, "no report");
   cmd->callback([args] { Run(*args); });

@@ -22,8 +22,9 @@ constexpr std::uint8_t kSemi = static_cast<std::uint8_t>(TravClass::kSemiTravers
 constexpr std::uint8_t kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
 constexpr std::uint8_t kUndecidedId = static_cast<std::uint8_t>(TravClass::kUndecided);
 
-/// The region both maps' surfaces cover, widened outwards to multiples of `resolution_m`, so
-/// that its pixels are the map columns.
+/// The region both maps' surfaces cover, with a metre around their sensor paths (as the map
+/// picture), widened outwards to multiples of `resolution_m` so that its pixels are the map
+/// columns. Empty when neither map has a surface.
 Eigen::AlignedBox2d ColumnRegion(const TraversabilityMap& a, const TraversabilityMap& b, double resolution_m) {
   Eigen::AlignedBox2d region;
   for (const TraversabilityMap* map : {&a, &b}) {
@@ -33,6 +34,12 @@ Eigen::AlignedBox2d ColumnRegion(const TraversabilityMap& a, const Traversabilit
     region.extend(bounds.max().head<2>());
   }
   if (region.isEmpty()) return region;
+  for (const TraversabilityMap* map : {&a, &b}) {
+    for (const Eigen::Vector3d& p : map->sensor_path()) {
+      region.extend(p.head<2>() - Eigen::Vector2d::Ones());
+      region.extend(p.head<2>() + Eigen::Vector2d::Ones());
+    }
+  }
   const Eigen::Vector2d lo = (region.min() / resolution_m).array().floor() * resolution_m;
   Eigen::Vector2d hi = (region.max() / resolution_m).array().ceil() * resolution_m;
   // A region of one column's width still holds that column.
@@ -69,6 +76,7 @@ bool MapDiffOptions::IsValid(std::string* error) const {
   if (!(min_confidence >= 0.0 && min_confidence <= 1.0)) return fail("min_confidence: must be in [0, 1]");
   if (!(slope_noise_deg > 0.0 && std::isfinite(slope_noise_deg))) return fail("slope_noise_deg: must be > 0");
   if (!(step_noise_m > 0.0 && std::isfinite(step_noise_m))) return fail("step_noise_m: must be > 0");
+  if (boundary_shift_columns < 0 || boundary_shift_columns > 10) return fail("boundary_shift_columns: must be in 0..10");
   return true;
 }
 
@@ -111,6 +119,22 @@ std::string MapDiffSummary::BriefReport() const {
   return r.str();
 }
 
+namespace {
+
+/// `grid` holds `cls` in a column within `reach` columns of (v, u) (the square around it).
+bool ClassNear(const GridProjection& grid, int v, int u, std::uint8_t cls, int reach) {
+  for (int dv = -reach; dv <= reach; ++dv) {
+    for (int du = -reach; du <= reach; ++du) {
+      const int vv = v + dv, uu = u + du;
+      if (vv < 0 || uu < 0 || vv >= grid.height() || uu >= grid.width()) continue;
+      if (grid.classes(vv, uu) == cls) return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
 MapDiff DiffProjections(const GridProjection& a, const GridProjection& b, const MapDiffOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw Error("diff options: " + error);
@@ -125,8 +149,15 @@ MapDiff DiffProjections(const GridProjection& a, const GridProjection& b, const 
   for (int v = 0; v < a.height(); ++v) {
     for (int u = 0; u < a.width(); ++u) {
       const std::uint8_t ca = a.classes(v, u), cb = b.classes(v, u);
-      const CellChange change = ClassifyChange(ca, a.confidence(v, u), a.slope_deg(v, u), a.step_m(v, u), cb,
-                                               b.confidence(v, u), b.slope_deg(v, u), b.step_m(v, u), options);
+      CellChange change = ClassifyChange(ca, a.confidence(v, u), a.slope_deg(v, u), a.step_m(v, u), cb,
+                                         b.confidence(v, u), b.slope_deg(v, u), b.step_m(v, u), options);
+      // A boundary between two classes that moved by a column or two: each map holds the
+      // other's class right beside the column.
+      if (IsRealChange(change) && options.boundary_shift_columns > 0 &&
+          ClassNear(a, v, u, cb, options.boundary_shift_columns) &&
+          ClassNear(b, v, u, ca, options.boundary_shift_columns)) {
+        change = CellChange::kUncertain;
+      }
       diff.change(v, u) = static_cast<std::uint8_t>(change);
       ++diff.summary.counts[static_cast<std::size_t>(change)];
       if (HasClass(ca) && HasClass(cb)) ++diff.summary.compared;

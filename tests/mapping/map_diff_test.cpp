@@ -49,11 +49,11 @@ TEST(MapDiff, ClassifiesEachPairOfClassesAsDocumented) {
   EXPECT_EQ(Change(1, 0.59, 3, 0.9), CellChange::kUncertain);
   EXPECT_EQ(Change(3, 0.9, 1, 0.59), CellChange::kUncertain);
   EXPECT_EQ(Change(1, kNaN, 3, 0.9), CellChange::kUncertain);
-  // Next to semi: the slope or the step must move by more than the noise (4 deg, 0.06 m).
-  EXPECT_EQ(Change(1, 0.9, 2, 0.9, 14.0, 17.0), CellChange::kUncertain);
-  EXPECT_EQ(Change(1, 0.9, 2, 0.9, 12.0, 17.0), CellChange::kHarder);
-  EXPECT_EQ(Change(2, 0.9, 1, 0.9, 17.0, 12.0), CellChange::kEasier);
-  EXPECT_EQ(Change(2, 0.9, 3, 0.9, 5.0, 5.0, 0.16, 0.21), CellChange::kUncertain);
+  // Next to semi: the slope or the step must move by more than the noise (20 deg, 0.10 m).
+  EXPECT_EQ(Change(1, 0.9, 2, 0.9, 5.0, 24.0), CellChange::kUncertain);
+  EXPECT_EQ(Change(1, 0.9, 2, 0.9, 3.0, 24.0), CellChange::kHarder);
+  EXPECT_EQ(Change(2, 0.9, 1, 0.9, 24.0, 3.0), CellChange::kEasier);
+  EXPECT_EQ(Change(2, 0.9, 3, 0.9, 5.0, 5.0, 0.12, 0.21), CellChange::kUncertain);
   EXPECT_EQ(Change(2, 0.9, 3, 0.9, 5.0, 5.0, 0.12, 0.30), CellChange::kNewObstacle);
   EXPECT_EQ(Change(3, 0.9, 2, 0.9, 5.0, 5.0, 0.30, 0.12), CellChange::kCleared);
   EXPECT_EQ(Change(2, 0.9, 3, 0.9, kNaN, 5.0, kNaN, 0.3), CellChange::kUncertain);  // nothing to compare
@@ -92,8 +92,10 @@ TEST(MapDiff, CountsAndListsTheChangedColumnsOfTwoProjections) {
   GridProjection b = Row({1, 3, 3, 1, 1, 0, 2, 1, 0});
   a.confidence(0, 7) = 0.4f;  // unsure in A: the change to 2 below is uncertain
   b.classes(0, 7) = 3;
-  b.slope_deg(0, 6) = 20.0f;  // 1 -> 2 with the slope 18 deg up: harder
-  const MapDiff d = DiffProjections(a, b);
+  b.slope_deg(0, 6) = 24.0f;  // 1 -> 2 with the slope 22 deg up: harder
+  MapDiffOptions no_rim;  // the rule for moved boundaries is checked below
+  no_rim.boundary_shift_columns = 0;
+  const MapDiff d = DiffProjections(a, b, no_rim);
   const std::vector<CellChange> expected = {CellChange::kUnchanged,  CellChange::kNewObstacle, CellChange::kNewObstacle,
                                             CellChange::kCleared,    CellChange::kNewlySeen,   CellChange::kNoLongerSeen,
                                             CellChange::kHarder,     CellChange::kUncertain,   CellChange::kNone};
@@ -109,6 +111,12 @@ TEST(MapDiff, CountsAndListsTheChangedColumnsOfTwoProjections) {
   EXPECT_NEAR(d.cells[0].confidence_b, 0.95, 1e-6);
   EXPECT_TRUE(std::isnan(d.cells[3].confidence_a));  // newly seen: no class in A
   EXPECT_NE(d.summary.BriefReport().find("new_obstacle: 2"), std::string::npos) << d.summary.BriefReport();
+
+  // An obstacle's rim that moved by one column: each map holds the other's class beside it.
+  const MapDiff rim = DiffProjections(Row({1, 1, 3, 3}), Row({1, 3, 3, 3}));
+  EXPECT_EQ(static_cast<CellChange>(rim.change(0, 1)), CellChange::kUncertain);
+  EXPECT_EQ(static_cast<CellChange>(DiffProjections(Row({1, 1, 3, 3}), Row({1, 3, 3, 3}), no_rim).change(0, 1)),
+            CellChange::kNewObstacle);
 
   GridProjection shifted = b;
   shifted.origin.x() = 0.1;

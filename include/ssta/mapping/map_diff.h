@@ -32,8 +32,9 @@ enum class CellChange : std::uint8_t {
   kNoLongerSeen = 7,  ///< a class in A, unobserved in B
   /// The class differs but the change may be noise: one map is not sure of its class
   /// (confidence below MapDiffOptions::min_confidence), one saw a surface it could not judge
-  /// (undecided, class 4), or a change between semi-traversable and a neighbouring class whose
-  /// slope and step moved less than the noise (MapDiffOptions::slope_noise_deg, step_noise_m).
+  /// (undecided, class 4), a change between semi-traversable and a neighbouring class whose
+  /// slope and step moved less than the noise (MapDiffOptions::slope_noise_deg, step_noise_m),
+  /// or a boundary between two classes that moved (MapDiffOptions::boundary_shift_columns).
   kUncertain = 8,
 };
 inline constexpr int kCellChangeCount = 9;
@@ -56,10 +57,15 @@ struct MapDiffOptions {
   /// non-traversable) counts only where the slope that decided the classes moved by more than
   /// this [deg] or the step by more than step_noise_m: such a change follows a threshold
   /// (semi_slope_deg, max_step_m, ...), and a column near it flips with the stereo noise.
-  /// > 0. The default is about twice the 95th percentile of the slope's change between two
-  /// drives of a rendered yard (docs/fleet.md).
-  double slope_noise_deg = 4.0;
-  double step_noise_m = 0.06;  ///< [m], > 0; as slope_noise_deg
+  /// > 0. The defaults: 90 % of the columns whose class stayed the same between two drives of
+  /// the rendered yard (320 x 240) moved less (docs/fleet.md).
+  double slope_noise_deg = 20.0;
+  double step_noise_m = 0.10;  ///< [m], > 0; as slope_noise_deg
+  /// A real change (new obstacle, cleared, harder, easier) where map A holds B's class and map
+  /// B holds A's class within this many columns of it is uncertain: the boundary between the
+  /// two classes only moved, as the rim of an obstacle does with stereo's smear from one drive
+  /// to the next. 0: off; 0..10.
+  int boundary_shift_columns = 1;
   /// The first field out of its range, as "key: requirement" in `*error`.
   bool IsValid(std::string* error) const;
 };
@@ -94,18 +100,21 @@ struct MapDiff {
 };
 
 /// The change of one column from its class and confidence in A and B, and the slope [deg] and
-/// step [m] that decided each class (NaN where unknown), under `options` (CellChange).
+/// step [m] that decided each class (NaN where unknown), under `options` (CellChange; all but
+/// the boundary-shift rule, which needs the columns around).
 CellChange ClassifyChange(std::uint8_t class_a, double confidence_a, double slope_a_deg, double step_a_m,
                           std::uint8_t class_b, double confidence_b, double slope_b_deg, double step_b_m,
                           const MapDiffOptions& options = MapDiffOptions{});
 
 /// The change of every pixel of two projections of one lattice (same origin, resolution and
-/// size; throws ssta::Error otherwise) by ClassifyChange. Paths are left empty.
+/// size; throws ssta::Error otherwise) by ClassifyChange, then the boundary-shift rule
+/// (MapDiffOptions::boundary_shift_columns). Paths are left empty.
 MapDiff DiffProjections(const GridProjection& a, const GridProjection& b, const MapDiffOptions& options = MapDiffOptions{});
 
 /// Compares map `b` (read from `b_file`) with map `a` (from `a_file`), the earlier drive:
 /// both are projected (TraversabilityMap::Project, the top surface as observed: no hole filling)
-/// at their resolution over the union of their surfaces, on the lattice of the map columns, and
+/// at their resolution over the union of their surfaces (and a metre around their sensor
+/// paths), on the lattice of the map columns, and
 /// each column classified by ClassifyChange. Throws ssta::Error naming both files and both
 /// values when the maps differ in resolution or world frame (RequireSameWorldGrid) or in
 /// vehicle (the classes are that vehicle's: a change of vehicle is not a change of the site),
