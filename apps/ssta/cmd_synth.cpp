@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "commands.h"
 #include "config_loading.h"
@@ -42,6 +43,33 @@ void ParseDropFrames(const std::string& text, synth::FaultOptions* faults) {
   }
 }
 
+/// `--add-box X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG]`: one box on the scene's ground.
+synth::AddedBox ParseBox(const std::string& text) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  try {
+    while (std::getline(in, item, ',')) {
+      std::size_t used = 0;
+      v.push_back(std::stod(item, &used));
+      if (used != item.size()) throw std::invalid_argument(item);
+    }
+  } catch (const std::exception&) {
+    v.clear();
+  }
+  if (v.size() != 5 && v.size() != 6) {
+    throw Error("--add-box: expected X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG] in metres and degrees, got '" + text + "'");
+  }
+  synth::AddedBox box;
+  box.x = v[0];
+  box.y = v[1];
+  box.length_m = v[2];
+  box.width_m = v[3];
+  box.height_m = v[4];
+  if (v.size() == 6) box.yaw_deg = v[5];
+  return box;
+}
+
 /// SynthOptions::IsValid names its keys ("rig.width: ..."); on the command line they are the
 /// options that set them ("--width: ..."). Keys no option sets (vehicle.*: --config) stay.
 std::string NameTheOption(const std::string& error) {
@@ -60,7 +88,8 @@ std::string NameTheOption(const std::string& error) {
       {"faults.pose_drift_pitch_deg_per_s", "--pose-drift-pitch-deg-per-s"},
       {"faults.imu_gyro_noise", "--imu-gyro-noise"}, {"faults.imu_accel_noise", "--imu-accel-noise"},
       {"faults.imu_gyro_bias", "--imu-gyro-bias"}, {"faults.imu_accel_bias", "--imu-accel-bias"},
-      {"faults.drop_frames", "--drop-frames"}, {"faults.textureless_patches", "--textureless-patches"}};
+      {"faults.drop_frames", "--drop-frames"}, {"faults.textureless_patches", "--textureless-patches"},
+      {"added_boxes", "--add-box"}};
   for (const auto& [key, flag] : kFlags) {
     const std::string prefix = std::string(key) + ":";
     if (error.rfind(prefix, 0) == 0) return flag + error.substr(std::string(key).size());
@@ -75,6 +104,7 @@ void RegisterSynth(CLI::App& app) {
   auto out_dir = std::make_shared<std::string>();
   auto drop_frames = std::make_shared<std::string>();
   auto config_files = std::make_shared<std::vector<std::string>>();
+  auto boxes = std::make_shared<std::vector<std::string>>();
   CLI::App* cmd = app.add_subcommand(
       "synth", "Render a synthetic stereo sequence with exact ground truth (SEQ/gt/) for testing and scoring");
   cmd->footer(
@@ -166,8 +196,13 @@ void RegisterSynth(CLI::App& app) {
                   "point (0.1), or 0-based frame indices (3,7,12)");
   cmd->add_option("--textureless-patches", f.textureless_patches,
                   "number of flat untextured discs on the ground ahead");
-  cmd->callback([cmd, options, out_dir, drop_frames, config_files] {
+  cmd->add_option("--add-box", *boxes,
+                  "X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG]: a wooden box (a crate) set on the ground, centred at X,Y\n"
+                  "[m], HEIGHT above the ground; in the truth too (repeatable; gt/rig.yaml lists them).\n"
+                  "The vehicle drives through one on its path: set it beside");
+  cmd->callback([cmd, options, out_dir, drop_frames, config_files, boxes] {
     ParseDropFrames(*drop_frames, &options->faults);
+    for (const std::string& box : *boxes) options->added_boxes.push_back(ParseBox(box));
     if (options->scene == "random") {
       // The rig and the light are drawn from the seed too; options given on the command line win.
       synth::SynthOptions drawn = *options;

@@ -27,6 +27,7 @@ void RegisterInspect(CLI::App& app);
 void RegisterConvert(CLI::App& app);
 void RegisterMergeMaps(CLI::App& app);
 void RegisterExplain(CLI::App& app);
+void RegisterDiffMaps(CLI::App& app);
 /// `eval disparity` and `eval stereo` (cmd_eval_disparity.cpp), added to the `eval` command.
 void AddDisparityEval(CLI::App* eval);
 

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   ssta::cli::RegisterExplain(app);
   ssta::cli::RegisterExport(app);
   ssta::cli::RegisterMergeMaps(app);
+  ssta::cli::RegisterDiffMaps(app);
   ssta::cli::RegisterEval(app);
   ssta::cli::RegisterCalibrateStereo(app);
   ssta::cli::RegisterCalibrateMount(app);

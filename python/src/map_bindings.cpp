@@ -16,6 +16,7 @@
 
 #include "bindings.h"
 #include "query_row.h"
+#include "ssta/mapping/map_diff.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
 
@@ -282,6 +283,41 @@ py::dict Project(const MapHandle& handle, const std::optional<std::vector<double
   return out;
 }
 
+// Map.diff: what changed from `a` to `b` (DiffMaps), written to `out` when given.
+py::dict Diff(const MapHandle& a, const MapHandle& b, const std::optional<py::object>& out_arg, double min_confidence,
+              double slope_noise_deg, double step_noise_m, int boundary_shift_columns) {
+  MapDiffOptions options;
+  options.boundary_shift_columns = boundary_shift_columns;
+  options.min_confidence = min_confidence;
+  options.slope_noise_deg = slope_noise_deg;
+  options.step_noise_m = step_noise_m;
+  std::string error;
+  if (!options.IsValid(&error)) throw py::value_error(error);
+  const std::string out = out_arg ? PathArg(*out_arg, "out") : std::string();
+  MapDiff diff;
+  {
+    py::gil_scoped_release release;
+    diff = DiffMaps(a.map, a.path, b.map, b.path, options);
+    if (!out.empty()) WriteMapDiff(diff, out, "Changes from " + a.path + " to " + b.path);
+  }
+  py::dict result;
+  result["change"] = ImageArray(diff.change);
+  result["class_a"] = ImageArray(diff.a.classes);
+  result["class_b"] = ImageArray(diff.b.classes);
+  result["confidence_a"] = ImageArray(diff.a.confidence);
+  result["confidence_b"] = ImageArray(diff.b.confidence);
+  py::dict counts;
+  for (int id = 1; id < kCellChangeCount; ++id) {
+    counts[CellChangeName(static_cast<CellChange>(id))] = diff.summary.counts[id];
+  }
+  result["counts"] = counts;
+  result["origin"] = py::make_tuple(diff.b.origin.x(), diff.b.origin.y());
+  result["resolution_m"] = diff.b.resolution_m;
+  result["extent"] = py::make_tuple(diff.b.origin.x(), diff.b.origin.x() + diff.b.width() * diff.b.resolution_m,
+                                    diff.b.origin.y(), diff.b.origin.y() + diff.b.height() * diff.b.resolution_m);
+  return result;
+}
+
 // Every field of an Options struct under its YAML key.
 template <class O>
 py::dict FieldsDict(const O& options) {
@@ -528,6 +564,31 @@ Returns:
 Raises:
     ValueError naming `region` or `resolution_m`; ssta.Error for more than 2^26 pixels.
 )doc").c_str())
+      .def("diff", &Diff, py::arg("other"), py::kw_only(), py::arg("out") = py::none(),
+           py::arg("min_confidence") = MapDiffOptions{}.min_confidence,
+           py::arg("slope_noise_deg") = MapDiffOptions{}.slope_noise_deg,
+           py::arg("step_noise_m") = MapDiffOptions{}.step_noise_m,
+           py::arg("boundary_shift_columns") = MapDiffOptions{}.boundary_shift_columns, R"doc(
+What changed from this map (the earlier drive) to `other`, as `ssta diff-maps` finds it: each
+map column's class in both maps over the union of their surfaces, at their resolution.
+
+Args:
+    other: a Map of the same site (same resolution, world frame and vehicle).
+    out: a folder (str or os.PathLike) to write diff.csv and diff.png into; None: none.
+    min_confidence, slope_noise_deg, step_noise_m, boundary_shift_columns: as
+        `--min-confidence`, `--slope-noise-deg`, `--step-noise-m`, `--boundary-shift`.
+
+Returns:
+    A dict of H x W arrays, row 0 the largest y: change (uint8: 0 no class in either,
+    1 unchanged, 2 new_obstacle, 3 cleared, 4 harder, 5 easier, 6 newly_seen,
+    7 no_longer_seen, 8 uncertain), class_a, class_b (uint8), confidence_a, confidence_b
+    (float32, NaN without a class); counts ({change name: columns}); origin, resolution_m,
+    extent as project's.
+
+Raises:
+    ssta.Error naming both files and both values when the maps differ in resolution, world
+    frame or vehicle; ValueError for options out of range.
+)doc")
       .def("__repr__", [](const MapHandle& h) {
         return "<ssta.Map '" + h.path + "', " + std::to_string(h.map.options().resolution_m) + " m voxels>";
       });

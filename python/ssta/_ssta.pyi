@@ -169,3 +169,14 @@ class Map:
         local_ground_radius_m: float = 0.0,
     ) -> dict[str, Any]:
         """The top surface as H x W arrays (class, cost, height_m, slope_deg, step_m), origin, extent."""
+    def diff(
+        self,
+        other: Map,
+        *,
+        out: Optional[_Path] = None,
+        min_confidence: float = 0.6,
+        slope_noise_deg: float = 20.0,
+        step_noise_m: float = 0.10,
+        boundary_shift_columns: int = 1,
+    ) -> dict[str, Any]:
+        """What changed from this map to `other`: H x W change, class_a/b, confidence_a/b; counts."""

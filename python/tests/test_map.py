@@ -322,3 +322,19 @@ def test_query_releases_the_gil(the_map):
         sys.setswitchinterval(interval)
     # Held, the GIL would have kept the main thread from counting until every query returned.
     assert seen == [target], "the main thread did not run during the queries: the query holds the GIL"
+
+
+def test_diff_equals_cli(the_map, yard, yard_map, cli, tmp_path):
+    """Map.diff against `ssta diff-maps` on the yard's map and a map of its first 3 frames."""
+    part = tmp_path / "part.ot"
+    cli("build-map", "--sequence", yard, "--map", part, "--max-frames", 3, "-q")
+    d = the_map.diff(ssta.Map.open(part), out=tmp_path / "py")
+    report = cli("diff-maps", yard_map, part, "--out", tmp_path / "cli").stdout
+    for name, count in d["counts"].items():
+        assert f"  {name}: {count}\n" in report, (name, report)
+    assert d["counts"]["no_longer_seen"] > 0  # the later frames saw farther
+    assert (tmp_path / "py" / "diff.csv").read_text() == (tmp_path / "cli" / "diff.csv").read_text()
+    rows = (tmp_path / "cli" / "diff.csv").read_text().splitlines()[1:]
+    assert len(rows) == int(np.sum(d["change"] >= 2))  # every change but none and unchanged
+    assert d["change"].shape == d["class_a"].shape == d["confidence_b"].shape
+    assert np.all(d["change"][(d["class_a"] == d["class_b"]) & (d["class_a"] >= 1) & (d["class_a"] <= 3)] == 1)

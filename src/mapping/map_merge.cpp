@@ -152,22 +152,28 @@ void RefuseRecordingsMergedBefore(const std::vector<RecordingFingerprint>& have,
 
 }  // namespace
 
+void RequireSameWorldGrid(const TraversabilityMap& a, const std::string& a_file, const TraversabilityMap& b,
+                          const std::string& b_file, const std::string& advice) {
+  const double res_a = a.options().resolution_m, res_b = b.options().resolution_m;
+  if (std::abs(res_a - res_b) > 1e-9 * res_a) {
+    throw Error(b_file + ": resolution " + Number(res_b) + " m, but " + a_file + " has " + Number(res_a) + " m; " +
+                advice);
+  }
+  if (a.metadata().world_frame != b.metadata().world_frame) {
+    const auto name = [](const std::string& frame) { return frame.empty() ? std::string("(unnamed)") : "'" + frame + "'"; };
+    throw Error(b_file + ": world frame " + name(b.metadata().world_frame) + ", but " + a_file + " has " +
+                name(a.metadata().world_frame) + "; " + advice);
+  }
+}
+
 void CheckMergeable(const TraversabilityMap& into, const std::string& into_file, const TraversabilityMap& from,
                     const std::string& from_file) {
   const MapOptions& a = into.options();
   const MapOptions& b = from.options();
   const std::string advice = "maps merge only when they share resolution, vehicle, world frame and evidence scale";
-  if (std::abs(a.resolution_m - b.resolution_m) > 1e-9 * a.resolution_m) {
-    throw Error(from_file + ": resolution " + Number(b.resolution_m) + " m, but " + into_file + " has " +
-                Number(a.resolution_m) + " m; " + advice);
-  }
+  RequireSameWorldGrid(into, into_file, from, from_file, advice);
   RequireSameVehicle(into.metadata().vehicle, into_file + ": built for", from.metadata().vehicle,
                      from_file + ": built for", "", advice);
-  if (into.metadata().world_frame != from.metadata().world_frame) {
-    const auto name = [](const std::string& frame) { return frame.empty() ? std::string("(unnamed)") : "'" + frame + "'"; };
-    throw Error(from_file + ": world frame " + name(from.metadata().world_frame) + ", but " + into_file + " has " +
-                name(into.metadata().world_frame) + "; " + advice);
-  }
   const struct {
     const char* key;
     double MapOptions::*field;

@@ -14,6 +14,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/map_diff.h"
 
 namespace ssta {
 namespace {
@@ -188,6 +189,23 @@ void DrawPath(const MapPicture& picture, const std::vector<Eigen::Vector3d>& pat
   DrawStartMarker(points.front(), canvas);
 }
 
+/// A scale bar of a round length near a fifth of the map's width (at most the legend's width),
+/// its top-left corner 12 px below (x, y), its length written under it.
+void DrawScaleBar(const MapPicture& picture, int x, int y, cv::Mat* canvas) {
+  const double px_per_m = picture.cell_px / picture.grid.resolution_m;
+  const double width_m = picture.grid.width() * picture.grid.resolution_m;
+  double length_m = NiceStep(std::max(width_m / 5.0, picture.grid.resolution_m));
+  while (length_m * px_per_m > kLegendWidth - 30 && length_m > picture.grid.resolution_m) length_m /= 2.0;
+  const int bar_px = std::max(1, static_cast<int>(std::lround(length_m * px_per_m)));
+  y += 12;
+  cv::rectangle(*canvas, cv::Rect(x, y, bar_px, 6), kInk, cv::FILLED);
+  cv::rectangle(*canvas, cv::Rect(x + bar_px / 2, y + 1, bar_px - bar_px / 2 - 1, 4), cv::Scalar(255, 255, 255),
+                cv::FILLED);
+  char label[32];
+  std::snprintf(label, sizeof(label), length_m < 1.0 ? "%.1f m" : "%.0f m", length_m);
+  Text(canvas, label, x, y + 24);
+}
+
 void DrawLegend(const MapPicture& picture, bool hillshade, bool has_path, cv::Mat* canvas) {
   const int x = picture.map_top_left_px.x() + picture.grid.width() * picture.cell_px + 24;
   int y = picture.map_top_left_px.y();
@@ -221,19 +239,7 @@ void DrawLegend(const MapPicture& picture, bool hillshade, bool has_path, cv::Ma
     y += kLegendRow;
   }
 
-  // Scale bar: a round length near a fifth of the map's width, at most the legend's width.
-  const double px_per_m = picture.cell_px / picture.grid.resolution_m;
-  const double width_m = picture.grid.width() * picture.grid.resolution_m;
-  double length_m = NiceStep(std::max(width_m / 5.0, picture.grid.resolution_m));
-  while (length_m * px_per_m > kLegendWidth - 30 && length_m > picture.grid.resolution_m) length_m /= 2.0;
-  const int bar_px = std::max(1, static_cast<int>(std::lround(length_m * px_per_m)));
-  y += 12;
-  cv::rectangle(*canvas, cv::Rect(x, y, bar_px, 6), kInk, cv::FILLED);
-  cv::rectangle(*canvas, cv::Rect(x + bar_px / 2, y + 1, bar_px - bar_px / 2 - 1, 4), cv::Scalar(255, 255, 255),
-                cv::FILLED);
-  char label[32];
-  std::snprintf(label, sizeof(label), length_m < 1.0 ? "%.1f m" : "%.0f m", length_m);
-  Text(canvas, label, x, y + 24);
+  DrawScaleBar(picture, x, y, canvas);
 }
 
 ImageRgb ToImage(const cv::Mat& canvas) {
@@ -312,6 +318,101 @@ MapPicture ExportPicture(const TraversabilityMap& map, const std::string& path, 
   MapPicture picture = RenderMapPicture(map, options);
   WriteImageCompact(picture.image, path);
   return picture;
+}
+
+namespace {
+
+/// The colour of a diff pixel: its change's, unchanged obstacles darker than unchanged ground.
+Rgb8 ChangeRgb(CellChange change, std::uint8_t class_b) {
+  namespace c = change_colours;
+  switch (change) {
+    case CellChange::kUnchanged:
+      return class_b == static_cast<std::uint8_t>(TravClass::kNonTraversable) ? c::kUnchangedObstacle : c::kUnchanged;
+    case CellChange::kNewObstacle: return c::kNewObstacle;
+    case CellChange::kCleared: return c::kCleared;
+    case CellChange::kHarder: return c::kHarder;
+    case CellChange::kEasier: return c::kEasier;
+    case CellChange::kNewlySeen: return c::kNewlySeen;
+    case CellChange::kNoLongerSeen: return c::kNoLongerSeen;
+    case CellChange::kUncertain: return c::kUncertain;
+    default: return colours::kUnknown;
+  }
+}
+
+}  // namespace
+
+ImageRgb RenderMapDiffPicture(const MapDiff& diff, const std::string& title) {
+  MapPicture picture;
+  picture.grid.origin = diff.b.origin;
+  picture.grid.resolution_m = diff.b.resolution_m;
+  picture.grid.classes = diff.change;
+  const int w = picture.grid.width();
+  const int h = picture.grid.height();
+  picture.cell_px = std::max(1, 1200 / std::max(1, std::max(w, h)));
+  picture.map_top_left_px = Eigen::Vector2i(kMargin + kAxisLeft, kMargin + kTitleHeight);
+  const int legend_rows = 12;
+  const int width = picture.map_top_left_px.x() + w * picture.cell_px + 24 + kLegendWidth + 40 + kMargin;
+  const int height = picture.map_top_left_px.y() + std::max(h * picture.cell_px, legend_rows * kLegendRow + 60) +
+                     kAxisBottom + kMargin;
+  cv::Mat canvas(height, width, CV_8UC3, ToScalar(colours::kBackground));
+
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const auto change = static_cast<CellChange>(diff.change(v, u));
+      const Rgb8 c = ChangeRgb(change, diff.b.classes(v, u));
+      for (int dv = 0; dv < picture.cell_px; ++dv) {
+        const int y = picture.map_top_left_px.y() + v * picture.cell_px + dv;
+        auto* row = canvas.ptr<cv::Vec3b>(y);
+        for (int du = 0; du < picture.cell_px; ++du) {
+          const int x = picture.map_top_left_px.x() + u * picture.cell_px + du;
+          const Rgb8 px = change == CellChange::kNone && (x + y) % 6 == 0 ? colours::kUnknownHatch : c;
+          row[x] = cv::Vec3b(px.r, px.g, px.b);
+        }
+      }
+    }
+  }
+  DrawPath(picture, diff.path_a, &canvas);
+  DrawPath(picture, diff.path_b, &canvas);
+  DrawAxes(picture, &canvas);
+
+  // The legend: every change with its count.
+  const int x = picture.map_top_left_px.x() + w * picture.cell_px + 24;
+  int y = picture.map_top_left_px.y();
+  const auto count = [&](CellChange change) {
+    return std::to_string(diff.summary.counts[static_cast<std::size_t>(change)]);
+  };
+  auto swatch = [&](const Rgb8& colour, bool hatched, const std::string& name) {
+    cv::rectangle(canvas, cv::Rect(x, y, kSwatch, kSwatch), ToScalar(colour), cv::FILLED);
+    if (hatched) cv::line(canvas, {x, y + kSwatch - 1}, {x + kSwatch - 1, y}, ToScalar(colours::kUnknownHatch), 1);
+    cv::rectangle(canvas, cv::Rect(x, y, kSwatch, kSwatch), kInk, 1);
+    Text(&canvas, name, x + kSwatch + 8, y + kSwatch - 2);
+    y += kLegendRow;
+  };
+  namespace c = change_colours;
+  swatch(c::kNewObstacle, false, "new obstacle " + count(CellChange::kNewObstacle));
+  swatch(c::kCleared, false, "cleared " + count(CellChange::kCleared));
+  swatch(c::kHarder, false, "harder (now semi) " + count(CellChange::kHarder));
+  swatch(c::kEasier, false, "easier (was semi) " + count(CellChange::kEasier));
+  swatch(c::kNewlySeen, false, "newly seen " + count(CellChange::kNewlySeen));
+  swatch(c::kNoLongerSeen, false, "no longer seen " + count(CellChange::kNoLongerSeen));
+  swatch(c::kUncertain, false, "uncertain " + count(CellChange::kUncertain));
+  swatch(c::kUnchanged, false, "unchanged ground");
+  swatch(c::kUnchangedObstacle, false, "unchanged obstacle");
+  swatch(colours::kUnknown, true, "no class in either");
+  if (!diff.path_a.empty() || !diff.path_b.empty()) {
+    y += 4;
+    cv::line(canvas, {x, y + kSwatch / 2}, {x + kSwatch + 4, y + kSwatch / 2}, ToScalar(colours::kPath), 2, cv::LINE_AA);
+    Text(&canvas, "sensor paths", x + kSwatch + 8, y + kSwatch - 2);
+    y += kLegendRow;
+  }
+  DrawScaleBar(picture, x, y, &canvas);
+
+  Text(&canvas, title.empty() ? "SSTA map changes" : title, kMargin, kMargin + 14, 0.55);
+  char subtitle[160];
+  std::snprintf(subtitle, sizeof(subtitle), "%d x %d cells of %.2f m; %zu with a class in both maps, %zu real changes",
+                w, h, picture.grid.resolution_m, diff.summary.compared, diff.summary.RealChanges());
+  Text(&canvas, subtitle, kMargin, kMargin + 34, 0.4);
+  return ToImage(canvas);
 }
 
 }  // namespace ssta

@@ -362,4 +362,10 @@ void AddTexturelessPatches(Scene* scene, int count, std::uint64_t seed) {
   scene->Finish();
 }
 
+void AddBox(Scene* scene, double x, double y, double yaw_rad, double length_m, double width_m, double height_m) {
+  scene->obstacles.push_back(
+      MakeBox(x, y, yaw_rad, 0.5 * length_m, 0.5 * width_m, height_m, scene->GroundHeight(x, y), Material::kWood));
+  scene->Finish();
+}
+
 }  // namespace ssta::synth

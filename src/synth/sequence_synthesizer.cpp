@@ -267,6 +267,9 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
 
   Scene scene = MakeScene(o.scene, o.seed, o.ramp_slope_deg);
   if (o.faults.textureless_patches > 0) AddTexturelessPatches(&scene, o.faults.textureless_patches, o.seed);
+  for (const AddedBox& b : o.added_boxes) {
+    AddBox(&scene, b.x, b.y, DegToRad(b.yaw_deg), b.length_m, b.width_m, b.height_m);
+  }
   const VehicleTrajectory trajectory(scene, o.motion);
   const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
   std::vector<std::int64_t> stamps;
@@ -403,7 +406,14 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
   rig << std::setprecision(10) << "# The rig and scene ssta synth rendered (for reports; the calibration is cam0/, cam1/).\n"
       << "scene: " << o.scene << "\nseed: " << o.seed << "\nwidth: " << o.rig.width << "\nheight: " << o.rig.height
       << "\nfocal_px: " << o.rig.focal_px << "\nbaseline_m: " << o.rig.baseline_m
-      << "\ncamera_height_m: " << o.rig.camera_height_m << "\npitch_down_deg: " << o.rig.pitch_down_deg << "\n";
+      << "\ncamera_height_m: " << o.rig.camera_height_m << "\npitch_down_deg: " << o.rig.pitch_down_deg << "\n"
+      << "# boxes added with --add-box: [x, y, length, width, height, yaw_deg] [m, deg]\nadded_boxes: [";
+  for (std::size_t i = 0; i < o.added_boxes.size(); ++i) {
+    const AddedBox& b = o.added_boxes[i];
+    rig << (i ? ", " : "") << "[" << b.x << ", " << b.y << ", " << b.length_m << ", " << b.width_m << ", " << b.height_m
+        << ", " << b.yaw_deg << "]";
+  }
+  rig << "]\n";
   WriteTextAtomically(Join(out_dir, "gt/rig.yaml"), rig.str());
   WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
                   Join(out_dir, "gt/faults.yaml"));

@@ -157,6 +157,16 @@ bool SynthOptions::IsValid(std::string* error) const {
   for (int i : faults.drop_frame_indices) {
     if (i >= frames) return Fail(error, "faults.drop_frames: frame index " + std::to_string(i) + " is not below frames");
   }
+  if (added_boxes.size() > 100) return Fail(error, "added_boxes: at most 100");
+  for (const AddedBox& b : added_boxes) {
+    if (!(Finite(b.x) && Finite(b.y) && std::abs(b.x) <= 1e4 && std::abs(b.y) <= 1e4 && Finite(b.yaw_deg))) {
+      return Fail(error, "added_boxes: x and y must be within 10 km of the origin, yaw_deg finite");
+    }
+    if (!(b.length_m > 0 && b.length_m <= 50 && b.width_m > 0 && b.width_m <= 50)) {
+      return Fail(error, "added_boxes: length and width must be in (0, 50] m");
+    }
+    if (!(b.height_m > 0 && b.height_m <= 20)) return Fail(error, "added_boxes: height must be in (0, 20] m");
+  }
   if (rig.camera_height_m <= motion.body_height_m) {
     return Fail(error, "rig.camera_height_m: must be above motion.body_height_m");
   }

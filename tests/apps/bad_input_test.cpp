@@ -261,6 +261,25 @@ const std::vector<BadInput>& Cases() {
        },
        "merge-maps {dir}/mm.ot {dir}/m.ot --out {dir}/merged.ot",
        {"{dir}/mm.ot and {dir}/m.ot both hold the recording", "merging them would count its evidence twice"}},
+      {"DiffMapsOfAnotherWorldFrame",
+       [](auto&, auto& d) {
+         ASSERT_EQ(RunSsta(Substitute(kBuild + " --world-frame site", kEuroc + "/mav0", d)).exit_code, 0);
+         const std::string other = "build-map -q --static --config " + kEurocConfig +
+                                   " --sequence {root} --map {dir}/n.ot --world-frame odom";
+         ASSERT_EQ(RunSsta(Substitute(other, kEuroc + "/mav0", d)).exit_code, 0);
+       },
+       "diff-maps {dir}/m.ot {dir}/n.ot --out {dir}/diff",
+       {"{dir}/n.ot: world frame 'odom', but {dir}/m.ot has 'site'; maps compare only when"}},
+      {"DiffMapsOfAnotherResolution",
+       [](auto&, auto& d) {
+         ASSERT_EQ(RunSsta(Substitute(kBuild, kEuroc + "/mav0", d)).exit_code, 0);
+         std::ofstream(d + "/c.yaml") << "map:\n  resolution_m: 0.2\n";
+         const std::string other = "build-map -q --static --config " + kEurocConfig +
+                                   " --config {dir}/c.yaml --sequence {root} --map {dir}/n.ot";
+         ASSERT_EQ(RunSsta(Substitute(other, kEuroc + "/mav0", d)).exit_code, 0);
+       },
+       "diff-maps {dir}/m.ot {dir}/n.ot --out {dir}/diff",
+       {"{dir}/n.ot: resolution 0.2 m, but {dir}/m.ot has 0.1 m; maps compare only when"}},
   };
   return cases;
 }

@@ -7,5 +7,6 @@ if(NOT SSTA_SANITIZE AND NOT SSTA_SANITIZE_THREAD)
   ssta_add_test(end_to_end_test
     ${CMAKE_CURRENT_LIST_DIR}/end_to_end_test.cpp
     ${CMAKE_CURRENT_LIST_DIR}/golden_output_test.cpp
-    ${CMAKE_CURRENT_LIST_DIR}/fleet_merge_test.cpp)
+    ${CMAKE_CURRENT_LIST_DIR}/fleet_merge_test.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/map_diff_drive_test.cpp)
 endif()

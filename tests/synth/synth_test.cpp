@@ -420,6 +420,41 @@ TEST(SynthGroundTruth, YardGridClassesAtKnownPlaces) {
   EXPECT_EQ(class_at(8.0, 4.6), TravClass::kTraversable);           // its flat top
 }
 
+TEST(SynthCli, AnAddedBoxStandsInTheTruthAndIsListed) {
+  const std::string binary = SSTA_BINARY;
+  TempDir tmp;
+  const std::string log = " > " + tmp.Sub("log.txt") + " 2>&1";
+  // A 0.6 m crate, 0.5 m tall, on the open yard 4 m ahead: ground before, an obstacle after.
+  const std::string common = " synth --scene yard --frames 1 --width 64 --height 48 --focal 42 --grid-all-cells --max-label-range 8 --out ";
+  ASSERT_EQ(std::system((binary + common + tmp.Sub("bare") + log).c_str()), 0) << ReadTextFile(tmp.Sub("log.txt"));
+  ASSERT_EQ(std::system((binary + common + tmp.Sub("box") + " --add-box 4.0,0.6,0.6,0.6,0.5,30" + log).c_str()), 0)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  auto class_at = [&](const std::string& seq, double x, double y) {
+    const ImageU8 grid = ReadLabelImage(seq + "/gt/grid_classes.png");
+    const std::string yaml = ReadTextFile(seq + "/gt/grid.yaml");
+    double x0 = 0, y0 = 0, r = 0;
+    EXPECT_EQ(std::sscanf(yaml.c_str() + yaml.find("resolution: "), "resolution: %lf", &r), 1);
+    EXPECT_EQ(std::sscanf(yaml.c_str() + yaml.find("origin: ["), "origin: [%lf, %lf", &x0, &y0), 2);
+    const int col = static_cast<int>(std::floor((x - x0) / r));
+    const int row = grid.height() - 1 - static_cast<int>(std::floor((y - y0) / r));
+    return static_cast<TravClass>(grid(row, col));
+  };
+  EXPECT_EQ(class_at(tmp.Sub("bare"), 4.0, 0.6), TravClass::kTraversable);
+  EXPECT_EQ(class_at(tmp.Sub("box"), 4.0, 0.6 + 0.25), TravClass::kNonTraversable);  // near its edge
+  EXPECT_EQ(class_at(tmp.Sub("box"), 4.0, -0.5), TravClass::kTraversable);  // beside it
+  EXPECT_NE(ReadTextFile(tmp.Sub("box/gt/rig.yaml")).find("added_boxes: [[4, 0.6, 0.6, 0.6, 0.5, 30]]"),
+            std::string::npos)
+      << ReadTextFile(tmp.Sub("box/gt/rig.yaml"));
+  EXPECT_NE(std::system((binary + common + tmp.Sub("bad") + " --add-box 4,0.6,0.6" + log).c_str()), 0);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("ssta: error: --add-box: expected X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG]"),
+            std::string::npos)
+      << ReadTextFile(tmp.Sub("log.txt"));
+  EXPECT_NE(std::system((binary + common + tmp.Sub("bad") + " --add-box 4,0.6,0.6,0.6,-1" + log).c_str()), 0);
+  EXPECT_NE(ReadTextFile(tmp.Sub("log.txt")).find("ssta: error: --add-box: height must be in (0, 20] m"),
+            std::string::npos)
+      << ReadTextFile(tmp.Sub("log.txt"));
+}
+
 TEST(SynthGroundTruth, GridScoresOnlyCellsTheCamerasSaw) {
   TempDir tmp;
   SynthOptions o = SmallOptions("ramp", 2);

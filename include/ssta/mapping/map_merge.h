@@ -15,9 +15,17 @@ struct MergeOptions {
   bool allow_overlap = false;
 };
 
+/// Throws ssta::Error when the maps `a` (read from `a_file`) and `b` (from `b_file`) do not lie
+/// on one grid of one world: another resolution, or another world frame name
+/// (MapMetadata::world_frame; maps built without one are all "unnamed"). The message names `b_file`
+/// and its value, then `a_file` and its, then `advice`. Merging (CheckMergeable) and comparing
+/// (DiffMaps) maps both require it.
+void RequireSameWorldGrid(const TraversabilityMap& a, const std::string& a_file, const TraversabilityMap& b,
+                          const std::string& b_file, const std::string& advice);
+
 /// Throws ssta::Error when the map `from` (read from the file `from_file`) cannot be merged
-/// into `into` (from `into_file`), naming both files and the difference: another resolution,
-/// another vehicle (its classes are that vehicle's), another world frame name, or another
+/// into `into` (from `into_file`), naming both files and the difference: another resolution or
+/// world frame name (RequireSameWorldGrid), another vehicle (its classes are that vehicle's), or another
 /// evidence scale (the occupancy and class log-odds clamps and the occupied threshold, which
 /// give the sums their meaning). The other fusion options (range, hit and miss
 /// probabilities, free-space rules) shaped how each map gathered its evidence and may differ;

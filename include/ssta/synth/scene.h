@@ -151,4 +151,9 @@ Scene MakeScene(const std::string& name, std::uint64_t seed, double ramp_slope_d
 /// Lays `count` textureless discs on flat-ish ground ahead of the start pose (seeded).
 void AddTexturelessPatches(Scene* scene, int count, std::uint64_t seed);
 
+/// Sets a wooden box (a crate) on the visible ground of `scene`: centred at (x, y) in world
+/// [m], its sides `length_m` along the heading `yaw_rad` and `width_m` across, its top
+/// `height_m` above the ground under its centre, its bottom buried. Calls Finish().
+void AddBox(Scene* scene, double x, double y, double yaw_rad, double length_m, double width_m, double height_m);
+
 }  // namespace ssta::synth

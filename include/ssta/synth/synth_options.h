@@ -89,6 +89,16 @@ struct FaultOptions {
 /// `o->render`.
 void DrawRandomRig(std::uint64_t seed, struct SynthOptions* o);
 
+/// A box set on the scene's ground (`ssta synth --add-box`): a crate that is there in one drive
+/// of a scene and not in another. The truth (labels, disparity, grid) includes it.
+struct AddedBox {
+  double x = 0.0, y = 0.0;  ///< centre in world [m]
+  double length_m = 0.6;    ///< side along yaw_deg [m], in (0, 50]
+  double width_m = 0.6;     ///< side across [m], in (0, 50]
+  double height_m = 0.5;    ///< top above the ground under its centre [m], in (0, 20]
+  double yaw_deg = 0.0;     ///< heading of the length side, from +x towards +y [deg]
+};
+
 /// Everything `ssta synth` needs. A given (options, seed) always produces the same bytes.
 struct SynthOptions {
   std::string scene = "yard";   ///< one of SceneNames(): yard, hills, dropoff, forest, ramp
@@ -104,6 +114,9 @@ struct SynthOptions {
   RenderOptions render;
   MotionOptions motion;
   FaultOptions faults;
+  /// Boxes added to the scene (at most 100); the vehicle's pose follows the ground only, so one
+  /// on its path is driven through.
+  std::vector<AddedBox> added_boxes;
 
   /// Checks every field; the message starts with the offending option name.
   bool IsValid(std::string* error) const;
