@@ -1,4 +1,4 @@
-#include "io/bag/db3_bag.h"
+#include "bags/db3_bag.h"
 
 #include <filesystem>
 #include <map>

@@ -1,4 +1,4 @@
-#include "io/bag/chunk_decompression.h"
+#include "bags/chunk_decompression.h"
 
 #include <algorithm>
 #include <memory>

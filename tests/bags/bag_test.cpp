@@ -17,11 +17,13 @@
 #include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "io/bag/bag_reader.h"
-#include "io/bag/ros_messages.h"
-#include "io/bag/tf_tree.h"
-#include "io/support/bag_content.h"
-#include "io/support/ros_cdr_encoder.h"
+#include "bags/bag_reader.h"
+#include "bags/image_decoding.h"
+#include "bags/ros_messages.h"
+#include "bags/tf_tree.h"
+#include "bags/support/bag_content.h"
+#include "bags/support/ros_cdr_encoder.h"
+#include "ssta/bags/bag_sequence.h"
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
 #include "ssta/io/sequence.h"

@@ -1,9 +1,9 @@
-#include "io/bag/mcap_writer.h"
+#include "mcap/mcap_writer.h"
 
 #include <zstd.h>
 
-#include "io/bag/crc32.h"
-#include "io/bag/mcap_records.h"
+#include "mcap/crc32.h"
+#include "mcap/mcap_records.h"
 #include "ssta/core/error.h"
 
 namespace ssta::internal {

@@ -1,4 +1,4 @@
-#include "io/bag/mcap_bag.h"
+#include "bags/mcap_bag.h"
 
 #include <algorithm>
 #include <cerrno>
@@ -14,9 +14,9 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "io/bag/chunk_decompression.h"
-#include "io/bag/crc32.h"
-#include "io/bag/mcap_records.h"
+#include "bags/chunk_decompression.h"
+#include "mcap/crc32.h"
+#include "mcap/mcap_records.h"
 #include "ssta/core/error.h"
 
 namespace ssta::internal {

@@ -1,4 +1,4 @@
-#include "io/bag/crc32.h"
+#include "mcap/crc32.h"
 
 #include <array>
 

@@ -1,4 +1,4 @@
-#include "io/support/ros2_bag_writer.h"
+#include "bags/support/ros2_bag_writer.h"
 
 #include <algorithm>
 #include <filesystem>
@@ -10,7 +10,7 @@
 #include <sqlite3.h>
 #include <zstd.h>
 
-#include "io/bag/crc32.h"
+#include "mcap/crc32.h"
 
 namespace fs = std::filesystem;
 

@@ -11,10 +11,10 @@
 
 #include <sqlite3.h>
 
-#include "io/bag/bag_reader.h"
-#include "io/bag/crc32.h"
-#include "io/support/ros2_bag_writer.h"
-#include "io/support/ros_cdr_encoder.h"
+#include "bags/bag_reader.h"
+#include "mcap/crc32.h"
+#include "bags/support/ros2_bag_writer.h"
+#include "bags/support/ros_cdr_encoder.h"
 #include "ssta/core/error.h"
 #include "temp_dir.h"
 

@@ -2,14 +2,14 @@
 
 // Test support: a sequence as the ROS messages a stereo robot records, written as a ROS 1 bag
 // with rosbag's own C++ API and the ROS message packages, or as a ROS 2 bag with the tests'
-// rosbag2 writer (independent writers for the readers in src/io/bag).
+// rosbag2 writer (independent writers for the readers in src/bags).
 
 #include <array>
 #include <string>
 #include <vector>
 
-#include "io/bag/ros_messages.h"
-#include "io/support/ros2_bag_writer.h"
+#include "bags/ros_messages.h"
+#include "bags/support/ros2_bag_writer.h"
 #include "ssta/io/sequence.h"
 
 namespace ssta::testing {

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "io/bag/bag_reader.h"
+#include "bags/bag_reader.h"
 
 namespace ssta::internal {
 

@@ -8,9 +8,9 @@
 #include <sstream>
 #include <tuple>
 
-#include "io/bag/bag_reader.h"
-#include "io/bag/db3_bag.h"
-#include "io/bag/mcap_bag.h"
+#include "bags/bag_reader.h"
+#include "bags/db3_bag.h"
+#include "bags/mcap_bag.h"
 #include "io/yaml_reader.h"
 #include "ssta/core/error.h"
 

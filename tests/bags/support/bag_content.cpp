@@ -1,4 +1,4 @@
-#include "io/support/bag_content.h"
+#include "bags/support/bag_content.h"
 
 #include <limits>
 
@@ -12,7 +12,7 @@
 #include <sensor_msgs/Imu.h>
 #include <tf2_msgs/TFMessage.h>
 
-#include "io/support/ros_cdr_encoder.h"
+#include "bags/support/ros_cdr_encoder.h"
 
 namespace ssta::testing {
 namespace {

@@ -5,7 +5,7 @@
 #include <memory>
 #include <string>
 
-#include "io/bag/bag_reader.h"
+#include "bags/bag_reader.h"
 
 namespace ssta::internal {
 

@@ -1,6 +1,6 @@
 #pragma once
 
-// Test support: CDR encoders for the ROS 2 messages of io/bag/ros_messages.h, so that tests write
+// Test support: CDR encoders for the ROS 2 messages of src/bags/ros_messages.h, so that tests write
 // bags from known messages and the decoders are checked against an independent writer.
 //
 // The bytes are the ROS 2 Humble layouts: the 4-byte encapsulation header 00 01 00 00 (CDR, little
@@ -13,7 +13,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "io/bag/ros_messages.h"
+#include "bags/ros_messages.h"
 
 namespace ssta::testing {
 

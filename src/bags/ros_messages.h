@@ -88,15 +88,6 @@ RosOdometry DecodeOdometry(const std::vector<std::uint8_t>& bytes, RosEncoding e
 /// tf2_msgs/TFMessage (the /tf and /tf_static topics).
 std::vector<RosTransform> DecodeTfMessage(const std::vector<std::uint8_t>& bytes, RosEncoding encoding,
                                           const std::string& where);
-/// The image as 8-bit grey: colour converted (ITU-R BT.601 weights, as OpenCV), Bayer
-/// patterns demosaiced, 16-bit scaled by 1/256 (byte order from `big_endian`), row padding
-/// (`step`) dropped. Throws ssta::Error naming `where` for an encoding it does not read or data
-/// too short for the size.
-ImageU8 GreyImage(const RosImage& image, const std::string& where);
-/// A JPEG or PNG image decoded to 8-bit grey. Throws ssta::Error naming `where` when it cannot
-/// be decoded (or is a compressed depth image).
-ImageU8 GreyImage(const RosCompressedImage& image, const std::string& where);
-
 /// Only the header at the start of any stamped message (cheap: the payload is not read).
 RosHeader DecodeHeader(const std::vector<std::uint8_t>& bytes, RosEncoding encoding, const std::string& where);
 

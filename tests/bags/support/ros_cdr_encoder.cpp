@@ -1,4 +1,4 @@
-#include "io/support/ros_cdr_encoder.h"
+#include "bags/support/ros_cdr_encoder.h"
 
 #include <cstring>
 #include <string>
