@@ -209,34 +209,27 @@ void ForEachBand(const std::vector<int>& rows, const Body& body) {
 
 }  // namespace
 
-NormalMethod ParseNormalMethod(const std::string& name) {
-  if (name == "covariance") return NormalMethod::kCovarianceMatrix;
-  if (name == "average_3d_gradient") return NormalMethod::kAverage3dGradient;
-  if (name == "average_depth_change") return NormalMethod::kAverageDepthChange;
-  throw Error("method: unknown normal method '" + name +
-              "' (expected covariance, average_3d_gradient or average_depth_change)");
+namespace {
+
+const EnumTable<NormalMethod>& NormalMethods() {
+  static const EnumTable<NormalMethod> table("method", {{NormalMethod::kCovarianceMatrix, "covariance"},
+                                                        {NormalMethod::kAverage3dGradient, "average_3d_gradient"},
+                                                        {NormalMethod::kAverageDepthChange, "average_depth_change"}});
+  return table;
 }
 
-const char* NormalMethodName(NormalMethod method) {
-  switch (method) {
-    case NormalMethod::kCovarianceMatrix:
-      return "covariance";
-    case NormalMethod::kAverage3dGradient:
-      return "average_3d_gradient";
-    case NormalMethod::kAverageDepthChange:
-      return "average_depth_change";
-  }
-  return "unknown";
-}
+}  // namespace
+
+NormalMethod ParseNormalMethod(const std::string& name) { return NormalMethods().Parse(name); }
+
+const char* NormalMethodName(NormalMethod method) { return NormalMethods().Name(method).c_str(); }
 
 const OptionFields<NormalOptions>& NormalOptions::Fields() {
   using O = NormalOptions;
   static const OptionFields<O> fields = [] {
     OptionFields<O> f;
-    f.push_back(Choice<O>("method", &O::method,
-                          {NormalMethod::kCovarianceMatrix, NormalMethod::kAverage3dGradient,
-                           NormalMethod::kAverageDepthChange},
-                          NormalMethodName, "covariance | average_3d_gradient | average_depth_change"));
+    f.push_back(Choice<O>("method", &O::method, NormalMethods(),
+                          "covariance | average_3d_gradient | average_depth_change"));
     f.push_back(Integer<O>("smoothing_size_px", &O::smoothing_size_px, Closed(kMinSmoothingSizePx, kMaxSmoothingSizePx),
                            "px", "side of the smoothing window")
                     .Require([](const O& o) { return o.subsample == 1 || o.smoothing_size_px / 2 >= kMinSmoothingSizePx; },

@@ -5,29 +5,30 @@
 #include "ssta/core/error.h"
 
 namespace ssta {
-GroundReference ParseGroundReference(const std::string& name) {
-  if (name == "body") return GroundReference::kBody;
-  if (name == "gravity") return GroundReference::kGravity;
-  if (name == "path") return GroundReference::kPath;
-  throw Error("refinement.ground_reference: '" + name + "' is not one of path, body, gravity");
+namespace {
+
+const EnumTable<GroundReference>& GroundReferences() {
+  static const EnumTable<GroundReference> table(
+      "refinement.ground_reference",
+      {{GroundReference::kPath, "path"}, {GroundReference::kBody, "body"}, {GroundReference::kGravity, "gravity"}});
+  return table;
 }
 
-std::string GroundReferenceName(GroundReference reference) {
-  switch (reference) {
-    case GroundReference::kBody: return "body";
-    case GroundReference::kGravity: return "gravity";
-    case GroundReference::kPath: return "path";
-  }
-  return "body";
+const EnumTable<RobustLoss>& RobustLosses() {
+  static const EnumTable<RobustLoss> table("refinement.robust_loss",
+                                           {{RobustLoss::kHuber, "huber"}, {RobustLoss::kCauchy, "cauchy"}});
+  return table;
 }
 
-RobustLoss ParseRobustLoss(const std::string& name) {
-  if (name == "huber") return RobustLoss::kHuber;
-  if (name == "cauchy") return RobustLoss::kCauchy;
-  throw Error("refinement.robust_loss: '" + name + "' is not one of huber, cauchy");
-}
+}  // namespace
 
-std::string RobustLossName(RobustLoss loss) { return loss == RobustLoss::kHuber ? "huber" : "cauchy"; }
+GroundReference ParseGroundReference(const std::string& name) { return GroundReferences().Parse(name); }
+
+std::string GroundReferenceName(GroundReference reference) { return GroundReferences().Name(reference); }
+
+RobustLoss ParseRobustLoss(const std::string& name) { return RobustLosses().Parse(name); }
+
+std::string RobustLossName(RobustLoss loss) { return RobustLosses().Name(loss); }
 
 const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
   using O = RefinementOptions;
@@ -45,12 +46,9 @@ const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
                         "1-sigma of a ground point's height near the camera"));
     f.push_back(Real<O>("point_sigma_range_m", &O::point_sigma_range_m, Above(0), "m",
                         "beyond this range the point sigma grows with range"));
-    f.push_back(Choice<O>("robust_loss", &O::robust_loss, {RobustLoss::kHuber, RobustLoss::kCauchy}, RobustLossName,
-                          "huber | cauchy"));
+    f.push_back(Choice<O>("robust_loss", &O::robust_loss, RobustLosses(), "huber | cauchy"));
     f.push_back(Real<O>("loss_scale", &O::loss_scale, Above(0), "sigmas", "robust loss scale"));
-    f.push_back(Choice<O>("ground_reference", &O::ground_reference,
-                          {GroundReference::kPath, GroundReference::kBody, GroundReference::kGravity},
-                          GroundReferenceName,
+    f.push_back(Choice<O>("ground_reference", &O::ground_reference, GroundReferences(),
                           "path: ground later driven over is parallel to the wheel plane standing on it (needs "
                           "poses; online and without poses: body) | body: the ground is parallel to the wheel "
                           "plane (z-up body) | gravity: the ground is level, its normal the IMU-corrected up"));
