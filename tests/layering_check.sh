@@ -14,9 +14,9 @@ declare -A allowed=(
   [geometry]="core geometry"
   [analysis]="core io stereo geometry analysis"
   [mapping]="core io mcap stereo geometry analysis mapping"
-  [refinement]="core io stereo geometry analysis refinement"
+  [mount]="core io stereo geometry analysis mount"
   [calibration]="core io stereo calibration"
-  [pipeline]="core io sensors stereo geometry analysis mapping refinement calibration pipeline"
+  [pipeline]="core io sensors stereo geometry analysis mapping mount calibration pipeline"
 )
 status=0
 for module in "${!allowed[@]}"; do

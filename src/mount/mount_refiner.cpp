@@ -1,4 +1,4 @@
-#include "ssta/refinement/mount_refiner.h"
+#include "ssta/mount/mount_refiner.h"
 
 #include <algorithm>
 #include <chrono>
@@ -14,7 +14,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
-#include "refinement/refinement_json.h"
+#include "mount/refinement_json.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
 

@@ -11,7 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/analysis/frame_result.h"
-#include "ssta/refinement/refinement_options.h"
+#include "ssta/mount/refinement_options.h"
 
 namespace ssta {
 

@@ -1,4 +1,4 @@
-#include "ssta/refinement/refinement_options.h"
+#include "ssta/mount/refinement_options.h"
 
 #include <cmath>
 

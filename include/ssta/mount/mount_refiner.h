@@ -9,8 +9,8 @@
 
 #include <Eigen/Geometry>
 
-#include "ssta/refinement/ground_evidence.h"
-#include "ssta/refinement/refinement_options.h"
+#include "ssta/mount/ground_evidence.h"
+#include "ssta/mount/refinement_options.h"
 
 namespace ssta {
 

@@ -1,10 +1,10 @@
-#include "ssta/refinement/online_mount_refiner.h"
+#include "ssta/mount/online_mount_refiner.h"
 
 #include <iomanip>
 #include <sstream>
 #include <utility>
 
-#include "refinement/refinement_json.h"
+#include "mount/refinement_json.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
 

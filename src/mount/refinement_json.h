@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "ssta/io/sequence.h"
-#include "ssta/refinement/mount_refiner.h"
+#include "ssta/mount/mount_refiner.h"
 
 namespace ssta::internal {
 

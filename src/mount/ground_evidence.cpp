@@ -1,4 +1,4 @@
-#include "ssta/refinement/ground_evidence.h"
+#include "ssta/mount/ground_evidence.h"
 
 #include <cmath>
 

@@ -9,9 +9,9 @@
 #include <Eigen/Geometry>
 
 #include "ssta/io/sequence.h"
-#include "ssta/refinement/ground_evidence.h"
-#include "ssta/refinement/mount_refiner.h"
-#include "ssta/refinement/refinement_options.h"
+#include "ssta/mount/ground_evidence.h"
+#include "ssta/mount/mount_refiner.h"
+#include "ssta/mount/refinement_options.h"
 
 namespace ssta {
 

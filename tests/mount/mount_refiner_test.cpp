@@ -9,8 +9,8 @@
 #include <random>
 
 #include "ssta/core/error.h"
-#include "ssta/refinement/mount_refiner.h"
-#include "ssta/refinement/online_mount_refiner.h"
+#include "ssta/mount/mount_refiner.h"
+#include "ssta/mount/online_mount_refiner.h"
 
 namespace ssta {
 namespace {
