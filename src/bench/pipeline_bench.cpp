@@ -14,7 +14,7 @@
 #include <sstream>
 #include <thread>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "core/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/frame_points.h"

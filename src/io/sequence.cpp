@@ -11,7 +11,7 @@
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 #include "text_parsers.h"
-#include "yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 
 namespace fs = std::filesystem;
 

@@ -3,7 +3,7 @@
 // Private helper: writes a MountRefinementResult into a JSON document being built, so that the
 // offline calibration can nest it in its own report.
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include <vector>
 
 #include "ssta/io/sequence.h"

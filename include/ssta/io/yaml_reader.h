@@ -1,7 +1,8 @@
 #pragma once
 
-// Private helper: reads a YAML mapping key by key, names every key it reports on with its full
-// path ("stereo.num_disparities"), and reports keys that nobody asked for.
+// Reads a YAML mapping key by key, names every key it reports on with its full path
+// ("stereo.num_disparities"), and reports keys that nobody asked for: the config, sensor.yaml,
+// rosbag2 metadata and map metadata readers share it. Includes yaml-cpp (link yaml-cpp).
 
 #include <cctype>
 #include <set>

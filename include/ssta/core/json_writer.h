@@ -1,7 +1,8 @@
 #pragma once
 
-// Private helper: a small streaming JSON writer (pretty-printed, two-space indent), so the eval
-// module needs no JSON library. Misuse (a value without a key inside an object, unbalanced
+// A small streaming JSON writer (pretty-printed, two-space indent): every JSON file and summary
+// SSTA writes (reports, eval metrics, benchmarks) goes through it, so no module needs a JSON
+// library. Misuse (a value without a key inside an object, unbalanced
 // End calls) is a programmer error and is checked.
 
 #include <cstdint>
