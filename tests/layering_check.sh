@@ -12,9 +12,9 @@ declare -A allowed=(
   [sensors]="core io sensors"
   [stereo]="core io stereo"
   [geometry]="core geometry"
-  [analysis]="core io stereo geometry analysis"
-  [mapping]="core io mcap stereo geometry analysis mapping"
-  [mount]="core io stereo geometry analysis mount"
+  [analysis]="core io stereo analysis"
+  [mapping]="core io mcap stereo analysis mapping"
+  [mount]="core io stereo analysis mount"
   [calibration]="core io stereo calibration"
   [pipeline]="core io sensors stereo geometry analysis mapping mount calibration pipeline"
 )
