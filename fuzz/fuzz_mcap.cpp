@@ -1,4 +1,4 @@
-// The ROS 2 MCAP reader (src/io/bag/mcap_bag.h): the records, the summary index, zstd and lz4
+// The ROS 2 MCAP reader (src/bags/mcap_bag.h): the records, the summary index, zstd and lz4
 // chunks, a file cut off by a crash. What opens is listed, and the first messages are read.
 // The seeds include files whose chunks carry no CRC, so that mutations reach the records inside
 // the chunks instead of stopping at the checksum.
@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "fuzz_util.h"
-#include "io/bag/mcap_bag.h"
+#include "bags/mcap_bag.h"
 
 namespace {
 constexpr std::size_t kMaxReads = 64;  // enough to reach every chunk of a 16 KB input

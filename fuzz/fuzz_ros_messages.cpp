@@ -1,9 +1,10 @@
-// The ROS message decoders (src/io/bag/ros_messages.cpp) on any bytes, in both encodings: ROS 1
+// The ROS message decoders (src/bags/ros_messages.cpp) on any bytes, in both encodings: ROS 1
 // serialization (bags read through rosbag) and CDR (ROS 2 bags). Every decoder sees every input,
 // and a decoded image goes on to the grey conversion, as a frame's would.
 
 #include "fuzz_util.h"
-#include "io/bag/ros_messages.h"
+#include "bags/image_decoding.h"
+#include "bags/ros_messages.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::vector<std::uint8_t> bytes(data, data + size);

@@ -7,14 +7,16 @@ cd "$1"
 declare -A allowed=(
   [core]="core"
   [io]="core io"
+  [mcap]="core mcap"
+  [bags]="core io mcap bags"
   [sensors]="core io sensors"
   [stereo]="core io stereo"
   [geometry]="core geometry"
-  [analysis]="core io stereo geometry analysis"
-  [mapping]="core io stereo geometry analysis mapping"
-  [refinement]="core io stereo geometry analysis refinement"
+  [analysis]="core io stereo analysis"
+  [mapping]="core io mcap stereo analysis mapping"
+  [mount]="core io stereo analysis mount"
   [calibration]="core io stereo calibration"
-  [pipeline]="core io sensors stereo geometry analysis mapping refinement calibration pipeline"
+  [pipeline]="core io sensors stereo geometry analysis mapping mount calibration pipeline"
 )
 status=0
 for module in "${!allowed[@]}"; do

@@ -4,6 +4,7 @@
 
 #include "bag_options.h"
 #include "commands.h"
+#include "ssta/bags/bag_sequence.h"
 
 namespace ssta::cli {
 namespace {

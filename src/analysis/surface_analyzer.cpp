@@ -32,43 +32,32 @@
 
 namespace ssta {
 
-StepReference ParseStepReference(const std::string& name) {
-  if (name == "dominant_plane") return StepReference::kDominantPlane;
-  if (name == "reachable") return StepReference::kReachable;
-  if (name == "reachable_large") return StepReference::kReachableLarge;
-  if (name == "local") return StepReference::kLocal;
-  throw Error("unknown step reference '" + name + "' (dominant_plane, reachable, reachable_large, local)");
+namespace {
+
+const EnumTable<StepReference>& StepReferences() {
+  static const EnumTable<StepReference> table("step_reference", {{StepReference::kDominantPlane, "dominant_plane"},
+                                                                 {StepReference::kReachable, "reachable"},
+                                                                 {StepReference::kReachableLarge, "reachable_large"},
+                                                                 {StepReference::kLocal, "local"}});
+  return table;
 }
 
-std::string StepReferenceName(StepReference reference) {
-  switch (reference) {
-    case StepReference::kReachable:
-      return "reachable";
-    case StepReference::kReachableLarge:
-      return "reachable_large";
-    case StepReference::kLocal:
-      return "local";
-    case StepReference::kDominantPlane:
-      break;
-  }
-  return "dominant_plane";
+const EnumTable<SmallSegmentPolicy>& SmallSegmentPolicies() {
+  static const EnumTable<SmallSegmentPolicy> table("small_segments", {{SmallSegmentPolicy::kPaper, "paper"},
+                                                                      {SmallSegmentPolicy::kObstacles, "obstacles"},
+                                                                      {SmallSegmentPolicy::kAll, "all"}});
+  return table;
 }
 
-SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name) {
-  if (name == "paper") return SmallSegmentPolicy::kPaper;
-  if (name == "obstacles") return SmallSegmentPolicy::kObstacles;
-  if (name == "all") return SmallSegmentPolicy::kAll;
-  throw Error("unknown small-segment policy '" + name + "' (paper, obstacles, all)");
-}
+}  // namespace
 
-std::string SmallSegmentPolicyName(SmallSegmentPolicy policy) {
-  switch (policy) {
-    case SmallSegmentPolicy::kPaper: return "paper";
-    case SmallSegmentPolicy::kObstacles: return "obstacles";
-    case SmallSegmentPolicy::kAll: return "all";
-  }
-  return "obstacles";
-}
+StepReference ParseStepReference(const std::string& name) { return StepReferences().Parse(name); }
+
+std::string StepReferenceName(StepReference reference) { return StepReferences().Name(reference); }
+
+SmallSegmentPolicy ParseSmallSegmentPolicy(const std::string& name) { return SmallSegmentPolicies().Parse(name); }
+
+std::string SmallSegmentPolicyName(SmallSegmentPolicy policy) { return SmallSegmentPolicies().Name(policy); }
 
 const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
   using O = AnalysisOptions;
@@ -83,18 +72,13 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
     f.push_back(Integer<O>("pixel_slope_window_px", &O::pixel_slope_window_px, Closed(1, 255), "px",
                            "that normal is the mean over a box this wide within the pixel's segment; 1: its own")
                     .Require([](const O& o) { return o.pixel_slope_window_px % 2 == 1; }, "must be odd"));
-    f.push_back(Choice<O>("step_reference", &O::step_reference,
-                          {StepReference::kDominantPlane, StepReference::kReachable, StepReference::kReachableLarge,
-                           StepReference::kLocal},
-                          StepReferenceName,
+    f.push_back(Choice<O>("step_reference", &O::step_reference, StepReferences(),
                           "dominant_plane: centroid distance to the ground plane (eq. 5) | reachable: class "
                           "of the best way from the ground across segment boundaries | reachable_large: "
                           "eq. 5, but a large segment that eq. 5 calls non-traversable takes its reachable class | "
                           "local: the largest height jump within step_radius_m of each point (the class rule "
                           "of docs/interfaces.md, section 3)"));
-    f.push_back(Choice<O>("small_segments", &O::small_segments,
-                          {SmallSegmentPolicy::kPaper, SmallSegmentPolicy::kObstacles, SmallSegmentPolicy::kAll},
-                          SmallSegmentPolicyName,
+    f.push_back(Choice<O>("small_segments", &O::small_segments, SmallSegmentPolicies(),
                           "what segments below inliers_min get: paper (undecided) | obstacles (non-traversable "
                           "when off the ground by more than max_step_m or steeper than max_slope_deg) | all "
                           "(obstacles, and any with min_plane_points points gets its class)"));

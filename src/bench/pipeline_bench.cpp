@@ -14,7 +14,7 @@
 #include <sstream>
 #include <thread>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "core/ordered_worker.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/frame_points.h"
@@ -22,8 +22,8 @@
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/pipeline/sequence_run.h"
 #include "ssta/sensors/attitude_filter.h"
-#include "ssta/refinement/ground_evidence.h"
-#include "ssta/refinement/online_mount_refiner.h"
+#include "ssta/mount/ground_evidence.h"
+#include "ssta/mount/online_mount_refiner.h"
 
 namespace ssta {
 namespace {

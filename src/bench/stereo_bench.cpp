@@ -7,7 +7,7 @@
 #include <ctime>
 #include <filesystem>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/bench/pipeline_bench.h"
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"

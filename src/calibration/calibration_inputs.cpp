@@ -7,7 +7,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "io/yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"

@@ -7,7 +7,7 @@
 #include <limits>
 #include <sstream>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/units.h"
 

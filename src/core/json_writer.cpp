@@ -1,4 +1,4 @@
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 
 #include "core/json_escape.h"
 

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "io/yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"

@@ -8,7 +8,7 @@
 #include <limits>
 #include <map>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/core/error.h"
 #include "eval/png_folder.h"
 #include "ssta/io/image_io.h"

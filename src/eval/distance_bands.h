@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/eval/distance_band.h"
 
 namespace ssta::internal {

@@ -6,7 +6,7 @@
 #include <limits>
 #include <memory>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "eval/class_ids.h"
 #include "eval/distance_bands.h"
 #include "eval/metrics_json.h"

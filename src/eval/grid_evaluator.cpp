@@ -8,7 +8,7 @@
 
 #include "eval/class_ids.h"
 #include "eval/distance_bands.h"
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "eval/metrics_json.h"
 #include "io/text_parsers.h"
 #include "ssta/core/classes.h"

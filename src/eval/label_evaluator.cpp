@@ -6,7 +6,7 @@
 #include <map>
 
 #include "eval/class_ids.h"
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"

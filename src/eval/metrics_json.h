@@ -2,7 +2,7 @@
 
 // Private helper: the JSON form of a confusion matrix and its scores, shared by all scorers.
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/eval/confusion_matrix.h"
 
 namespace ssta::internal {

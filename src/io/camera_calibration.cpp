@@ -7,7 +7,7 @@
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
 #include "text_parsers.h"
-#include "yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 
 namespace ssta {
 bool IsRigidTransform(const Eigen::Matrix4d& m, std::string* why) {

@@ -11,7 +11,7 @@
 #include "ssta/io/file_util.h"
 #include "ssta/io/image_io.h"
 #include "text_parsers.h"
-#include "yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 
 namespace fs = std::filesystem;
 
@@ -102,8 +102,6 @@ std::vector<internal::ImageListEntry> ReadImageList(const std::string& cam_dir) 
 
 }  // namespace
 
-namespace internal {
-
 std::vector<std::ptrdiff_t> PairNearestWithin1Ms(const std::vector<std::int64_t>& left,
                                                  const std::vector<std::int64_t>& right) {
   std::vector<std::ptrdiff_t> out;
@@ -116,6 +114,8 @@ std::vector<std::ptrdiff_t> PairNearestWithin1Ms(const std::vector<std::int64_t>
   }
   return out;
 }
+
+namespace internal {
 
 std::vector<CsvRow> ParseAslNumericCsv(const std::string& text, const std::string& path, int columns) {
   std::vector<CsvRow> rows;
@@ -217,26 +217,6 @@ std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped) {
   return out.str();
 }
 
-Sequence Sequence::Open(const std::string& path, const BagTopics& topics) {
-  if (IsBagPath(path)) return OpenBag(path, topics);
-  for (const auto& [option, value] : {std::pair<const char*, const std::string*>{"--left-topic", &topics.left},
-                                      {"--right-topic", &topics.right},
-                                      {"--imu-topic", &topics.imu},
-                                      {"--pose-topic", &topics.pose},
-                                      {"--pose-frame", &topics.pose_frame}}) {
-    if (!value->empty()) throw Error(path + ": " + option + " applies to ROS bags; this is not one (a .bag, .mcap, .db3 or rosbag2 folder)");
-  }
-  if (!fs::exists(path)) throw Error(path + ": sequence not found (a folder or a ROS bag)");
-  if (!fs::is_directory(path)) {
-    throw Error(path + ": not a sequence: neither a folder (ASL, KITTI raw) nor a ROS bag (.bag, .mcap, .db3, a "
-                "rosbag2 folder)");
-  }
-  if (fs::is_directory(fs::path(path) / "image_00") && fs::is_directory(fs::path(path) / "oxts")) {
-    return OpenKittiRaw(path);
-  }
-  return OpenAsl(path);
-}
-
 Sequence Sequence::OpenAsl(const std::string& path) {
   if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
   SequenceData seq;
@@ -257,7 +237,7 @@ Sequence Sequence::OpenAsl(const std::string& path) {
     for (const auto& entry : list) out.push_back(entry.timestamp_ns);
     return out;
   };
-  const std::vector<std::ptrdiff_t> paired = internal::PairNearestWithin1Ms(times(left), times(right));
+  const std::vector<std::ptrdiff_t> paired = PairNearestWithin1Ms(times(left), times(right));
   std::vector<bool> right_used(right.size(), false);
   for (std::size_t i = 0; i < left.size(); ++i) {
     const auto& l = left[i];

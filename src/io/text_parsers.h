@@ -26,12 +26,6 @@ struct ImageListEntry {
 /// timestamps in the first column, `columns` columns in all).
 std::vector<CsvRow> ParseAslNumericCsv(const std::string& text, const std::string& path, int columns);
 
-/// Pairs two ascending timestamp lists as every sequence reader does (docs/interfaces.md,
-/// section 2): for each left time, the index of the nearest right time when it is within 1 ms,
-/// else -1.
-std::vector<std::ptrdiff_t> PairNearestWithin1Ms(const std::vector<std::int64_t>& left,
-                                                 const std::vector<std::int64_t>& right);
-
 /// A camera's `data.csv` ("timestamp,filename").
 std::vector<ImageListEntry> ParseAslImageList(const std::string& text, const std::string& path);
 

@@ -1,4 +1,4 @@
-#include "yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 
 #include <cmath>
 #include <set>

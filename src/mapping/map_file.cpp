@@ -30,7 +30,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "io/yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 #include "mapping/map_file_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "io/bag/cdr_writer.h"
-#include "io/bag/mcap_writer.h"
+#include "mcap/cdr_writer.h"
+#include "mcap/mcap_writer.h"
 #include "ssta/core/error.h"
 #include "ssta/io/file_util.h"
 #include "ssta/mapping/map_export.h"

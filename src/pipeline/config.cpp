@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "io/yaml_reader.h"
+#include "ssta/io/yaml_reader.h"
 #include "pipeline/config_text.h"
 #include "ssta/io/file_util.h"
 

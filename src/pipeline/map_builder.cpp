@@ -15,7 +15,7 @@
 #include "ssta/mapping/frame_points.h"
 #include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/gravity_provider.h"
-#include "ssta/refinement/ground_evidence.h"
+#include "ssta/mount/ground_evidence.h"
 
 namespace ssta {
 namespace {

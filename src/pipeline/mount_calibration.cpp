@@ -4,7 +4,7 @@
 #include <optional>
 #include <sstream>
 
-#include "refinement/refinement_json.h"
+#include "mount/refinement_json.h"
 #include "ssta/core/error.h"
 #include "ssta/pipeline/sequence_run.h"
 

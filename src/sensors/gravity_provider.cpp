@@ -1,18 +1,24 @@
 #include "ssta/sensors/gravity_provider.h"
 
 namespace ssta {
+namespace {
 
+const EnumTable<GravitySource>& GravitySources() {
+  static const EnumTable<GravitySource> table("gravity.source", {{GravitySource::kAuto, "auto"},
+                                                                 {GravitySource::kImu, "imu"},
+                                                                 {GravitySource::kPose, "pose"},
+                                                                 {GravitySource::kLevel, "level"},
+                                                                 {GravitySource::kFixed, "fixed"}});
+  return table;
+}
+
+}  // namespace
 
 const OptionFields<GravityOptions>& GravityOptions::Fields() {
   using O = GravityOptions;
   static const OptionFields<O> fields = [] {
     OptionFields<O> f;
-    f.push_back(Choice<O>("source", &O::source,
-                          {{GravitySource::kAuto, "auto"},
-                           {GravitySource::kImu, "imu"},
-                           {GravitySource::kPose, "pose"},
-                           {GravitySource::kLevel, "level"},
-                           {GravitySource::kFixed, "fixed"}},
+    f.push_back(Choice<O>("source", &O::source, GravitySources(),
                           "auto (the IMU, else the pose, else level) | imu | pose | level | fixed"));
     f.push_back(Vector3<O>("up_camera", &O::up_camera, "",
                            "for source fixed: up in the cam0 frame (x right, y down, z forward)")
@@ -22,11 +28,7 @@ const OptionFields<GravityOptions>& GravityOptions::Fields() {
   return fields;
 }
 
-std::string GravitySourceName(GravitySource source) {
-  GravityOptions o;
-  o.source = source;
-  return std::get<std::string>(GravityOptions::Fields()[0].get(o));
-}
+std::string GravitySourceName(GravitySource source) { return GravitySources().Name(source); }
 
 bool GravityOptions::IsValid(std::string* error) const { return CheckOptions(*this, Fields(), error); }
 

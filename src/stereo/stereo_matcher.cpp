@@ -281,52 +281,38 @@ ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int bloc
   return keep;
 }
 
-SgbmMode ParseSgbmMode(const std::string& name) {
-  if (name == "3way") return SgbmMode::kThreeWay;
-  if (name == "sgbm") return SgbmMode::kFive;
-  if (name == "hh4") return SgbmMode::kHh4;
-  if (name == "hh") return SgbmMode::kHh;
-  throw Error("unknown SGBM mode '" + name + "' (3way, sgbm, hh4, hh)");
+namespace {
+
+const EnumTable<SgbmMode>& SgbmModes() {
+  static const EnumTable<SgbmMode> table(
+      "sgbm_mode",
+      {{SgbmMode::kThreeWay, "3way"}, {SgbmMode::kFive, "sgbm"}, {SgbmMode::kHh4, "hh4"}, {SgbmMode::kHh, "hh"}});
+  return table;
 }
 
-std::string SgbmModeName(SgbmMode mode) {
-  switch (mode) {
-    case SgbmMode::kThreeWay: return "3way";
-    case SgbmMode::kFive: return "sgbm";
-    case SgbmMode::kHh4: return "hh4";
-    case SgbmMode::kHh: return "hh";
-  }
-  return "3way";
+const EnumTable<MatcherType>& MatcherTypes() {
+  static const EnumTable<MatcherType> table("algorithm", {{MatcherType::kBlockMatching, "bm"},
+                                                          {MatcherType::kSemiGlobal, "sgbm"},
+                                                          {MatcherType::kPclBlockBased, "pcl_bb"},
+                                                          {MatcherType::kPclAdaptiveCost, "pcl_acso"}});
+  return table;
 }
 
-MatcherType ParseMatcherType(const std::string& name) {
-  if (name == "bm") return MatcherType::kBlockMatching;
-  if (name == "sgbm") return MatcherType::kSemiGlobal;
-  if (name == "pcl_bb") return MatcherType::kPclBlockBased;
-  if (name == "pcl_acso") return MatcherType::kPclAdaptiveCost;
-  throw Error("algorithm: unknown stereo algorithm '" + name +
-              "' (expected bm, sgbm, pcl_bb or pcl_acso)");
-}
+}  // namespace
 
-std::string MatcherTypeName(MatcherType type) {
-  switch (type) {
-    case MatcherType::kBlockMatching: return "bm";
-    case MatcherType::kSemiGlobal: return "sgbm";
-    case MatcherType::kPclBlockBased: return "pcl_bb";
-    case MatcherType::kPclAdaptiveCost: return "pcl_acso";
-  }
-  SSTA_CHECK(false, "MatcherTypeName: unknown MatcherType value");
-  return {};
-}
+SgbmMode ParseSgbmMode(const std::string& name) { return SgbmModes().Parse(name); }
+
+std::string SgbmModeName(SgbmMode mode) { return SgbmModes().Name(mode); }
+
+MatcherType ParseMatcherType(const std::string& name) { return MatcherTypes().Parse(name); }
+
+std::string MatcherTypeName(MatcherType type) { return MatcherTypes().Name(type); }
 
 const OptionFields<StereoMatcherOptions>& StereoMatcherOptions::Fields() {
   using O = StereoMatcherOptions;
   static const OptionFields<O> fields = [] {
     OptionFields<O> f;
-    f.push_back(Choice<O>("algorithm", &O::algorithm,
-                          {MatcherType::kBlockMatching, MatcherType::kSemiGlobal, MatcherType::kPclBlockBased,
-                           MatcherType::kPclAdaptiveCost},
-                          MatcherTypeName,
+    f.push_back(Choice<O>("algorithm", &O::algorithm, MatcherTypes(),
                           "bm (OpenCV StereoBM) | sgbm (OpenCV StereoSGBM) | pcl_bb (PCL block-based, "
                           "the paper's BB) | pcl_acso (PCL adaptive-cost 2-pass scanline optimisation, "
                           "the paper's ACSO)"));
@@ -346,8 +332,7 @@ const OptionFields<StereoMatcherOptions>& StereoMatcherOptions::Fields() {
                     .Require([](const O& o) {
                       return o.block_size % 2 == 1 && (o.algorithm != MatcherType::kBlockMatching || o.block_size >= 5);
                     }, "must be odd and in [3, 51] (in [5, 51] for bm)"));
-    f.push_back(Choice<O>("sgbm_mode", &O::sgbm_mode,
-                          {SgbmMode::kThreeWay, SgbmMode::kFive, SgbmMode::kHh4, SgbmMode::kHh}, SgbmModeName,
+    f.push_back(Choice<O>("sgbm_mode", &O::sgbm_mode, SgbmModes(),
                           "sgbm only: 3way (fastest) | sgbm (5 directions) | hh4 | hh (8 directions)"));
     f.push_back(Integer<O>("sgbm_p1", &O::sgbm_p1, Closed(1, 64), "",
                            "sgbm only: penalty for a 1 px disparity step between neighbours, per pixel of the "

@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "cli_runner.h"
-#include "io/support/bag_content.h"
+#include "bags/support/bag_content.h"
 #include "ssta/io/sequence.h"
 #include "ssta/mapping/traversability_map.h"
 #include "temp_dir.h"

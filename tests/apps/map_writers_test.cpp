@@ -15,7 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "cli_runner.h"
-#include "io/support/bag_content.h"
+#include "bags/support/bag_content.h"
 #include "lock_holder.h"
 #include "ssta/io/file_util.h"
 #include "ssta/io/sequence.h"

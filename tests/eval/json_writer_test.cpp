@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/json_writer.h"
+#include "ssta/core/json_writer.h"
 #include "ssta/core/error.h"
 
 namespace ssta::internal {

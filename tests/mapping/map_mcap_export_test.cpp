@@ -1,4 +1,4 @@
-// The `mcap` export read back with SSTA's own MCAP reader (src/io/bag/mcap_bag.h) and a CDR
+// The `mcap` export read back with SSTA's own MCAP reader (src/bags/mcap_bag.h) and a CDR
 // decoder written here from the ROS 2 message definitions. tests/mcap_reader/ reads it with
 // Foxglove's libraries instead.
 
@@ -13,8 +13,8 @@
 
 #include <gtest/gtest.h>
 
-#include "io/bag/mcap_bag.h"
-#include "io/bag/ros_messages.h"
+#include "bags/mcap_bag.h"
+#include "bags/ros_messages.h"
 #include "map_test_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"

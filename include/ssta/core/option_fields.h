@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "ssta/core/enum_table.h"
 #include "ssta/core/error.h"
 
 namespace ssta {
@@ -183,6 +184,12 @@ OptionField<O> Choice(std::string key, E O::*member, const std::vector<E>& value
   std::vector<std::pair<E, std::string>> names;
   for (const E& v : values) names.emplace_back(v, std::string(name(v)));
   return Choice<O, E>(std::move(key), member, std::move(names), std::move(meaning));
+}
+
+/// One of the names of `table` (enum_table.h), in its order.
+template <class O, class E>
+OptionField<O> Choice(std::string key, E O::*member, const EnumTable<E>& table, std::string meaning) {
+  return Choice<O, E>(std::move(key), member, table.entries(), std::move(meaning));
 }
 
 /// A 3-vector of finite numbers.

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -104,7 +105,7 @@ class Sequence {
   /// Opens `path` as a ROS bag (a `.bag` file, a rosbag2 folder, a `.mcap` or `.db3` file:
   /// OpenBag with `topics`), a KITTI raw drive when it has `image_00/` and `oxts/`, else as an
   /// ASL / EuRoC sequence (docs/interfaces.md, section 2). Throws ssta::Error naming the file
-  /// (and line).
+  /// (and line). Defined with the bag readers: link ssta::bags (ssta::ssta does).
   static Sequence Open(const std::string& path, const BagTopics& topics = {});
 
   /// A ROS 1 bag or a ROS 2 bag (MCAP or sqlite3) as a sequence (docs/bags.md): left and right
@@ -117,7 +118,8 @@ class Sequence {
   /// open; images are decoded as frames are read. Throws ssta::Error naming the bag and topic,
   /// and for a truncated bag (an MCAP cut off before its end, a rosbag2 folder holding fewer
   /// messages than its metadata.yaml lists; with topics.allow_truncated read up to its last
-  /// complete message, with a warning) or a ROS 1 bag cut off before its index.
+  /// complete message, with a warning) or a ROS 1 bag cut off before its index. Defined with the
+  /// bag readers: link ssta::bags (ssta::ssta does).
   static Sequence OpenBag(const std::string& path, const BagTopics& topics = {});
 
   /// The ASL / EuRoC layout (the folder, or the folder holding `mav0/`). Left/right frames are
@@ -182,25 +184,9 @@ class Sequence {
 /// the wrong size.
 StereoImages ReadStereoImages(const StereoFrame& frame, const StereoCalibration& calibration);
 
-/// True when `path` is a ROS bag: a file that starts "#ROSBAG V2.0", a folder with
-/// `metadata.yaml`, a `.mcap` or `.db3` file.
-bool IsBagPath(const std::string& path);
-
 /// The skipped frames grouped by reason, one line each ("  skipped N (first at T ns): REASON"),
 /// in the order the reasons first occur, at most 10 reasons; "" when none was skipped.
 std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped);
-
-/// What DescribeBag finds.
-struct BagDescription {
-  std::string text;     ///< for a person, one line per item, each ending in a newline
-  std::string problem;  ///< why the bag cannot be used as a stereo sequence ("" when it can)
-};
-
-/// What a bag holds (topics, types, counts, rates, time span) and what OpenBag would make of it
-/// with `topics` (the topics chosen, the calibration, the mounts, the frames paired and skipped
-/// with their reasons, the assumptions). A bag that OpenBag refuses, or that pairs no frame, is
-/// described with the reason in `problem`. Throws ssta::Error when the bag cannot be opened at all.
-BagDescription DescribeBag(const std::string& path, const BagTopics& topics = {});
 
 /// Writes `sequence` in the ASL layout under `out` (docs/interfaces.md, section 2): the images
 /// as read (grey; raw when the bag's images were raw, with the raw calibration), both
@@ -208,6 +194,12 @@ BagDescription DescribeBag(const std::string& path, const BagTopics& topics = {}
 /// file it cannot write.
 void WriteAslSequence(const Sequence& sequence, const std::string& out,
                       const std::function<void(int, int)>& progress = {});
+
+/// Pairs two ascending timestamp lists as every sequence reader does (docs/interfaces.md,
+/// section 2): for each left time [ns], the index of the nearest right time when it is within
+/// 1 ms, else -1.
+std::vector<std::ptrdiff_t> PairNearestWithin1Ms(const std::vector<std::int64_t>& left,
+                                                 const std::vector<std::int64_t>& right);
 
 /// Every `every`-th frame from the first, at most `max_frames` of them (0: no limit).
 /// Precondition: every >= 1, max_frames >= 0.

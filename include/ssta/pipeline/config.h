@@ -10,7 +10,7 @@
 #include "ssta/sensors/gravity_provider.h"
 #include "ssta/geometry/segmenter.h"
 #include "ssta/mapping/map_options.h"
-#include "ssta/refinement/refinement_options.h"
+#include "ssta/mount/refinement_options.h"
 #include "ssta/stereo/rectifier.h"
 #include "ssta/stereo/stereo_matcher.h"
 #include "ssta/stereo/triangulator.h"

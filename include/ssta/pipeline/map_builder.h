@@ -15,7 +15,7 @@
 #include "ssta/core/progress.h"
 #include "ssta/pipeline/frame_pipeline.h"
 #include "ssta/pipeline/sequence_run.h"
-#include "ssta/refinement/online_mount_refiner.h"
+#include "ssta/mount/online_mount_refiner.h"
 
 namespace ssta {
 

@@ -9,7 +9,7 @@
 #include "ssta/core/progress.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/sequence_run.h"
-#include "ssta/refinement/mount_refiner.h"
+#include "ssta/mount/mount_refiner.h"
 
 namespace ssta {
 

@@ -1,2 +1,0 @@
-ssta_add_test(refinement_test
-  ${CMAKE_CURRENT_LIST_DIR}/mount_refiner_test.cpp)
