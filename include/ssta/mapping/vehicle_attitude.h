@@ -78,7 +78,8 @@ std::string HeadingName(int k, int headings);
 /// 2 pi k / headings): at each pixel, HeadingCost of its cost and the attitude on the grid's fused
 /// surface heights (`grid.surface_z_m`) of the pixels the footprint centred at the pixel touches
 /// (the pixels whose squares overlap the rectangle, the rule of TraversabilityMap::QueryFootprint,
-/// so at the map's resolution both fit the same columns), judged against `vehicle`.
+/// so at the map's resolution both fit the same columns; pixels beyond the grid do not count),
+/// judged against `vehicle`.
 /// Throws ssta::Error naming the key when options are invalid, or when the grid has no
 /// surface_z_m layer of its size.
 std::vector<ImageF> HeadingCosts(const GridProjection& grid, const VehicleOptions& vehicle,
