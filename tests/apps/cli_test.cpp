@@ -369,7 +369,8 @@ TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
   // Later files win: a file that sets the map's values back makes the pair match; the key that
   // still differs is named with the file that set it.
   std::ofstream(dir / "back.yaml") << "vehicle:\n  max_slope_deg: 25\n  semi_slope_deg: 15\n  max_step_m: 0.2\n"
-                                      "  semi_step_m: 0.1\n  min_camera_height_m: 0.2\n  max_camera_height_m: 3\n";
+                                      "  semi_step_m: 0.1\n  min_camera_height_m: 0.2\n  max_camera_height_m: 3\n"
+                                      "  max_pitch_deg: 25\n  max_descent_deg: 25\n  max_roll_deg: 25\n";
   auto r = RunSsta(query + " --config " + large + " --config " + (dir / "back.yaml"), false);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, plain.output);
