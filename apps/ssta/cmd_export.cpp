@@ -28,6 +28,8 @@ struct ExportArgs {
   bool flat = false;
   std::string compression = "zstd";
   std::string frame = McapExportOptions{}.map_frame;
+  int headings = 0;
+  std::vector<double> heading_footprint = {HeadingCostOptions{}.footprint_length_m, HeadingCostOptions{}.footprint_width_m};
 };
 
 // True when `a` and `b` name the same file (or would, once written).
@@ -120,6 +122,18 @@ void RegisterExport(CLI::App& app) {
       ->delimiter(',')
       ->expected(4);
   AddGridExportSteps(cmd, "grid, picture, mcap: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
+  cmd->add_option("--headings", args->headings,
+                  "grid, mcap: also a cost layer per heading, N headings evenly spaced from +x towards +y: the class "
+                  "cost raised where the vehicle's pitch or roll on the ground under its footprint nears or passes "
+                  "its max_pitch_deg, max_descent_deg or max_roll_deg (grid: PREFIX_cost_heading_<deg>.png each; mcap: "
+                  "GridMap layers cost_heading_<deg>)")
+      ->check(CLI::Range(1, 360));
+  cmd->add_option("--heading-footprint", args->heading_footprint,
+                  "with --headings: LENGTH,WIDTH [m] of the footprint, centred at each cell, whose ground gives the "
+                  "pitch and roll")
+      ->delimiter(',')
+      ->expected(2)
+      ->capture_default_str();
   cmd->add_flag("--flat", args->flat, "picture: flat class colours, without the relief shading");
   cmd->add_option("--compression", args->compression, "mcap: how its chunks are compressed")
       ->check(CLI::IsMember({"zstd", "none"}))
@@ -136,6 +150,14 @@ void RegisterExport(CLI::App& app) {
       }
     }
     if (f != "picture" && args->flat) throw Error("--flat: only for --format picture");
+    for (const char* option : {"--headings", "--heading-footprint"}) {
+      if (f != "grid" && f != "mcap" && cmd->count(option) > 0) {
+        throw Error(std::string(option) + ": only for --format grid or mcap");
+      }
+    }
+    if (cmd->count("--heading-footprint") > 0 && cmd->count("--headings") == 0) {
+      throw Error("--heading-footprint: only with --headings");
+    }
     for (const char* option : {"--compression", "--frame"}) {
       if (f != "mcap" && cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
     }
@@ -146,11 +168,14 @@ void RegisterExport(CLI::App& app) {
     if (cmd->count("--resolution") > 0 && !(args->resolution_m > 0.0 && std::isfinite(args->resolution_m))) {
       throw Error("--resolution: must be a positive number of metres");
     }
-    const std::vector<std::string> suffixes =
+    std::vector<std::string> suffixes =
         f == "grid"      ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
         : f == "picture" ? std::vector<std::string>{".png"}
         : f == "mcap"    ? std::vector<std::string>{".mcap"}
                          : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
+    if (f == "grid") {
+      for (int k = 0; k < args->headings; ++k) suffixes.push_back(HeadingCostPath("", k, args->headings));
+    }
     for (const std::string& suffix : suffixes) {
       if (SameFile(args->out + suffix, args->map)) {
         throw Error("--out " + args->out + ": would write " + args->out + suffix + " over the map it reads (" +
@@ -163,6 +188,13 @@ void RegisterExport(CLI::App& app) {
     options.resolution_m = args->resolution_m;
     options.fill_min_neighbours = args->fill_min_neighbours;
     options.local_ground_radius_m = args->local_ground_radius_m;
+    options.headings.headings = args->headings;
+    options.headings.footprint_length_m = args->heading_footprint[0];
+    options.headings.footprint_width_m = args->heading_footprint[1];
+    std::string heading_error;
+    if (!options.headings.IsValid(&heading_error)) {
+      throw Error("--heading-footprint: " + heading_error.substr(heading_error.find(':') + 2));
+    }
     if (!args->region.empty()) {
       const auto& r = args->region;
       if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
@@ -193,7 +225,8 @@ void RegisterExport(CLI::App& app) {
       mcap.map_frame = args->frame;
       const McapExportSummary s = ExportMcap(map, args->out + ".mcap", mcap);
       written = args->out + ".mcap (" + std::to_string(s.bytes) + " bytes in " + std::to_string(s.chunks) +
-                " chunks; " + std::to_string(s.grid_width) + "x" + std::to_string(s.grid_height) + " cells, " +
+                " chunks; " + std::to_string(s.grid_width) + "x" + std::to_string(s.grid_height) + " cells" +
+                (args->headings > 0 ? " with " + std::to_string(args->headings) + " heading cost layers" : "") + ", " +
                 std::to_string(s.voxels) + " voxels, " + std::to_string(s.path_poses) + " path poses)";
     } else if (f == "octovis") {
       ExportOctovis(map, args->out + ".ot");

@@ -62,10 +62,13 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   const FootprintResult result = NamingTheOption(option, "footprint query: ", [&] {
     return args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
   });
-  std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n"
+  std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
+               "attitude_heights\n"
             << static_cast<int>(result.worst) << ',' << Number(result.mean_cost, "%.4f") << ','
             << Number(result.max_cost, "%.4f") << ',' << Number(result.fraction_observed, "%.4f") << ','
-            << result.cells << ',' << result.observed_cells << "\n";
+            << result.cells << ',' << result.observed_cells << ',' << Number(result.pitch_deg, "%.2f") << ','
+            << Number(result.roll_deg, "%.2f") << ',' << static_cast<int>(result.attitude) << ','
+            << result.attitude_heights << "\n";
 }
 
 // --path FILE.csv [--width W]: one row per sample; the verdict on stderr.

@@ -1,17 +1,21 @@
 #!/usr/bin/env python3
 """Plan a robot's path on an SSTA map, from Python.
 
-Builds the map of a stereo sequence (a rendered yard by default), plans a path with A* over the
-exported grid's costs (unknown, undecided and non-traversable cells avoided, with the robot's
-size kept clear of them), checks the path with the map's footprint and path queries, and saves
-a picture of the map and the path.
+Builds the map of a stereo sequence (a rendered yard by default), plans a path with A* over
+(x, y, heading) on the exported grid's costs per heading (8 headings: the class cost, raised
+where the robot's pitch or roll on the ground under it nears or passes the vehicle's
+max_pitch_deg, max_descent_deg or max_roll_deg; unknown, undecided and non-traversable cells
+avoided, with the robot's size kept clear of them), checks the path with the map's footprint
+and path queries, and saves a picture of the map and the path, with the cells whose cost
+depends on the heading.
 
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --out out/plan
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --sequence SEQ --out out/plan
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --sequence SEQ --static --out out/plan
+    PYTHONPATH=build/python python3 examples/python/plan_on_map.py --scene hills --config VEHICLE.yaml --out out/plan
 
 Writes OUT/map.ot, OUT/plan.png (the picture) and OUT/plan.json (start, goal, the path's
-vertices [m, world frame] and both checks). Exits 1 when no path is found or the check fails,
+vertices [m, world frame] and headings [deg], and the checks). Exits 1 when no path is found or the check fails,
 2 with a one-line message when the sequence cannot be mapped (a recording without poses needs
 --static, as `ssta build-map` does).
 """
@@ -46,6 +50,9 @@ def parse_args():
                    help="the platform stands still and the sequence has no poses: every frame at the origin, "
                         "levelled by gravity (as `ssta build-map --static`); the goal then lies along the "
                         "camera's view (world x)")
+    p.add_argument("--scene", default="yard", help="scene rendered when no --sequence is given (`ssta synth --scene`)")
+    p.add_argument("--config", type=pathlib.Path, action="append", default=[],
+                   help="YAML config for the map (repeatable): e.g. a vehicle section with max_roll_deg")
     p.add_argument("--ssta", type=pathlib.Path, default=ROOT / "build" / "apps" / "ssta",
                    help="the ssta command line, to render the yard (default: build/apps/ssta)")
     p.add_argument("--robot-length", type=float, default=1.0, help="robot length [m]")
@@ -73,37 +80,52 @@ def dilate(mask, radius_px):
     return out
 
 
+# The lattice's headings: k faces 45 k deg from +x towards +y, and its move is one cell that way
+# (dv, du) in the image, whose row 0 is the largest y.
+HEADINGS = 8
+STEPS = [(0, 1), (-1, 1), (-1, 0), (-1, -1), (0, -1), (1, -1), (1, 0), (1, 1)]
+
+
 def astar(step_cost, start, goal):
-    """Cheapest 8-connected path of cells from start to goal (row, col); a move costs its length
-    in cells times the mean step_cost of its two cells; inf cells are never entered. None when
-    the goal cannot be reached."""
-    h, w = step_cost.shape
-    moves = [(dv, du, math.hypot(dv, du)) for dv in (-1, 0, 1) for du in (-1, 0, 1) if dv or du]
+    """Cheapest path over the lattice (row, col, heading) from the start cell to the goal cell,
+    any heading at either end. step_cost is H x W x 8: the cost of standing on a cell facing
+    each heading (inf: never). From heading k the robot moves one cell along heading k - 1, k
+    or k + 1 (it turns at most 45 deg a cell) and arrives facing it; a move costs its length in
+    cells times the mean step_cost of its two cells at that heading. Returns [(row, col,
+    heading)], or None when the goal cannot be reached."""
+    h, w, _ = step_cost.shape
 
     def heuristic(cell):  # octile distance: no move costs less than its length
         dv, du = abs(cell[0] - goal[0]), abs(cell[1] - goal[1])
         return max(dv, du) + (math.sqrt(2) - 1) * min(dv, du)
 
-    best = {start: 0.0}
-    came_from = {}
-    frontier = [(heuristic(start), start)]
+    best, came_from, frontier = {}, {}, []
+    for k in range(HEADINGS):
+        if not math.isinf(step_cost[start[0], start[1], k]):
+            best[(*start, k)] = 0.0
+            heapq.heappush(frontier, (heuristic(start), 0.0, (*start, k)))
     while frontier:
-        _, cell = heapq.heappop(frontier)
-        if cell == goal:
-            path = [cell]
-            while cell in came_from:
-                cell = came_from[cell]
-                path.append(cell)
+        _, g_here, state = heapq.heappop(frontier)
+        v, u, k = state
+        if g_here > best[state]:
+            continue  # a stale entry: the state was reached more cheaply since
+        if (v, u) == goal:
+            path = [state]
+            while state in came_from:
+                state = came_from[state]
+                path.append(state)
             return path[::-1]
-        for dv, du, length in moves:
-            nxt = (cell[0] + dv, cell[1] + du)
-            if not (0 <= nxt[0] < h and 0 <= nxt[1] < w) or math.isinf(step_cost[nxt]):
+        for turn in (-1, 0, 1):
+            k2 = (k + turn) % HEADINGS
+            v2, u2 = v + STEPS[k2][0], u + STEPS[k2][1]
+            if not (0 <= v2 < h and 0 <= u2 < w) or math.isinf(step_cost[v2, u2, k2]):
                 continue
-            g = best[cell] + length * 0.5 * (step_cost[cell] + step_cost[nxt])
-            if g < best.get(nxt, math.inf):
-                best[nxt] = g
-                came_from[nxt] = cell
-                heapq.heappush(frontier, (g + heuristic(nxt), nxt))
+            length = math.sqrt(2) if k2 % 2 else 1.0
+            g = best[state] + length * 0.5 * (step_cost[v, u, k2] + step_cost[v2, u2, k2])
+            if g < best.get((v2, u2, k2), math.inf):
+                best[(v2, u2, k2)] = g
+                came_from[(v2, u2, k2)] = state
+                heapq.heappush(frontier, (g + heuristic((v2, u2)), g, (v2, u2, k2)))
     return None
 
 
@@ -122,12 +144,14 @@ def cell_centres(grid, v, u):
     return grid["origin"][0] + (np.asarray(u) + 0.5) * r, grid["origin"][1] + (h - 1 - np.asarray(v) + 0.5) * r
 
 
-def draw(grid, meta, path_xy, poses, args, checks, out_png):
+def draw(grid, meta, path_xy, path_cost, poses, args, checks, out_png):
+    """Left: the classes, the path coloured by its cost at the heading it drives, footprints.
+    Right: where the heading matters: each cell's highest minus lowest cost over the headings."""
     colours = {k: np.array(c) / 255.0 for k, c in ssta.CLASS_COLOURS.items()}
     image = np.zeros(grid["class"].shape + (3,))
     for k, c in colours.items():
         image[grid["class"] == k] = 0.35 + 0.65 * c if k != ssta.UNKNOWN else (0.18, 0.18, 0.18)
-    fig, ax = plt.subplots(figsize=(9, 6.5), dpi=110)
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(15, 6.5), dpi=100)
     ax.imshow(image, extent=grid["extent"], origin="upper", interpolation="nearest")
     sensor = meta["sensor_path"]
     ax.plot(sensor[:, 0], sensor[:, 1], color="black", lw=2, ls="--", label="camera's drive")
@@ -137,7 +161,8 @@ def draw(grid, meta, path_xy, poses, args, checks, out_png):
                          [-args.robot_length, -args.robot_width], [-args.robot_length, args.robot_width]]) / 2
         corners = half @ np.array([[c, s], [-s, c]]) + (x, y)
         ax.add_patch(Polygon(corners, closed=True, fill=False, ec="orange", lw=1.0))
-    ax.plot(path_xy[:, 0], path_xy[:, 1], color="orange", lw=2.5, label="planned path (A*)")
+    drawn = ax.scatter(path_xy[:, 0], path_xy[:, 1], c=path_cost, cmap="plasma", vmin=0, vmax=1, s=10, zorder=3)
+    fig.colorbar(drawn, ax=ax, shrink=0.7, label="path: cost at its heading")
     ax.plot(*path_xy[0], "o", color="white", mec="black", ms=9, label="start")
     ax.plot(*path_xy[-1], "*", color="yellow", mec="black", ms=15, label="goal")
     legend = [Patch(color=0.35 + 0.65 * colours[k], label=name) for k, name in
@@ -147,9 +172,22 @@ def draw(grid, meta, path_xy, poses, args, checks, out_png):
     ax.legend(handles=handles + legend, loc="upper left", fontsize=8, framealpha=0.9)
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
-    ax.set_title(f"A* on the exported costs, robot {args.robot_length} x {args.robot_width} m: "
+    ax.set_title(f"A* over (x, y, heading), robot {args.robot_length} x {args.robot_width} m: "
                  f"footprints' worst class {checks['footprints_worst']}, "
                  f"{'blocked' if checks['path']['blocked'] else 'not blocked'}", fontsize=10)
+
+    stack = grid["cost_heading"]  # NaN at every heading where the class cost is
+    spread = stack.max(axis=2) - stack.min(axis=2)
+    shown = ax2.imshow(spread, extent=grid["extent"], origin="upper", interpolation="nearest", cmap="magma",
+                       vmin=0, vmax=1)
+    fig.colorbar(shown, ax=ax2, shrink=0.7, label="highest - lowest cost over the 8 headings")
+    ax2.plot(path_xy[:, 0], path_xy[:, 1], color="cyan", lw=1.5, label="planned path")
+    ax2.legend(loc="upper left", fontsize=8)
+    ax2.set_xlabel("x [m]")
+    vehicle = meta["vehicle"]
+    ax2.set_title(f"where the heading matters: {int((spread > 0.05).sum())} cells (climb "
+                  f"{vehicle['max_pitch_deg']:g}, descent {vehicle['max_descent_deg']:g}, roll "
+                  f"{vehicle['max_roll_deg']:g} deg)", fontsize=10)
     fig.tight_layout()
     fig.savefig(out_png)
     plt.close(fig)
@@ -160,12 +198,13 @@ def main():
     args.out.mkdir(parents=True, exist_ok=True)
     sequence = args.sequence
     if sequence is None:
-        sequence = args.out / "yard"
-        subprocess.run([str(args.ssta), "synth", "--scene", "yard", "--frames", "20", "--seed", "1",
+        sequence = args.out / args.scene
+        subprocess.run([str(args.ssta), "synth", "--scene", args.scene, "--frames", "20", "--seed", "1",
                         "--out", str(sequence)], check=True, stdout=subprocess.DEVNULL)
 
     try:
-        summary = ssta.build_map(sequence, args.out / "map.ot", static_platform=args.static)
+        summary = ssta.build_map(sequence, args.out / "map.ot", [str(c) for c in args.config] or None,
+                                 static_platform=args.static)
     except (ssta.Error, FileNotFoundError) as e:  # bad input: the library's one-line message
         print(f"plan_on_map.py: error: {e}", file=sys.stderr)
         return 2
@@ -173,15 +212,18 @@ def main():
     the_map = ssta.Map.open(args.out / "map.ot")
     meta = the_map.metadata
 
-    # The planner's grid: the exported classes and costs (holes filled as the export fills them).
-    grid = the_map.project(as_exported=True)
-    classes, cost = grid["class"], grid["cost"]
+    # The planner's grid: the exported classes and costs per heading (holes filled as the export
+    # fills them), the attitude fitted under the robot's own footprint.
+    grid = the_map.project(as_exported=True, headings=HEADINGS,
+                           heading_footprint=(args.robot_length, args.robot_width))
+    classes, cost = grid["class"], grid["cost_heading"]
     drivable = (classes == ssta.TRAVERSABLE) | (classes == ssta.SEMI_TRAVERSABLE)
     # Keep the robot's half diagonal clear of everything else (unknown included) and prefer
-    # cheap ground: a step costs 1 on traversable ground, up to 1 + 4 x 0.75 on the worst semi.
+    # cheap ground: a step costs 1 on traversable ground, up to 1 + 4 x 0.75 on the worst semi;
+    # a heading whose pitch or roll passes the limits (cost 1) is never taken there.
     half_diagonal_px = 0.5 * math.hypot(args.robot_length, args.robot_width) / grid["resolution_m"]
     free = ~dilate(~drivable, half_diagonal_px)
-    step_cost = np.where(free, 1.0 + 4.0 * np.nan_to_num(cost, nan=1.0), np.inf)
+    step_cost = np.where(free[:, :, None] & (np.nan_to_num(cost, nan=1.0) < 1.0), 1.0 + 4.0 * cost, np.inf)
 
     # Start where the camera started, goal ahead along its drive: the nearest free cells.
     sensor = meta["sensor_path"][:, :2]
@@ -189,38 +231,46 @@ def main():
     if np.linalg.norm(heading) < grid["resolution_m"]:  # a static platform: along its view, world x
         heading = np.array([1.0, 0.0])
     heading /= np.linalg.norm(heading)
-    start = nearest_free(free, grid, sensor[0])
+    drivable_somehow = ~np.isinf(step_cost).all(axis=2)
+    start = nearest_free(drivable_somehow, grid, sensor[0])
     right = np.array([heading[1], -heading[0]])
-    goal = nearest_free(free, grid, sensor[0] + args.goal_ahead * heading + args.goal_right * right)
-    cells = astar(step_cost, start, goal)
-    if cells is None:
+    goal = nearest_free(drivable_somehow, grid, sensor[0] + args.goal_ahead * heading + args.goal_right * right)
+    states = astar(step_cost, start, goal)
+    if states is None:
         print("no path: the goal cannot be reached over known drivable ground", file=sys.stderr)
         return 1
-    v, u = np.array(cells).T
+    v, u, k = np.array(states).T
     path_xy = np.column_stack(cell_centres(grid, v, u))
+    path_cost = cost[v, u, k]
 
-    # Check it with the map itself: a footprint at every cell of the path, heading along it, and
-    # the path with the robot's width, both as the exported grid shows the ground.
-    ahead = np.vstack([path_xy[1:], path_xy[-1:]]) - np.vstack([path_xy[:1], path_xy[:-1]])
-    yaw = np.arctan2(ahead[:, 1], ahead[:, 0])
-    poses = np.column_stack([path_xy, yaw])
+    # Check it with the map itself: a footprint at every cell of the path, facing the lattice
+    # heading it drives there (its pitch and roll within the vehicle's limits), and the path with
+    # the robot's width, both as the exported grid shows the ground.
+    poses = np.column_stack([path_xy, np.radians(45.0 * k)])
     footprints = the_map.footprints(poses, args.robot_length, args.robot_width, as_exported=True)
     path_check = the_map.path(path_xy, args.robot_width, as_exported=True)
     worst = int(footprints["worst"].max())
+    attitude_ok = bool((footprints["within_limits"] | (footprints["attitude"] == ssta.UNKNOWN)).all())
     checks = {
         "footprints_worst": worst,
         "footprints_fully_observed": bool((footprints["observed_cells"] == footprints["cells"]).all()),
+        "attitude_within_limits": attitude_ok,
+        "largest_pitch_deg": float(np.nanmax(np.abs(footprints["pitch_deg"]), initial=0.0)),
+        "largest_roll_deg": float(np.nanmax(np.abs(footprints["roll_deg"]), initial=0.0)),
         "path": {k: path_check[k] for k in ("worst", "blocked", "length_m", "fraction_observed", "mean_cost")},
     }
-    valid = worst in (ssta.TRAVERSABLE, ssta.SEMI_TRAVERSABLE) and not path_check["blocked"]
+    valid = worst in (ssta.TRAVERSABLE, ssta.SEMI_TRAVERSABLE) and not path_check["blocked"] and attitude_ok
 
-    draw(grid, meta, path_xy, poses, args, checks, args.out / "plan.png")
+    draw(grid, meta, path_xy, path_cost, poses, args, checks, args.out / "plan.png")
     plan = {"start": path_xy[0].tolist(), "goal": path_xy[-1].tolist(), "path": path_xy.tolist(),
+            "headings_deg": (45.0 * k).tolist(),
             "robot": {"length_m": args.robot_length, "width_m": args.robot_width}, "checks": checks,
             "valid": valid}
     (args.out / "plan.json").write_text(json.dumps(plan, indent=1))
     print(f"path: {path_check['length_m']:.1f} m, footprints' worst class {worst}, "
-          f"{'blocked' if path_check['blocked'] else 'not blocked'}; picture {args.out / 'plan.png'}")
+          f"{'blocked' if path_check['blocked'] else 'not blocked'}, largest pitch "
+          f"{checks['largest_pitch_deg']:.1f} deg, roll {checks['largest_roll_deg']:.1f} deg; "
+          f"picture {args.out / 'plan.png'}")
     return 0 if valid else 1
 
 

@@ -30,6 +30,10 @@ struct FootprintRow {
   std::uint8_t worst;
   double mean_cost, max_cost, fraction_observed;
   std::int32_t cells, observed_cells;
+  double pitch_deg, roll_deg;
+  std::uint8_t attitude;
+  std::int32_t attitude_heights;
+  bool within_limits;
 };
 
 // One sample of Map.path: the columns of `ssta query --path`.
@@ -177,7 +181,9 @@ py::array Footprints(const MapHandle& handle, const py::object& poses_arg, doubl
         return exported ? map.QueryFootprint(query, std::cref(*exported)) : map.QueryFootprint(query);
       });
       rows[i] = FootprintRow{static_cast<std::uint8_t>(f.worst), f.mean_cost, f.max_cost, f.fraction_observed,
-                             f.cells, f.observed_cells};
+                             f.cells, f.observed_cells, f.pitch_deg, f.roll_deg, static_cast<std::uint8_t>(f.attitude),
+                             f.attitude_heights,
+                             f.attitude == TravClass::kTraversable || f.attitude == TravClass::kSemiTraversable};
     }
   }
   return std::move(out);
@@ -238,7 +244,7 @@ py::array_t<T> ImageArray(const Image<T>& image) {
 
 py::dict Project(const MapHandle& handle, const std::optional<std::vector<double>>& region_arg,
                  std::optional<double> resolution_arg, bool as_exported, int fill_holes,
-                 double local_ground_radius_m) {
+                 double local_ground_radius_m, int headings, const std::vector<double>& heading_footprint) {
   const TraversabilityMap& map = handle.map;
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
   Eigen::AlignedBox2d region;
@@ -258,7 +264,18 @@ py::dict Project(const MapHandle& handle, const std::optional<std::vector<double
   if (!(std::isfinite(resolution_m) && resolution_m > 0.0)) {
     throw py::value_error("resolution_m: must be a finite number > 0");
   }
+  HeadingCostOptions heading_options;
+  heading_options.headings = headings;
+  if (heading_footprint.size() != 2) throw py::value_error("heading_footprint: expected (length_m, width_m)");
+  heading_options.footprint_length_m = heading_footprint[0];
+  heading_options.footprint_width_m = heading_footprint[1];
+  std::string error;
+  if (!heading_options.IsValid(&error)) {
+    const bool footprint = error.rfind("headings", 0) != 0;
+    throw py::value_error((footprint ? "heading_footprint: " + error : error));
+  }
   GridProjection grid;
+  std::vector<ImageF> heading_costs;
   {
     py::gil_scoped_release release;
     if (as_exported) {
@@ -269,6 +286,7 @@ py::dict Project(const MapHandle& handle, const std::optional<std::vector<double
     } else {
       grid = map.Project(region, resolution_m);
     }
+    if (headings > 0) heading_costs = HeadingCosts(grid, map.metadata().vehicle, heading_options);
   }
   py::dict out;
   out["class"] = ImageArray(grid.classes);
@@ -276,6 +294,19 @@ py::dict Project(const MapHandle& handle, const std::optional<std::vector<double
   out["height_m"] = ImageArray(grid.height_m);
   out["slope_deg"] = ImageArray(grid.slope_deg);
   out["step_m"] = ImageArray(grid.step_m);
+  out["surface_z_m"] = ImageArray(grid.surface_z_m);
+  if (headings > 0) {
+    const py::ssize_t h = grid.height(), w = grid.width();
+    py::array_t<float> stack({h, w, static_cast<py::ssize_t>(headings)});
+    float* data = stack.mutable_data();
+    for (py::ssize_t i = 0; i < h * w; ++i) {
+      for (int k = 0; k < headings; ++k) data[i * headings + k] = heading_costs[static_cast<std::size_t>(k)][static_cast<std::size_t>(i)];
+    }
+    out["cost_heading"] = stack;
+    py::list degrees;
+    for (int k = 0; k < headings; ++k) degrees.append(360.0 * k / headings);
+    out["headings_deg"] = degrees;
+  }
   out["origin"] = py::make_tuple(grid.origin.x(), grid.origin.y());
   out["resolution_m"] = grid.resolution_m;
   out["extent"] = py::make_tuple(grid.origin.x(), grid.origin.x() + grid.width() * grid.resolution_m,
@@ -392,7 +423,9 @@ py::dict Metadata(const MapHandle& handle) {
 
 void BindMap(py::module_& m) {
   PYBIND11_NUMPY_DTYPE_EX(FootprintRow, worst, "worst", mean_cost, "mean_cost", max_cost, "max_cost",
-                          fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells");
+                          fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells",
+                          pitch_deg, "pitch_deg", roll_deg, "roll_deg", attitude, "attitude", attitude_heights,
+                          "attitude_heights", within_limits, "within_limits");
   PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
                           fraction_observed, "fraction_observed");
 
@@ -511,7 +544,12 @@ Args:
 Returns:
     A structured array of N rows: worst (uint8, the worst 1..3 class under it, 0 when none),
     mean_cost, max_cost (float64; NaN when no cell has a cost), fraction_observed (float64,
-    observed columns / columns), cells and observed_cells (int32).
+    observed columns / columns), cells and observed_cells (int32); the vehicle's attitude on
+    the plane fitted to the fused heights under it: pitch_deg (float64, nose up positive),
+    roll_deg (float64, left side up positive; both NaN with fewer than 3 heights),
+    attitude (uint8: 1 below 0.8 of the map's vehicle max_pitch_deg / max_descent_deg /
+    max_roll_deg, 2 up to them, 3 beyond, 0 without a plane), attitude_heights (int32, the
+    heights fitted) and within_limits (bool: attitude 1 or 2).
 
 Raises:
     ValueError naming `poses`, `length_m` or `width_m`; ssta.Error naming `poses[i]` for a
@@ -542,7 +580,9 @@ Raises:
 )doc").c_str())
       .def("project", &Project, py::arg("region") = py::none(), py::arg("resolution_m") = py::none(),
            py::kw_only(), py::arg("as_exported") = false, py::arg("fill_holes") = 5,
-           py::arg("local_ground_radius_m") = 0.0,
+           py::arg("local_ground_radius_m") = 0.0, py::arg("headings") = 0,
+           py::arg("heading_footprint") = std::vector<double>{HeadingCostOptions{}.footprint_length_m,
+                                                               HeadingCostOptions{}.footprint_width_m},
            (std::string(R"doc(
 The top surface over a region as 2D arrays, for a planner or matplotlib.
 
@@ -553,12 +593,18 @@ Args:
 )doc") + exported_doc + R"doc(
         With as_exported the region is widened outwards to multiples of the resolution,
         exactly as `ssta export --format grid` (whose PNGs hold the same classes).
+    headings: N > 0 adds cost_heading, the cost per heading as `ssta export --headings N`:
+        heading k faces 360 k / N deg from +x towards +y; the class cost, raised where the
+        vehicle's pitch or roll on the ground under the footprint nears (0.8 of) or passes the
+        map's vehicle limits (max_pitch_deg, max_descent_deg, max_roll_deg; 1 beyond).
+    heading_footprint: (length_m, width_m) of that footprint, centred at each pixel.
 
 Returns:
     A dict of H x W arrays, row 0 the largest y, column 0 the smallest x (an image; pass
     `extent` and origin='upper' to matplotlib's imshow): class (uint8), cost, height_m,
     slope_deg, step_m (float32: the slope and step that decided the class, as query's; NaN
-    where unknown); and origin ((x, y) of the lower-left
+    where unknown), surface_z_m (float32, the fused surface height); with headings, cost_heading
+    (H x W x N float32) and headings_deg (N floats); and origin ((x, y) of the lower-left
     corner [m]), resolution_m, extent ((x_min, x_max, y_min, y_max) [m]).
 
 Raises:

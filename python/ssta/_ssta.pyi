@@ -148,7 +148,8 @@ class Map:
         local_ground_radius_m: float = 0.0,
     ) -> np.ndarray:
         """N x 3 poses (x [m], y [m], yaw [rad]) -> structured rows: worst, mean_cost, max_cost,
-        fraction_observed, cells, observed_cells."""
+        fraction_observed, cells, observed_cells, pitch_deg, roll_deg, attitude,
+        attitude_heights, within_limits."""
     def path(
         self,
         vertices: _Array,
@@ -167,8 +168,11 @@ class Map:
         as_exported: bool = False,
         fill_holes: int = 5,
         local_ground_radius_m: float = 0.0,
+        headings: int = 0,
+        heading_footprint: Sequence[float] = (1.0, 0.6),
     ) -> dict[str, Any]:
-        """The top surface as H x W arrays (class, cost, height_m, slope_deg, step_m), origin, extent."""
+        """The top surface as H x W arrays (class, cost, height_m, slope_deg, step_m,
+        surface_z_m), origin, extent; with headings=N, cost_heading (H x W x N) and headings_deg."""
     def diff(
         self,
         other: Map,

@@ -14,7 +14,8 @@ from conftest import cli_error, read_csv
 
 # The CSV's precision per column (QueryCsvRow): compare to half its last digit.
 CSV_DECIMALS = {"x": 4, "y": 4, "z": 4, "cost": 4, "probability": 4, "slope_deg": 2, "step_m": 3,
-                "confidence": 4, "frame_mean_slope_deg": 2, "frame_mean_step_m": 3, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4}
+                "confidence": 4, "frame_mean_slope_deg": 2, "frame_mean_step_m": 3, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4,
+                "pitch_deg": 2, "roll_deg": 2}
 
 
 def assert_rows_match_csv(rows, csv_columns, columns_of_rows=None):
@@ -171,6 +172,59 @@ def test_project_as_exported_equals_grid_export(the_map, yard_map, cli, tmp_path
     assert grid["resolution_m"] == the_map.resolution_m
     x0, x1, y0, y1 = grid["extent"]
     assert (x1 - x0, y1 - y0) == pytest.approx((grid["class"].shape[1] * 0.1, grid["class"].shape[0] * 0.1))
+
+
+def attitude_cost(pitch_deg, roll_deg, vehicle):
+    """The attitude's cost (docs/interfaces.md, section 5): f = the largest fraction of a limit;
+    0 up to 0.8, 0.25 + 0.5 (f - 0.8) / 0.2 up to 1, then 1."""
+    pitch_limit = vehicle["max_pitch_deg"] if pitch_deg >= 0 else vehicle["max_descent_deg"]
+    f = max(abs(pitch_deg) / pitch_limit, abs(roll_deg) / vehicle["max_roll_deg"])
+    return 0.0 if f <= 0.8 else 0.25 + 0.5 * (f - 0.8) / 0.2 if f <= 1.0 else 1.0
+
+
+def test_project_headings_agree_with_footprints_and_the_grid_export(the_map, yard_map, cli, tmp_path):
+    grid = the_map.project(as_exported=True, headings=8)
+    h, w = grid["class"].shape
+    stack = grid["cost_heading"]
+    assert stack.shape == (h, w, 8) and stack.dtype == np.float32
+    assert grid["headings_deg"] == [0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0]
+    # The class cost, never lowered; unknown where the class cost is.
+    cost = grid["cost"][:, :, None]
+    np.testing.assert_array_equal(np.isnan(stack), np.isnan(np.broadcast_to(cost, stack.shape)))
+    known = ~np.isnan(stack)
+    assert known.any() and np.all(stack[known] >= np.broadcast_to(cost, stack.shape)[known])
+
+    # Each layer is the heading cost of the footprint query centred at the pixel.
+    vehicle = the_map.metadata["vehicle"]
+    x0, y0 = grid["origin"]
+    r = grid["resolution_m"]
+    rows, cols = np.nonzero(known[:, :, 0])
+    checked = 0
+    for v, u in list(zip(rows, cols))[:: max(1, len(rows) // 40)]:
+        for k in range(8):
+            pose = np.array([[x0 + (u + 0.5) * r, y0 + (h - 1 - v + 0.5) * r, np.radians(45.0 * k)]])
+            f = the_map.footprints(pose, 1.0, 0.6, as_exported=True)[0]
+            assert f["within_limits"] == (f["attitude"] in (1, 2))
+            expected = grid["cost"][v, u]
+            if np.isfinite(f["pitch_deg"]):
+                expected = max(expected, attitude_cost(f["pitch_deg"], f["roll_deg"], vehicle))
+            assert stack[v, u, k] == pytest.approx(expected, abs=1e-4), (v, u, k)
+            checked += 1
+    assert checked >= 8 * 20
+
+    # `ssta export --format grid --headings 8` writes the same costs, one 8-bit PNG per heading.
+    cli("export", "--map", yard_map, "--format", "grid", "--headings", 8, "--out", tmp_path / "g")
+    for k, deg in enumerate(grid["headings_deg"]):
+        png = np.round(matplotlib.image.imread(tmp_path / f"g_cost_heading_{deg:g}.png") * 255).astype(np.int32)
+        want = np.where(np.isnan(stack[:, :, k]), 255, np.round(np.nan_to_num(stack[:, :, k]) * 254)).astype(np.int32)
+        assert np.abs(png - want).max() <= 1, deg
+
+
+def test_project_headings_arguments_name_themselves(the_map):
+    with pytest.raises(ValueError, match="headings: must be in 0..360"):
+        the_map.project(headings=-1)
+    with pytest.raises(ValueError, match="heading_footprint: footprint_width_m"):
+        the_map.project(headings=8, heading_footprint=(1.0, 0.0))
 
 
 def test_project_pixels_equal_point_queries(the_map):

@@ -60,6 +60,18 @@ const OptionFields<VehicleOptions>& VehicleOptions::Fields() {
                         "upper end of that band")
                     .Require([](const O& o) { return o.max_camera_height_m > o.min_camera_height_m; },
                              "must be above min_camera_height_m"));
+    // Keys added after maps were first written: a map file leaves them out while they hold the
+    // defaults, so the files of default vehicles stay byte for byte as they were.
+    f.push_back(Real<O>("max_pitch_deg", &O::max_pitch_deg, Open(0, 90), "deg",
+                        "heading costs: steepest climb (nose up) along the direction of travel, the pitch on the "
+                        "plane fitted under the footprint")
+                    .AbsentMeans(25.0));
+    f.push_back(Real<O>("max_descent_deg", &O::max_descent_deg, Open(0, 90), "deg",
+                        "heading costs: steepest descent (nose down) along the direction of travel")
+                    .AbsentMeans(25.0));
+    f.push_back(Real<O>("max_roll_deg", &O::max_roll_deg, Open(0, 90), "deg",
+                        "heading costs: steepest cross-slope (roll on that plane, either side down)")
+                    .AbsentMeans(25.0));
     return f;
   }();
   return fields;

@@ -253,11 +253,20 @@ CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y, 
   return ExportedSurface(map, Eigen::AlignedBox2d(Eigen::Vector2d(x, y), Eigen::Vector2d(x, y)), options)(x, y);
 }
 
+std::string HeadingCostPath(const std::string& prefix, int k, int headings) {
+  return prefix + "_cost_heading_" + HeadingName(k, headings) + ".png";
+}
+
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options, GridExportChanges* changes) {
   GridExportOptions resolved = options;
   resolved.region = RegionToProject(map, options, prefix + ".pgm: the map");
+  std::string error;
+  if (!options.headings.IsValid(&error)) throw Error(prefix + ".yaml: heading costs: " + error);
   const GridProjection grid = ProjectAsExported(map, resolved, changes);
+  const int headings = options.headings.headings;
+  const std::vector<ImageF> heading_costs =
+      headings > 0 ? HeadingCosts(grid, map.metadata().vehicle, options.headings) : std::vector<ImageF>{};
 
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);
@@ -282,6 +291,23 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
        << "occupied_thresh: 0.65\n"
        << "free_thresh: 0.196\n"
        << "mode: trinary\n";
+  if (headings > 0) {
+    yaml << "# Cost per heading (yaw in degrees from +x towards +y in the file name), 8-bit: round(254 cost),\n"
+         << "# 255 unknown; the vehicle's attitude on the ground under the footprint raises the class cost.\n"
+         << "heading_cost_images: [";
+    for (int k = 0; k < headings; ++k) {
+      const std::string path = HeadingCostPath(prefix, k, headings);
+      ImageU8 png(grid.width(), grid.height(), 255);
+      const ImageF& cost = heading_costs[static_cast<std::size_t>(k)];
+      for (std::size_t i = 0; i < png.size(); ++i) {
+        if (std::isfinite(cost[i])) png[i] = static_cast<std::uint8_t>(std::lround(std::clamp(cost[i], 0.0f, 1.0f) * 254.0f));
+      }
+      WriteImage(png, path);
+      yaml << (k ? ", " : "") << std::filesystem::path(path).filename().string();
+    }
+    yaml << "]\nheading_cost_footprint_m: [" << Format("%.9g", options.headings.footprint_length_m) << ", "
+         << Format("%.9g", options.headings.footprint_width_m) << "]\n";
+  }
   WriteTextAtomically(prefix + ".yaml", yaml.str());
   return grid;
 }

@@ -120,7 +120,8 @@ std::vector<std::uint8_t> OccupancyGridMessage(const GridProjection& grid, std::
   return m.Take();
 }
 
-std::vector<std::uint8_t> GridMapMessage(const GridProjection& grid, std::int64_t stamp_ns, const std::string& frame) {
+std::vector<std::uint8_t> GridMapMessage(const GridProjection& grid, const std::vector<ImageF>& heading_costs,
+                                         std::int64_t stamp_ns, const std::string& frame) {
   const int w = grid.width(), h = grid.height();
   const double res = grid.resolution_m;
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -130,7 +131,9 @@ std::vector<std::uint8_t> GridMapMessage(const GridProjection& grid, std::int64_
   m.F64(w * res);  // length_x
   m.F64(h * res);  // length_y
   Pose(&m, grid.origin.x() + 0.5 * w * res, grid.origin.y() + 0.5 * h * res, 0.0, 0.0);
-  const std::vector<std::string> layers = {"class", "cost", "confidence", "elevation", "slope", "step"};
+  std::vector<std::string> layers = {"class", "cost", "confidence", "elevation", "slope", "step"};
+  const int headings = static_cast<int>(heading_costs.size());
+  for (int k = 0; k < headings; ++k) layers.push_back("cost_heading_" + HeadingName(k, headings));
   m.U32(static_cast<std::uint32_t>(layers.size()));
   for (const std::string& layer : layers) m.String(layer);
   m.U32(1);
@@ -140,12 +143,16 @@ std::vector<std::uint8_t> GridMapMessage(const GridProjection& grid, std::int64_
   // largest y (columns, size h); stored column-major, so i runs fastest. Image pixel (v, u) is
   // (i, j) = (w - 1 - u, v).
   std::vector<float> values(static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
-  for (const std::string& layer : layers) {
+  for (std::size_t l = 0; l < layers.size(); ++l) {
+    const std::string& layer = layers[l];
+    const ImageF* heading = l >= 6 ? &heading_costs[l - 6] : nullptr;
     for (int j = 0; j < h; ++j) {
       for (int i = 0; i < w; ++i) {
         const int v = j, u = w - 1 - i;
         float value = nan;
-        if (layer == "class") {
+        if (heading != nullptr) {
+          value = (*heading)(v, u);
+        } else if (layer == "class") {
           const std::uint8_t c = grid.classes(v, u);
           value = c == static_cast<std::uint8_t>(TravClass::kUnknown) ? nan : static_cast<float>(c);
         } else if (layer == "cost") {
@@ -274,7 +281,12 @@ McapExportSummary ExportMcap(const TraversabilityMap& map, const std::string& pa
     if (bounds.isEmpty()) throw Error(path + ": the map has no observed surface to export (give a region)");
     grid_options.region = Eigen::AlignedBox2d(bounds.min().head<2>(), bounds.max().head<2>());
   }
+  std::string error;
+  if (!grid_options.headings.IsValid(&error)) throw Error(path + ": heading costs: " + error);
   const GridProjection grid = ProjectAsExported(map, grid_options, &summary.changes);
+  const std::vector<ImageF> heading_costs = grid_options.headings.headings > 0
+                                                ? HeadingCosts(grid, map.metadata().vehicle, grid_options.headings)
+                                                : std::vector<ImageF>{};
   const std::vector<CellInfo> voxels = map.SurfaceCells();
   const std::string world_frame = !options.world_frame.empty()          ? options.world_frame
                                   : !map.metadata().world_frame.empty() ? map.metadata().world_frame
@@ -320,7 +332,7 @@ McapExportSummary ExportMcap(const TraversabilityMap& map, const std::string& pa
 
     writer.Write(tf, log_time, log_time, TfStaticMessage(options.map_frame, world_frame, stamp_ns));
     writer.Write(occupancy, log_time, log_time, OccupancyGridMessage(grid, stamp_ns, options.map_frame));
-    writer.Write(grid_map, log_time, log_time, GridMapMessage(grid, stamp_ns, options.map_frame));
+    writer.Write(grid_map, log_time, log_time, GridMapMessage(grid, heading_costs, stamp_ns, options.map_frame));
     writer.Write(cloud, log_time, log_time, VoxelCloudMessage(voxels, stamp_ns, options.map_frame));
     writer.Write(sensor_path, log_time, log_time, PathMessage(map.sensor_path(), stamp_ns, options.map_frame));
     const internal::McapWriteSummary written = writer.Finish();

@@ -17,6 +17,7 @@
 #include "ssta/core/units.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/surface_judgement.h"
+#include "ssta/mapping/vehicle_attitude.h"
 
 namespace ssta {
 
@@ -427,8 +428,10 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
   FootprintResult result;
   double cost_sum = 0.0;
   int cost_count = 0;
+  std::vector<Eigen::Vector3d> ground;  // the fused heights under the footprint
   for (const Eigen::Vector2d& col : columns) {
     const CellInfo cell = surface ? surface(col.x(), col.y()) : TopSurfaceAt(col.x(), col.y());
+    if (cell.observed && std::isfinite(cell.surface_z_m)) ground.emplace_back(col.x(), col.y(), cell.surface_z_m);
     ++result.cells;
     if (!Known(cell)) continue;
     ++result.observed_cells;
@@ -441,6 +444,11 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
   }
   if (cost_count > 0) result.mean_cost = cost_sum / cost_count;
   result.fraction_observed = static_cast<double>(result.observed_cells) / result.cells;
+  const VehicleAttitude attitude = AttitudeOnGround(ground, q.yaw, impl_->metadata.vehicle);
+  result.pitch_deg = attitude.pitch_deg;
+  result.roll_deg = attitude.roll_deg;
+  result.attitude = attitude.verdict;
+  result.attitude_heights = attitude.heights;
   return result;
 }
 
@@ -510,6 +518,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
   grid.slope_deg = ImageF(width, height, nan);
   grid.step_m = ImageF(width, height, nan);
   grid.confidence = ImageF(width, height, nan);
+  grid.surface_z_m = ImageF(width, height, nan);
   // A pixel coarser than the map's columns takes the worst of the columns whose centres it
   // holds (a planner must not read an obstacle's pixel as free); at the map's resolution or
   // finer, the column under the pixel's centre.
@@ -539,6 +548,7 @@ GridProjection TraversabilityMap::Project(const Eigen::AlignedBox2d& region,
       grid.slope_deg(v, u) = static_cast<float>(cell.slope_deg);
       grid.step_m(v, u) = static_cast<float>(cell.step_m);
       grid.confidence(v, u) = static_cast<float>(cell.confidence);
+      grid.surface_z_m(v, u) = static_cast<float>(cell.surface_z_m);
     }
   }
   return grid;

@@ -252,10 +252,13 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   const std::string query = "query --map " + (dir / "m.ot");
   auto r = RunSsta(query + " --footprint 0.65,0.65,0,0.3,0.3", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(r.output, "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells\n3,1.0000,1.0000,1.0000,9,9\n");
+  // The floor is level: the vehicle stands flat on it (attitude 1, traversable).
+  EXPECT_EQ(r.output,
+            "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
+            "attitude_heights\n3,1.0000,1.0000,1.0000,9,9,0.00,0.00,1,9\n");
   r = RunSsta(query + " --footprint 0.65,0.65,90,0.3,0.3 --as-exported --local-ground 1", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9");
+  EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9,0.00,0.00,1,9");
 
   std::ofstream(dir / "path.csv") << "x,y\n0.05,0.65\n1.55,0.65\n";
   r = RunSsta(query + " --path " + (dir / "path.csv"));  // with the verdict from stderr
@@ -297,6 +300,71 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   EXPECT_NE(r.output.find("path.csv --width 1e+09: grid projection: more than"), std::string::npos) << r.output;
 }
 
+TEST(Cli, ExportWithHeadingsWritesACostLayerPerHeading) {
+  // A 20 deg hillside rising along +x (fused heights on the plane) for a vehicle that climbs
+  // 25 deg and rolls 15 deg: climbing keeps the class cost, traversing is refused (cost 1).
+  testing::TempDir dir;
+  std::vector<ClassifiedPoint> points;
+  const double gradient = std::tan(DegToRad(20.0));
+  for (int ix = 0; ix < 30; ++ix) {
+    for (int iy = 0; iy < 30; ++iy) {
+      ClassifiedPoint p;
+      p.world_p = Eigen::Vector3f(0.05f + 0.1f * ix, 0.05f + 0.1f * iy, static_cast<float>(gradient * (0.05 + 0.1 * ix)));
+      p.cls = TravClass::kSemiTraversable;
+      p.slope_deg = 20.0f;
+      p.height_sigma_m = p.horizontal_sigma_m = 0.01f;
+      points.push_back(p);
+    }
+  }
+  MapOptions options;
+  options.occupied_threshold_prob = 0.5;
+  MapMetadata metadata;
+  metadata.vehicle.max_roll_deg = 15.0;
+  TraversabilityMap map(options, metadata);
+  map.InsertFrame(points, {1.5, 1.5, 10.0}, 1);
+  map.Save(dir / "m.ot");
+
+  const std::string prefix = dir / "g";
+  auto r = RunSsta("export --map " + (dir / "m.ot") + " --format grid --headings 8 --out " + prefix, false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const ImageU8 classes = ReadLabelImage(prefix + "_classes.png");
+  std::string listed;
+  for (const char* deg : {"0", "45", "90", "135", "180", "225", "270", "315"}) {
+    const std::string png = prefix + "_cost_heading_" + deg + ".png";
+    ASSERT_TRUE(fs::exists(png)) << png;
+    const ImageU8 layer = ReadGreyImage(png);
+    ASSERT_EQ(layer.width(), classes.width());
+    ASSERT_EQ(layer.height(), classes.height());
+    listed += std::string(listed.empty() ? "" : ", ") + "g_cost_heading_" + deg + ".png";
+  }
+  std::ifstream yaml(prefix + ".yaml");
+  const std::string text((std::istreambuf_iterator<char>(yaml)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("heading_cost_images: [" + listed + "]"), std::string::npos) << text;
+  EXPECT_NE(text.find("heading_cost_footprint_m: [1, 0.6]"), std::string::npos) << text;
+  // The middle of the hillside: across (90, 270) cost 1 (254); up and down the class cost of a
+  // 20 deg slope, 0.25 + 0.5 (20 - 15) / (25 - 15) = 0.5 (127).
+  const int v = classes.height() / 2, u = classes.width() / 2;
+  EXPECT_EQ(ReadGreyImage(prefix + "_cost_heading_90.png")(v, u), 254);
+  EXPECT_EQ(ReadGreyImage(prefix + "_cost_heading_270.png")(v, u), 254);
+  EXPECT_NEAR(ReadGreyImage(prefix + "_cost_heading_0.png")(v, u), 127, 1);
+  EXPECT_NEAR(ReadGreyImage(prefix + "_cost_heading_180.png")(v, u), 127, 1);
+
+  r = RunSsta("query --map " + (dir / "m.ot") + " --footprint 1.5,1.5,90,1,0.6", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::vector<std::string> row = Fields(Lines(r.output).back());  // ...,pitch,roll,attitude,heights
+  ASSERT_EQ(row.size(), 10u) << r.output;
+  EXPECT_NEAR(std::stod(row[6]), 0.0, 0.05);
+  EXPECT_NEAR(std::stod(row[7]), -20.0, 0.05);  // facing +y, the left (-x) side is the lower one
+  EXPECT_EQ(row[8], "3");                        // beyond the 15 deg roll limit
+
+  r = RunSsta("export --map " + (dir / "m.ot") + " --format csv --headings 8 --out " + prefix);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--headings: only for --format grid or mcap"), std::string::npos) << r.output;
+  r = RunSsta("export --map " + (dir / "m.ot") + " --format grid --headings 8 --heading-footprint 0,1 --out " + prefix);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--heading-footprint: must be in (0, 100] m"), std::string::npos) << r.output;
+}
+
 TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
   // The floor map was built for the default vehicle (max slope 25 deg, max step 0.2 m).
   testing::TempDir dir;
@@ -328,7 +396,8 @@ TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
   // Later files win: a file that sets the map's values back makes the pair match; the key that
   // still differs is named with the file that set it.
   std::ofstream(dir / "back.yaml") << "vehicle:\n  max_slope_deg: 25\n  semi_slope_deg: 15\n  max_step_m: 0.2\n"
-                                      "  semi_step_m: 0.1\n  min_camera_height_m: 0.2\n  max_camera_height_m: 3\n";
+                                      "  semi_step_m: 0.1\n  min_camera_height_m: 0.2\n  max_camera_height_m: 3\n"
+                                      "  max_pitch_deg: 25\n  max_descent_deg: 25\n  max_roll_deg: 25\n";
   auto r = RunSsta(query + " --config " + large + " --config " + (dir / "back.yaml"), false);
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(r.output, plain.output);

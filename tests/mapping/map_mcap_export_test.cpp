@@ -267,6 +267,57 @@ TEST(McapExport, ReadBackHoldsTheGridOfThePgmExportTheLayersTheVoxelsAndThePath)
   EXPECT_EQ(tf[0].rotation_xyzw, (std::array<double, 4>{0, 0, 0, 1}));
 }
 
+TEST(McapExport, HeadingsAddACostLayerPerHeadingEqualToHeadingCosts) {
+  // The 20 deg hillside of vehicle_attitude_test.cpp: eight cost_heading layers after the six,
+  // each HeadingCosts of the exported grid; across the slope the 15 deg roll limit refuses it.
+  TempDir dir;
+  const TraversabilityMap map = testing::HillsideMap(20.0, testing::HillsideVehicle());
+  McapExportOptions options;
+  options.grid.headings.headings = 8;
+  ExportMcap(map, dir / "h.mcap", options);
+  const GridProjection grid = ProjectAsExported(map, options.grid);
+  const std::vector<ImageF> expected = HeadingCosts(grid, map.metadata().vehicle, options.grid.headings);
+  const int w = grid.width(), h = grid.height();
+
+  Cdr grid_map(ReadMcap(dir / "h.mcap").messages.at("/traversability"));
+  grid_map.Header();
+  for (int k = 0; k < 3 + 7; ++k) grid_map.Get<double>();  // resolution, lengths, pose
+  std::vector<std::string> names = {"class", "cost", "confidence", "elevation", "slope", "step"};
+  for (const char* deg : {"0", "45", "90", "135", "180", "225", "270", "315"}) names.push_back(std::string("cost_heading_") + deg);
+  ASSERT_EQ(grid_map.Get<std::uint32_t>(), names.size());
+  for (const std::string& name : names) EXPECT_EQ(grid_map.String(), name);
+  ASSERT_EQ(grid_map.Get<std::uint32_t>(), 1u);
+  grid_map.String();
+  ASSERT_EQ(grid_map.Get<std::uint32_t>(), names.size());
+  int refused = 0;
+  for (std::size_t l = 0; l < names.size(); ++l) {
+    ASSERT_EQ(grid_map.Get<std::uint32_t>(), 2u);
+    for (int d = 0; d < 2; ++d) {
+      grid_map.String();
+      grid_map.Get<std::uint32_t>();
+      grid_map.Get<std::uint32_t>();
+    }
+    grid_map.Get<std::uint32_t>();
+    ASSERT_EQ(grid_map.Get<std::uint32_t>(), static_cast<std::uint32_t>(w * h));
+    for (int j = 0; j < h; ++j) {
+      for (int i = 0; i < w; ++i) {
+        const float value = grid_map.Get<float>();
+        if (l < 6) continue;
+        const float want = expected[l - 6](j, w - 1 - i);  // (i, j) is pixel (v, u) = (j, w - 1 - i)
+        if (std::isnan(want)) {
+          EXPECT_TRUE(std::isnan(value));
+        } else {
+          EXPECT_EQ(value, want);
+          refused += (l == 8 || l == 12) && value == 1.0f ? 1 : 0;
+        }
+      }
+    }
+  }
+  // Away from the edges (where the footprint runs off the map and its plane is still fine)
+  // every cell is refused across: 90 and 270 deg.
+  EXPECT_GE(refused, 2 * 30 * 30);
+}
+
 TEST(McapExport, UncompressedAndZstdFilesHoldTheSameMessages) {
   TempDir dir;
   const TraversabilityMap map = TwoViewMap();

@@ -84,6 +84,39 @@ inline TraversabilityMap FloorAndBoxMap() {
   return map;
 }
 
+/// The vehicle of the heading tests: the limits, 25 deg climb and descent, 15 deg roll.
+inline VehicleOptions HillsideVehicle() {
+  VehicleOptions v;
+  v.max_pitch_deg = 25.0;
+  v.max_descent_deg = 25.0;
+  v.max_roll_deg = 15.0;
+  return v;
+}
+
+/// A hillside rising along +x at `slope_deg`, z = tan(slope) x, over x, y in [0, 4) m: one point
+/// per 0.1 m column at its centre's height with a 1 cm height sigma (so the fused surface heights
+/// lie on the plane), seen once from above, for a map of `vehicle`.
+inline TraversabilityMap HillsideMap(double slope_deg, const VehicleOptions& vehicle) {
+  std::vector<ClassifiedPoint> points;
+  const double gradient = std::tan(slope_deg * 3.14159265358979323846 / 180.0);
+  for (int ix = 0; ix < 40; ++ix) {
+    for (int iy = 0; iy < 40; ++iy) {
+      ClassifiedPoint p = Pt(C(ix), C(iy), gradient * C(ix), TravClass::kSemiTraversable, static_cast<float>(slope_deg));
+      p.height_sigma_m = 0.01f;
+      p.horizontal_sigma_m = 0.01f;
+      points.push_back(p);
+    }
+  }
+  MapOptions options;
+  options.max_range_m = 30.0;
+  options.occupied_threshold_prob = 0.5;  // one frame's hit makes a voxel occupied
+  MapMetadata metadata;
+  metadata.vehicle = vehicle;
+  TraversabilityMap map(options, metadata);
+  map.InsertFrame(points, {2.0, 2.0, 15.0}, 1);
+  return map;
+}
+
 /// Softmax probability of class index `c` given float class log-odds.
 inline double Softmax(const std::array<float, 3>& l, int c) {
   double d = 0.0;

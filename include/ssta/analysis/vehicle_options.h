@@ -20,6 +20,13 @@ struct VehicleOptions {
   /// ground plane lies outside this band fails the quality check.
   double min_camera_height_m = 0.2;
   double max_camera_height_m = 3.0;
+  /// Attitude limits for the costs that depend on the heading (docs/interfaces.md, section 5):
+  /// the vehicle's pitch and roll on the plane fitted to the ground under its footprint. They
+  /// come on top of the class and never change it. The defaults equal max_slope_deg's default, so
+  /// on ground whose class already allows it the heading adds nothing until they are lowered.
+  double max_pitch_deg = 25.0;    ///< steepest climb (nose up) along the heading [deg]
+  double max_descent_deg = 25.0;  ///< steepest descent (nose down) along the heading [deg]
+  double max_roll_deg = 25.0;     ///< steepest cross-slope (either side down) [deg]
 
   /// Slope class per eq. 3: <= semi traversable, <= max semi-traversable, else non-traversable.
   TravClass ClassifySlope(double slope_deg) const;

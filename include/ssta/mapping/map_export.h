@@ -9,6 +9,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/mapping/traversability_map.h"
+#include "ssta/mapping/vehicle_attitude.h"
 
 namespace ssta {
 
@@ -44,6 +45,10 @@ struct GridExportOptions {
   /// frames measure local steps and the map judges each column from the surface around it,
   /// so it is off by default. 0: off.
   double local_ground_radius_m = 0.0;
+  /// Cost layers per heading (HeadingCosts of the exported grid, judged against the map's
+  /// vehicle): written by ExportGrid and ExportMcap when headings > 0; the other exports and
+  /// the queries ignore it.
+  HeadingCostOptions headings;
 };
 
 /// One pass over a projection: each non-traversable pixel (3) whose slope (the one that decided
@@ -122,9 +127,17 @@ CellInfo TopSurfaceAsExported(const TraversabilityMap& map, double x, double y,
 /// step changed. Throws ssta::Error when the map has no surface and no region is given, when
 /// fill_min_neighbours is not in 0..8 or local_ground_radius_m is negative or not finite (before
 /// any file is written).
+/// With options.headings.headings = N > 0 it also writes the cost per heading, one 8-bit PNG
+/// per heading, HeadingCostPath(prefix, k, N) for k = 0..N-1: pixel round(254 cost), 255 where
+/// the cost is unknown; PREFIX.yaml then lists them (heading_cost_images, in heading order) and
+/// the footprint they were fitted under (heading_cost_footprint_m: [length, width]).
 GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefix,
                           const GridExportOptions& options = GridExportOptions{},
                           GridExportChanges* changes = nullptr);
+
+/// PREFIX_cost_heading_<yaw in degrees, HeadingName>.png: the `grid` export's image of heading k
+/// of N.
+std::string HeadingCostPath(const std::string& prefix, int k, int headings);
 
 /// The value of a grid pixel in the `mcap` export's nav_msgs/OccupancyGrid, from its class id
 /// and cost: non-traversable 100; traversable and semi-traversable round(100 cost) (0..75), or,
@@ -167,6 +180,8 @@ struct McapExportSummary {
 ///    confidence, elevation (top surface voxel centre z [m]), slope [deg], step [m]; grid_map's
 ///    conventions: index (i, j) grows towards -x and -y from the cell at the largest x and y,
 ///    column-major Float32MultiArray (labels "column_index", "row_index"), pose the grid's centre.
+///    With grid.headings.headings = N > 0, also layers cost_heading_<yaw in degrees> (HeadingName:
+///    cost_heading_0, cost_heading_45, ...), HeadingCosts of the grid.
 ///  - /traversability/voxels, sensor_msgs/msg/PointCloud2: every occupied voxel's centre (x, y, z
 ///    float32), class (uint8), cost and confidence (float32), as SurfaceCells.
 ///  - /sensor_path, nav_msgs/msg/Path: sensor_path(), each pose facing the next.

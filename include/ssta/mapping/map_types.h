@@ -138,6 +138,18 @@ struct FootprintResult {
   /// Of those, columns with an observed surface (or, read from a surface source such as
   /// ExportedSurface, with a class: a filled hole counts).
   int observed_cells = 0;
+  /// The vehicle's attitude on the plane fitted (least squares) to the fused surface heights
+  /// (CellInfo::surface_z_m) of those columns, heading `yaw` (AttitudeOnGround,
+  /// ssta/mapping/vehicle_attitude.h): pitch [deg], positive nose up; NaN when fewer than 3
+  /// columns (not in a line) have a height.
+  double pitch_deg = std::numeric_limits<double>::quiet_NaN();
+  /// Roll [deg] on that plane, positive when the left side is higher; NaN likewise.
+  double roll_deg = std::numeric_limits<double>::quiet_NaN();
+  /// The attitude against the vehicle's max_pitch_deg, max_descent_deg and max_roll_deg:
+  /// traversable below 0.8 of every limit, semi-traversable up to the limits, non-traversable
+  /// beyond one; kUnknown without a plane. It comes on top of `worst` and does not change it.
+  TravClass attitude = TravClass::kUnknown;
+  int attitude_heights = 0;  ///< columns whose heights the plane was fitted to
 };
 
 /// One sample along a path: the worst top-surface cell across the path's width there.
@@ -181,6 +193,9 @@ struct GridProjection {
   /// The pixel's CellInfo::confidence in [0, 1]; NaN where there is no class 1..3 (and where an
   /// export step, not the map's evidence, set the class).
   ImageF confidence;
+  /// The fused surface height of the pixel's column (CellInfo::surface_z_m, world z) [m]; NaN
+  /// where unobserved. The heading costs fit their planes to it.
+  ImageF surface_z_m;
 
   int width() const { return classes.width(); }
   int height() const { return classes.height(); }
