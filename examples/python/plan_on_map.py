@@ -5,7 +5,7 @@ Builds the map of a stereo sequence (a rendered yard by default), plans a path w
 (x, y, heading) on the exported grid's costs per heading (8 headings: the class cost, raised
 where the robot's pitch or roll on the ground under it nears or passes the vehicle's
 max_pitch_deg, max_descent_deg or max_roll_deg; unknown, undecided and non-traversable cells
-avoided, with the robot's size kept clear of them), checks the path with the map's footprint
+avoided, with the robot's footprint at each heading kept clear of them), checks the path with the map's footprint
 and path queries, and saves a picture of the map and the path, with the cells whose cost
 depends on the heading.
 
@@ -64,19 +64,38 @@ def parse_args():
     return p.parse_args()
 
 
-def dilate(mask, radius_px):
-    """Cells within radius_px of a True cell (a disc): the obstacles grown by the robot."""
-    out = mask.copy()
+def footprint_offsets(length_m, width_m, yaw, resolution_m):
+    """(dv, du) of the cells whose squares overlap the robot's rectangle, centred on a cell's
+    centre and facing yaw (rad from +x towards +y): the cells the map's footprint query counts.
+    Two convex shapes overlap unless one of their edge directions separates them: the square's
+    (x, y) or the rectangle's (along, across)."""
+    half = 0.5 * resolution_m
+    c, s = abs(math.cos(yaw)), abs(math.sin(yaw))
+    reach_x = 0.5 * (length_m * c + width_m * s) + half  # the rectangle's half extent + the square's
+    reach_y = 0.5 * (length_m * s + width_m * c) + half
+    reach_along = 0.5 * length_m + half * (c + s)  # the square's half extent along the rectangle's axes
+    reach_across = 0.5 * width_m + half * (c + s)
+    r = int(math.ceil(max(reach_x, reach_y) / resolution_m))
+    offsets = []
+    for dy in range(-r, r + 1):
+        for dx in range(-r, r + 1):
+            x, y = dx * resolution_m, dy * resolution_m
+            along = x * math.cos(yaw) + y * math.sin(yaw)
+            across = -x * math.sin(yaw) + y * math.cos(yaw)
+            if (abs(x) < reach_x - 1e-9 and abs(y) < reach_y - 1e-9 and abs(along) < reach_along - 1e-9
+                    and abs(across) < reach_across - 1e-9):
+                offsets.append((-dy, dx))  # row 0 is the largest y
+    return offsets
+
+
+def any_under(mask, offsets):
+    """Cells from which some offset reaches a True cell of mask: the obstacles grown by the
+    robot's footprint (outside the grid counts as clear; the map does not count unseen ground)."""
+    out = np.zeros_like(mask)
     h, w = mask.shape
-    r = int(math.ceil(radius_px))
-    for dv in range(-r, r + 1):
-        for du in range(-r, r + 1):
-            if dv * dv + du * du > radius_px * radius_px:
-                continue
-            shifted = np.zeros_like(mask)
-            shifted[max(dv, 0):h + min(dv, 0), max(du, 0):w + min(du, 0)] = \
-                mask[max(-dv, 0):h + min(-dv, 0), max(-du, 0):w + min(-du, 0)]
-            out |= shifted
+    for dv, du in offsets:
+        out[max(-dv, 0):h + min(-dv, 0), max(-du, 0):w + min(-du, 0)] |= \
+            mask[max(dv, 0):h + min(dv, 0), max(du, 0):w + min(du, 0)]
     return out
 
 
@@ -218,12 +237,13 @@ def main():
                            heading_footprint=(args.robot_length, args.robot_width))
     classes, cost = grid["class"], grid["cost_heading"]
     drivable = (classes == ssta.TRAVERSABLE) | (classes == ssta.SEMI_TRAVERSABLE)
-    # Keep the robot's half diagonal clear of everything else (unknown included) and prefer
-    # cheap ground: a step costs 1 on traversable ground, up to 1 + 4 x 0.75 on the worst semi;
-    # a heading whose pitch or roll passes the limits (cost 1) is never taken there.
-    half_diagonal_px = 0.5 * math.hypot(args.robot_length, args.robot_width) / grid["resolution_m"]
-    free = ~dilate(~drivable, half_diagonal_px)
-    step_cost = np.where(free[:, :, None] & (np.nan_to_num(cost, nan=1.0) < 1.0), 1.0 + 4.0 * cost, np.inf)
+    # Keep the robot's footprint at each heading clear of everything else (unknown included) and
+    # prefer cheap ground: a step costs 1 on traversable ground, up to 1 + 4 x 0.75 on the worst
+    # semi; a heading whose pitch or roll passes the limits (cost 1) is never taken there.
+    free = np.stack([~any_under(~drivable, footprint_offsets(args.robot_length, args.robot_width,
+                                                             math.radians(45.0 * k), grid["resolution_m"]))
+                     for k in range(HEADINGS)], axis=2)
+    step_cost = np.where(free & (np.nan_to_num(cost, nan=1.0) < 1.0), 1.0 + 4.0 * cost, np.inf)
 
     # Start where the camera started, goal ahead along its drive: the nearest free cells.
     sensor = meta["sensor_path"][:, :2]
@@ -231,10 +251,12 @@ def main():
     if np.linalg.norm(heading) < grid["resolution_m"]:  # a static platform: along its view, world x
         heading = np.array([1.0, 0.0])
     heading /= np.linalg.norm(heading)
-    drivable_somehow = ~np.isinf(step_cost).all(axis=2)
-    start = nearest_free(drivable_somehow, grid, sensor[0])
+    # Start and goal where the robot may face every heading, so that it can leave and arrive
+    # whichever way the path runs (the lattice does not turn on the spot): the nearest such cells.
+    any_heading = ~np.isinf(step_cost).any(axis=2)
+    start = nearest_free(any_heading, grid, sensor[0])
     right = np.array([heading[1], -heading[0]])
-    goal = nearest_free(drivable_somehow, grid, sensor[0] + args.goal_ahead * heading + args.goal_right * right)
+    goal = nearest_free(any_heading, grid, sensor[0] + args.goal_ahead * heading + args.goal_right * right)
     states = astar(step_cost, start, goal)
     if states is None:
         print("no path: the goal cannot be reached over known drivable ground", file=sys.stderr)
