@@ -21,10 +21,8 @@ struct ExplainArgs {
 };
 
 std::string Fixed(double v, int decimals) {
-  if (!std::isfinite(v)) return "nan";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", decimals, v);
-  return buffer;
+  const std::string format = "%." + std::to_string(decimals) + "f";
+  return PrintNumber(v, format.c_str());
 }
 
 std::string Three(const std::array<double, 3>& v, int decimals) {
@@ -42,7 +40,8 @@ const char* RuleSentence(JudgeRule rule) {
              "for it; the frames decided";
     case JudgeRule::kWorseOfTwo: return "the surface found a slope or a jump: the worse of the two verdicts counts";
     case JudgeRule::kProduct:
-      return "the surface sees the whole disc and found open ground: its probabilities multiply the frames'";
+      return "the surface sees the whole disc and found open ground: its probabilities, mixed with "
+             "class_surface_miss_prob of a uniform one, multiply the frames'";
     default: return "no class: nothing observed here, or no evidence to judge by";
   }
 }

@@ -27,13 +27,6 @@ struct QueryArgs {
   GridExportOptions exported;  // the export's steps, for --as-exported
 };
 
-std::string Number(double v, const char* format) {
-  if (!std::isfinite(v)) return "nan";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, v);
-  return buffer;
-}
-
 // Runs a map query; its error names the option that asked it instead of the library's query
 // ("footprint query: ..." -> "--footprint 1,1,0,1e9,0.5: ...").
 template <typename Query>
@@ -58,16 +51,16 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   const double r = 0.5 * std::hypot(q.length_m, q.width_m);  // the rectangle lies within r of (x, y)
   const Eigen::AlignedBox2d box(Eigen::Vector2d(q.x - r, q.y - r), Eigen::Vector2d(q.x + r, q.y + r));
   std::string option = "--footprint ";
-  for (std::size_t i = 0; i < f.size(); ++i) option += (i ? "," : "") + Number(f[i], "%g");
+  for (std::size_t i = 0; i < f.size(); ++i) option += (i ? "," : "") + PrintNumber(f[i], "%g");
   const FootprintResult result = NamingTheOption(option, "footprint query: ", [&] {
     return args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
   });
   std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
                "attitude_heights\n"
-            << static_cast<int>(result.worst) << ',' << Number(result.mean_cost, "%.4f") << ','
-            << Number(result.max_cost, "%.4f") << ',' << Number(result.fraction_observed, "%.4f") << ','
-            << result.cells << ',' << result.observed_cells << ',' << Number(result.pitch_deg, "%.2f") << ','
-            << Number(result.roll_deg, "%.2f") << ',' << static_cast<int>(result.attitude) << ','
+            << static_cast<int>(result.worst) << ',' << PrintNumber(result.mean_cost, "%.4f") << ','
+            << PrintNumber(result.max_cost, "%.4f") << ',' << PrintNumber(result.fraction_observed, "%.4f") << ','
+            << result.cells << ',' << result.observed_cells << ',' << PrintNumber(result.pitch_deg, "%.2f") << ','
+            << PrintNumber(result.roll_deg, "%.2f") << ',' << static_cast<int>(result.attitude) << ','
             << result.attitude_heights << "\n";
 }
 
@@ -82,7 +75,7 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
   }
   if (polyline.empty()) throw Error(args.path + ": no vertices");
   const Eigen::Vector2d half_width = Eigen::Vector2d::Constant(0.5 * args.path_width_m);
-  const std::string option = "--path " + args.path + " --width " + Number(args.path_width_m, "%g");
+  const std::string option = "--path " + args.path + " --width " + PrintNumber(args.path_width_m, "%g");
   const PathResult result = NamingTheOption(option, "path query: ", [&] {
     return args.as_exported
                ? map.QueryPath(polyline, args.path_width_m,
@@ -92,15 +85,15 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
   });
   std::cout << "distance_m,x,y,class,cost,fraction_observed\n";
   for (const PathSample& sample : result.samples) {
-    std::cout << Number(sample.distance_m, "%.4f") << ',' << Number(sample.point.x(), "%.4f") << ','
-              << Number(sample.point.y(), "%.4f") << ',' << static_cast<int>(sample.cls) << ','
-              << Number(sample.cost, "%.4f") << ',' << Number(sample.fraction_observed, "%.4f") << "\n";
+    std::cout << PrintNumber(sample.distance_m, "%.4f") << ',' << PrintNumber(sample.point.x(), "%.4f") << ','
+              << PrintNumber(sample.point.y(), "%.4f") << ',' << static_cast<int>(sample.cls) << ','
+              << PrintNumber(sample.cost, "%.4f") << ',' << PrintNumber(sample.fraction_observed, "%.4f") << "\n";
   }
-  std::cerr << "path " << Number(result.length_m, "%.2f") << " m, " << result.samples.size()
+  std::cerr << "path " << PrintNumber(result.length_m, "%.2f") << " m, " << result.samples.size()
             << " samples, worst class " << static_cast<int>(result.worst) << ", "
-            << (result.blocked ? "blocked at " + Number(result.first_non_traversable_distance_m, "%.2f") + " m"
+            << (result.blocked ? "blocked at " + PrintNumber(result.first_non_traversable_distance_m, "%.2f") + " m"
                                : std::string("not blocked"))
-            << ", " << Number(100.0 * result.fraction_observed, "%.0f") << " % observed\n";
+            << ", " << PrintNumber(100.0 * result.fraction_observed, "%.0f") << " % observed\n";
 }
 
 // One point per line, `max_values` numbers (x,y, or x,y[,z] when 3), comma-separated; blank

@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -38,6 +40,15 @@ void AddDisparityEval(CLI::App* eval);
 CLI::Validator OutputFile();
 CLI::Validator OutputPrefix();
 CLI::Validator OutputFolder();
+
+/// `v` as printf's `format` (one double) prints it, or "nan" when it is not finite: the
+/// commands' text and CSV outputs agree on how a missing value reads.
+inline std::string PrintNumber(double v, const char* format) {
+  if (!std::isfinite(v)) return "nan";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, v);
+  return buffer;
+}
 
 /// The grid export's two steps as options (`--fill-holes N`, `--local-ground R`), shared by
 /// `export` and `query --as-exported`; `scope` starts each help text ("grid: ").

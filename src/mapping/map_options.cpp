@@ -43,6 +43,11 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                         "added to the traversable log-odds when a column is judged: weak evidence leaves open "
                         "ground traversable with a lower confidence instead of blocking it")
                     .AbsentMeans(0.0));
+    f.push_back(Real<O>("class_surface_miss_prob", &O::class_surface_miss_prob, ClosedOpen(0, 1), "",
+                        "chance that a fused surface finding open ground misses a hazard the frames saw (a "
+                        "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "
+                        "much of a uniform one before they multiply the frames' (0: its word is final)")
+                    .AbsentMeans(0.0));
     f.push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
     f.push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
     f.push_back(Real<O>("free_space_clearance_m", &O::free_space_clearance_m, Closed(0, 5), "m",

@@ -130,8 +130,9 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 ///  - a surface that finds a slope or a jump (its most probable class is not traversable)
 ///    makes the column the worse of the two verdicts (WorseOfClasses): either one's hazard counts;
 ///  - a surface that finds open ground vouches for it only where it sees every column that
-///    meets the disc (DiscFullySeen): then its verdict is a likelihood multiplied into the
-///    frames';
+///    meets the disc (DiscFullySeen): then its verdict, mixed with class_surface_miss_prob of
+///    a uniform one (it may miss a lip beyond its edge or a thin obstacle), is a likelihood
+///    multiplied into the frames';
 ///  - otherwise the frames decide alone.
 /// An uncertain surface (stereo noise at range) so never turns open ground red by itself.
 /// `decided_by` names the judge whose own most probable class the verdict is (both: each's, or
@@ -169,8 +170,10 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
       judge = ClassJudge::kBoth;
       rule = JudgeRule::kWorseOfTwo;
     } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
+      // The surface's open ground is mixed with a uniform share: it may miss what the frames saw.
+      const double miss = map.options().class_surface_miss_prob;
       double total = 0.0;
-      for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * s[k]);
+      for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * ((1.0 - miss) * s[k] + miss / 3.0));
       for (double& p : posterior) p /= total;
       judge = ClassJudge::kBoth;
       rule = JudgeRule::kProduct;

@@ -1,6 +1,7 @@
-#include <functional>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <string>
 #include <thread>
@@ -421,13 +422,17 @@ TEST(ExplainColumn, GivesEachJudgesEvidenceAndTheRuleThatCombinedThem) {
   }
   {
     // Level ground the frames call traversable, seen all round: the product rule, whose posterior
-    // is the normalised product of the two judges' probabilities.
+    // is the normalised product of the frames' probabilities and the surface's, these mixed with
+    // class_surface_miss_prob e of a uniform one.
     const TraversabilityMap map = Ramp(0.0, TravClass::kTraversable, 2.0f, 0.01f);
+    const double e = map.options().class_surface_miss_prob;
+    EXPECT_EQ(e, 0.1);
     const ColumnExplanation why = map.ExplainColumn(x, y);
     EXPECT_EQ(why.rule, JudgeRule::kProduct);
     EXPECT_EQ(why.cell.cls, TravClass::kTraversable);
     const auto& f = why.frame_probability;
-    const auto& s = why.surface.probability;
+    std::array<double, 3> s = why.surface.probability;
+    for (double& p : s) p = (1.0 - e) * p + e / 3.0;
     const double total = f[0] * s[0] + f[1] * s[1] + f[2] * s[2];
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(why.posterior[k], f[k] * s[k] / total, 1e-9) << k;
     // At the map's corner the disc reaches unseen columns: the surface cannot vouch, the frames

@@ -11,6 +11,7 @@
 #include "map_test_util.h"
 #include "mapping/hidden_drops.h"
 #include "ssta/core/units.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"
 
 namespace ssta {
@@ -93,6 +94,41 @@ TEST(SafeFusion, ARockRingOneClearViewSawIsKeptUnderNoisyFarViews) {
   plain.class_vote_noise_steps = 0.0;
   plain.class_prior_traversable_log_odds = 0.0;
   EXPECT_EQ(ClassAt(build(plain), C(17), C(20)), TravClass::kTraversable);
+}
+
+TEST(SafeFusion, ALipBandEveryViewSawSurvivesASurfaceThatLooksWhole) {
+  // The floor beyond a drop-off is hidden, and stereo smears the upper level a cell or two past
+  // the edge: the fused surface then holds level heights over the whole disc of the lip's
+  // columns and finds open ground there. Views that saw the lip (a 0.2 m band, two columns,
+  // from near: height sigma 2 cm) call it red in every frame.
+  const auto band = [](int ix, int) { return ix == 30 || ix == 31; };
+  const auto none = [](int, int) { return false; };
+  auto build = [&](const MapOptions& options, int red_views, int open_views) {
+    TraversabilityMap map(options);
+    for (int k = 0; k < red_views + open_views; ++k) {
+      map.InsertFrame(k < red_views ? Floor(0.02f, band) : Floor(0.02f, none), kSensor, k);
+    }
+    return map;
+  };
+  const TraversabilityMap map = build(Options(), 2, 0);
+  int kept = 0;
+  for (int iy = 3; iy < 37; ++iy) {  // clear of the floor's ends, where the disc is not whole
+    for (const int ix : {30, 31}) {
+      const CellInfo cell = map.TopSurfaceAt(C(ix), C(iy));
+      kept += cell.cls == TravClass::kNonTraversable;
+      ASSERT_TRUE(map.ExplainColumn(C(ix), C(iy)).disc_fully_seen);  // the surface judged it whole
+    }
+  }
+  EXPECT_EQ(kept, 68);
+  EXPECT_EQ(ClassAt(map, C(27), C(5)), TravClass::kTraversable);  // the floor next to it stays open
+  // Two views: the frames' odds for the lip are e^(2 * 1.7 + 2 * 0.8 - 0.5) = 90 to one, more
+  // than the (1 - 2e/3) / (e/3) = 28 that the surface's open ground is worth at e = 0.1. One
+  // view of two (odds e^(1.7 - 0.4 - (0.85 - 0.8) - 0.5) = 2.1) does not outweigh it.
+  EXPECT_EQ(ClassAt(build(Options(), 1, 1), C(30), C(5)), TravClass::kTraversable);
+  // Where the surface's word is final, it erases the lip every view saw.
+  MapOptions final_word = Options();
+  final_word.class_surface_miss_prob = 0.0;
+  EXPECT_EQ(ClassAt(build(final_word, 10, 0), C(30), C(5)), TravClass::kTraversable);
 }
 
 TEST(SafeFusion, FarNoiseLeavesALevelFloorTraversableWithALowerConfidence) {

@@ -56,6 +56,14 @@ struct MapOptions {
   /// noisy evidence leaves the column traversable with a lower confidence (and a higher cost)
   /// instead of blocking it; >= 0.
   double class_prior_traversable_log_odds = 0.5;
+  /// The chance that a fused surface which finds open ground misses a hazard the frames saw: a
+  /// lip whose floor is hidden (the surface ends at the edge, where stereo smears the upper
+  /// level a cell or two beyond it) or an obstacle thinner than a cell. Where the surface
+  /// vouches for open ground, its class probabilities are mixed with this much of a uniform
+  /// one before they multiply the frames'. Its word on open ground is then worth at most
+  /// (1 - 2e/3) / (e/3) to one, so frames that saw an obstacle in nearly every view keep it,
+  /// while a few noisy votes are still outweighed. 0: the surface's word is final; in [0, 1).
+  double class_surface_miss_prob = 0.1;
   double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
   double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
   /// A ray stops clearing free space where it comes within this height [m] of its endpoint,
