@@ -113,6 +113,10 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
                         "pixels above the horizon whose left-image standard deviation over the stereo block "
                         "is lower are labelled unknown: the sky, where matching finds noise (below the "
                         "horizon a blank surface is a surface); 0: off"));
+    f.push_back(Real<O>("texture_noise_multiple", &O::texture_noise_multiple, Closed(0, 10), "",
+                        "the texture tests (label_min_texture, map.min_texture) ask for at least this many "
+                        "times the image's sensor noise, estimated from the image itself, where that is more "
+                        "than their grey levels: a noisy camera's sky has no texture to match; 0: off"));
     f.push_back(OddOrOff<O>("face_window_px", &O::face_window_px, Closed(3, 63), "px",
                             "thin vertical faces (a curb's front): the disparity fitted along the image column "
                             "over this many rows gives the surface's rise along the column; 0: off"));

@@ -127,7 +127,8 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
   const bool refine = options.subpixel_window_px > 0 && !frame.right_matched.empty();
   // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
   // never emitted: a map threshold no stricter than that needs no mask of its own.
-  const bool mask = options.min_texture > 0.0 && frame.labels_min_texture < options.min_texture;
+  const double min_texture = options.min_texture > 0.0 ? std::max(options.min_texture, frame.texture_noise_floor) : 0.0;
+  const bool mask = min_texture > 0.0 && frame.labels_min_texture < min_texture;
   ImageU8 keep, lip;
   // The refinement, the texture mask and the lips are independent: they run side by side.
   internal::RunBoth(
@@ -141,7 +142,7 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
       },
       [&] {
         if (mask) {
-          keep = SupportedPixels(frame.left_rectified, geometry, frame.texture_block_px, options.min_texture,
+          keep = SupportedPixels(frame.left_rectified, geometry, frame.texture_block_px, min_texture,
                                  frame.up_rectified);
         }
         if (options.hidden_drops) {

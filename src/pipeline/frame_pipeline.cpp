@@ -1,5 +1,6 @@
 #include "ssta/pipeline/frame_pipeline.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/run_both.h"
@@ -132,10 +133,16 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   // The texture test on the full rectified image (the block reaches past the common area's border
   // as the matcher's does), less the matcher's floating noise: such points stay out of the local
   // steps' grid and their labels are unknown.
+  // Both texture tests ask for texture beyond the camera's own noise (texture_noise_multiple).
+  const double noise_multiple = config_.analysis.texture_noise_multiple;
+  if (noise_multiple > 0.0 && (config_.analysis.label_min_texture > 0.0 || config_.map.min_texture > 0.0)) {
+    out.texture_noise_floor = noise_multiple * ImageNoiseSigma(pair.left_full);
+  }
   const bool masked = config_.analysis.label_min_texture > 0.0;
+  const double label_min_texture = std::max(config_.analysis.label_min_texture, out.texture_noise_floor);
   if (masked) {
-    supported_ = SupportedPixels(pair.left_full, g, config_.stereo.block_size, config_.analysis.label_min_texture,
-                                 out.up_rectified, out.disparity);
+    supported_ = SupportedPixels(pair.left_full, g, config_.stereo.block_size, label_min_texture, out.up_rectified,
+                                 out.disparity);
   }
   out.analysis = stages_->analyzer.Analyze({&g, &out.disparity, &cloud, &normals, &segmentation.labels,
                                             out.num_segments, out.up_rectified, masked ? &supported_ : nullptr});
@@ -163,7 +170,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   }
   out.left_rectified = std::move(pair.left_full);
   out.texture_block_px = config_.stereo.block_size;
-  out.labels_min_texture = config_.analysis.label_min_texture;
+  out.labels_min_texture = masked ? label_min_texture : 0.0;
   out.depth_noise_per_m2 = config_.stereo.disparity_sigma_px / (g.f * g.baseline_m);
   // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
   // per-frame path; the classification keeps the matcher's disparity.

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
+#include <cstdlib>
 #include <vector>
 
 #include <opencv2/calib3d.hpp>
@@ -11,6 +13,7 @@
 
 #include "pcl_stereo.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
@@ -227,6 +230,39 @@ void RefineDisparitySubpixel(const ImageU8& left, const ImageU8& right, int wind
              "RefineDisparitySubpixel: the images and the disparity differ in size");
   if (disparity->empty()) return;
   RefineSubpixel(left, right, window, iterations, disparity, surface_ids);
+}
+
+double ImageNoiseSigma(const ImageU8& image) {
+  constexpr int kTile = 32;
+  const int tiles_u = (image.width() - 2) / kTile, tiles_v = (image.height() - 2) / kTile;
+  if (tiles_u <= 0 || tiles_v <= 0) return 0.0;
+  std::vector<double> per_tile;
+  per_tile.reserve(static_cast<std::size_t>(tiles_u) * tiles_v);
+  std::vector<std::int64_t> tile_sums(static_cast<std::size_t>(tiles_u));
+  for (int tv = 0; tv < tiles_v; ++tv) {
+    std::fill(tile_sums.begin(), tile_sums.end(), 0);
+    for (int v = 1 + tv * kTile; v < 1 + (tv + 1) * kTile; ++v) {
+      const std::uint8_t* above = image.row(v - 1);
+      const std::uint8_t* here = image.row(v);
+      const std::uint8_t* below = image.row(v + 1);
+      for (int tu = 0; tu < tiles_u; ++tu) {
+        std::int64_t sum = 0;
+        for (int u = 1 + tu * kTile; u < 1 + (tu + 1) * kTile; ++u) {
+          const int corners = above[u - 1] + above[u + 1] + below[u - 1] + below[u + 1];
+          const int edges = above[u] + below[u] + here[u - 1] + here[u + 1];
+          sum += std::abs(corners - 2 * edges + 4 * here[u]);
+        }
+        tile_sums[static_cast<std::size_t>(tu)] += sum;
+      }
+    }
+    for (const std::int64_t sum : tile_sums) {
+      if (sum > 0) per_tile.push_back(static_cast<double>(sum));
+    }
+  }
+  if (per_tile.empty()) return 0.0;
+  const std::size_t k = per_tile.size() / 10;
+  std::nth_element(per_tile.begin(), per_tile.begin() + static_cast<std::ptrdiff_t>(k), per_tile.end());
+  return std::sqrt(kPi / 2.0) * per_tile[k] / (6.0 * kTile * kTile);
 }
 
 ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std) {

@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <iostream>
 #include <string>
@@ -486,6 +487,60 @@ TEST(StereoMatcher, BadImageSizesThrowAndNameTheSizes) {
     EXPECT_NE(std::string(e.what()).find("60x100"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("73"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace
+}  // namespace ssta
+
+namespace ssta {
+namespace {
+
+/// A 640 x 480 image: a grey ramp across (locally planar: no mask response), strong texture
+/// (a 4 px checkerboard of +-40 grey levels) over its lower `textured_share` of rows, and white
+/// Gaussian noise of `sigma` grey levels, rounded to 8 bits.
+ImageU8 NoisyImage(double sigma, double textured_share, std::uint32_t seed) {
+  ImageU8 image(640, 480, 0);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  const int textured_from = static_cast<int>(480 * (1.0 - textured_share));
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      double g = 80.0 + 0.1 * u + 0.05 * v;
+      if (v >= textured_from) g += ((u / 4 + v / 4) % 2 == 0) ? 40.0 : -40.0;
+      image(v, u) = static_cast<std::uint8_t>(std::clamp(std::lround(g + noise(rng)), 0L, 255L));
+    }
+  }
+  return image;
+}
+
+TEST(ImageNoiseSigma, MeasuresTheSensorNoiseUnderTextureAndShading) {
+  // Rounding to whole grey levels adds a uniform error of variance 1/12 to the noise. The
+  // quietest tenth of the tiles lies below their mean by 1.3 times their scatter, about 5 %;
+  // where blank tiles are few, the tenth reaches into their quieter half's top: within 10 %.
+  for (const double sigma : {1.0, 2.0, 4.0}) {
+    const double expected = std::sqrt(sigma * sigma + 1.0 / 12.0);
+    for (const double textured : {0.0, 0.8}) {  // texture over four fifths: the quietest tenth is noise
+      const double estimate = ImageNoiseSigma(NoisyImage(sigma, textured, 7));
+      EXPECT_GT(estimate, 0.9 * expected) << sigma << " " << textured;
+      EXPECT_LT(estimate, 1.05 * expected) << sigma << " " << textured;
+    }
+  }
+  // A noiseless shaded image has no noise; an image smaller than a tile has no estimate.
+  EXPECT_LT(ImageNoiseSigma(NoisyImage(0.0, 0.5, 9)), 0.1);
+  EXPECT_EQ(ImageNoiseSigma(ImageU8(20, 20, 128)), 0.0);
+  // A pure-noise block's standard deviation is the noise's: at 1.5 times the estimate, the
+  // texture mask keeps none of a blank noisy sky and all of the checkerboard.
+  const ImageU8 image = NoisyImage(3.0, 0.5, 10);
+  const ImageU8 mask = TextureMask(image, 0, 0, 640, 480, 9, 1.5 * ImageNoiseSigma(image));
+  long sky_kept = 0, texture_lost = 0;  // clear of the boundary at row 240 by a block
+  for (int v = 0; v < 480; ++v) {
+    for (int u = 0; u < 640; ++u) {
+      if (v < 230) sky_kept += mask(v, u) != 0;
+      if (v >= 250) texture_lost += mask(v, u) == 0;
+    }
+  }
+  EXPECT_EQ(sky_kept, 0);
+  EXPECT_EQ(texture_lost, 0);
 }
 
 }  // namespace

@@ -38,6 +38,9 @@ struct FrameResult {
   /// [grey levels] Labels are 0 where the texture is below this (analysis.label_min_texture;
   /// 0: no mask was applied).
   double labels_min_texture = 0.0;
+  /// [grey levels] The left image's sensor noise (ImageNoiseSigma) times
+  /// analysis.texture_noise_multiple: no texture test asks for less. 0: not measured.
+  double texture_noise_floor = 0.0;
   /// The frame's stereo depth noise: a point at depth Z errs by this times Z^2 along its ray
   /// (disparity sigma / (f b)) [1/m]; 0: unknown.
   double depth_noise_per_m2 = 0.0;

@@ -155,6 +155,13 @@ struct AnalysisOptions {
   /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
   /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
   double label_min_texture = 2.0;
+  /// The texture tests (label_min_texture here, map.min_texture) ask for at least this many
+  /// times the image's own sensor noise (ImageNoiseSigma) when that is more than their grey
+  /// levels: a block whose grey levels vary no more than noise would has no texture to match,
+  /// and a noisy camera's sky otherwise passes a fixed threshold and matches at random depths.
+  /// A pure-noise block's standard deviation is the noise's, within a spread of sigma /
+  /// sqrt(2 (n - 1)) (0.07 sigma over a 9 x 9 block), so 1.5 keeps it out. 0: off.
+  double texture_noise_multiple = 1.5;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<AnalysisOptions>& Fields();

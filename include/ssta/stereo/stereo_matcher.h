@@ -38,6 +38,16 @@ std::string MatcherTypeName(MatcherType type);
 /// images). The mask of `stereo.min_texture` and of `map.min_texture`.
 ImageU8 TextureMask(const ImageU8& image, int u0, int v0, int w, int h, int block, double min_std);
 
+/// The standard deviation of `image`'s sensor noise [grey levels], estimated from the image
+/// itself (Immerkaer, "Fast noise variance estimation", 1996): the mask [1 -2 1; -2 4 -2;
+/// 1 -2 1] cancels every grey level that is locally planar, and its response to white noise of
+/// sigma has mean absolute value sqrt(2 / pi) 6 sigma. Texture and edges only add to the
+/// response, and the noise is the same everywhere, so the estimate is the 10th percentile over
+/// the 32 x 32 px tiles (tiles without any response, clipped or blank, are left out), which
+/// lies about 5 % below the noise (the tiles' own scatter). 0 when no tile has a response, or
+/// the image is smaller than a tile.
+double ImageNoiseSigma(const ImageU8& image);
+
 /// Refines `disparity` (of `left` against `right`, all three the same size; 0 = none) to
 /// sub-pixel precision in place: the refinement of StereoMatcherOptions::subpixel_window_px
 /// with a `window` x `window` window (odd, >= 1) and `iterations` Gauss-Newton steps (the
