@@ -34,7 +34,8 @@ const char* RuleSentence(JudgeRule rule) {
   switch (rule) {
     case JudgeRule::kSurfaceAlone: return "no frame gave the voxel a class; the fused surface judged alone";
     case JudgeRule::kFramesAlone:
-      return "too few columns around it hold a fused height for the surface to judge; the frames decided";
+      return "the surface could not judge (too few columns hold a fused height, or their heights are smeared "
+             "sideways); the frames decided";
     case JudgeRule::kFramesSurfacePartial:
       return "the surface found open ground but does not see every column of the disc, so it cannot vouch "
              "for it; the frames decided";
@@ -85,7 +86,9 @@ void Explain(const ExplainArgs& args) {
               << Fixed(s.step_m, 3) << " +- " << Fixed(s.step_sigma_m, 3) << " m; probabilities "
               << Three(s.probability, 3) << "\n";
   } else {
-    std::cout << "; too few to judge\n";
+    std::cout << (s.smeared ? "; their heights may come from more than half the radius away (stereo's range "
+                              "error smears them sideways): no judgement\n"
+                            : "; too few to judge\n");
   }
 }
 

@@ -99,7 +99,8 @@ SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<Sur
   std::vector<double> xy_sigmas;
   for (const SurfaceSample& s : samples) xy_sigmas.push_back(s.xy_sigma_m);
   std::nth_element(xy_sigmas.begin(), xy_sigmas.begin() + xy_sigmas.size() / 2, xy_sigmas.end());
-  if (xy_sigmas[xy_sigmas.size() / 2] > 0.5 * vehicle.step_radius_m) return v;
+  v.smeared = xy_sigmas[xy_sigmas.size() / 2] > 0.5 * vehicle.step_radius_m;
+  if (v.smeared) return v;
   // The slope: a plane through the columns that lie on the centre column's side of any jump
   // (within what the steepest drivable slope rises from it), so a curb does not tilt it.
   const SurfaceSample* own = &samples.front();

@@ -83,6 +83,22 @@ TEST(JudgeSurface, NoisyFarHeightsGiveALevelSurfaceAnUnsureVerdict) {
   EXPECT_GT(far.slope_sigma_deg, 5 * near.slope_sigma_deg);
 }
 
+TEST(JudgeSurface, HeightsSmearedSidewaysJudgeNothing) {
+  // A 0.5 m box edge through the disc: seen from near (heights where their columns are), a
+  // non-traversable step; with horizontal sigmas above half the step radius the heights may
+  // belong to columns beyond the disc, and the surface says so instead of judging.
+  const VehicleOptions vehicle;
+  std::vector<SurfaceSample> edge = Disc([](double x, double) { return x > 0.05 ? 0.5 : 0.0; }, 0.01);
+  for (SurfaceSample& s : edge) s.xy_sigma_m = 0.02;
+  const SurfaceVerdict near = JudgeSurface({0, 0}, edge, 0.1, vehicle);
+  EXPECT_TRUE(near.determined && !near.smeared);
+  EXPECT_GT(near.probability[2], 0.99);
+  for (SurfaceSample& s : edge) s.xy_sigma_m = 0.6 * vehicle.step_radius_m;
+  const SurfaceVerdict far = JudgeSurface({0, 0}, edge, 0.1, vehicle);
+  EXPECT_TRUE(far.smeared);
+  EXPECT_FALSE(far.determined);
+}
+
 TEST(JudgeSurface, TooFewColumnsLeaveTheCellUndetermined) {
   const VehicleOptions vehicle;
   std::vector<SurfaceSample> three = {{{0, 0}, 0, 0.01}, {{0.1, 0}, 0, 0.01}, {{0, 0.1}, 0, 0.01}};

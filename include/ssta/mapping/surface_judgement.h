@@ -26,6 +26,10 @@ struct SurfaceSample {
 /// What the surface around a cell says about it.
 struct SurfaceVerdict {
   bool determined = false;  ///< enough columns around the cell to fit a surface
+  /// The columns' heights may come from more than half the step radius away (stereo's range
+  /// error smears them sideways, their median horizontal sigma says): they show no slope or
+  /// step of this cell, and the surface is not determined.
+  bool smeared = false;
   /// Share of the disc's columns that hold a fused height, in [0, 1]: below 1 the surface
   /// cannot vouch for ground next to what it does not see (a lip's hidden side, a rock's top).
   double coverage = 0.0;
@@ -49,7 +53,8 @@ std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::
 /// fitted by iteratively reweighted least squares (weights 1 / sigma^2, Huber on the residuals)
 /// to the columns on the cell's side of any jump: its slope is the slope class's; the range of
 /// the columns' heights about it (LargestJump) the step's. Not determined when fewer than half
-/// the disc's columns, or fewer than 4, are seen, or they lie on one line.
+/// the disc's columns, or fewer than 4, are seen, or they lie on one line, or their heights
+/// are smeared sideways (SurfaceVerdict::smeared).
 SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
                             double spacing_m, const VehicleOptions& vehicle);
 
