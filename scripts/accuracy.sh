@@ -13,7 +13,8 @@
 # non-traversable recall and the share of traversable pixels called non-traversable; the map
 # grid's accuracy within 10 m of the path and its unsafe / falsely blocked cells there; what a
 # planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
-# over all seen ground and within 10 m. The last row pools the samples of every scene.
+# over all seen ground and within 10 m. The last row pools the samples of every scene. A second
+# table pools the footprints per 2 m band of distance from the path, with each class's recall.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels.
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
@@ -138,4 +139,32 @@ _, _, wu, wf = rates(totals.get("feet10"))
 print("| **pooled** | | **%s** | **%s** | **%s** | **%s** | **%s / %s** | **%s / %s** | **%s / %s** |" % (
     f(la), f(lr), f(trav_non, True), f(ca), f(cu, True), f(cf, True), f(fu, True), f(ff, True), f(wu, True),
     f(wf, True)))
+
+# What a planner is told by distance from the path, pooled over the scenes: per 2 m band the
+# footprints' unsafe and falsely blocked shares and each class's recall (labels: over all pixels).
+def recalls(m):
+    return " / ".join(f(m[c][c] / sum(m[c]) if m and sum(m[c]) else None) for c in (1, 2, 3))
+
+bands = {}
+for run in runs:
+    feet = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "footprints.json"))
+    for band in (feet or {}).get("by_distance_from_path", {}).get("bands", []):
+        key = (band["from_m"], band["to_m"])
+        bands[key] = add(bands.get(key), band["metrics"]["confusion"])
+print()
+print("| footprints, pooled | scored | truly blocked | unsafe | falsely blocked | recall trav. / semi / non |")
+print("|---|---|---|---|---|---|")
+for key in sorted(bands):
+    m = bands[key]
+    _, _, u, fb = rates(m)
+    print("| %g-%g m from the path | %d | %d | %s | %s | %s |" % (
+        key[0], key[1], sum(sum(m[t]) for t in (1, 2, 3)), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+m = totals.get("feet")
+if m:
+    _, _, u, fb = rates(m)
+    print("| **all** | **%d** | **%d** | **%s** | **%s** | **%s** |" % (
+        sum(sum(m[t]) for t in (1, 2, 3)), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+if lm:
+    print()
+    print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
 PY
