@@ -160,7 +160,7 @@ struct AnalysisOptions {
   /// levels: a block whose grey levels vary no more than noise would has no texture to match,
   /// and a noisy camera's sky otherwise passes a fixed threshold and matches at random depths.
   /// A pure-noise block's standard deviation is the noise's, within a spread of sigma /
-  /// sqrt(2 (n - 1)) (0.07 sigma over a 9 x 9 block), so 1.5 keeps it out. 0: off.
+  /// sqrt(2 (n - 1)) (0.08 sigma over a 9 x 9 block), so 1.5 keeps it out. 0: off.
   double texture_noise_multiple = 1.5;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
