@@ -88,15 +88,18 @@ def within(doc):
 def add(a, b):
     return b if a is None else [[x + y for x, y in zip(ra, rb)] for ra, rb in zip(a, b)]
 
+def scored(m):
+    """Samples whose truth is a class (1..3)."""
+    return sum(sum(m[t]) for t in (1, 2, 3))
+
 def rates(m):
     """accuracy, non-traversable recall, unsafe, falsely blocked (shares; None without samples)."""
     if m is None:
         return None, None, None, None
-    scored = sum(sum(m[t]) for t in (1, 2, 3))
     correct = sum(m[c][c] for c in (1, 2, 3))
     blocked, free = sum(m[3]), sum(m[1]) + sum(m[2])
     ratio = lambda n, d: n / d if d else None
-    return (ratio(correct, scored), ratio(m[3][3], blocked), ratio(m[3][1] + m[3][2], blocked),
+    return (ratio(correct, scored(m)), ratio(m[3][3], blocked), ratio(m[3][1] + m[3][2], blocked),
             ratio(m[1][3] + m[2][3], free))
 
 def f(x, pct=False):
@@ -158,12 +161,12 @@ for key in sorted(bands):
     m = bands[key]
     _, _, u, fb = rates(m)
     print("| %g-%g m from the path | %d | %d | %s | %s | %s |" % (
-        key[0], key[1], sum(sum(m[t]) for t in (1, 2, 3)), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+        key[0], key[1], scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
 m = totals.get("feet")
 if m:
     _, _, u, fb = rates(m)
     print("| **all** | **%d** | **%d** | **%s** | **%s** | **%s** |" % (
-        sum(sum(m[t]) for t in (1, 2, 3)), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+        scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
 if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))

@@ -5,9 +5,9 @@ Builds the map of a stereo sequence (a rendered yard by default), plans a path w
 (x, y, heading) on the exported grid's costs per heading (8 headings: the class cost, raised
 where the robot's pitch or roll on the ground under it nears or passes the vehicle's
 max_pitch_deg, max_descent_deg or max_roll_deg; unknown, undecided and non-traversable cells
-avoided, with the robot's footprint at each heading kept clear of them), checks the path with the map's footprint
-and path queries, and saves a picture of the map and the path, with the cells whose cost
-depends on the heading.
+avoided, with the robot's footprint at each heading kept clear of them), checks the path with
+the map's footprint and path queries, and saves a picture of the map and the path, with the
+cells whose cost depends on the heading.
 
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --out out/plan
     PYTHONPATH=build/python python3 examples/python/plan_on_map.py --sequence SEQ --out out/plan

@@ -127,7 +127,7 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
   const bool refine = options.subpixel_window_px > 0 && !frame.right_matched.empty();
   // The labels are 0 where the texture is below analysis.label_min_texture, and such pixels are
   // never emitted: a map threshold no stricter than that needs no mask of its own.
-  const double min_texture = options.min_texture > 0.0 ? std::max(options.min_texture, frame.texture_noise_floor) : 0.0;
+  const double min_texture = TextureThreshold(options.min_texture, frame.texture_noise_floor);
   const bool mask = min_texture > 0.0 && frame.labels_min_texture < min_texture;
   ImageU8 keep, lip;
   // The refinement, the texture mask and the lips are independent: they run side by side.

@@ -130,16 +130,17 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   out.timings.segment_ms = clock.LapMs();
 
   out.up_rectified = (g.rectified_R_camera * up_camera).normalized();
-  // The texture test on the full rectified image (the block reaches past the common area's border
-  // as the matcher's does), less the matcher's floating noise: such points stay out of the local
-  // steps' grid and their labels are unknown.
-  // Both texture tests ask for texture beyond the camera's own noise (texture_noise_multiple).
+  // Both texture tests (the labels' here, the map's later) ask for texture beyond the camera's
+  // own noise (texture_noise_multiple).
   const double noise_multiple = config_.analysis.texture_noise_multiple;
   if (noise_multiple > 0.0 && (config_.analysis.label_min_texture > 0.0 || config_.map.min_texture > 0.0)) {
     out.texture_noise_floor = noise_multiple * ImageNoiseSigma(pair.left_full);
   }
-  const bool masked = config_.analysis.label_min_texture > 0.0;
-  const double label_min_texture = std::max(config_.analysis.label_min_texture, out.texture_noise_floor);
+  // The texture test on the full rectified image (the block reaches past the common area's border
+  // as the matcher's does), less the matcher's floating noise: such points stay out of the local
+  // steps' grid and their labels are unknown.
+  const double label_min_texture = TextureThreshold(config_.analysis.label_min_texture, out.texture_noise_floor);
+  const bool masked = label_min_texture > 0.0;
   if (masked) {
     supported_ = SupportedPixels(pair.left_full, g, config_.stereo.block_size, label_min_texture, out.up_rectified,
                                  out.disparity);
@@ -170,7 +171,7 @@ FrameResult FramePipeline::Run(const ImageU8& left, const ImageU8& right, const 
   }
   out.left_rectified = std::move(pair.left_full);
   out.texture_block_px = config_.stereo.block_size;
-  out.labels_min_texture = masked ? label_min_texture : 0.0;
+  out.labels_min_texture = label_min_texture;
   out.depth_noise_per_m2 = config_.stereo.disparity_sigma_px / (g.f * g.baseline_m);
   // The map's points may be refined to sub-pixel disparity later (MapPointsOfFrame), off the
   // per-frame path; the classification keeps the matcher's disparity.

@@ -236,9 +236,11 @@ double ImageNoiseSigma(const ImageU8& image) {
   constexpr int kTile = 32;
   const int tiles_u = (image.width() - 2) / kTile, tiles_v = (image.height() - 2) / kTile;
   if (tiles_u <= 0 || tiles_v <= 0) return 0.0;
-  std::vector<double> per_tile;
-  per_tile.reserve(static_cast<std::size_t>(tiles_u) * tiles_v);
-  std::vector<std::int64_t> tile_sums(static_cast<std::size_t>(tiles_u));
+  // Kept per thread between calls: every frame measures its noise.
+  thread_local std::vector<double> per_tile;
+  thread_local std::vector<std::int64_t> tile_sums;
+  per_tile.clear();
+  tile_sums.resize(static_cast<std::size_t>(tiles_u));
   for (int tv = 0; tv < tiles_v; ++tv) {
     std::fill(tile_sums.begin(), tile_sums.end(), 0);
     for (int v = 1 + tv * kTile; v < 1 + (tv + 1) * kTile; ++v) {

@@ -1,5 +1,7 @@
 #pragma once
 
+#include <algorithm>
+
 #include <Eigen/Core>
 
 #include "ssta/analysis/label_refinements.h"
@@ -62,6 +64,12 @@ class FrameAnalyzer {
   ImageU8 step_classes_;    // the local steps' classes, kept between frames
   LabelRuleTracker rule_tracker_;  // the labels before each step, for AnalysisResult::rules
 };
+
+/// The grey levels a texture test asks for in a frame: its configured `min_std`, raised to the
+/// frame's noise floor (FrameResult::texture_noise_floor); a test that is off (0) stays off.
+inline double TextureThreshold(double min_std, double noise_floor) {
+  return min_std > 0.0 ? std::max(min_std, noise_floor) : 0.0;
+}
 
 /// 1 where the common area (crop_width x crop_height at crop_u0, crop_v0 of the full rectified
 /// left image) has texture: the grey-level standard deviation of the full image over the

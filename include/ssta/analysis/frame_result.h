@@ -35,8 +35,8 @@ struct FrameResult {
   ImageU8 left_matched, right_matched;
   /// [px] The matcher's block (stereo.block_size): texture is measured over this window.
   int texture_block_px = 0;
-  /// [grey levels] Labels are 0 where the texture is below this (analysis.label_min_texture;
-  /// 0: no mask was applied).
+  /// [grey levels] Labels are 0 where the texture is below this (analysis.label_min_texture
+  /// raised to texture_noise_floor, TextureThreshold; 0: no mask was applied).
   double labels_min_texture = 0.0;
   /// [grey levels] The left image's sensor noise (ImageNoiseSigma) times
   /// analysis.texture_noise_multiple: no texture test asks for less. 0: not measured.
