@@ -123,6 +123,20 @@ int MajorityClassIndex(const std::array<std::uint32_t, 3>& votes) {
   return best;
 }
 
+/// The worst class index whose votes, counted with the worse classes', reach `share` of all
+/// votes; the plurality when `share` is 0 (MapOptions::class_worst_share); -1 when there are none.
+int VoxelVerdictIndex(const std::array<std::uint32_t, 3>& votes, double share) {
+  if (share <= 0.0) return MajorityClassIndex(votes);
+  const double total = static_cast<double>(votes[0]) + votes[1] + votes[2];
+  if (total == 0.0) return -1;
+  double worse = 0.0;
+  for (int k = 2; k > 0; --k) {
+    worse += votes[k];
+    if (worse > 0.0 && worse >= share * total) return k;
+  }
+  return 0;
+}
+
 float Clamp(double v, double lo, double hi) { return static_cast<float>(std::min(hi, std::max(lo, v))); }
 
 float DecayTowardsZero(float l, double decay) {
@@ -373,7 +387,7 @@ inline void FrameFusion::UpdateHit(const VoxelAccumulator& acc, std::int64_t tim
     // are worth a few views, not all of them, so the weight stops at four of this frame's.
     node->surface_weight = static_cast<float>(std::min(total, std::max<double>(node->surface_weight, 4.0 * weight)));
   }
-  const int winner = MajorityClassIndex(acc.votes);
+  const int winner = VoxelVerdictIndex(acc.votes, opt.class_worst_share);
   if (winner < 0) return;
   // Votes for an obstacle weigh more (class_obstacle_gain); far, noisy views less (VoteWeight).
   const double weight = VoteWeight(acc) * (winner == 2 ? opt.class_obstacle_gain : 1.0) *

@@ -35,6 +35,11 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                         "a frame's non-traversable verdict adds this many times the hit (and miss) log-odds: "
                         "missing an obstacle costs more than a false alarm")
                     .AbsentMeans(1.0));
+    f.push_back(Real<O>("class_worst_share", &O::class_worst_share, Closed(0, 1), "",
+                        "a frame's verdict for a voxel is the worst class this share of its points reach, each "
+                        "class counted with the worse ones: a voxel on the edge of an obstacle band is the "
+                        "band's (0: the plurality of its points)")
+                    .AbsentMeans(0.0));
     f.push_back(Real<O>("class_vote_noise_steps", &O::class_vote_noise_steps, Closed(0, 10), "",
                         "a frame's vote counts 1 / (1 + (sigma / (k vehicle.max_step_m))^2), sigma the height "
                         "noise of its points in the voxel, k this (0: every vote counts 1)")

@@ -245,6 +245,19 @@ TEST(Fusion, OneUpdatePerVoxelPerFrameByMajority) {
   tie.InsertFrame({Pt(kA.x(), 0.05, 0.05, TravClass::kTraversable), Pt(kA.x(), 0.05, 0.05, TravClass::kSemiTraversable)},
                   kOrigin, 1);
   EXPECT_EQ(tie.CellAt(kA).cls, TravClass::kSemiTraversable);
+  // With class_worst_share (shipped 0.25) three non-traversable points of ten make the voxel's
+  // vote non-traversable; two of ten do not.
+  for (const int red : {3, 2}) {
+    MapOptions options = OctoMapCarving();
+    options.class_worst_share = 0.25;
+    TraversabilityMap share(options);
+    std::vector<ClassifiedPoint> mixed;
+    for (int i = 0; i < 10; ++i) {
+      mixed.push_back(Pt(2.01 + 0.005 * i, 0.02, 0.03, i < red ? TravClass::kNonTraversable : TravClass::kTraversable));
+    }
+    share.InsertFrame(mixed, kOrigin, 1);
+    EXPECT_EQ(share.CellAt(kA).cls, red == 3 ? TravClass::kNonTraversable : TravClass::kTraversable) << red;
+  }
 }
 
 TEST(Fusion, SlopeAndStepAreRunningMeansOverFrames) {

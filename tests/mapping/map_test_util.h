@@ -14,10 +14,12 @@
 
 namespace ssta::testing {
 
-/// The class evidence of the plain log-odds model: every vote counts alike (no obstacle gain,
-/// no noise weighting) and no prior for open ground. The tests that check its formulas use it;
+/// The class evidence of the plain log-odds model: the plurality of a voxel's points is the
+/// frame's vote, every vote counts alike (no obstacle gain, no noise weighting) and there is no
+/// prior for open ground. The tests that check its formulas use it;
 /// safe_fusion_test.cpp checks what the shipped weighting adds.
 inline MapOptions PlainVotes(MapOptions o = MapOptions{}) {
+  o.class_worst_share = 0.0;
   o.class_obstacle_gain = 1.0;
   o.class_vote_noise_steps = 0.0;
   o.class_prior_traversable_log_odds = 0.0;

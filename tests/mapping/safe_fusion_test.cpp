@@ -131,6 +131,46 @@ TEST(SafeFusion, ALipBandEveryViewSawSurvivesASurfaceThatLooksWhole) {
   EXPECT_EQ(ClassAt(build(final_word, 10, 0), C(30), C(5)), TravClass::kTraversable);
 }
 
+
+TEST(SafeFusion, AVoxelOnTheEdgeOfAnObstacleBandIsTheBands) {
+  // A lip band from x = 2.9875 to 3.2125 m: four points per 0.1 m voxel along x (at 0.025 m
+  // spacing), so the voxel columns x in [2.9, 3.0) and [3.2, 3.3) hold one red point of four.
+  // A cell's class is the worst of the ground in it: both edge columns are non-traversable.
+  auto build = [](const MapOptions& options) {
+    TraversabilityMap map(options);
+    std::vector<ClassifiedPoint> points;
+    for (int q = 0; q < 160; ++q) {  // x = (q + 0.5) * 0.025 over [0, 4) m
+      for (int iy = 0; iy < 40; ++iy) {
+        const bool red = q >= 119 && q < 129;
+        ClassifiedPoint p = testing::Pt((q + 0.5) * 0.025, C(iy), 0.0,
+                                        red ? TravClass::kNonTraversable : TravClass::kTraversable);
+        p.height_sigma_m = 0.02f;
+        p.horizontal_sigma_m = 0.01f;
+        points.push_back(p);
+      }
+    }
+    for (int k = 0; k < 3; ++k) map.InsertFrame(points, kSensor, k);
+    return map;
+  };
+  const TraversabilityMap map = build(Options());
+  for (const int ix : {29, 30, 31, 32}) {
+    EXPECT_EQ(ClassAt(map, C(ix), C(20)), TravClass::kNonTraversable) << "column " << ix;
+  }
+  EXPECT_EQ(ClassAt(map, C(28), C(20)), TravClass::kTraversable);
+  EXPECT_EQ(ClassAt(map, C(33), C(20)), TravClass::kTraversable);
+  // A share above one point in four, or the plurality of the points, gives the edges to the
+  // open ground beside them: the band shrinks by a cell on each side.
+  MapOptions half = Options();
+  half.class_worst_share = 0.3;
+  MapOptions plurality = Options();
+  plurality.class_worst_share = 0.0;
+  for (const MapOptions& options : {half, plurality}) {
+    const TraversabilityMap narrow = build(options);
+    EXPECT_EQ(ClassAt(narrow, C(29), C(20)), TravClass::kTraversable);
+    EXPECT_EQ(ClassAt(narrow, C(30), C(20)), TravClass::kNonTraversable);
+    EXPECT_EQ(ClassAt(narrow, C(32), C(20)), TravClass::kTraversable);
+  }
+}
 TEST(SafeFusion, FarNoiseLeavesALevelFloorTraversableWithALowerConfidence) {
   // Two views whose labels call a 0.3 m patch of level floor red: at a far range (height sigma
   // 0.3 m, more than the 0.2 m step) that is what noise explains. The same two views of a

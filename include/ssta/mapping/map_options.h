@@ -46,6 +46,14 @@ struct MapOptions {
   /// a planner more than a false alarm, so one clear view of a lip or a rock's ring is not
   /// outvoted by a few views that did not resolve it; >= 1.
   double class_obstacle_gain = 2.0;
+  /// A frame's verdict for a voxel is the worst class that this share of the voxel's class
+  /// votes reach, counting each class with the worse ones: non-traversable when that many of
+  /// its points are, else semi-traversable when that many are semi or worse, else traversable.
+  /// A cell's class is the worst class of the ground in it (interfaces.md, section 3), so a
+  /// voxel that straddles the edge of a lip band or a rock's ring is the band's, not the open
+  /// ground's beside it; the share keeps a lone mislabelled point from deciding. 0: the
+  /// plurality of the points, ties to the worse class; in [0, 1].
+  double class_worst_share = 0.25;
   /// A frame's class vote for a voxel counts w = 1 / (1 + (sigma / (k max_step))^2), with sigma
   /// the stereo height noise of its points there and k this value (vehicle.max_step_m from the
   /// map's vehicle): a view that resolves a jump of max_step at k sigma counts fully, a far view
