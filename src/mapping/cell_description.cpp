@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "mapping/map_impl.h"
+#include "ssta/core/enum_table.h"
 
 namespace ssta {
 
@@ -76,13 +77,12 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
 }  // namespace internal
 
 const char* ClassJudgeName(ClassJudge judge) {
-  switch (judge) {
-    case ClassJudge::kFrames: return "frames";
-    case ClassJudge::kSurface: return "surface";
-    case ClassJudge::kBoth: return "both";
-    case ClassJudge::kExport: return "export";
-    default: return "";
-  }
+  static const EnumTable<ClassJudge> table("decided_by", {{ClassJudge::kNone, ""},
+                                                          {ClassJudge::kFrames, "frames"},
+                                                          {ClassJudge::kSurface, "surface"},
+                                                          {ClassJudge::kBoth, "both"},
+                                                          {ClassJudge::kExport, "export"}});
+  return table.Name(judge).c_str();
 }
 
 double TraversabilityMap::Cost(TravClass cls, double slope_deg, double step_m, double confidence) const {

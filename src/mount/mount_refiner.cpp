@@ -15,6 +15,7 @@
 #include <ceres/rotation.h>
 
 #include "mount/refinement_json.h"
+#include "ssta/core/enum_table.h"
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
 
@@ -392,14 +393,13 @@ Verdict JudgeSolution(const RefinementOptions& options, const MountRefinementRes
 }  // namespace
 
 std::string RefinementStatusName(RefinementStatus status) {
-  switch (status) {
-    case RefinementStatus::kDetermined: return "determined";
-    case RefinementStatus::kTooFewFrames: return "too_few_frames";
-    case RefinementStatus::kNotBetterThanPrior: return "not_better_than_prior";
-    case RefinementStatus::kTerrainTooRough: return "terrain_too_rough";
-    case RefinementStatus::kFailed: return "failed";
-  }
-  return "failed";
+  static const EnumTable<RefinementStatus> table("refinement status",
+                                                 {{RefinementStatus::kDetermined, "determined"},
+                                                  {RefinementStatus::kTooFewFrames, "too_few_frames"},
+                                                  {RefinementStatus::kNotBetterThanPrior, "not_better_than_prior"},
+                                                  {RefinementStatus::kTerrainTooRough, "terrain_too_rough"},
+                                                  {RefinementStatus::kFailed, "failed"}});
+  return table.Name(status);
 }
 
 MountRefiner::MountRefiner(const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera)
