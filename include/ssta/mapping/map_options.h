@@ -8,7 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/core/option_fields.h"
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/mapping/recording_fingerprint.h"
 
 namespace ssta {
