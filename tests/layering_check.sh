@@ -6,17 +6,18 @@ set -euo pipefail
 cd "$1"
 declare -A allowed=(
   [core]="core"
-  [io]="core io"
+  [files]="core files"
+  [io]="core files io"
   [mcap]="core mcap"
-  [bags]="core io mcap bags"
-  [sensors]="core io sensors"
-  [stereo]="core io stereo"
+  [bags]="core files io mcap bags"
+  [sensors]="core files io sensors"
+  [stereo]="core files io stereo"
   [geometry]="core geometry"
-  [analysis]="core io stereo analysis"
-  [mapping]="core io mcap stereo analysis mapping"
-  [mount]="core io stereo analysis mount"
-  [calibration]="core io stereo calibration"
-  [pipeline]="core io sensors stereo geometry analysis mapping mount calibration pipeline"
+  [analysis]="core files io stereo analysis"
+  [mapping]="core files io mcap stereo analysis mapping"
+  [mount]="core files io stereo analysis mount"
+  [calibration]="core files io stereo calibration"
+  [pipeline]="core files io sensors stereo geometry analysis mapping mount calibration pipeline"
 )
 status=0
 for module in "${!allowed[@]}"; do

@@ -19,7 +19,7 @@
 #include "bindings.h"
 #include "ssta/analysis/label_rule.h"
 #include "ssta/io/camera_calibration.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/sequence.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"

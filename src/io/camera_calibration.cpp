@@ -5,9 +5,9 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "text_parsers.h"
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 
 namespace ssta {
 bool IsRigidTransform(const Eigen::Matrix4d& m, std::string* why) {

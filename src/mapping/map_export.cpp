@@ -16,7 +16,7 @@
 
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {

@@ -11,7 +11,7 @@
 
 #include "core/json_escape.h"
 #include "core/ordered_worker.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/frame_points.h"
 #include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/gravity_provider.h"

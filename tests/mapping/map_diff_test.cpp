@@ -12,7 +12,7 @@
 
 #include "map_test_util.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_diff.h"
 #include "temp_dir.h"
 
