@@ -7,17 +7,19 @@ cd "$1"
 declare -A allowed=(
   [core]="core"
   [files]="core files"
-  [io]="core files io"
   [mcap]="core mcap"
+  [mapping]="core files mcap mapping"
+  [io]="core files io"
   [bags]="core files io mcap bags"
   [sensors]="core files io sensors"
   [stereo]="core files io stereo"
   [geometry]="core geometry"
   [analysis]="core files io stereo analysis"
-  [mapping]="core files io mcap stereo analysis mapping"
+  [fusion]="core files io mcap stereo analysis mapping fusion"
+  [pictures]="core files io mcap mapping pictures"
   [mount]="core files io stereo analysis mount"
   [calibration]="core files io stereo calibration"
-  [pipeline]="core files io sensors stereo geometry analysis mapping mount calibration pipeline"
+  [pipeline]="core files io mcap sensors stereo geometry analysis mapping fusion pictures mount calibration pipeline"
 )
 status=0
 for module in "${!allowed[@]}"; do

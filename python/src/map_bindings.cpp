@@ -16,7 +16,7 @@
 
 #include "bindings.h"
 #include "query_row.h"
-#include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
 

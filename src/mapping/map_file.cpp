@@ -34,7 +34,7 @@
 #include "mapping/map_file_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
-#include "ssta/io/camera_calibration.h"
+#include "ssta/core/rigid_transform.h"
 #include "ssta/files/file_util.h"
 
 #ifndef SSTA_VERSION

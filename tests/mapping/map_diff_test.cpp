@@ -14,6 +14,7 @@
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
 #include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 #include "temp_dir.h"
 
 namespace ssta {
