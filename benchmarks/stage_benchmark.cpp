@@ -28,7 +28,7 @@
 #include <pcl/segmentation/plane_refinement_comparator.h>
 
 #include "ssta/analysis/frame_analysis.h"
-#include "ssta/mapping/frame_points.h"
+#include "ssta/fusion/frame_points.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/geometry/normal_estimator.h"

@@ -1,7 +1,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(ssta_install_targets ssta)
+set(ssta_install_targets ${SSTA_COMPONENT_TARGETS})
 foreach(module ${SSTA_MODULES})
   list(APPEND ssta_install_targets ssta_${module})
 endforeach()

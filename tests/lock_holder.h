@@ -10,7 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta::testing {
 

@@ -11,7 +11,7 @@
 #include "commands.h"
 #include "config_loading.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/bench/pipeline_bench.h"
 #include "ssta/synth/sequence_synthesizer.h"
 

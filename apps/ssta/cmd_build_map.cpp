@@ -8,8 +8,8 @@
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
-#include "ssta/io/file_util.h"
-#include "ssta/mapping/map_picture.h"
+#include "ssta/files/file_util.h"
+#include "ssta/pictures/map_picture.h"
 #include "ssta/pipeline/map_builder.h"
 
 namespace ssta::cli {

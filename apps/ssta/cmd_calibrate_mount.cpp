@@ -10,7 +10,7 @@
 #include "commands.h"
 #include "config_loading.h"
 #include "progress.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/pipeline/mount_calibration.h"
 
 namespace ssta::cli {

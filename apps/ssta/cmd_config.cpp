@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "config_loading.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta::cli {
 

@@ -5,7 +5,7 @@
 
 #include "commands.h"
 #include "ssta/core/error.h"
-#include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 
 namespace ssta::cli {
 namespace {

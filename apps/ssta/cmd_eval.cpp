@@ -22,7 +22,7 @@
 #include "ssta/eval/grid_evaluator.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/eval/query_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"

@@ -11,7 +11,7 @@
 #include "config_loading.h"
 #include "ssta/bench/stereo_bench.h"
 #include "ssta/eval/disparity_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta::cli {
 namespace {

@@ -11,7 +11,7 @@
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
-#include "ssta/mapping/map_picture.h"
+#include "ssta/pictures/map_picture.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/config.h"
 

@@ -6,7 +6,7 @@
 
 #include "commands.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_merge.h"
 
 namespace ssta::cli {

@@ -11,7 +11,7 @@
 
 #include "commands.h"
 #include "ssta/mapping/map_export.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/core/units.h"
 

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "commands.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta::cli {
 namespace {

@@ -8,7 +8,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cerrno>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <stdexcept>
 #include <string>
@@ -95,6 +97,28 @@ inline double NonNegativeArg(double value, const char* name) {
     throw py::value_error(std::string(name) + ": must be a finite number >= 0, got " + std::to_string(value));
   }
   return value;
+}
+
+/// ssta.Error (the library's ssta::Error, a ValueError) and the translation of MissingFile into
+/// FileNotFoundError, on module `m`.
+inline void RegisterErrors(py::module_& m) {
+  py::register_exception<Error>(m, "Error", PyExc_ValueError);
+  m.attr("Error").attr("__doc__") =
+      "Bad input to SSTA (a corrupt file, a bad config value, a calibration that cannot be right): the\n"
+      "library's ssta::Error, with the message the command line prints. A subclass of ValueError.";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const MissingFile& e) {
+      // FileNotFoundError(errno, strerror, filename), as open() raises it: str() reads
+      // "[Errno 2] <the library's reason>: '<file>'", and `filename` names the file.
+      std::string reason = e.what();
+      if (reason.rfind(e.path() + ": ", 0) == 0) reason.erase(0, e.path().size() + 2);
+      const py::object error =
+          py::reinterpret_borrow<py::object>(PyExc_FileNotFoundError)(ENOENT, reason, e.path());
+      PyErr_SetObject(PyExc_FileNotFoundError, error.ptr());
+    }
+  });
 }
 
 void BindMap(py::module_& m);

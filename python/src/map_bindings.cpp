@@ -19,6 +19,9 @@
 #include "ssta/mapping/map_diff.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
+#if !SSTA_PYTHON_MAP_ONLY
+#include "ssta/pictures/map_diff_picture.h"
+#endif
 
 namespace ssta::python {
 namespace {
@@ -325,11 +328,19 @@ py::dict Diff(const MapHandle& a, const MapHandle& b, const std::optional<py::ob
   std::string error;
   if (!options.IsValid(&error)) throw py::value_error(error);
   const std::string out = out_arg ? PathArg(*out_arg, "out") : std::string();
+#if SSTA_PYTHON_MAP_ONLY
+  if (!out.empty()) {
+    throw py::value_error("out: writing the diff's picture needs the full ssta build (this module was built with "
+                          "SSTA_MAP_ONLY); compute the diff without out, or build without SSTA_MAP_ONLY");
+  }
+#endif
   MapDiff diff;
   {
     py::gil_scoped_release release;
     diff = DiffMaps(a.map, a.path, b.map, b.path, options);
+#if !SSTA_PYTHON_MAP_ONLY
     if (!out.empty()) WriteMapDiff(diff, out, "Changes from " + a.path + " to " + b.path);
+#endif
   }
   py::dict result;
   result["change"] = ImageArray(diff.change);
@@ -621,6 +632,7 @@ map column's class in both maps over the union of their surfaces, at their resol
 Args:
     other: a Map of the same site (same resolution, world frame and vehicle).
     out: a folder (str or os.PathLike) to write diff.csv and diff.png into; None: none.
+        Needs the full build: a map-only module (ssta.MAP_ONLY) raises ValueError.
     min_confidence, slope_noise_deg, step_noise_m, boundary_shift_columns: as
         `--min-confidence`, `--slope-noise-deg`, `--step-noise-m`, `--boundary-shift`.
 

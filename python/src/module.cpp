@@ -19,7 +19,7 @@
 #include "bindings.h"
 #include "ssta/analysis/label_rule.h"
 #include "ssta/io/camera_calibration.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/sequence.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_pipeline.h"
@@ -693,23 +693,8 @@ PYBIND11_MODULE(_ssta, m) {
     m.attr("LABEL_RULES") = py::tuple(names);
   }
 
-  py::register_exception<ssta::Error>(m, "Error", PyExc_ValueError);
-  m.attr("Error").attr("__doc__") =
-      "Bad input to SSTA (a corrupt file, a bad config value, a calibration that cannot be right): the\n"
-      "library's ssta::Error, with the message the command line prints. A subclass of ValueError.";
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const MissingFile& e) {
-      // FileNotFoundError(errno, strerror, filename), as open() raises it: str() reads
-      // "[Errno 2] <the library's reason>: '<file>'", and `filename` names the file.
-      std::string reason = e.what();
-      if (reason.rfind(e.path() + ": ", 0) == 0) reason.erase(0, e.path().size() + 2);
-      const py::object error =
-          py::reinterpret_borrow<py::object>(PyExc_FileNotFoundError)(ENOENT, reason, e.path());
-      PyErr_SetObject(PyExc_FileNotFoundError, error.ptr());
-    }
-  });
+  RegisterErrors(m);
+  m.attr("MAP_ONLY") = false;
 
   BindConfig(m);
   BindCalibration(m);

@@ -13,19 +13,20 @@ naming the file; bad input the library rejects (a corrupt map, a config value ou
 raises ssta.Error, a subclass of ValueError, with the message `ssta` on the command line prints.
 """
 
-from ._ssta import (
-    CameraCalibration,
-    Config,
-    ConfigSection,
-    Error,
-    FramePipeline,
-    LABEL_RULES,
-    Map,
-    StereoCalibration,
-    __version__,
-    build_map,
-    classify,
-)
+from ._ssta import MAP_ONLY, Error, Map, __version__
+
+# A map-only build (cmake -DSSTA_MAP_ONLY=ON) binds maps alone: Map and Error.
+if not MAP_ONLY:
+    from ._ssta import (
+        CameraCalibration,
+        Config,
+        ConfigSection,
+        FramePipeline,
+        LABEL_RULES,
+        StereoCalibration,
+        build_map,
+        classify,
+    )
 
 #: Class ids (docs/interfaces.md, section 3).
 UNKNOWN, TRAVERSABLE, SEMI_TRAVERSABLE, NON_TRAVERSABLE, UNDECIDED = 0, 1, 2, 3, 4
@@ -40,16 +41,9 @@ CLASS_COLOURS = {
 }
 
 __all__ = [
-    "CameraCalibration",
-    "Config",
-    "ConfigSection",
     "Error",
-    "FramePipeline",
-    "LABEL_RULES",
+    "MAP_ONLY",
     "Map",
-    "StereoCalibration",
-    "build_map",
-    "classify",
     "UNKNOWN",
     "TRAVERSABLE",
     "SEMI_TRAVERSABLE",
@@ -57,3 +51,14 @@ __all__ = [
     "UNDECIDED",
     "CLASS_COLOURS",
 ]
+if not MAP_ONLY:
+    __all__ += [
+        "CameraCalibration",
+        "Config",
+        "ConfigSection",
+        "FramePipeline",
+        "LABEL_RULES",
+        "StereoCalibration",
+        "build_map",
+        "classify",
+    ]

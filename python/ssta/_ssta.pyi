@@ -8,6 +8,8 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+#: True in a map-only build (cmake -DSSTA_MAP_ONLY=ON): only Map and Error are bound.
+MAP_ONLY: bool
 #: Rule names by id: classify's "rules" image holds these ids (docs/interfaces.md).
 LABEL_RULES: Tuple[str, ...]
 

@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 
 #include "ssta/analysis/surface_analyzer.h"
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/image.h"
 

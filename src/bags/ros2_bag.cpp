@@ -11,7 +11,7 @@
 #include "bags/bag_reader.h"
 #include "bags/db3_bag.h"
 #include "bags/mcap_bag.h"
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 #include "ssta/core/error.h"
 
 namespace fs = std::filesystem;

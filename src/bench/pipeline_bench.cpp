@@ -17,7 +17,7 @@
 #include "ssta/core/json_writer.h"
 #include "core/ordered_worker.h"
 #include "ssta/io/image_io.h"
-#include "ssta/mapping/frame_points.h"
+#include "ssta/fusion/frame_points.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/pipeline/sequence_run.h"

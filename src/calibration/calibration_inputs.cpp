@@ -7,10 +7,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 

@@ -9,7 +9,7 @@
 #include "calibration/board_detection.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/stereo/rectifier.h"
 

@@ -2,7 +2,7 @@
 
 #include <utility>
 
-#include "core/run_both.h"
+#include "core/parallel_pair.h"
 
 namespace ssta::internal {
 

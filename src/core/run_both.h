@@ -1,20 +1,17 @@
 #pragma once
 
+// Private, for the modules that link OpenCV (the core library itself does not): parallel work on
+// OpenCV's thread pool.
+
 #include <exception>
+#include <functional>
 
 #include <opencv2/core/utility.hpp>
 
+#include "core/parallel_pair.h"
+
 namespace ssta {
 namespace internal {
-
-/// True on a thread whose work runs beside another thread's parallel work, such as the
-/// pipelined map worker beside the frame being classified: RunBoth then runs its two parts one
-/// after the other there. On two cores, two threads that both fan out oversubscribe them (the
-/// yard's pipelined interval measured 105 ms with the map worker serial, 120 ms without).
-inline bool& SerialOnThisThread() {
-  thread_local bool serial = false;
-  return serial;
-}
 
 /// Runs a() and b() at the same time on OpenCV's threads (one after the other when its thread
 /// count is 1, e.g. under `ssta --threads 1`, or on a SerialOnThisThread thread); the first
@@ -48,6 +45,17 @@ void RunBoth(const A& a, const B& b) {
   for (const std::exception_ptr& e : errors) {
     if (e) std::rethrow_exception(e);
   }
+}
+
+/// A PairRunner (core/parallel_pair.h) on OpenCV's thread pool: part(0) and part(1) at the same
+/// time, one after the other when OpenCV's thread count is 1.
+inline void RunPairOnOpenCv(const std::function<void(int)>& part) {
+  cv::parallel_for_(
+      cv::Range(0, 2),
+      [&](const cv::Range& range) {
+        for (int i = range.start; i < range.end; ++i) part(i);
+      },
+      2);
 }
 
 }  // namespace internal

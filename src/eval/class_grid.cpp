@@ -4,10 +4,10 @@
 #include <filesystem>
 #include <vector>
 
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {

@@ -11,7 +11,7 @@
 #include "io/text_parsers.h"
 #include "ssta/core/error.h"
 #include "ssta/eval/class_grid.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta::internal {
 namespace {

@@ -14,7 +14,7 @@
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
 #include "ssta/eval/label_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 namespace {

@@ -12,7 +12,7 @@
 #include "ssta/core/error.h"
 #include "eval/png_folder.h"
 #include "ssta/eval/class_grid.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {

@@ -11,7 +11,7 @@
 #include "eval/metrics_json.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 namespace {

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/io/sequence.h"
 

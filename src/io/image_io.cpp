@@ -8,7 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 namespace {

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/sequence.h"
 #include "ssta/core/units.h"
 #include "text_parsers.h"

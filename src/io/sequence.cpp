@@ -8,10 +8,10 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "text_parsers.h"
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 
 namespace fs = std::filesystem;
 

@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <limits>
 
-#include "core/run_both.h"
+#include "core/parallel_pair.h"
 
 namespace ssta::internal {
 namespace {
@@ -129,8 +129,13 @@ void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
     }
   };
   const std::size_t half = ends.size() / 2;
-  RunBoth([&] { walk(0, half, &bitmap_, &overflow_); },
-          [&] { walk(half, ends.size(), &bitmap_2_, &overflow_2_); });
+  RunPair([&](int part) {
+    if (part == 0) {
+      walk(0, half, &bitmap_, &overflow_);
+    } else {
+      walk(half, ends.size(), &bitmap_2_, &overflow_2_);
+    }
+  });
   if (use_bitmap_) bitmap_.TakeBitsOf(&bitmap_2_);
   overflow_2_.ForEach([&](std::uint64_t code) { overflow_.Insert(code); });
 }

@@ -1,5 +1,5 @@
 // DiffMaps: two maps of one site projected on one lattice of columns, each column's change
-// sorted into real changes, coverage and uncertainty. The picture is drawn in map_picture.cpp.
+// sorted into real changes, coverage and uncertainty. The picture is drawn in src/pictures/map_picture.cpp.
 
 #include "ssta/mapping/map_diff.h"
 
@@ -9,8 +9,6 @@
 #include <sstream>
 
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
-#include "ssta/io/image_io.h"
 #include "ssta/mapping/map_merge.h"
 
 namespace ssta {
@@ -192,16 +190,14 @@ MapDiff DiffMaps(const TraversabilityMap& a, const std::string& a_file, const Tr
   return diff;
 }
 
-void WriteMapDiff(const MapDiff& diff, const std::string& out_dir, const std::string& title) {
-  MakeDirectories(out_dir);
+std::string MapDiffCsv(const MapDiff& diff) {
   std::string csv = std::string(kMapDiffCsvHeader) + "\n";
   for (const CellDiff& c : diff.cells) {
     csv += Decimals(c.xy.x(), 4) + "," + Decimals(c.xy.y(), 4) + "," + std::to_string(c.class_a) + "," +
            std::to_string(c.class_b) + "," + Decimals(c.confidence_a, 4) + "," + Decimals(c.confidence_b, 4) + "," +
            CellChangeName(c.change) + "\n";
   }
-  WriteTextAtomically(out_dir + "/diff.csv", csv);
-  WriteImageCompact(RenderMapDiffPicture(diff, title), out_dir + "/diff.png");
+  return csv;
 }
 
 }  // namespace ssta

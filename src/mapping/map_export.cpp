@@ -16,8 +16,8 @@
 
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
-#include "ssta/io/image_io.h"
+#include "ssta/files/file_util.h"
+#include "ssta/files/png_file.h"
 
 namespace ssta {
 namespace {
@@ -271,8 +271,8 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
   ImageU8 nav(grid.width(), grid.height());
   for (std::size_t i = 0; i < nav.size(); ++i) nav[i] = NavValue(grid.classes[i]);
 
-  WriteImage(ColourizeLabels(grid.classes), prefix + ".png");
-  WriteImage(grid.classes, prefix + "_classes.png");
+  WritePng(ColourizeLabels(grid.classes), prefix + ".png");
+  WritePng(grid.classes, prefix + "_classes.png");
   const std::string pgm = prefix + ".pgm";
   WriteStreamAtomically(pgm, [&](std::ostream& out) {
     out << "P5\n# SSTA navigation grid: 0 non-traversable, 254 traversable, 205 unknown\n"
@@ -302,7 +302,7 @@ GridProjection ExportGrid(const TraversabilityMap& map, const std::string& prefi
       for (std::size_t i = 0; i < png.size(); ++i) {
         if (std::isfinite(cost[i])) png[i] = static_cast<std::uint8_t>(std::lround(std::clamp(cost[i], 0.0f, 1.0f) * 254.0f));
       }
-      WriteImage(png, path);
+      WritePng(png, path);
       yaml << (k ? ", " : "") << std::filesystem::path(path).filename().string();
     }
     yaml << "]\nheading_cost_footprint_m: [" << Format("%.9g", options.headings.footprint_length_m) << ", "

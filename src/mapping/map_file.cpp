@@ -30,12 +30,12 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 #include "mapping/map_file_reader.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
-#include "ssta/io/camera_calibration.h"
-#include "ssta/io/file_util.h"
+#include "ssta/core/rigid_transform.h"
+#include "ssta/files/file_util.h"
 
 #ifndef SSTA_VERSION
 #define SSTA_VERSION "unknown"

@@ -13,7 +13,7 @@
 #include "mcap/cdr_writer.h"
 #include "mcap/mcap_writer.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_export.h"
 
 #ifndef SSTA_VERSION

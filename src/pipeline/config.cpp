@@ -2,9 +2,9 @@
 
 #include <sstream>
 
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 #include "pipeline/config_text.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "core/json_escape.h"
 #include "ssta/analysis/label_rule.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta {

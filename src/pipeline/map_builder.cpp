@@ -11,8 +11,8 @@
 
 #include "core/json_escape.h"
 #include "core/ordered_worker.h"
-#include "ssta/io/file_util.h"
-#include "ssta/mapping/frame_points.h"
+#include "ssta/files/file_util.h"
+#include "ssta/fusion/frame_points.h"
 #include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/gravity_provider.h"
 #include "ssta/mount/ground_evidence.h"

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "core/json_escape.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/ground_truth.h"
 #include "ssta/io/image_io.h"
 #include "ssta/pipeline/frame_report.h"

@@ -10,7 +10,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/camera_calibration.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/synth/scene.h"
 #include "ssta/synth/stereo_renderer.h"

@@ -1,4 +1,3 @@
 ssta_add_test(analysis_test
   ${CMAKE_CURRENT_LIST_DIR}/surface_analyzer_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/label_refinements_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/vehicle_options_test.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/label_refinements_test.cpp)

@@ -16,7 +16,7 @@
 
 #include "cli_runner.h"
 #include "ssta/core/units.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"

@@ -17,7 +17,7 @@
 #include "cli_runner.h"
 #include "bags/support/bag_content.h"
 #include "lock_holder.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/sequence.h"
 #include "ssta/mapping/traversability_map.h"
 #include "temp_dir.h"

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "cli_runner.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/bench/pipeline_bench.h"
 #include "ssta_test_paths.h"
 #include "temp_dir.h"

@@ -17,7 +17,7 @@
 #include "cli_runner.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/io/camera_calibration.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/io/sequence.h"
 #include "ssta/stereo/rectifier.h"

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "ssta/eval/grid_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/map_merge.h"
 #include "ssta/pipeline/config.h"

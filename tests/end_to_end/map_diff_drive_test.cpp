@@ -11,7 +11,7 @@
 #include <iostream>
 #include <string>
 
-#include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/synth/sequence_synthesizer.h"

@@ -16,7 +16,7 @@
 #include "ssta/bench/stereo_bench.h"
 #include "ssta/core/error.h"
 #include "ssta/eval/disparity_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "stereo/synthetic_pair.h"
 

@@ -6,7 +6,7 @@
 
 #include "cli_runner.h"
 #include "eval_test_helpers.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 namespace ssta {
 namespace {

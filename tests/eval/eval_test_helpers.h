@@ -12,7 +12,7 @@
 
 #include "temp_dir.h"
 #include "ssta/core/image.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
 namespace ssta::test {

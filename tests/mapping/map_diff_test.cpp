@@ -12,8 +12,9 @@
 
 #include "map_test_util.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 #include "temp_dir.h"
 
 namespace ssta {

@@ -11,7 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "map_test_util.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"
 #include "temp_dir.h"

@@ -13,7 +13,7 @@
 #include <octomap/OcTree.h>
 
 #include "map_test_util.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "temp_dir.h"
 
 namespace ssta {

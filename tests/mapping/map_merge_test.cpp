@@ -19,7 +19,7 @@
 #include "map_test_util.h"
 #include "mapping/map_impl.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_merge.h"
 #include "ssta/mapping/recording_fingerprint.h"
 #include "temp_dir.h"

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "map_test_util.h"
-#include "mapping/hidden_drops.h"
+#include "fusion/hidden_drops.h"
 #include "ssta/core/units.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"

@@ -5,8 +5,6 @@ ssta_add_test(mapping_test
   ${CMAKE_CURRENT_LIST_DIR}/queries_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_export_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_mcap_export_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/map_picture_test.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/frame_points_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surface_judgement_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_merge_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_diff_test.cpp

@@ -5,7 +5,7 @@
 #include "plane_stereo_renderer.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/label_refinements.h"
-#include "ssta/mapping/frame_points.h"
+#include "ssta/fusion/frame_points.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/pipeline/frame_pipeline.h"

@@ -10,7 +10,7 @@
 
 #include "cli_runner.h"
 #include "ssta/core/error.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/pipeline/mount_calibration.h"
 #include "ssta/synth/sequence_synthesizer.h"
 #include "temp_dir.h"

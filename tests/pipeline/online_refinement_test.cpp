@@ -11,7 +11,7 @@
 
 #include "cli_runner.h"
 #include "ssta/eval/grid_evaluator.h"
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
 #include "ssta/synth/sequence_synthesizer.h"

@@ -11,7 +11,7 @@
 #include <Eigen/Core>
 
 #include "ssta/core/option_fields.h"
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/image.h"
 

@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include "ssta/core/rigid_transform.h"  // IsRigidTransform, which the calibration's checks use
+
 namespace ssta {
 
 /// One camera of an ASL sequence (`camN/sensor.yaml`, docs/interfaces.md, section 2): a pinhole model
@@ -51,8 +53,5 @@ struct StereoCalibration {
 /// Loads `dir/cam0/sensor.yaml` and `dir/cam1/sensor.yaml` (dir may be a sequence or its mav0).
 StereoCalibration LoadStereoCalibration(const std::string& cam0_yaml, const std::string& cam1_yaml);
 
-/// True when `m` is a finite rigid transform (last row 0 0 0 1, rotation orthonormal within 1e-4
-/// with determinant +1); else false, with the reason in *why when why is not null.
-bool IsRigidTransform(const Eigen::Matrix4d& m, std::string* why);
 
 }  // namespace ssta

@@ -138,15 +138,9 @@ inline constexpr Rgb8 kNoLongerSeen{185, 170, 225};
 inline constexpr Rgb8 kUncertain{240, 210, 40};
 }  // namespace change_colours
 
-/// The picture of a diff: each column in its change's colour (change_colours; unchanged
-/// obstacles darker than unchanged ground, columns without a class white), both sensor paths,
-/// metric axes, a scale bar, a legend with each change's count, and `title`.
-ImageRgb RenderMapDiffPicture(const MapDiff& diff, const std::string& title);
-
-/// Writes `out_dir`/diff.csv (kMapDiffCsvHeader, one row per MapDiff::cells entry: x, y [m]
-/// with 4 decimals, the class ids, the confidences with 4 decimals or "nan", the change's name)
-/// and `out_dir`/diff.png (RenderMapDiffPicture), each atomically; creates `out_dir`. Errors
-/// name the file.
-void WriteMapDiff(const MapDiff& diff, const std::string& out_dir, const std::string& title);
+/// The diff as CSV text: kMapDiffCsvHeader, then one row per MapDiff::cells entry (x, y [m] with
+/// 4 decimals, the class ids, the confidences with 4 decimals or "nan", the change's name), each
+/// line ending in a newline. The picture beside it is ssta/pictures/map_diff_picture.h.
+std::string MapDiffCsv(const MapDiff& diff);
 
 }  // namespace ssta

@@ -8,7 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/core/option_fields.h"
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/mapping/recording_fingerprint.h"
 
 namespace ssta {
@@ -126,7 +126,7 @@ struct MappingOptions {
   /// The lips of drop-offs whose foot a frame cannot see are non-traversable in the map: up
   /// each image column, a view that passes over an edge and lands lower by more than
   /// vehicle.max_step_m beyond the noise of both heights marks the ground within
-  /// vehicle.step_radius_m of the edge (src/mapping/hidden_drops.h).
+  /// vehicle.step_radius_m of the edge (src/fusion/hidden_drops.h).
   bool hidden_drops = true;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   /// The map's range follows the rig: fusion.max_range_m becomes the depth at which the stereo

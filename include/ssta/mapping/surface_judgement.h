@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 
 namespace ssta {
 

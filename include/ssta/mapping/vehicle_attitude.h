@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/core/classes.h"
 #include "ssta/core/image.h"
 #include "ssta/mapping/map_types.h"

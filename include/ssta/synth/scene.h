@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/core/classes.h"
 
 namespace ssta::synth {

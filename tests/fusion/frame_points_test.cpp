@@ -9,7 +9,7 @@
 
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/core/error.h"
-#include "ssta/mapping/frame_points.h"
+#include "ssta/fusion/frame_points.h"
 
 namespace ssta {
 namespace {

@@ -1,4 +1,4 @@
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 #include <algorithm>
 #include <cctype>

@@ -1,4 +1,4 @@
-#include "mapping/hidden_drops.h"
+#include "fusion/hidden_drops.h"
 
 #include <algorithm>
 #include <cmath>

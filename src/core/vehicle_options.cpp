@@ -1,4 +1,4 @@
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,9 +5,9 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
-#include "map_test_util.h"
+#include "mapping/map_test_util.h"
 #include "ssta/core/error.h"
-#include "ssta/mapping/map_picture.h"
+#include "ssta/pictures/map_picture.h"
 #include "temp_dir.h"
 
 namespace ssta {

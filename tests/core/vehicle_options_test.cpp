@@ -1,6 +1,6 @@
 #include <gtest/gtest.h>
 
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 
 namespace ssta {
 namespace {

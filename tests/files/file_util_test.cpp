@@ -1,7 +1,7 @@
 // Atomic writes: a write that fails (full disk, unwritable path) names the file and leaves the
 // previous file as it was, with no temporary file left behind.
 
-#include "ssta/io/file_util.h"
+#include "ssta/files/file_util.h"
 
 #include <algorithm>
 #include <csignal>
@@ -200,7 +200,7 @@ TEST(MapWriteLock, ASecondWriterFailsNamingTheMapAndTheHolder) {
     EXPECT_EQ(refusal.rfind(map + ": another process is writing this map (pid " + std::to_string(::getpid()) + ": ", 0),
               0u)
         << refusal;
-    EXPECT_NE(refusal.find("io_test"), std::string::npos) << "the holder's command: " << refusal;
+    EXPECT_NE(refusal.find("files_test"), std::string::npos) << "the holder's command: " << refusal;
     EXPECT_EQ(refusal.find('\n'), std::string::npos) << refusal;
   }
   EXPECT_FALSE(fs::exists(MapWriteLock::LockPath(map))) << "a released lock leaves its file";

@@ -1,7 +1,7 @@
-// RenderMapPicture: the exported grid drawn for people (the only mapping source that draws
-// text, with OpenCV's imgproc).
+// RenderMapPicture and RenderMapDiffPicture: the exported grid and a diff drawn for people, with
+// text, through OpenCV's imgproc.
 
-#include "ssta/mapping/map_picture.h"
+#include "ssta/pictures/map_picture.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +14,7 @@
 
 #include "ssta/core/error.h"
 #include "ssta/io/image_io.h"
-#include "ssta/mapping/map_diff.h"
+#include "ssta/pictures/map_diff_picture.h"
 
 namespace ssta {
 namespace {

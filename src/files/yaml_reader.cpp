@@ -1,4 +1,4 @@
-#include "ssta/io/yaml_reader.h"
+#include "ssta/files/yaml_reader.h"
 
 #include <cmath>
 #include <set>

@@ -4,7 +4,7 @@
 
 #include <Eigen/Geometry>
 
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/core/image.h"
 
 namespace ssta::internal {

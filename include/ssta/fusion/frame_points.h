@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 
 #include "ssta/analysis/frame_result.h"
-#include "ssta/analysis/vehicle_options.h"
+#include "ssta/core/vehicle_options.h"
 #include "ssta/mapping/map_options.h"
 #include "ssta/mapping/map_types.h"
 #include "ssta/stereo/rectifier.h"

@@ -1,4 +1,4 @@
-#include "ssta/mapping/frame_points.h"
+#include "ssta/fusion/frame_points.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,13 +6,21 @@
 #include <utility>
 
 #include "core/run_both.h"
-#include "mapping/hidden_drops.h"
+#include "fusion/hidden_drops.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/core/error.h"
 #include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
 namespace {
+
+// Where frames feed the map, the map's parallel steps (its free-space walk) run on OpenCV's
+// thread pool with the frame's, so that one thread setting (`ssta --threads`) caps them all.
+// A program that links this file calls MapPointsOfFrame before InsertFrame.
+const bool kMapStepsOnOpenCvThreads = [] {
+  internal::SetPairRunner(&internal::RunPairOnOpenCv);
+  return true;
+}();
 
 /// 1-sigma of the height at a map column of a point `q` (rectified camera frame, depth q.z())
 /// whose depth errs by `per_m2` q.z()^2: its error along its ray, seen vertically, and its

@@ -1,0 +1,2 @@
+ssta_add_test(pictures_test
+  ${CMAKE_CURRENT_LIST_DIR}/map_picture_test.cpp)
