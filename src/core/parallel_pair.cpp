@@ -20,7 +20,9 @@ void RunOnTwoThreads(const std::function<void(int)>& part) {
 
 void SetPairRunner(PairRunner runner) { g_runner.store(runner); }
 
-void RunPair(const std::function<void(int)>& part) {
+void RunPair(const std::function<void(int)>& part) { RunPairWith(g_runner.load(), part); }
+
+void RunPairWith(PairRunner runner, const std::function<void(int)>& part) {
   if (SerialOnThisThread()) {
     part(0);
     part(1);
@@ -34,7 +36,6 @@ void RunPair(const std::function<void(int)>& part) {
       errors[i] = std::current_exception();
     }
   };
-  const PairRunner runner = g_runner.load();
   if (runner != nullptr) {
     runner(guarded);
   } else {

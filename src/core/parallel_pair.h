@@ -35,5 +35,8 @@ void SetPairRunner(PairRunner runner);
 /// result never depends on the scheduling.
 void RunPair(const std::function<void(int)>& part);
 
+/// RunPair through `runner` instead of the process's (nullptr: the default, two threads).
+void RunPairWith(PairRunner runner, const std::function<void(int)>& part);
+
 }  // namespace internal
 }  // namespace ssta

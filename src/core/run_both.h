@@ -3,7 +3,6 @@
 // Private, for the modules that link OpenCV (the core library itself does not): parallel work on
 // OpenCV's thread pool.
 
-#include <exception>
 #include <functional>
 
 #include <opencv2/core/utility.hpp>
@@ -12,40 +11,6 @@
 
 namespace ssta {
 namespace internal {
-
-/// Runs a() and b() at the same time on OpenCV's threads (one after the other when its thread
-/// count is 1, e.g. under `ssta --threads 1`, or on a SerialOnThisThread thread); the first
-/// exception either throws reaches the caller once both are done. For two independent steps of
-/// one frame whose results the caller then combines in a fixed order, so the result never
-/// depends on the scheduling.
-template <typename A, typename B>
-void RunBoth(const A& a, const B& b) {
-  if (SerialOnThisThread()) {
-    a();
-    b();
-    return;
-  }
-  std::exception_ptr errors[2];
-  cv::parallel_for_(
-      cv::Range(0, 2),
-      [&](const cv::Range& range) {
-        for (int i = range.start; i < range.end; ++i) {
-          try {
-            if (i == 0) {
-              a();
-            } else {
-              b();
-            }
-          } catch (...) {
-            errors[i] = std::current_exception();
-          }
-        }
-      },
-      2);
-  for (const std::exception_ptr& e : errors) {
-    if (e) std::rethrow_exception(e);
-  }
-}
 
 /// A PairRunner (core/parallel_pair.h) on OpenCV's thread pool: part(0) and part(1) at the same
 /// time, one after the other when OpenCV's thread count is 1.
@@ -56,6 +21,22 @@ inline void RunPairOnOpenCv(const std::function<void(int)>& part) {
         for (int i = range.start; i < range.end; ++i) part(i);
       },
       2);
+}
+
+/// Runs a() and b() at the same time on OpenCV's threads (one after the other when its thread
+/// count is 1, e.g. under `ssta --threads 1`, or on a SerialOnThisThread thread); the first
+/// exception either throws reaches the caller once both are done. For two independent steps of
+/// one frame whose results the caller then combines in a fixed order, so the result never
+/// depends on the scheduling.
+template <typename A, typename B>
+void RunBoth(const A& a, const B& b) {
+  RunPairWith(&RunPairOnOpenCv, [&](int part) {
+    if (part == 0) {
+      a();
+    } else {
+      b();
+    }
+  });
 }
 
 }  // namespace internal
