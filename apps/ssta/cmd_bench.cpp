@@ -9,10 +9,10 @@
 
 #include "bag_options.h"
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
 #include "ssta/bench/pipeline_bench.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/synth/sequence_synthesizer.h"
 
 namespace ssta::cli {

@@ -6,10 +6,10 @@
 
 #include "bag_options.h"
 #include "commands.h"
-#include "config_loading.h"
 #include "progress.h"
 #include "ssta/files/file_util.h"
 #include "ssta/pictures/map_picture.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/map_builder.h"
 
 namespace ssta::cli {
@@ -32,33 +32,27 @@ void Run(const BuildMapArgs& a) {
   const Sequence sequence = Sequence::Open(a.sequence, a.topics);
   Config config = LoadLayeredConfig(&sequence, a.config);
   if (a.refine) config.refinement.online = true;
-  const bool map_existed = std::filesystem::exists(a.options.map_path);
   // SIGINT / SIGTERM stop after the current frame; the map is saved before exiting.
   std::signal(SIGINT, RequestStop);
   std::signal(SIGTERM, RequestStop);
   ProgressLine progress("build-map", !a.quiet);
-  const std::string name = std::filesystem::path(a.sequence).lexically_normal().filename().string();
-  const BuildMapSummary summary = BuildMap(sequence, name.empty() ? a.sequence : name, config, a.options,
+  const BuildMapSummary summary = BuildMap(sequence, SequenceNameOf(a.sequence), config, a.options,
                                            [&](int done, int total) { progress.Update(done, total); }, &g_stop);
   progress.Finish();
-  const bool fused = summary.frames_used > 0 || summary.frames_already_in_map > 0;
-  if (fused && !a.picture.empty()) {
+  if (summary.Fused() && !a.picture.empty()) {
     MapPictureOptions picture;
     picture.title = std::filesystem::path(a.options.map_path).filename().string();
     ExportPicture(TraversabilityMap::Load(a.options.map_path), a.picture, picture);
   }
   if (!a.quiet) {
     // Said once the file is written: a run that fuses nothing leaves it as it was.
-    const bool replaced = !a.options.resume && map_existed && summary.frames_used > 0;
+    const bool replaced = !a.options.resume && summary.map_existed && summary.frames_used > 0;
     std::cout << summary.BriefReport() << "map: " << a.options.map_path
               << (replaced ? " (replaced the earlier file; --resume continues a map)" : "") << "\n";
-    if (fused && !a.picture.empty()) std::cout << "picture: " << a.picture << "\n";
+    if (summary.Fused() && !a.picture.empty()) std::cout << "picture: " << a.picture << "\n";
   }
   if (!a.json.empty()) WriteTextAtomically(a.json, summary.Json());
-  if (!fused) {
-    throw Error(a.sequence + ": no frame could be fused; " + a.options.map_path +
-                (map_existed ? " was left as it was" : " was not written"));
-  }
+  RequireFused(summary, a.sequence, a.options.map_path);
   if (summary.interrupted) throw Error("interrupted; the map holds the frames fused so far (continue with --resume)");
 }
 

@@ -8,9 +8,9 @@
 
 #include "bag_options.h"
 #include "commands.h"
-#include "config_loading.h"
 #include "progress.h"
 #include "ssta/files/file_util.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/mount_calibration.h"
 
 namespace ssta::cli {

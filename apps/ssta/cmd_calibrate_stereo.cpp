@@ -7,9 +7,9 @@
 #include <sstream>
 
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/calibration/stereo_calibrator.h"
 #include "ssta/core/error.h"
+#include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 namespace {

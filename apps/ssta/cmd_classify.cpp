@@ -5,9 +5,9 @@
 
 #include "bag_options.h"
 #include "commands.h"
-#include "config_loading.h"
 #include "progress.h"
 #include "ssta/io/image_io.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/pipeline/frame_report.h"
 #include "ssta/pipeline/sequence_classifier.h"
 

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/files/file_util.h"
+#include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 

@@ -16,7 +16,6 @@
 #include <unistd.h>
 
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/bench/stereo_bench.h"
 #include "ssta/eval/disparity_evaluator.h"
 #include "ssta/files/file_util.h"
+#include "ssta/pipeline/config.h"
 
 namespace ssta::cli {
 namespace {

@@ -11,8 +11,8 @@
 #include <vector>
 
 #include "commands.h"
-#include "config_loading.h"
 #include "ssta/core/error.h"
+#include "ssta/pipeline/config.h"
 #include "ssta/synth/sequence_synthesizer.h"
 
 namespace ssta::cli {

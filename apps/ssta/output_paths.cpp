@@ -22,11 +22,10 @@ bool NamesAFolder(const std::string& path) {
 CLI::Validator FileOrPrefix(bool prefix) {
   return CLI::Validator(
       [prefix](std::string& path) -> std::string {
-        if (NamesAFolder(path)) {
-          return path + (prefix ? ": is a folder; give a prefix such as " + (fs::path(path) / "map").string()
-                                : std::string(": is a folder; give a file name"));
+        if (prefix && NamesAFolder(path)) {
+          return path + ": is a folder; give a prefix such as " + (fs::path(path) / "map").string();
         }
-        const std::string problem = ParentFolderProblem(path);
+        const std::string problem = OutputFileProblem(path);
         return problem.empty() ? "" : path + ": " + problem;
       },
       prefix ? "PREFIX" : "FILE");

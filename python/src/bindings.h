@@ -1,7 +1,7 @@
 #pragma once
 
-// Shared by the two translation units of the Python module: argument checks and the exceptions
-// they raise. Conventions (docs/python.md): a bad argument raises ValueError naming it; a
+// Shared by the translation units of the Python module: argument checks, the exceptions they
+// raise, and each unit's Bind function. Conventions (docs/python.md): a bad argument raises ValueError naming it; a
 // missing input file FileNotFoundError naming the file; the library's ssta::Error becomes
 // ssta.Error (a ValueError) with the message the command line prints.
 
@@ -12,9 +12,12 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <Eigen/Geometry>
 
 #include "ssta/core/error.h"
 
@@ -121,6 +124,34 @@ inline void RegisterErrors(py::module_& m) {
   });
 }
 
-void BindMap(py::module_& m);
+/// `t` as a 4x4 float64 array.
+inline py::array_t<double> Matrix4(const Eigen::Isometry3d& t) {
+  py::array_t<double> a({4, 4});
+  const Eigen::Matrix4d m = t.matrix();
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) a.mutable_at(r, c) = m(r, c);
+  }
+  return a;
+}
+
+void BindMap(py::module_& m);  // map_bindings.cpp
+
+#if !SSTA_PYTHON_MAP_ONLY
+}  // namespace ssta::python
+namespace ssta {
+struct Config;
+class Sequence;
+}  // namespace ssta
+namespace ssta::python {
+
+void BindConfig(py::module_& m);  // config_bindings.cpp
+void BindCalibration(py::module_& m);  // frame_bindings.cpp
+void BindFrames(py::module_& m);  // frame_bindings.cpp
+void BindBuildMap(py::module_& m);  // build_map_bindings.cpp
+
+/// The config LoadLayeredConfig gives, with FileNotFoundError for a missing file
+/// (config_bindings.cpp).
+std::shared_ptr<Config> LoadConfigFiles(const std::vector<std::string>& files, const Sequence* sequence);
+#endif
 
 }  // namespace ssta::python

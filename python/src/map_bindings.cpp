@@ -381,15 +381,6 @@ py::dict FieldsDict(const O& options) {
   return out;
 }
 
-py::array_t<double> Matrix4(const Eigen::Isometry3d& t) {
-  py::array_t<double> a({4, 4});
-  const Eigen::Matrix4d m = t.matrix();
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) a.mutable_at(r, c) = m(r, c);
-  }
-  return a;
-}
-
 py::dict Metadata(const MapHandle& handle) {
   const TraversabilityMap& map = handle.map;
   const MapMetadata& meta = map.metadata();

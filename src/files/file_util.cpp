@@ -165,6 +165,12 @@ std::string ParentFolderProblem(const std::string& path) {
                                 : "the folder " + parent.string() + " does not exist";
 }
 
+std::string OutputFileProblem(const std::string& path) {
+  std::error_code ec;
+  if (path.empty() || path.back() == '/' || fs::is_directory(path, ec)) return "is a folder; give a file name";
+  return ParentFolderProblem(path);
+}
+
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,
                          bool remove_stale) {
   const fs::path target(path);

@@ -145,12 +145,6 @@ float DecayTowardsZero(float l, double decay) {
   return l;
 }
 
-/// The voxel's verdict is traversable (as DescribeCell gives it: ties go to the worse class).
-bool HeldAsTraversable(const TravNode& node) {
-  const auto& l = node.class_log_odds;
-  return l[0] > 0.0f && l[0] > l[1] && l[0] > l[2];
-}
-
 }  // namespace
 
 /// InsertFrame's buffers, by step.

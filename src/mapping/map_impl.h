@@ -50,7 +50,6 @@ std::unique_ptr<TravOcTree> MakeTree(const MapOptions& options);
 CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, const TravNode* node,
                       const octomap::OcTreeKey& key);
 
-/// Whether `node` is occupied: its occupancy at or above the tree's threshold.
 /// The probabilities of the three classes from a voxel's class log-odds (softmax), the
 /// traversable one raised by `prior_traversable` (MapOptions::class_prior_traversable_log_odds).
 inline std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>& log_odds, double prior_traversable) {
@@ -63,8 +62,17 @@ inline std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>&
   return p;
 }
 
+/// Whether `node` is occupied: its occupancy at or above the tree's threshold.
 inline bool NodeOccupied(const TravOcTree& tree, const TravNode& node) {
   return node.getLogOdds() >= tree.getOccupancyThresLog();
+}
+
+/// Whether the voxel's verdict is traversable, as DescribeCell gives it (ties go to the worse
+/// class). Fusion spares such ground from free-space rays (free_space_keeps_traversable) and
+/// the merge must spare the same voxels, so both ask here.
+inline bool HeldAsTraversable(const TravNode& node) {
+  const auto& l = node.class_log_odds;
+  return l[0] > 0.0f && l[0] > l[1] && l[0] > l[2];
 }
 
 /// Centre [m] of the voxels with key `k` along one axis.

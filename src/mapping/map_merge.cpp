@@ -30,12 +30,6 @@ float WeightedMean(float a, double wa, float b, double wb) {
   return static_cast<float>((wa * a + wb * b) / (wa + wb));
 }
 
-/// The voxel's verdict is traversable (as frame_fusion.cpp's HeldAsTraversable).
-bool HeldAsTraversable(const internal::TravNode& node) {
-  const auto& l = node.class_log_odds;
-  return l[0] > 0.0f && l[0] > l[1] && l[0] > l[2];
-}
-
 /// The per-voxel rule of MergeMapInto (map_merge.h). Every step is symmetric in its two
 /// operands, so merge(A, B) and merge(B, A) hold the same bits.
 struct CombineEvidence {
@@ -51,7 +45,7 @@ struct CombineEvidence {
   /// map's misses are left out where the other map held the voxel as traversable ground
   /// before the passing map's last frame.
   bool Spared(const internal::TravNode& ground, std::int64_t passing_last_ns) const {
-    return keeps_traversable && HeldAsTraversable(ground) && ground.last_seen_ns < passing_last_ns;
+    return keeps_traversable && internal::HeldAsTraversable(ground) && ground.last_seen_ns < passing_last_ns;
   }
   /// What `passed` adds to the occupancy of ground the other map held: its hits without its
   /// misses. A map keeps only the net log-odds, so its hits are estimated from its

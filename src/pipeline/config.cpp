@@ -5,29 +5,12 @@
 #include "ssta/files/yaml_reader.h"
 #include "pipeline/config_text.h"
 #include "ssta/files/file_util.h"
+#include "ssta/io/sequence.h"
 
 namespace ssta {
 namespace {
 
 using internal::YamlSection;
-
-/// Calls `visit(name, what, section)` for every section of `config`, in file order: the one
-/// list of the config's sections.
-template <class C, class Visit>
-void ForEachSection(C& config, Visit&& visit) {
-  visit("vehicle", "what the vehicle can drive over (docs/interfaces.md, section 3)", config.vehicle);
-  visit("rectification", "", config.rectification);
-  visit("stereo", "stereo matching (paper III-B)", config.stereo);
-  visit("triangulation", "Z = f b / d, X = (u - cu) Z / f, Y = (v - cv) Z / f", config.triangulation);
-  visit("normals", "per-pixel normals from integral images (paper III-C)", config.normals);
-  visit("segmentation", "4-connected components of normals (paper III-D, eq. 1)", config.segmentation);
-  visit("analysis", "SSTA on each segment (paper III-E) and the label refinements after it", config.analysis);
-  visit("gravity", "up direction per frame, for the slopes and the map's poses", config.gravity);
-  visit("attitude", "IMU attitude filter (Mahony-style complementary filter)", config.attitude);
-  visit("map", "fusion into the persistent map (build-map; maps/README.md)", config.map);
-  visit("refinement", "Ceres refinement of cam0's mount from the ground (docs/mount_calibration.md)",
-        config.refinement);
-}
 
 /// `text` broken into lines of at most `width` characters at spaces.
 std::vector<std::string> Wrap(const std::string& text, std::size_t width) {
@@ -68,7 +51,7 @@ void WriteSection(const char* name, const char* what, const O& options, bool com
 std::string WriteConfig(const Config& config, bool comments) {
   std::ostringstream y;
   bool first = true;
-  ForEachSection(config, [&](const char* name, const char* what, const auto& section) {
+  ForEachConfigSection(config, [&](const char* name, const char* what, const auto& section) {
     if (comments && !first) y << "\n";
     first = false;
     WriteSection(name, what, section, comments, &y);
@@ -80,7 +63,7 @@ std::string WriteConfig(const Config& config, bool comments) {
 
 bool Config::IsValid(std::string* error) const {
   bool valid = true;
-  ForEachSection(*this, [&](const char* name, const char*, const auto& section) {
+  ForEachConfigSection(*this, [&](const char* name, const char*, const auto& section) {
     std::string e;
     if (valid && !section.IsValid(&e)) valid = Fail(error, std::string(name) + "." + e);
   });
@@ -94,7 +77,7 @@ void ApplyConfigFile(const std::string& path, Config* config) {
 void internal::ApplyConfigText(const std::string& text, const std::string& path, Config* config) {
   YamlSection root(internal::ParseYaml(text, path), path, "");
   Config c = *config;
-  ForEachSection(c, [&](const char* name, const char*, auto& section) {
+  ForEachConfigSection(c, [&](const char* name, const char*, auto& section) {
     YamlSection s = root.Child(name);
     ReadOptions(s, std::decay_t<decltype(section)>::Fields(), &section);
     if (std::string(name) == "vehicle") {  // labels for people (config/vehicles/*.yaml)
@@ -107,6 +90,13 @@ void internal::ApplyConfigText(const std::string& text, const std::string& path,
   std::string error;
   if (!c.IsValid(&error)) throw Error(path + ": " + error);
   *config = c;
+}
+
+Config LoadLayeredConfig(const Sequence* sequence, const std::vector<std::string>& files) {
+  Config config;
+  if (sequence && sequence->vehicle_config()) ApplyConfigFile(*sequence->vehicle_config(), &config);
+  for (const std::string& file : files) ApplyConfigFile(file, &config);
+  return config;
 }
 
 Config LoadConfig(const std::string& path) {

@@ -425,7 +425,22 @@ class MapBuilder {
 
 BuildMapSummary BuildMap(const Sequence& sequence, const std::string& sequence_name, const Config& config,
                          const BuildMapOptions& options, const Progress& progress, const std::atomic<bool>* stop) {
-  return MapBuilder(sequence, sequence_name, config, options, progress, stop).Run();
+  std::error_code ec;
+  const bool map_existed = std::filesystem::exists(options.map_path, ec);
+  BuildMapSummary summary = MapBuilder(sequence, sequence_name, config, options, progress, stop).Run();
+  summary.map_existed = map_existed;
+  return summary;
+}
+
+void RequireFused(const BuildMapSummary& summary, const std::string& sequence, const std::string& map_path) {
+  if (summary.Fused()) return;
+  throw Error(sequence + ": no frame could be fused; " + map_path +
+              (summary.map_existed ? " was left as it was" : " was not written"));
+}
+
+std::string SequenceNameOf(const std::string& path) {
+  const std::string name = std::filesystem::path(path).lexically_normal().filename().string();
+  return name.empty() ? path : name;
 }
 
 std::string BuildMapSummary::BriefReport() const {
@@ -440,7 +455,7 @@ std::string BuildMapSummary::BriefReport() const {
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  no verdicts " << s.timestamp_ns << ": " << s.reason << "\n";
   if (!gravity.empty()) r << "gravity: " << gravity << "\n";
-  if (frames_used == 0 && frames_already_in_map == 0) {  // BuildMap wrote nothing
+  if (!Fused()) {  // BuildMap wrote nothing
     r << "map: nothing fused, the file was not written"
       << (map_file_bytes > 0 ? " (the earlier one, " + std::to_string(map_file_bytes / 1024) + " KiB, is as it was)" : "")
       << "\n";

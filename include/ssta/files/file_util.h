@@ -19,6 +19,11 @@ void WriteFileAtomically(const std::string& path, const std::function<void(const
 /// `path` has none.
 std::string ParentFolderProblem(const std::string& path);
 
+/// What keeps a file from being written at `path`: "is a folder; give a file name" when it
+/// names a folder (or ends in '/'), else ParentFolderProblem; "" when it can be written. The
+/// check `--map FILE` and Python's map paths make before any work.
+std::string OutputFileProblem(const std::string& path);
+
 /// The one writer of the file at `path` (a map): an exclusive lock held from construction to
 /// destruction. Writers of a map (`build-map`, `merge-maps --out`, Python's `build_map`) hold
 /// it for their whole run; readers never take it and read the last complete save (saves are

@@ -65,12 +65,25 @@ struct BuildMapSummary {
   std::size_t points_inserted = 0;
   double wall_s = 0.0;
   bool interrupted = false;  ///< stopped early on request; the map holds what was fused
+  bool map_existed = false;  ///< a file was at map_path when the run started
   /// What the online mount refinement did (config.refinement.online); nullopt when off.
   std::optional<OnlineRefinementSummary> refinement;
 
+  /// Whether the map at map_path holds the sequence: the run fused a frame, or found every
+  /// frame it could use already in the resumed map.
+  bool Fused() const { return frames_used > 0 || frames_already_in_map > 0; }
   std::string BriefReport() const;
   std::string Json() const;
 };
+
+/// Unless summary.Fused(), throws ssta::Error "SEQUENCE: no frame could be fused; MAP was left
+/// as it was" ("... was not written" when there was no file): a run that fuses nothing fails,
+/// after its report, for `build-map` and Python's build_map alike.
+void RequireFused(const BuildMapSummary& summary, const std::string& sequence, const std::string& map_path);
+
+/// The name a run records for the sequence at `path` (MapMetadata): its folder or file name,
+/// or `path` itself when it has none.
+std::string SequenceNameOf(const std::string& path);
 
 /// Fuses one classified frame into `map` the way BuildMap does: its points (MapPointsOfFrame with
 /// config.map and config.vehicle, written into `*points`, which is cleared first and keeps its
