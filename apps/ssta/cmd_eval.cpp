@@ -181,19 +181,8 @@ void Report(const Summary& summary, const EvalArguments& args) {
   }
 }
 
-}  // namespace
-
-void RegisterEval(CLI::App& app) {
-  CLI::App* eval = app.add_subcommand(
-      "eval", "Score labels, an exported grid or query answers against synthetic ground truth, and disparities "
-              "against disparity truth");
-  eval->require_subcommand(1);
-  eval->footer(
-      "Scored samples have truth 1..3 (255 = don't care, 0 and 4 are not scored). accuracy = "
-      "correct / scored (a predicted 0 or 4 is wrong); coverage = share of scored samples with a "
-      "verdict 1..3; IoU_c = TP / (TP + FP + FN); mean IoU over classes 1..3 present in the truth "
-      "or prediction of scored samples.");
-
+/// `eval labels`: per-pixel label images, frame by frame.
+void AddLabelsEval(CLI::App* eval) {
   auto labels_args = std::make_shared<EvalArguments>();
   CLI::App* labels = eval->add_subcommand(
       "labels", "Score per-pixel label images (output of `ssta classify`) frame by frame");
@@ -218,7 +207,10 @@ void RegisterEval(CLI::App& app) {
       std::cout << "pictures: " << labels_args->pictures_dir << "\n";
     }
   });
+}
 
+/// `eval grid`: an exported grid against gt/grid_classes.png.
+void AddGridEval(CLI::App* eval) {
   auto grid_args = std::make_shared<EvalArguments>();
   CLI::App* grid = eval->add_subcommand(
       "grid", "Score an exported grid (ssta export --format grid) against gt/grid_classes.png");
@@ -236,7 +228,10 @@ void RegisterEval(CLI::App& app) {
       std::cout << "picture: " << grid_args->picture_path << "\n";
     }
   });
+}
 
+/// `eval query`: the CSV answers of `ssta query`.
+void AddQueryEval(CLI::App* eval) {
   auto query_args = std::make_shared<EvalArguments>();
   CLI::App* query = eval->add_subcommand(
       "query", "Score the CSV answers of `ssta query` against the ground-truth grid");
@@ -246,7 +241,10 @@ void RegisterEval(CLI::App& app) {
     RequireTruthVehicle(*query_args);
     Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);
   });
+}
 
+/// `eval footprints`: a map's footprint verdicts, the answers a planner gets.
+void AddFootprintsEval(CLI::App* eval) {
   auto fp_args = std::make_shared<FootprintArguments>();
   CLI::App* footprints = eval->add_subcommand(
       "footprints",
@@ -277,7 +275,25 @@ void RegisterEval(CLI::App& app) {
       "non-traversable footprints answered traversable or semi-traversable; falsely blocked: truly "
       "traversable ones answered non-traversable.");
   footprints->callback([fp_args] { Report(EvaluateMapFootprints(*fp_args), fp_args->eval); });
+}
 
+}  // namespace
+
+void RegisterEval(CLI::App& app) {
+  CLI::App* eval = app.add_subcommand(
+      "eval", "Score labels, an exported grid or query answers against synthetic ground truth, and disparities "
+              "against disparity truth");
+  eval->require_subcommand(1);
+  eval->footer(
+      "Scored samples have truth 1..3 (255 = don't care, 0 and 4 are not scored). accuracy = "
+      "correct / scored (a predicted 0 or 4 is wrong); coverage = share of scored samples with a "
+      "verdict 1..3; IoU_c = TP / (TP + FP + FN); mean IoU over classes 1..3 present in the truth "
+      "or prediction of scored samples.");
+
+  AddLabelsEval(eval);
+  AddGridEval(eval);
+  AddQueryEval(eval);
+  AddFootprintsEval(eval);
   AddDisparityEval(eval);
 }
 

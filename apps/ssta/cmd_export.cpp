@@ -99,6 +99,138 @@ void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_n
       ->capture_default_str();
 }
 
+namespace {
+
+/// The options that `--format` ignores are errors naming them, as are bad values of the grid's.
+void CheckFormatOptions(const ExportArgs& args, const CLI::App& cmd) {
+  const std::string& f = args.format;
+  const bool gridded = f == "grid" || f == "picture" || f == "mcap";
+  if (!gridded) {  // the grid's options would be ignored: say so instead
+    for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
+      if (cmd.count(option) > 0) throw Error(std::string(option) + ": only for --format grid, picture or mcap");
+    }
+  }
+  if (f != "picture" && args.flat) throw Error("--flat: only for --format picture");
+  for (const char* option : {"--headings", "--heading-footprint"}) {
+    if (f != "grid" && f != "mcap" && cmd.count(option) > 0) {
+      throw Error(std::string(option) + ": only for --format grid or mcap");
+    }
+  }
+  if (cmd.count("--heading-footprint") > 0 && cmd.count("--headings") == 0) {
+    throw Error("--heading-footprint: only with --headings");
+  }
+  for (const char* option : {"--compression", "--frame"}) {
+    if (f != "mcap" && cmd.count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
+  }
+  if (args.frame.empty()) throw Error("--frame: must not be empty");
+  if (cmd.count("--resolution") > 0 && !(args.resolution_m > 0.0 && std::isfinite(args.resolution_m))) {
+    throw Error("--resolution: must be a positive number of metres");
+  }
+}
+
+/// What `--format` writes after the prefix: one suffix per file.
+std::vector<std::string> ExportSuffixes(const ExportArgs& args) {
+  const std::string& f = args.format;
+  std::vector<std::string> suffixes =
+      f == "grid"      ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
+      : f == "picture" ? std::vector<std::string>{".png"}
+      : f == "mcap"    ? std::vector<std::string>{".mcap"}
+                       : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
+  if (f == "grid") {
+    for (int k = 0; k < args.headings; ++k) suffixes.push_back(HeadingCostPath("", k, args.headings));
+  }
+  return suffixes;
+}
+
+/// The grid's options from the command line; the heading footprint and the region checked.
+GridExportOptions GridOptionsOf(const ExportArgs& args) {
+  GridExportOptions options;
+  options.resolution_m = args.resolution_m;
+  options.fill_min_neighbours = args.fill_min_neighbours;
+  options.local_ground_radius_m = args.local_ground_radius_m;
+  options.headings.headings = args.headings;
+  options.headings.footprint_length_m = args.heading_footprint[0];
+  options.headings.footprint_width_m = args.heading_footprint[1];
+  std::string heading_error;
+  if (!options.headings.IsValid(&heading_error)) {
+    throw Error("--heading-footprint: " + heading_error.substr(heading_error.find(':') + 2));
+  }
+  if (!args.region.empty()) {
+    const auto& r = args.region;
+    if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
+    options.region = Eigen::AlignedBox2d(Eigen::Vector2d(r[0], r[1]), Eigen::Vector2d(r[2], r[3]));
+  }
+  return options;
+}
+
+/// Writes `map` in args.format under args.out; what was written, for people.
+std::string WriteExport(const TraversabilityMap& map, const ExportArgs& args, const GridExportOptions& options,
+                        const std::vector<std::string>& suffixes) {
+  const std::string& f = args.format;
+  std::string written;
+  if (f == "picture") {
+    MapPictureOptions picture_options;
+    picture_options.grid = options;
+    picture_options.hillshade = !args.flat;
+    picture_options.title = std::filesystem::path(args.map).filename().string();
+    const MapPicture picture = ExportPicture(map, args.out + ".png", picture_options);
+    written = args.out + ".png (" + std::to_string(picture.grid.width()) + "x" +
+              std::to_string(picture.grid.height()) + " cells of " + std::to_string(picture.grid.resolution_m).substr(0, 5) +
+              " m)";
+  } else if (f == "grid") {
+    GridExportChanges changes;
+    const GridProjection grid = ExportGrid(map, args.out, options, &changes);
+    std::string files;  // each file whole: a brace expansion would read "yard._classes.png"
+    for (const std::string& suffix : suffixes) files += (files.empty() ? "" : ", ") + args.out + suffix;
+    written = files + " (" + std::to_string(grid.width()) + "x" +
+              std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
+              " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
+              " holes filled)";
+  } else if (f == "mcap") {
+    McapExportOptions mcap;
+    mcap.grid = options;
+    mcap.zstd = args.compression == "zstd";
+    mcap.map_frame = args.frame;
+    const McapExportSummary s = ExportMcap(map, args.out + ".mcap", mcap);
+    written = args.out + ".mcap (" + std::to_string(s.bytes) + " bytes in " + std::to_string(s.chunks) +
+              " chunks; " + std::to_string(s.grid_width) + "x" + std::to_string(s.grid_height) + " cells" +
+              (args.headings > 0 ? " with " + std::to_string(args.headings) + " heading cost layers" : "") + ", " +
+              std::to_string(s.voxels) + " voxels, " + std::to_string(s.path_poses) + " path poses)";
+  } else if (f == "octovis") {
+    ExportOctovis(map, args.out + ".ot");
+    written = args.out + ".ot";
+  } else if (f == "ply") {
+    ExportPly(map, args.out + ".ply");
+    written = args.out + ".ply";
+  } else if (f == "pcd") {
+    ExportPcd(map, args.out + ".pcd");
+    written = args.out + ".pcd";
+  } else {
+    ExportCsv(map, args.out + ".csv");
+    written = args.out + ".csv";
+  }
+  return written;
+}
+
+/// `ssta export` once its options are parsed.
+void RunExport(ExportArgs* args, const CLI::App& cmd) {
+  CheckFormatOptions(*args, cmd);
+  // mcap: `--out map.mcap` names the file itself.
+  const bool named_mcap = args->format == "mcap" && args->out.size() > 5 && args->out.substr(args->out.size() - 5) == ".mcap";
+  if (named_mcap) args->out.resize(args->out.size() - 5);
+  const std::vector<std::string> suffixes = ExportSuffixes(*args);
+  for (const std::string& suffix : suffixes) {
+    if (SameFile(args->out + suffix, args->map)) {
+      throw Error("--out " + args->out + ": would write " + args->out + suffix + " over the map it reads (" +
+                  args->map + "); choose another prefix, e.g. " + args->out + "_" + args->format);
+    }
+  }
+  const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
+  std::cout << "wrote " << WriteExport(map, *args, GridOptionsOf(*args), suffixes) << "\n";
+}
+
+}  // namespace
+
 void RegisterExport(CLI::App& app) {
   auto args = std::make_shared<ExportArgs>();
   CLI::App* cmd = app.add_subcommand(
@@ -141,108 +273,7 @@ void RegisterExport(CLI::App& app) {
   cmd->add_option("--frame", args->frame,
                   "mcap: the frame of its messages; /tf_static places the map's world frame in it (identity)")
       ->capture_default_str();
-  cmd->callback([args, cmd] {
-    const std::string& f = args->format;
-    const bool gridded = f == "grid" || f == "picture" || f == "mcap";
-    if (!gridded) {  // the grid's options would be ignored: say so instead
-      for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
-        if (cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format grid, picture or mcap");
-      }
-    }
-    if (f != "picture" && args->flat) throw Error("--flat: only for --format picture");
-    for (const char* option : {"--headings", "--heading-footprint"}) {
-      if (f != "grid" && f != "mcap" && cmd->count(option) > 0) {
-        throw Error(std::string(option) + ": only for --format grid or mcap");
-      }
-    }
-    if (cmd->count("--heading-footprint") > 0 && cmd->count("--headings") == 0) {
-      throw Error("--heading-footprint: only with --headings");
-    }
-    for (const char* option : {"--compression", "--frame"}) {
-      if (f != "mcap" && cmd->count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
-    }
-    if (args->frame.empty()) throw Error("--frame: must not be empty");
-    // mcap: `--out map.mcap` names the file itself.
-    const bool named_mcap = f == "mcap" && args->out.size() > 5 && args->out.substr(args->out.size() - 5) == ".mcap";
-    if (named_mcap) args->out.resize(args->out.size() - 5);
-    if (cmd->count("--resolution") > 0 && !(args->resolution_m > 0.0 && std::isfinite(args->resolution_m))) {
-      throw Error("--resolution: must be a positive number of metres");
-    }
-    std::vector<std::string> suffixes =
-        f == "grid"      ? std::vector<std::string>{".png", "_classes.png", ".pgm", ".yaml"}
-        : f == "picture" ? std::vector<std::string>{".png"}
-        : f == "mcap"    ? std::vector<std::string>{".mcap"}
-                         : std::vector<std::string>{f == "octovis" ? ".ot" : "." + f};
-    if (f == "grid") {
-      for (int k = 0; k < args->headings; ++k) suffixes.push_back(HeadingCostPath("", k, args->headings));
-    }
-    for (const std::string& suffix : suffixes) {
-      if (SameFile(args->out + suffix, args->map)) {
-        throw Error("--out " + args->out + ": would write " + args->out + suffix + " over the map it reads (" +
-                    args->map + "); choose another prefix, e.g. " + args->out + "_" + f);
-      }
-    }
-    const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
-    std::string written;
-    GridExportOptions options;
-    options.resolution_m = args->resolution_m;
-    options.fill_min_neighbours = args->fill_min_neighbours;
-    options.local_ground_radius_m = args->local_ground_radius_m;
-    options.headings.headings = args->headings;
-    options.headings.footprint_length_m = args->heading_footprint[0];
-    options.headings.footprint_width_m = args->heading_footprint[1];
-    std::string heading_error;
-    if (!options.headings.IsValid(&heading_error)) {
-      throw Error("--heading-footprint: " + heading_error.substr(heading_error.find(':') + 2));
-    }
-    if (!args->region.empty()) {
-      const auto& r = args->region;
-      if (!(r[2] > r[0] && r[3] > r[1])) throw Error("--region: needs XMIN < XMAX and YMIN < YMAX");
-      options.region = Eigen::AlignedBox2d(Eigen::Vector2d(r[0], r[1]), Eigen::Vector2d(r[2], r[3]));
-    }
-    if (f == "picture") {
-      MapPictureOptions picture_options;
-      picture_options.grid = options;
-      picture_options.hillshade = !args->flat;
-      picture_options.title = std::filesystem::path(args->map).filename().string();
-      const MapPicture picture = ExportPicture(map, args->out + ".png", picture_options);
-      written = args->out + ".png (" + std::to_string(picture.grid.width()) + "x" +
-                std::to_string(picture.grid.height()) + " cells of " + std::to_string(picture.grid.resolution_m).substr(0, 5) +
-                " m)";
-    } else if (f == "grid") {
-      GridExportChanges changes;
-      const GridProjection grid = ExportGrid(map, args->out, options, &changes);
-      std::string files;  // each file whole: a brace expansion would read "yard._classes.png"
-      for (const std::string& suffix : suffixes) files += (files.empty() ? "" : ", ") + args->out + suffix;
-      written = files + " (" + std::to_string(grid.width()) + "x" +
-                std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
-                " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
-                " holes filled)";
-    } else if (f == "mcap") {
-      McapExportOptions mcap;
-      mcap.grid = options;
-      mcap.zstd = args->compression == "zstd";
-      mcap.map_frame = args->frame;
-      const McapExportSummary s = ExportMcap(map, args->out + ".mcap", mcap);
-      written = args->out + ".mcap (" + std::to_string(s.bytes) + " bytes in " + std::to_string(s.chunks) +
-                " chunks; " + std::to_string(s.grid_width) + "x" + std::to_string(s.grid_height) + " cells" +
-                (args->headings > 0 ? " with " + std::to_string(args->headings) + " heading cost layers" : "") + ", " +
-                std::to_string(s.voxels) + " voxels, " + std::to_string(s.path_poses) + " path poses)";
-    } else if (f == "octovis") {
-      ExportOctovis(map, args->out + ".ot");
-      written = args->out + ".ot";
-    } else if (f == "ply") {
-      ExportPly(map, args->out + ".ply");
-      written = args->out + ".ply";
-    } else if (f == "pcd") {
-      ExportPcd(map, args->out + ".pcd");
-      written = args->out + ".pcd";
-    } else {
-      ExportCsv(map, args->out + ".csv");
-      written = args->out + ".csv";
-    }
-    std::cout << "wrote " << written << "\n";
-  });
+  cmd->callback([args, cmd] { RunExport(args.get(), *cmd); });
 }
 
 }  // namespace ssta::cli

@@ -162,6 +162,52 @@ std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, c
   return QueryCsvRow(unknown);
 }
 
+/// The X,Y[,Z] points of --at or --points, checked.
+std::vector<std::vector<double>> QueryPoints(const QueryArgs& args) {
+  std::vector<std::vector<double>> points;
+  if (!args.at.empty()) {
+    if (args.at.size() < 2) throw Error("--at: expected X,Y or X,Y,Z");
+    for (double v : args.at) {
+      if (!std::isfinite(v)) throw Error("--at: NaN or infinite value");
+    }
+    points.push_back(args.at);
+  } else {
+    points = ReadPoints(args.points, 3);
+  }
+  for (const auto& p : points) {
+    if (args.as_exported && p.size() == 3) {
+      throw Error((args.at.empty() ? args.points + ": " : std::string("--at: ")) +
+                  "--as-exported answers X,Y points (the exported grid is 2D), got X,Y,Z");
+    }
+  }
+  return points;
+}
+
+/// `ssta query` once its options are parsed.
+void RunQuery(const QueryArgs& args) {
+  if (args.at.empty() && args.points.empty() && args.footprint.empty() && args.path.empty()) {
+    throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
+  }
+  const TraversabilityMap map = LoadMapForConfig(args.map, args.config);
+  if (!args.footprint.empty()) return AnswerFootprint(map, args);
+  if (!args.path.empty()) return AnswerPath(map, ReadPoints(args.path, 2), args);
+  const std::vector<std::vector<double>> points = QueryPoints(args);
+  // As exported: one projection of the points' bounding box when it is not too large (each
+  // answer is the same from any projection that holds it; ExportedSurface projects a point
+  // outside on its own), else one per point.
+  std::unique_ptr<ExportedSurface> exported;
+  if (args.as_exported) {
+    Eigen::AlignedBox2d box;
+    for (const auto& p : points) box.extend(Eigen::Vector2d(p[0], p[1]));
+    const double res = map.options().resolution_m;
+    const bool one_projection = box.sizes().x() / res * (box.sizes().y() / res) <= 4e6;
+    if (!one_projection) box = Eigen::AlignedBox2d(box.min(), box.min());
+    exported = std::make_unique<ExportedSurface>(map, box, args.exported);
+  }
+  std::cout << kQueryCsvHeader << "\n";
+  for (const auto& p : points) std::cout << Answer(map, p, exported.get()) << "\n";
+}
+
 }  // namespace
 
 void RegisterQuery(CLI::App& app) {
@@ -208,44 +254,7 @@ void RegisterQuery(CLI::App& app) {
                 "X,Y, footprints and paths: read the cells as the exported grid shows them (its local-ground and "
                 "hole-filling steps)",
                 &args->as_exported, &args->exported);
-  cmd->callback([args] {
-    if (args->at.empty() && args->points.empty() && args->footprint.empty() && args->path.empty()) {
-      throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
-    }
-    const TraversabilityMap map = LoadMapForConfig(args->map, args->config);
-    if (!args->footprint.empty()) return AnswerFootprint(map, *args);
-    if (!args->path.empty()) return AnswerPath(map, ReadPoints(args->path, 2), *args);
-    std::vector<std::vector<double>> points;
-    if (!args->at.empty()) {
-      if (args->at.size() < 2) throw Error("--at: expected X,Y or X,Y,Z");
-      for (double v : args->at) {
-        if (!std::isfinite(v)) throw Error("--at: NaN or infinite value");
-      }
-      points.push_back(args->at);
-    } else {
-      points = ReadPoints(args->points, 3);
-    }
-    for (const auto& p : points) {
-      if (args->as_exported && p.size() == 3) {
-        throw Error((args->at.empty() ? args->points + ": " : std::string("--at: ")) +
-                    "--as-exported answers X,Y points (the exported grid is 2D), got X,Y,Z");
-      }
-    }
-    // As exported: one projection of the points' bounding box when it is not too large (each
-    // answer is the same from any projection that holds it; ExportedSurface projects a point
-    // outside on its own), else one per point.
-    std::unique_ptr<ExportedSurface> exported;
-    if (args->as_exported) {
-      Eigen::AlignedBox2d box;
-      for (const auto& p : points) box.extend(Eigen::Vector2d(p[0], p[1]));
-      const double res = map.options().resolution_m;
-      const bool one_projection = box.sizes().x() / res * (box.sizes().y() / res) <= 4e6;
-      if (!one_projection) box = Eigen::AlignedBox2d(box.min(), box.min());
-      exported = std::make_unique<ExportedSurface>(map, box, args->exported);
-    }
-    std::cout << kQueryCsvHeader << "\n";
-    for (const auto& p : points) std::cout << Answer(map, p, exported.get()) << "\n";
-  });
+  cmd->callback([args] { RunQuery(*args); });
 }
 
 }  // namespace ssta::cli

@@ -97,14 +97,131 @@ std::string NameTheOption(const std::string& error) {
   return error;
 }
 
+/// What `ssta synth` parses: the options, and the texts turned into them once all are read.
+struct SynthArgs {
+  synth::SynthOptions options;
+  std::string out_dir, drop_frames;
+  std::vector<std::string> config_files, boxes;
+};
+
+/// --width ... --imu-rate: the rig and its motion.
+void AddRigOptions(CLI::App* cmd, synth::SynthOptions* options) {
+  cmd->add_option("--width", options->rig.width, "image width [px]")->capture_default_str();
+  cmd->add_option("--height", options->rig.height, "image height [px]")->capture_default_str();
+  cmd->add_option("--focal", options->rig.focal_px, "focal length [px]")->capture_default_str();
+  cmd->add_option("--baseline", options->rig.baseline_m, "stereo baseline [m]")->capture_default_str();
+  cmd->add_option("--camera-height", options->rig.camera_height_m, "cam0 height above ground [m]")
+      ->capture_default_str();
+  cmd->add_option("--camera-pitch-deg", options->rig.pitch_down_deg, "rig pitch down [deg]")
+      ->capture_default_str();
+  cmd->add_option("--rate", options->rig.rate_hz, "camera rate [Hz]")->capture_default_str();
+  cmd->add_option("--speed", options->motion.speed_mps, "vehicle speed [m/s]")->capture_default_str();
+  cmd->add_option("--weave", options->motion.weave_amplitude_m, "lateral weave of the path [m]")
+      ->capture_default_str();
+  cmd->add_option("--weave-period", options->motion.weave_period_s, "period of the weave [s]")
+      ->capture_default_str();
+  cmd->add_option("--imu-rate", options->motion.imu_rate_hz, "IMU and pose0 rate [Hz]")
+      ->capture_default_str();
+}
+
+/// --max-label-range ... --config: how the images and the truth are rendered.
+void AddRenderOptions(CLI::App* cmd, SynthArgs* args) {
+  cmd->add_option("--max-label-range", args->options.render.max_label_range_m,
+                  "labels beyond this range are 255 [m]")
+      ->capture_default_str();
+  cmd->add_option("--boundary-band", args->options.render.boundary_band_px,
+                  "labels within this many px of a class change are 255")
+      ->capture_default_str();
+  cmd->add_option("--supersample", args->options.render.supersample,
+                  "rays per pixel side for anti-aliasing (1 = off, 2 = 2x2: about 5x slower)")
+      ->capture_default_str();
+  cmd->add_option("--noise", args->options.render.sensor_noise_grey, "pixel noise std dev [grey levels]")
+      ->capture_default_str();
+  cmd->add_flag("!--no-shadows", args->options.render.shadows, "render without cast sun shadows");
+  cmd->add_option("--threads", args->options.render.threads,
+                  "render threads (0 = all cores); the output is the same for any count")
+      ->capture_default_str();
+  cmd->add_flag("!--grid-all-cells", args->options.grid_seen_only,
+                "classify every gt grid cell, also those no camera saw (default: those are 255)");
+  cmd->add_option("--grid-resolution", args->options.grid_resolution_m, "gt grid cell size [m]")
+      ->capture_default_str();
+  cmd->add_option("--config", args->config_files,
+                  "YAML config whose vehicle section sets the ground truth's thresholds (repeatable)");
+}
+
+/// --mount-pitch-error-deg ... --add-box: faults and additions to test against.
+void AddFaultOptions(CLI::App* cmd, SynthArgs* args) {
+  auto& f = args->options.faults;
+  cmd->add_option("--mount-pitch-error-deg", f.mount_pitch_error_deg,
+                  "rotate the rig in cam*/sensor.yaml about body y [deg] (positive: further down);\n"
+                  "images stay true, gt/extrinsics.yaml keeps the truth");
+  cmd->add_option("--mount-roll-error-deg", f.mount_roll_error_deg,
+                  "rotate the rig in cam*/sensor.yaml about body x [deg] (positive: right side down);\n"
+                  "images stay true, gt/extrinsics.yaml keeps the truth");
+  cmd->add_option("--pose-drift-roll-deg-per-s", f.pose_drift_roll_deg_per_s,
+                  "pose0 roll drifts linearly [deg/s]; images and IMU stay true");
+  cmd->add_option("--pose-drift-pitch-deg-per-s", f.pose_drift_pitch_deg_per_s,
+                  "pose0 pitch drifts linearly [deg/s]; images and IMU stay true");
+  cmd->add_option("--imu-gyro-noise", f.imu_gyro_noise, "gyro white noise per sample [rad/s]");
+  cmd->add_option("--imu-accel-noise", f.imu_accel_noise, "accel white noise per sample [m/s^2]");
+  cmd->add_option("--imu-gyro-bias", f.imu_gyro_bias, "gyro bias on every axis [rad/s]");
+  cmd->add_option("--imu-accel-bias", f.imu_accel_bias, "accel bias on every axis [m/s^2]");
+  cmd->add_option("--drop-frames", args->drop_frames,
+                  "frames missing from cam1 (cam0 and gt keep them): a fraction with a decimal\n"
+                  "point (0.1), or 0-based frame indices (3,7,12)");
+  cmd->add_option("--textureless-patches", f.textureless_patches,
+                  "number of flat untextured discs on the ground ahead");
+  cmd->add_option("--add-box", args->boxes,
+                  "X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG]: a wooden box (a crate) set on the ground, centred at X,Y\n"
+                  "[m], HEIGHT above the ground; in the truth too (repeatable; gt/rig.yaml lists them).\n"
+                  "The vehicle drives through one on its path: set it beside");
+}
+
+/// The random scene draws its rig and light from the seed too; what the command line gives wins.
+void ApplyDrawnRig(const CLI::App& cmd, synth::SynthOptions* options) {
+  synth::SynthOptions drawn = *options;
+  synth::DrawRandomRig(options->seed, &drawn);
+  const auto keep = [&](const char* flag, auto* value, auto drawn_value) {
+    if (cmd.count(flag) == 0) *value = drawn_value;
+  };
+  keep("--width", &options->rig.width, drawn.rig.width);
+  keep("--height", &options->rig.height, drawn.rig.height);
+  keep("--focal", &options->rig.focal_px, drawn.rig.focal_px);
+  keep("--baseline", &options->rig.baseline_m, drawn.rig.baseline_m);
+  keep("--camera-height", &options->rig.camera_height_m, drawn.rig.camera_height_m);
+  keep("--camera-pitch-deg", &options->rig.pitch_down_deg, drawn.rig.pitch_down_deg);
+  keep("--noise", &options->render.sensor_noise_grey, drawn.render.sensor_noise_grey);
+  options->render.sun_direction = drawn.render.sun_direction;
+  options->render.sun_gain = drawn.render.sun_gain;
+  options->render.ambient = drawn.render.ambient;
+  options->render.sky_grey = drawn.render.sky_grey;
+}
+
+/// `ssta synth` once its options are parsed.
+void RunSynth(const CLI::App& cmd, SynthArgs* args) {
+  ParseDropFrames(args->drop_frames, &args->options.faults);
+  for (const std::string& box : args->boxes) args->options.added_boxes.push_back(ParseBox(box));
+  if (args->options.scene == "random") ApplyDrawnRig(cmd, &args->options);
+  if (!args->config_files.empty()) args->options.vehicle = LoadLayeredConfig(nullptr, args->config_files).vehicle;
+  std::string error;
+  if (!args->options.IsValid(&error)) throw Error(NameTheOption(error));
+  const bool tty = isatty(fileno(stderr)) != 0;
+  Progress progress;
+  if (tty) {
+    progress = [](int done, int total) {
+      std::cerr << "\rsynth: frame " << done << " / " << total << std::flush;
+      if (done == total) std::cerr << "\n";
+    };
+  }
+  const synth::SynthSummary summary = synth::WriteSyntheticSequence(args->options, args->out_dir, progress);
+  std::cout << summary.BriefReport() << "\n";
+  if (!summary.warning.empty()) std::cerr << "ssta synth: warning: " << summary.warning << "\n";
+}
+
 }  // namespace
 
 void RegisterSynth(CLI::App& app) {
-  auto options = std::make_shared<synth::SynthOptions>();
-  auto out_dir = std::make_shared<std::string>();
-  auto drop_frames = std::make_shared<std::string>();
-  auto config_files = std::make_shared<std::vector<std::string>>();
-  auto boxes = std::make_shared<std::vector<std::string>>();
+  auto args = std::make_shared<SynthArgs>();
   CLI::App* cmd = app.add_subcommand(
       "synth", "Render a synthetic stereo sequence with exact ground truth (SEQ/gt/) for testing and scoring");
   cmd->footer(
@@ -132,111 +249,17 @@ void RegisterSynth(CLI::App& app) {
       "class and the step class of the true heights within the vehicle's step_radius_m. Labels are\n"
       "255 (don't care) for sky, beyond --max-label-range, pixels hidden from cam1 and a 1 px band\n"
       "on class boundaries.");
-  cmd->add_option("--scene", options->scene, "yard | hills | dropoff | forest | ramp | random (terrain, rig and light drawn from --seed)")
+  cmd->add_option("--scene", args->options.scene, "yard | hills | dropoff | forest | ramp | random (terrain, rig and light drawn from --seed)")
       ->capture_default_str();
-  cmd->add_option("--out", *out_dir, "output sequence folder SEQ")->required()->check(OutputFolder());
-  cmd->add_option("--frames", options->frames, "number of stereo frames")->capture_default_str();
-  cmd->add_option("--seed", options->seed, "seed of layout, texture and noise")->capture_default_str();
-  cmd->add_option("--ramp-slope-deg", options->ramp_slope_deg, "slope of the ramp scene [deg]")
+  cmd->add_option("--out", args->out_dir, "output sequence folder SEQ")->required()->check(OutputFolder());
+  cmd->add_option("--frames", args->options.frames, "number of stereo frames")->capture_default_str();
+  cmd->add_option("--seed", args->options.seed, "seed of layout, texture and noise")->capture_default_str();
+  cmd->add_option("--ramp-slope-deg", args->options.ramp_slope_deg, "slope of the ramp scene [deg]")
       ->capture_default_str();
-  cmd->add_option("--width", options->rig.width, "image width [px]")->capture_default_str();
-  cmd->add_option("--height", options->rig.height, "image height [px]")->capture_default_str();
-  cmd->add_option("--focal", options->rig.focal_px, "focal length [px]")->capture_default_str();
-  cmd->add_option("--baseline", options->rig.baseline_m, "stereo baseline [m]")->capture_default_str();
-  cmd->add_option("--camera-height", options->rig.camera_height_m, "cam0 height above ground [m]")
-      ->capture_default_str();
-  cmd->add_option("--camera-pitch-deg", options->rig.pitch_down_deg, "rig pitch down [deg]")
-      ->capture_default_str();
-  cmd->add_option("--rate", options->rig.rate_hz, "camera rate [Hz]")->capture_default_str();
-  cmd->add_option("--speed", options->motion.speed_mps, "vehicle speed [m/s]")->capture_default_str();
-  cmd->add_option("--weave", options->motion.weave_amplitude_m, "lateral weave of the path [m]")
-      ->capture_default_str();
-  cmd->add_option("--weave-period", options->motion.weave_period_s, "period of the weave [s]")
-      ->capture_default_str();
-  cmd->add_option("--imu-rate", options->motion.imu_rate_hz, "IMU and pose0 rate [Hz]")
-      ->capture_default_str();
-  cmd->add_option("--max-label-range", options->render.max_label_range_m,
-                  "labels beyond this range are 255 [m]")
-      ->capture_default_str();
-  cmd->add_option("--boundary-band", options->render.boundary_band_px,
-                  "labels within this many px of a class change are 255")
-      ->capture_default_str();
-  cmd->add_option("--supersample", options->render.supersample,
-                  "rays per pixel side for anti-aliasing (1 = off, 2 = 2x2: about 5x slower)")
-      ->capture_default_str();
-  cmd->add_option("--noise", options->render.sensor_noise_grey, "pixel noise std dev [grey levels]")
-      ->capture_default_str();
-  cmd->add_flag("!--no-shadows", options->render.shadows, "render without cast sun shadows");
-  cmd->add_option("--threads", options->render.threads,
-                  "render threads (0 = all cores); the output is the same for any count")
-      ->capture_default_str();
-  cmd->add_flag("!--grid-all-cells", options->grid_seen_only,
-                "classify every gt grid cell, also those no camera saw (default: those are 255)");
-  cmd->add_option("--grid-resolution", options->grid_resolution_m, "gt grid cell size [m]")
-      ->capture_default_str();
-  cmd->add_option("--config", *config_files,
-                  "YAML config whose vehicle section sets the ground truth's thresholds (repeatable)");
-  auto& f = options->faults;
-  cmd->add_option("--mount-pitch-error-deg", f.mount_pitch_error_deg,
-                  "rotate the rig in cam*/sensor.yaml about body y [deg] (positive: further down);\n"
-                  "images stay true, gt/extrinsics.yaml keeps the truth");
-  cmd->add_option("--mount-roll-error-deg", f.mount_roll_error_deg,
-                  "rotate the rig in cam*/sensor.yaml about body x [deg] (positive: right side down);\n"
-                  "images stay true, gt/extrinsics.yaml keeps the truth");
-  cmd->add_option("--pose-drift-roll-deg-per-s", f.pose_drift_roll_deg_per_s,
-                  "pose0 roll drifts linearly [deg/s]; images and IMU stay true");
-  cmd->add_option("--pose-drift-pitch-deg-per-s", f.pose_drift_pitch_deg_per_s,
-                  "pose0 pitch drifts linearly [deg/s]; images and IMU stay true");
-  cmd->add_option("--imu-gyro-noise", f.imu_gyro_noise, "gyro white noise per sample [rad/s]");
-  cmd->add_option("--imu-accel-noise", f.imu_accel_noise, "accel white noise per sample [m/s^2]");
-  cmd->add_option("--imu-gyro-bias", f.imu_gyro_bias, "gyro bias on every axis [rad/s]");
-  cmd->add_option("--imu-accel-bias", f.imu_accel_bias, "accel bias on every axis [m/s^2]");
-  cmd->add_option("--drop-frames", *drop_frames,
-                  "frames missing from cam1 (cam0 and gt keep them): a fraction with a decimal\n"
-                  "point (0.1), or 0-based frame indices (3,7,12)");
-  cmd->add_option("--textureless-patches", f.textureless_patches,
-                  "number of flat untextured discs on the ground ahead");
-  cmd->add_option("--add-box", *boxes,
-                  "X,Y,LENGTH,WIDTH,HEIGHT[,YAW_DEG]: a wooden box (a crate) set on the ground, centred at X,Y\n"
-                  "[m], HEIGHT above the ground; in the truth too (repeatable; gt/rig.yaml lists them).\n"
-                  "The vehicle drives through one on its path: set it beside");
-  cmd->callback([cmd, options, out_dir, drop_frames, config_files, boxes] {
-    ParseDropFrames(*drop_frames, &options->faults);
-    for (const std::string& box : *boxes) options->added_boxes.push_back(ParseBox(box));
-    if (options->scene == "random") {
-      // The rig and the light are drawn from the seed too; options given on the command line win.
-      synth::SynthOptions drawn = *options;
-      synth::DrawRandomRig(options->seed, &drawn);
-      const auto keep = [&](const char* flag, auto* value, auto drawn_value) {
-        if (cmd->count(flag) == 0) *value = drawn_value;
-      };
-      keep("--width", &options->rig.width, drawn.rig.width);
-      keep("--height", &options->rig.height, drawn.rig.height);
-      keep("--focal", &options->rig.focal_px, drawn.rig.focal_px);
-      keep("--baseline", &options->rig.baseline_m, drawn.rig.baseline_m);
-      keep("--camera-height", &options->rig.camera_height_m, drawn.rig.camera_height_m);
-      keep("--camera-pitch-deg", &options->rig.pitch_down_deg, drawn.rig.pitch_down_deg);
-      keep("--noise", &options->render.sensor_noise_grey, drawn.render.sensor_noise_grey);
-      options->render.sun_direction = drawn.render.sun_direction;
-      options->render.sun_gain = drawn.render.sun_gain;
-      options->render.ambient = drawn.render.ambient;
-      options->render.sky_grey = drawn.render.sky_grey;
-    }
-    if (!config_files->empty()) options->vehicle = LoadLayeredConfig(nullptr, *config_files).vehicle;
-    std::string error;
-    if (!options->IsValid(&error)) throw Error(NameTheOption(error));
-    const bool tty = isatty(fileno(stderr)) != 0;
-    Progress progress;
-    if (tty) {
-      progress = [](int done, int total) {
-        std::cerr << "\rsynth: frame " << done << " / " << total << std::flush;
-        if (done == total) std::cerr << "\n";
-      };
-    }
-    const synth::SynthSummary summary = synth::WriteSyntheticSequence(*options, *out_dir, progress);
-    std::cout << summary.BriefReport() << "\n";
-    if (!summary.warning.empty()) std::cerr << "ssta synth: warning: " << summary.warning << "\n";
-  });
+  AddRigOptions(cmd, &args->options);
+  AddRenderOptions(cmd, args.get());
+  AddFaultOptions(cmd, args.get());
+  cmd->callback([cmd, args] { RunSynth(*cmd, args.get()); });
 }
 
 }  // namespace ssta::cli

@@ -20,8 +20,64 @@
 namespace ssta::python {
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// build_map
+// The check `build-map --map` makes while parsing, before any work: FileNotFoundError for a
+// missing folder, ValueError for a path that cannot be written.
+void CheckMapPath(const std::string& map_path) {
+  const std::string problem = OutputFileProblem(map_path);
+  if (problem.empty()) return;
+  const std::string folder = std::filesystem::path(map_path).parent_path().string();
+  std::error_code ec;
+  if (!folder.empty() && !std::filesystem::exists(folder, ec)) throw MissingFile(map_path + ": " + problem, folder);
+  throw py::value_error("map_path: " + map_path + ": " + problem);
+}
+
+// The config of build_map's `config` argument, layered as the command line layers it:
+// defaults, the sequence's vehicle.yaml, the files given. A Config object is taken as it is.
+std::shared_ptr<Config> ConfigArg(const py::object& config_arg, const Sequence& sequence) {
+  if (config_arg.is_none()) return LoadConfigFiles({}, &sequence);
+  if (py::isinstance<Config>(config_arg)) return std::make_shared<Config>(config_arg.cast<const Config&>());
+  if (py::isinstance<py::str>(config_arg) || py::hasattr(config_arg, "__fspath__")) {
+    return LoadConfigFiles({PathArg(config_arg, "config")}, &sequence);
+  }
+  if (py::isinstance<py::list>(config_arg) || py::isinstance<py::tuple>(config_arg)) {
+    std::vector<std::string> files;
+    for (const py::handle& f : config_arg) files.push_back(PathArg(f, "config"));
+    return LoadConfigFiles(files, &sequence);
+  }
+  throw py::value_error("config: expected None, an ssta.Config, a config file path or a list of them");
+}
+
+// BuildMap with the GIL released, stopped by Ctrl-C or by an exception from `progress`.
+// Python's handler only notes the signal; the progress callback, run on this thread after every
+// frame, lets Python raise KeyboardInterrupt and asks the build to stop after the current frame.
+// The map is then saved, and the KeyboardInterrupt raised once BuildMap returns, as `ssta
+// build-map` stops on SIGINT. An exception from `progress` stops it the same way.
+BuildMapSummary RunInterruptibly(const Sequence& sequence, const std::string& sequence_path, const Config& config,
+                                 const BuildMapOptions& options, const py::object& progress) {
+  std::atomic<bool> stop{false};
+  std::optional<py::error_already_set> raised;
+  const Progress on_frame = [&](int done, int total) {
+    py::gil_scoped_acquire acquire;
+    if (raised) return;
+    try {
+      if (!progress.is_none()) progress(done, total);
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    } catch (py::error_already_set& e) {
+      raised.emplace(std::move(e));
+      stop = true;
+    }
+  };
+  BuildMapSummary summary;
+  {
+    py::gil_scoped_release release;
+    summary = BuildMap(sequence, SequenceNameOf(sequence_path), config, options, on_frame, &stop);
+  }
+  if (raised) {
+    raised->restore();
+    throw py::error_already_set();
+  }
+  return summary;
+}
 
 py::dict BuildMapPython(const py::object& sequence_arg, const py::object& map_arg, const py::object& config_arg,
                         const py::object& progress, bool resume, bool static_platform, int max_frames, int every,
@@ -42,13 +98,7 @@ py::dict BuildMapPython(const py::object& sequence_arg, const py::object& map_ar
   options.oracles.labels = oracle_labels;
   std::string error;
   if (!options.IsValid(&error)) throw py::value_error(error);
-  // The checks `build-map --map` makes while parsing: before any work.
-  if (const std::string problem = OutputFileProblem(map_path); !problem.empty()) {
-    const std::string folder = std::filesystem::path(map_path).parent_path().string();
-    std::error_code ec;
-    if (!folder.empty() && !std::filesystem::exists(folder, ec)) throw MissingFile(map_path + ": " + problem, folder);
-    throw py::value_error("map_path: " + map_path + ": " + problem);
-  }
+  CheckMapPath(map_path);
   if (!progress.is_none() && !PyCallable_Check(progress.ptr())) {
     throw py::value_error("progress: expected a callable progress(done, total) or None");
   }
@@ -57,51 +107,9 @@ py::dict BuildMapPython(const py::object& sequence_arg, const py::object& map_ar
     py::gil_scoped_release release;
     return Sequence::Open(sequence_path);
   });
-  // As the command line layers them: defaults, the sequence's vehicle.yaml, the files given. A
-  // Config object is taken as it is.
-  std::shared_ptr<Config> config;
-  if (config_arg.is_none()) {
-    config = LoadConfigFiles({}, &sequence);
-  } else if (py::isinstance<Config>(config_arg)) {
-    config = std::make_shared<Config>(config_arg.cast<const Config&>());
-  } else if (py::isinstance<py::str>(config_arg) || py::hasattr(config_arg, "__fspath__")) {
-    config = LoadConfigFiles({PathArg(config_arg, "config")}, &sequence);
-  } else if (py::isinstance<py::list>(config_arg) || py::isinstance<py::tuple>(config_arg)) {
-    std::vector<std::string> files;
-    for (const py::handle& f : config_arg) files.push_back(PathArg(f, "config"));
-    config = LoadConfigFiles(files, &sequence);
-  } else {
-    throw py::value_error("config: expected None, an ssta.Config, a config file path or a list of them");
-  }
+  const std::shared_ptr<Config> config = ConfigArg(config_arg, sequence);
   if (refine) config->refinement.online = true;
-
-
-  // Ctrl-C: Python's handler only notes the signal; the progress callback, run on this thread
-  // after every frame, lets Python raise KeyboardInterrupt and asks the build to stop after the
-  // current frame. The map is then saved, and the KeyboardInterrupt raised once BuildMap returns,
-  // as `ssta build-map` stops on SIGINT. An exception from `progress` stops it the same way.
-  std::atomic<bool> stop{false};
-  std::optional<py::error_already_set> raised;
-  const Progress on_frame = [&](int done, int total) {
-    py::gil_scoped_acquire acquire;
-    if (raised) return;
-    try {
-      if (!progress.is_none()) progress(done, total);
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-    } catch (py::error_already_set& e) {
-      raised.emplace(std::move(e));
-      stop = true;
-    }
-  };
-  BuildMapSummary summary;
-  {
-    py::gil_scoped_release release;
-    summary = BuildMap(sequence, SequenceNameOf(sequence_path), *config, options, on_frame, &stop);
-  }
-  if (raised) {
-    raised->restore();
-    throw py::error_already_set();
-  }
+  const BuildMapSummary summary = RunInterruptibly(sequence, sequence_path, *config, options, progress);
   RequireFused(summary, sequence_path, map_path);
   py::dict out = py::module_::import("json").attr("loads")(summary.Json());
   out["map_path"] = map_path;

@@ -421,87 +421,26 @@ py::dict Metadata(const MapHandle& handle) {
   return out;
 }
 
-}  // namespace
+// The docstrings of ssta.Map and its methods. kAsExportedArgsDoc: the keyword arguments every
+// query takes for as_exported, with their help, which ExportedDoc puts where a docstring says
+// {as_exported}.
+constexpr const char* kAsExportedArgsDoc =
+    "    as_exported: answer as `ssta export --format grid` shows the cells (its local-ground and\n"
+    "        hole-filling steps: a filled hole has its filled class, cost NaN), as `ssta query\n"
+    "        --as-exported`. False: the map as observed.\n"
+    "    fill_holes: with as_exported, an unknown cell with at least this many of its 8 neighbours\n"
+    "        classified takes their most frequent class (0: off; 0..8), as `--fill-holes`.\n"
+    "    local_ground_radius_m: with as_exported, the local-ground step judgement's radius [m]\n"
+    "        (0: off), as `--local-ground`.\n";
 
-void BindMap(py::module_& m) {
-  PYBIND11_NUMPY_DTYPE_EX(FootprintRow, worst, "worst", mean_cost, "mean_cost", max_cost, "max_cost",
-                          fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells",
-                          pitch_deg, "pitch_deg", roll_deg, "roll_deg", attitude, "attitude", attitude_heights,
-                          "attitude_heights", within_limits, "within_limits");
-  PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
-                          fraction_observed, "fraction_observed");
-
-  // The keyword arguments every query takes for as_exported, with their help.
-  const char* exported_doc =
-      "    as_exported: answer as `ssta export --format grid` shows the cells (its local-ground and\n"
-      "        hole-filling steps: a filled hole has its filled class, cost NaN), as `ssta query\n"
-      "        --as-exported`. False: the map as observed.\n"
-      "    fill_holes: with as_exported, an unknown cell with at least this many of its 8 neighbours\n"
-      "        classified takes their most frequent class (0: off; 0..8), as `--fill-holes`.\n"
-      "    local_ground_radius_m: with as_exported, the local-ground step judgement's radius [m]\n"
-      "        (0: off), as `--local-ground`.\n";
-
-  py::class_<MapHandle, std::shared_ptr<MapHandle>>(m, "Map", R"doc(
-A persistent 3D traversability map (an `.ot` file written by `ssta build-map` or
-`ssta.build_map`), read-only. World frame W: right-handed, z up, metres; yaw in radians from +x
-towards +y. Classes: 0 unknown, 1 traversable, 2 semi-traversable, 3 non-traversable,
-4 undecided. Unknown numbers are NaN.
-
-Thread safety: every query releases the GIL and only reads the map, so any number of Python
-threads may query one Map at the same time.
-)doc")
-      .def_static(
-          "open",
-          [](const py::object& path_arg) {
-            const std::string path = PathArg(path_arg, "path");
-            auto handle = std::make_shared<MapHandle>(MapHandle{
-                ReportingMissingFiles({path}, [&] {
-                  py::gil_scoped_release release;
-                  return TraversabilityMap::Load(path);
-                }),
-                path});
-            return handle;
-          },
-          py::arg("path"), R"doc(
-Reads the map file at `path` (str or os.PathLike).
-
-Raises FileNotFoundError naming the file when it does not exist, and ssta.Error (a ValueError)
-naming it when it is truncated, corrupt, not an SSTA map or of a newer format: the messages of
-`ssta query`.
-)doc")
-      .def_property_readonly(
-          "resolution_m", [](const MapHandle& h) { return h.map.options().resolution_m; }, "Voxel edge [m].")
-      .def_property_readonly("file", [](const MapHandle& h) { return h.path; }, "The file the map was read from.")
-      .def_property_readonly(
-          "bounds",
-          [](const MapHandle& h) -> py::object {
-            const Eigen::AlignedBox3d b = h.map.SurfaceBounds();
-            if (b.isEmpty()) return py::none();
-            return py::make_tuple(b.min().x(), b.min().y(), b.min().z(), b.max().x(), b.max().y(), b.max().z());
-          },
-          "(x_min, y_min, z_min, x_max, y_max, z_max) of the occupied voxels in W [m]; None when the map\n"
-          "has no surface.")
-      .def_property_readonly("metadata", &Metadata, R"doc(
-What the map knows about how it was made, as a dict: `file`, `resolution_m` [m], `vehicle`
-(the vehicle section whose limits gave the classes, YAML keys and units as in
-config/default.yaml), `fusion` (the map's fusion options), `sequences` (names fused, in order),
-`calibration_summary`, `notes` (what a reader must know about the evidence: a truncated bag read
-anyway), `refined_mount` (None, or {'configured', 'refined'}: cam0's body_T_camera
-as 4x4 arrays), `software_version` (the ssta that saved it), `frames_inserted`,
-`last_timestamp_ns`, `sensor_path` (K x 3 float64, the sensor's origins in W [m]) and
-`recordings` (the fingerprints of the recordings fused, each {'sequence', 'frames',
-'fingerprint'}; maps/README.md).
-)doc")
-      .def("query", &Query, py::arg("points"), py::kw_only(), py::arg("as_exported") = false,
-           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
-           (std::string(R"doc(
+constexpr const char* kQueryDoc = R"doc(
 The map at N points, as `ssta query --points` answers them.
 
 Args:
     points: N x 2 (x, y) or N x 3 (x, y, z) real numbers in W [m], no NaN. (x, y): the top
         observed surface of that map column (the ground the robot drives on); (x, y, z): the
         voxel holding that point.
-)doc") + exported_doc + R"doc(
+{as_exported}
 Returns:
     A structured array of N rows with the fields of `ssta query`'s CSV, then two more:
     x, y, z (float64): the voxel centre [m]; for an unobserved cell the point asked (z NaN
@@ -530,10 +469,9 @@ Returns:
 Raises:
     ValueError naming `points` for another shape, a non-numeric dtype or NaN / infinity;
     ValueError for N x 3 points with as_exported (the exported grid is 2D).
-)doc").c_str())
-      .def("footprints", &Footprints, py::arg("poses"), py::arg("length_m"), py::arg("width_m"), py::kw_only(),
-           py::arg("as_exported") = false, py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
-           (std::string(R"doc(
+)doc";
+
+constexpr const char* kFootprintsDoc = R"doc(
 The ground under N robot footprints, as `ssta query --footprint` answers each.
 
 Args:
@@ -542,7 +480,7 @@ Args:
     length_m: the rectangle's side along the heading [m], >= 0.
     width_m: its side across the heading [m], >= 0. Every map column the rectangle touches
         counts: an obstacle under any part of it is under the robot.
-)doc") + exported_doc + R"doc(
+{as_exported}
 Returns:
     A structured array of N rows: worst (uint8, the worst 1..3 class under it, 0 when none),
     mean_cost, max_cost (float64; NaN when no cell has a cost), fraction_observed (float64,
@@ -556,10 +494,9 @@ Returns:
 Raises:
     ValueError naming `poses`, `length_m` or `width_m`; ssta.Error naming `poses[i]` for a
     footprint beyond the map's addressable area or over more than 10^7 columns.
-)doc").c_str())
-      .def("path", &Path, py::arg("vertices"), py::arg("width_m"), py::kw_only(), py::arg("as_exported") = false,
-           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
-           (std::string(R"doc(
+)doc";
+
+constexpr const char* kPathDoc = R"doc(
 Checks a polyline with a width, as `ssta query --path FILE --width W`.
 
 Samples every resolution/2 along the polyline; at each sample the top surfaces across the
@@ -569,7 +506,7 @@ turns check their outside too.
 Args:
     vertices: N x 2 (x, y) in W [m], N >= 1, no NaN.
     width_m: corridor width [m], >= 0.
-)doc") + exported_doc + R"doc(
+{as_exported}
 Returns:
     A dict: samples (structured array: distance_m, x, y, class, cost, fraction_observed),
     worst (int), mean_cost, fraction_observed, length_m (float), blocked (bool),
@@ -579,20 +516,16 @@ Returns:
 Raises:
     ValueError naming `vertices` or `width_m`; ssta.Error naming `vertices` for a path over more
     than 10^7 cells or 10^6 samples.
-)doc").c_str())
-      .def("project", &Project, py::arg("region") = py::none(), py::arg("resolution_m") = py::none(),
-           py::kw_only(), py::arg("as_exported") = false, py::arg("fill_holes") = 5,
-           py::arg("local_ground_radius_m") = 0.0, py::arg("headings") = 0,
-           py::arg("heading_footprint") = std::vector<double>{HeadingCostOptions{}.footprint_length_m,
-                                                               HeadingCostOptions{}.footprint_width_m},
-           (std::string(R"doc(
+)doc";
+
+constexpr const char* kProjectDoc = R"doc(
 The top surface over a region as 2D arrays, for a planner or matplotlib.
 
 Args:
     region: (x_min, y_min, x_max, y_max) in W [m]; None: the occupied voxels' bounds.
     resolution_m: pixel edge [m]; None: the map's. Finer than the map: each pixel's centre;
         coarser: the worst class among the map columns the pixel holds.
-)doc") + exported_doc + R"doc(
+{as_exported}
         With as_exported the region is widened outwards to multiples of the resolution,
         exactly as `ssta export --format grid` (whose PNGs hold the same classes).
     headings: N > 0 adds cost_heading, the cost per heading as `ssta export --headings N`:
@@ -611,12 +544,39 @@ Returns:
 
 Raises:
     ValueError naming `region` or `resolution_m`; ssta.Error for more than 2^26 pixels.
-)doc").c_str())
-      .def("diff", &Diff, py::arg("other"), py::kw_only(), py::arg("out") = py::none(),
-           py::arg("min_confidence") = MapDiffOptions{}.min_confidence,
-           py::arg("slope_noise_deg") = MapDiffOptions{}.slope_noise_deg,
-           py::arg("step_noise_m") = MapDiffOptions{}.step_noise_m,
-           py::arg("boundary_shift_columns") = MapDiffOptions{}.boundary_shift_columns, R"doc(
+)doc";
+
+constexpr const char* kMapDoc = R"doc(
+A persistent 3D traversability map (an `.ot` file written by `ssta build-map` or
+`ssta.build_map`), read-only. World frame W: right-handed, z up, metres; yaw in radians from +x
+towards +y. Classes: 0 unknown, 1 traversable, 2 semi-traversable, 3 non-traversable,
+4 undecided. Unknown numbers are NaN.
+
+Thread safety: every query releases the GIL and only reads the map, so any number of Python
+threads may query one Map at the same time.
+)doc";
+
+constexpr const char* kOpenDoc = R"doc(
+Reads the map file at `path` (str or os.PathLike).
+
+Raises FileNotFoundError naming the file when it does not exist, and ssta.Error (a ValueError)
+naming it when it is truncated, corrupt, not an SSTA map or of a newer format: the messages of
+`ssta query`.
+)doc";
+
+constexpr const char* kMetadataDoc = R"doc(
+What the map knows about how it was made, as a dict: `file`, `resolution_m` [m], `vehicle`
+(the vehicle section whose limits gave the classes, YAML keys and units as in
+config/default.yaml), `fusion` (the map's fusion options), `sequences` (names fused, in order),
+`calibration_summary`, `notes` (what a reader must know about the evidence: a truncated bag read
+anyway), `refined_mount` (None, or {'configured', 'refined'}: cam0's body_T_camera
+as 4x4 arrays), `software_version` (the ssta that saved it), `frames_inserted`,
+`last_timestamp_ns`, `sensor_path` (K x 3 float64, the sensor's origins in W [m]) and
+`recordings` (the fingerprints of the recordings fused, each {'sequence', 'frames',
+'fingerprint'}; maps/README.md).
+)doc";
+
+constexpr const char* kDiffDoc = R"doc(
 What changed from this map (the earlier drive) to `other`, as `ssta diff-maps` finds it: each
 map column's class in both maps over the union of their surfaces, at their resolution.
 
@@ -637,7 +597,73 @@ Returns:
 Raises:
     ssta.Error naming both files and both values when the maps differ in resolution, world
     frame or vehicle; ValueError for options out of range.
-)doc")
+)doc";
+
+// `doc` with kAsExportedArgsDoc in place of its "{as_exported}".
+std::string ExportedDoc(const char* doc) {
+  std::string text = doc;
+  const std::string mark = "{as_exported}";
+  text.replace(text.find(mark), mark.size(), kAsExportedArgsDoc);
+  return text;
+}
+
+}  // namespace
+
+void BindMap(py::module_& m) {
+  PYBIND11_NUMPY_DTYPE_EX(FootprintRow, worst, "worst", mean_cost, "mean_cost", max_cost, "max_cost",
+                          fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells",
+                          pitch_deg, "pitch_deg", roll_deg, "roll_deg", attitude, "attitude", attitude_heights,
+                          "attitude_heights", within_limits, "within_limits");
+  PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
+                          fraction_observed, "fraction_observed");
+
+  py::class_<MapHandle, std::shared_ptr<MapHandle>>(m, "Map", kMapDoc)
+      .def_static(
+          "open",
+          [](const py::object& path_arg) {
+            const std::string path = PathArg(path_arg, "path");
+            auto handle = std::make_shared<MapHandle>(MapHandle{
+                ReportingMissingFiles({path}, [&] {
+                  py::gil_scoped_release release;
+                  return TraversabilityMap::Load(path);
+                }),
+                path});
+            return handle;
+          },
+          py::arg("path"), kOpenDoc)
+      .def_property_readonly(
+          "resolution_m", [](const MapHandle& h) { return h.map.options().resolution_m; }, "Voxel edge [m].")
+      .def_property_readonly("file", [](const MapHandle& h) { return h.path; }, "The file the map was read from.")
+      .def_property_readonly(
+          "bounds",
+          [](const MapHandle& h) -> py::object {
+            const Eigen::AlignedBox3d b = h.map.SurfaceBounds();
+            if (b.isEmpty()) return py::none();
+            return py::make_tuple(b.min().x(), b.min().y(), b.min().z(), b.max().x(), b.max().y(), b.max().z());
+          },
+          "(x_min, y_min, z_min, x_max, y_max, z_max) of the occupied voxels in W [m]; None when the map\n"
+          "has no surface.")
+      .def_property_readonly("metadata", &Metadata, kMetadataDoc)
+      .def("query", &Query, py::arg("points"), py::kw_only(), py::arg("as_exported") = false,
+           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
+           ExportedDoc(kQueryDoc).c_str())
+      .def("footprints", &Footprints, py::arg("poses"), py::arg("length_m"), py::arg("width_m"), py::kw_only(),
+           py::arg("as_exported") = false, py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
+           ExportedDoc(kFootprintsDoc).c_str())
+      .def("path", &Path, py::arg("vertices"), py::arg("width_m"), py::kw_only(), py::arg("as_exported") = false,
+           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
+           ExportedDoc(kPathDoc).c_str())
+      .def("project", &Project, py::arg("region") = py::none(), py::arg("resolution_m") = py::none(),
+           py::kw_only(), py::arg("as_exported") = false, py::arg("fill_holes") = 5,
+           py::arg("local_ground_radius_m") = 0.0, py::arg("headings") = 0,
+           py::arg("heading_footprint") = std::vector<double>{HeadingCostOptions{}.footprint_length_m,
+                                                               HeadingCostOptions{}.footprint_width_m},
+           ExportedDoc(kProjectDoc).c_str())
+      .def("diff", &Diff, py::arg("other"), py::kw_only(), py::arg("out") = py::none(),
+           py::arg("min_confidence") = MapDiffOptions{}.min_confidence,
+           py::arg("slope_noise_deg") = MapDiffOptions{}.slope_noise_deg,
+           py::arg("step_noise_m") = MapDiffOptions{}.step_noise_m,
+           py::arg("boundary_shift_columns") = MapDiffOptions{}.boundary_shift_columns, kDiffDoc)
       .def("__repr__", [](const MapHandle& h) {
         return "<ssta.Map '" + h.path + "', " + std::to_string(h.map.options().resolution_m) + " m voxels>";
       });
