@@ -58,6 +58,112 @@ void WriteCamera(const CameraCalibration& c, internal::JsonWriter* json) {
   json->EndObject();
 }
 
+/// The chessboard: inner corners (columns, rows) and square size [m].
+void WriteBoard(const StereoCalibratorOptions& options, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("inner_corners");
+  json->BeginInlineArray();
+  json->Integer(options.board_cols);
+  json->Integer(options.board_rows);
+  json->EndArray();
+  json->Key("square_m");
+  json->Number(options.square_m);
+  json->EndObject();
+}
+
+/// RMS reprojection errors [px]: each camera alone, then the stereo solve.
+void WriteRms(const StereoCalibrationSummary& s, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("left_mono");
+  json->Number(s.left_mono_rms_px);
+  json->Key("right_mono");
+  json->Number(s.right_mono_rms_px);
+  json->Key("stereo");
+  json->Number(s.stereo_rms_px);
+  json->EndObject();
+}
+
+/// The coverage grid (columns, rows) and the fraction of its cells with a corner, per camera.
+void WriteCoverage(const StereoCalibrationSummary& s, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("grid");
+  json->BeginInlineArray();
+  json->Integer(s.options.coverage_cols);
+  json->Integer(s.options.coverage_rows);
+  json->EndArray();
+  json->Key("left");
+  json->Number(s.left_coverage);
+  json->Key("right");
+  json->Number(s.right_coverage);
+  json->EndObject();
+}
+
+/// A pose as its 4x4 matrix, one inline array per row.
+void WritePoseRows(const Eigen::Isometry3d& pose, internal::JsonWriter* json) {
+  json->BeginArray();
+  const Eigen::Matrix4d m = pose.matrix();
+  for (int r = 0; r < 4; ++r) {
+    json->BeginInlineArray();
+    for (int k = 0; k < 4; ++k) json->Number(m(r, k));
+    json->EndArray();
+  }
+  json->EndArray();
+}
+
+/// The epipolar check of the rectified pairs [px]; the errors are NaN when no pair was checked.
+void WriteRectification(const RectificationCheck& c, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("pairs_checked");
+  json->Integer(c.pairs_checked);
+  json->Key("corners_checked");
+  json->Integer(c.corners_checked);
+  json->Key("mean_abs_dv_px");
+  json->Number(c.pairs_checked > 0 ? c.mean_abs_dv_px : std::numeric_limits<double>::quiet_NaN());
+  json->Key("max_abs_dv_px");
+  json->Number(c.pairs_checked > 0 ? c.max_abs_dv_px : std::numeric_limits<double>::quiet_NaN());
+  json->Key("rectified_f_px");
+  json->Number(c.rectified_f_px);
+  json->Key("common_area");
+  json->BeginInlineArray();
+  json->Integer(c.crop_width);
+  json->Integer(c.crop_height);
+  json->EndArray();
+  json->Key("picture_pair");
+  json->String(c.picture_pair);
+  json->EndObject();
+}
+
+/// One input pair: its files, where the board was found, whether it was used, its RMS errors
+/// [px] and its outlier status.
+void WritePairReport(const CalibrationPairReport& p, internal::JsonWriter* json) {
+  json->BeginObject();
+  json->Key("left");
+  json->String(p.left_path);
+  json->Key("right");
+  json->String(p.right_path);
+  json->Key("board_in_left");
+  json->Bool(p.board_in_left);
+  json->Key("board_in_right");
+  json->Bool(p.board_in_right);
+  json->Key("used");
+  json->Bool(p.used());
+  json->Key("skip_reason");
+  json->String(p.skip_reason);
+  json->Key("left_mono_rms_px");
+  json->Number(p.left_mono_rms_px);
+  json->Key("right_mono_rms_px");
+  json->Number(p.right_mono_rms_px);
+  json->Key("left_stereo_rms_px");
+  json->Number(p.left_stereo_rms_px);
+  json->Key("right_stereo_rms_px");
+  json->Number(p.right_stereo_rms_px);
+  json->Key("outlier");
+  json->Bool(p.outlier);
+  json->Key("dropped");
+  json->Bool(p.dropped);
+  json->EndObject();
+}
+
 }  // namespace
 
 std::string StereoCalibrationSummary::BriefReport() const {
@@ -136,15 +242,7 @@ std::string StereoCalibrationSummary::ToJson() const {
   internal::JsonWriter json;
   json.BeginObject();
   json.Key("board");
-  json.BeginObject();
-  json.Key("inner_corners");
-  json.BeginInlineArray();
-  json.Integer(options.board_cols);
-  json.Integer(options.board_rows);
-  json.EndArray();
-  json.Key("square_m");
-  json.Number(options.square_m);
-  json.EndObject();
+  WriteBoard(options, &json);
   json.Key("intrinsics_mode");
   json.String(options.intrinsics == StereoIntrinsics::kFix ? "fixed" : "refined");
   json.Key("outlier_px");
@@ -156,91 +254,22 @@ std::string StereoCalibrationSummary::ToJson() const {
   json.Key("pairs_used");
   json.Integer(pairs_used);
   json.Key("rms_px");
-  json.BeginObject();
-  json.Key("left_mono");
-  json.Number(left_mono_rms_px);
-  json.Key("right_mono");
-  json.Number(right_mono_rms_px);
-  json.Key("stereo");
-  json.Number(stereo_rms_px);
-  json.EndObject();
+  WriteRms(*this, &json);
   json.Key("coverage");
-  json.BeginObject();
-  json.Key("grid");
-  json.BeginInlineArray();
-  json.Integer(options.coverage_cols);
-  json.Integer(options.coverage_rows);
-  json.EndArray();
-  json.Key("left");
-  json.Number(left_coverage);
-  json.Key("right");
-  json.Number(right_coverage);
-  json.EndObject();
+  WriteCoverage(*this, &json);
   json.Key("baseline_m");
   json.Number(baseline_m);
   json.Key("cam0_T_cam1");
-  json.BeginArray();
-  const Eigen::Matrix4d m = cam0_T_cam1.matrix();
-  for (int r = 0; r < 4; ++r) {
-    json.BeginInlineArray();
-    for (int k = 0; k < 4; ++k) json.Number(m(r, k));
-    json.EndArray();
-  }
-  json.EndArray();
+  WritePoseRows(cam0_T_cam1, &json);
   json.Key("cam0");
   WriteCamera(calibration.left, &json);
   json.Key("cam1");
   WriteCamera(calibration.right, &json);
   json.Key("rectification");
-  json.BeginObject();
-  json.Key("pairs_checked");
-  json.Integer(rectification.pairs_checked);
-  json.Key("corners_checked");
-  json.Integer(rectification.corners_checked);
-  json.Key("mean_abs_dv_px");
-  json.Number(rectification.pairs_checked > 0 ? rectification.mean_abs_dv_px : std::numeric_limits<double>::quiet_NaN());
-  json.Key("max_abs_dv_px");
-  json.Number(rectification.pairs_checked > 0 ? rectification.max_abs_dv_px : std::numeric_limits<double>::quiet_NaN());
-  json.Key("rectified_f_px");
-  json.Number(rectification.rectified_f_px);
-  json.Key("common_area");
-  json.BeginInlineArray();
-  json.Integer(rectification.crop_width);
-  json.Integer(rectification.crop_height);
-  json.EndArray();
-  json.Key("picture_pair");
-  json.String(rectification.picture_pair);
-  json.EndObject();
+  WriteRectification(rectification, &json);
   json.Key("pairs");
   json.BeginArray();
-  for (const CalibrationPairReport& p : pairs) {
-    json.BeginObject();
-    json.Key("left");
-    json.String(p.left_path);
-    json.Key("right");
-    json.String(p.right_path);
-    json.Key("board_in_left");
-    json.Bool(p.board_in_left);
-    json.Key("board_in_right");
-    json.Bool(p.board_in_right);
-    json.Key("used");
-    json.Bool(p.used());
-    json.Key("skip_reason");
-    json.String(p.skip_reason);
-    json.Key("left_mono_rms_px");
-    json.Number(p.left_mono_rms_px);
-    json.Key("right_mono_rms_px");
-    json.Number(p.right_mono_rms_px);
-    json.Key("left_stereo_rms_px");
-    json.Number(p.left_stereo_rms_px);
-    json.Key("right_stereo_rms_px");
-    json.Number(p.right_stereo_rms_px);
-    json.Key("outlier");
-    json.Bool(p.outlier);
-    json.Key("dropped");
-    json.Bool(p.dropped);
-    json.EndObject();
-  }
+  for (const CalibrationPairReport& p : pairs) WritePairReport(p, &json);
   json.EndArray();
   json.EndObject();
   return json.Take();

@@ -3,12 +3,123 @@
 #include <chrono>
 #include <optional>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "mount/refinement_json.h"
 #include "ssta/core/error.h"
 #include "ssta/pipeline/sequence_run.h"
 
 namespace ssta {
+namespace {
+
+/// The path reference chooses its points later, among more: the driven-over band is a small
+/// part of the ground segment.
+constexpr int kPathPointsFactor = 8;
+
+/// What the per-frame pipeline gave over a run's frames.
+struct GroundCollection {
+  std::vector<GroundEvidence> body;  ///< each usable frame's evidence, in frame order
+  /// Per frame of the run, kPathPointsFactor times the points for the path reference (default
+  /// evidence for a frame that is not usable); empty for any other reference.
+  std::vector<GroundEvidence> path;
+  int frames_processed = 0;           ///< frames run through the pipeline
+  std::vector<SkippedFrame> skipped;  ///< frames of the run not used, with the reason
+  double pipeline_s = 0.0;            ///< wall time of the pipeline over all frames [s]
+};
+
+/// The mount correction and the reference it was solved against.
+struct MountSolution {
+  MountRefinementResult refinement;
+  int frames_on_path = 0;      ///< path reference: frames whose ground a later body stands on
+  std::string reference_note;  ///< why the path reference gave way to the body reference
+};
+
+/// The pose of every frame of the run for the path reference, `nullopt` for none; all `nullopt`
+/// for any other reference.
+std::vector<std::optional<Eigen::Isometry3d>> PathPoses(const Sequence& sequence, const SequenceRun& run,
+                                                        const RefinementOptions& refinement) {
+  // The path reference needs every selected frame's pose before the first frame is processed:
+  // the sequence's own poses, as they are. Only their relative motion over the seconds between
+  // seeing the ground and standing on it matters, and the IMU attitude filter's roll and pitch
+  // lean with every turn's centripetal acceleration, which the relative rotation would carry.
+  // A frame without a pose has no path: its ground and the ground it stands on are unused.
+  std::vector<std::optional<Eigen::Isometry3d>> poses(run.frames().size());
+  if (refinement.ground_reference == GroundReference::kPath) {
+    for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = sequence.WorldTBodyAt(run.frames()[i].timestamp_ns);
+  }
+  return poses;
+}
+
+/// Runs the per-frame pipeline over every frame of `run` and takes each frame's ground evidence,
+/// up in the body from the run's gravity. A frame that fails is skipped with the reason (a
+/// StrictStop in a strict run).
+GroundCollection CollectGroundEvidence(SequenceRun* run, const StereoCalibration& rig,
+                                       const RefinementOptions& refinement, const Progress& progress) {
+  const RigChain chain(rig.left.body_T_camera, run->geometry());
+  const bool path = refinement.ground_reference == GroundReference::kPath;
+  RefinementOptions wide = refinement;
+  wide.points_per_frame *= kPathPointsFactor;
+  GroundCollection out;
+  out.path.resize(path ? run->frames().size() : 0);
+  const auto start = std::chrono::steady_clock::now();
+  int done = 0;
+  for (std::size_t i = 0; i < run->frames().size(); ++i) {
+    const StereoFrame& frame = run->frames()[i];
+    const std::int64_t t = frame.timestamp_ns;
+    try {
+      // Gravity through the configured (uncorrected) mount: it only steers the choice of the
+      // ground segment, whose points are what the refinement uses.
+      const FrameResult result = run->Classify(frame, run->gravity().UpInCamera(t));
+      ++out.frames_processed;
+      const Eigen::Vector3d up_body = run->gravity().UpInBody(t);
+      GroundEvidence evidence = ExtractGroundEvidence(result, chain.camera_R_rectified(), up_body, refinement);
+      if (evidence.usable) {
+        out.body.push_back(std::move(evidence));
+        if (path) out.path[i] = ExtractGroundEvidence(result, chain.camera_R_rectified(), up_body, wide);
+      } else {
+        out.skipped.push_back({t, evidence.reason});
+      }
+    } catch (const StrictStop&) {
+      throw;
+    } catch (const Error& e) {
+      run->RequireNotStrict(t, e.what());
+      out.skipped.push_back({t, e.what()});
+    }
+    if (progress) progress(++done, static_cast<int>(run->frames().size()));
+  }
+  out.pipeline_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+/// Solves for cam0's mount correction from the collected evidence: the path reference when the
+/// drive went over the ground of at least min_frames frames; otherwise the plane under the
+/// wheels now. `body_T_camera` is the configured mount of cam0.
+MountSolution SolveMount(const RefinementOptions& refinement, const Eigen::Isometry3d& body_T_camera,
+                         const std::vector<std::optional<Eigen::Isometry3d>>& poses, GroundCollection* ground) {
+  const bool path = refinement.ground_reference == GroundReference::kPath;
+  MountSolution out;
+  int frames_on_path = 0;
+  if (path) {
+    out.refinement = SolveAlongPath(refinement, body_T_camera, poses, ground->path, &frames_on_path);
+    out.frames_on_path = frames_on_path;
+  }
+  if (!path || frames_on_path < refinement.min_frames) {
+    RefinementOptions body = refinement;
+    if (path) {
+      body.ground_reference = GroundReference::kBody;
+      out.reference_note = "path reference: the drive goes over the ground of " + std::to_string(frames_on_path) +
+                           " frame(s), fewer than min_frames (" + std::to_string(body.min_frames) +
+                           "); the body reference is used";
+    }
+    MountRefiner refiner(body, body_T_camera);
+    for (GroundEvidence& e : ground->body) refiner.AddFrame(std::move(e));
+    out.refinement = refiner.Solve();
+  }
+  return out;
+}
+
+}  // namespace
 
 bool MountCalibrationOptions::IsValid(std::string* error) const {
   if (!frames.IsValid(error)) return false;
@@ -23,81 +134,25 @@ MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, 
   if (!options.IsValid(&error)) throw Error(error);
   SequenceRun run(sequence, config, options.frames);
   const StereoCalibration& rig = sequence.calibration();
-  const RigChain chain(rig.left.body_T_camera, run.geometry());
-  const bool path = options.refinement.ground_reference == GroundReference::kPath;
-
-  // The path reference needs every selected frame's pose before the first frame is processed:
-  // the sequence's own poses, as they are. Only their relative motion over the seconds between
-  // seeing the ground and standing on it matters, and the IMU attitude filter's roll and pitch
-  // lean with every turn's centripetal acceleration, which the relative rotation would carry.
-  // A frame without a pose has no path: its ground and the ground it stands on are unused.
-  std::vector<std::optional<Eigen::Isometry3d>> poses(run.frames().size());
-  if (path) {
-    for (std::size_t i = 0; i < poses.size(); ++i) poses[i] = sequence.WorldTBodyAt(run.frames()[i].timestamp_ns);
-  }
+  const std::vector<std::optional<Eigen::Isometry3d>> poses = PathPoses(sequence, run, options.refinement);
 
   MountCalibration out;
   out.frames_listed = run.frames_listed();
   out.skipped = run.sequence_skips();
-  // The path reference chooses its points later, among more: the driven-over band is a small
-  // part of the ground segment.
-  constexpr int kPathPointsFactor = 8;
-  RefinementOptions wide = options.refinement;
-  wide.points_per_frame *= kPathPointsFactor;
-  std::vector<GroundEvidence> evidence_body, evidence_path(path ? run.frames().size() : 0);
-  const auto start = std::chrono::steady_clock::now();
-  int done = 0;
-  for (std::size_t i = 0; i < run.frames().size(); ++i) {
-    const StereoFrame& frame = run.frames()[i];
-    const std::int64_t t = frame.timestamp_ns;
-    try {
-      // Gravity through the configured (uncorrected) mount: it only steers the choice of the
-      // ground segment, whose points are what the refinement uses.
-      const FrameResult result = run.Classify(frame, run.gravity().UpInCamera(t));
-      ++out.frames_processed;
-      const Eigen::Vector3d up_body = run.gravity().UpInBody(t);
-      GroundEvidence evidence =
-          ExtractGroundEvidence(result, chain.camera_R_rectified(), up_body, options.refinement);
-      if (evidence.usable) {
-        evidence_body.push_back(std::move(evidence));
-        if (path) evidence_path[i] = ExtractGroundEvidence(result, chain.camera_R_rectified(), up_body, wide);
-      } else {
-        out.skipped.push_back({t, evidence.reason});
-      }
-    } catch (const StrictStop&) {
-      throw;
-    } catch (const Error& e) {
-      run.RequireNotStrict(t, e.what());
-      out.skipped.push_back({t, e.what()});
-    }
-    if (progress) progress(++done, static_cast<int>(run.frames().size()));
-  }
-  out.pipeline_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (evidence_body.empty()) {
+  GroundCollection ground = CollectGroundEvidence(&run, rig, options.refinement, progress);
+  out.frames_processed = ground.frames_processed;
+  out.skipped.insert(out.skipped.end(), ground.skipped.begin(), ground.skipped.end());
+  out.pipeline_s = ground.pipeline_s;
+  if (ground.body.empty()) {
     std::ostringstream m;
     m << sequence.root() << ": no frame has a usable ground plane (" << run.frames().size() << " tried)";
     if (!out.skipped.empty()) m << "; first: " << out.skipped.front().reason;
     throw Error(m.str());
   }
-  // The path reference when the drive went over the ground of at least min_frames frames;
-  // otherwise the plane under the wheels now.
-  int frames_on_path = 0;
-  if (path) {
-    out.refinement = SolveAlongPath(options.refinement, rig.left.body_T_camera, poses, evidence_path, &frames_on_path);
-    out.frames_on_path = frames_on_path;
-  }
-  if (!path || frames_on_path < options.refinement.min_frames) {
-    RefinementOptions body = options.refinement;
-    if (path) {
-      body.ground_reference = GroundReference::kBody;
-      out.reference_note = "path reference: the drive goes over the ground of " + std::to_string(frames_on_path) +
-                           " frame(s), fewer than min_frames (" + std::to_string(body.min_frames) +
-                           "); the body reference is used";
-    }
-    MountRefiner refiner(body, rig.left.body_T_camera);
-    for (GroundEvidence& e : evidence_body) refiner.AddFrame(std::move(e));
-    out.refinement = refiner.Solve();
-  }
+  MountSolution solution = SolveMount(options.refinement, rig.left.body_T_camera, poses, &ground);
+  out.refinement = std::move(solution.refinement);
+  out.frames_on_path = solution.frames_on_path;
+  out.reference_note = std::move(solution.reference_note);
   out.refined = rig;
   out.refined.left.body_T_camera = out.refinement.body_T_camera_refined;
   out.refined.right.body_T_camera = out.refinement.body_T_camera_refined * rig.LeftTRight();

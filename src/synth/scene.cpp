@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
+#include <vector>
 
 #include "ssta/core/error.h"
 #include "ssta/core/units.h"
@@ -235,106 +237,179 @@ Material Scene::GroundMaterialAt(double x, double y, int pit) const {
   return ground_material;
 }
 
-void Scene::Finish() {
-  for (GroundRamp& r : ramps) {
+namespace {
+
+/// World rectangle [x0, x1] x [y0, y1] [m].
+struct Extent {
+  double x0, x1, y0, y1;
+};
+
+/// Layout of the bound grid: lower-left corner (x0, y0) in world [m], side of its square cells
+/// [m], and its size in cells.
+struct GridLayout {
+  double x0, y0, cell;
+  int nx, ny;
+};
+
+/// Per bound cell (row-major), the maxima over its samples of the visible ground height [m],
+/// the base ground height [m] and the base slope |grad| [m/m], and whether a pit shows in it.
+struct CellSamples {
+  std::vector<float> z, base, slope;
+  std::vector<std::uint8_t> pit;
+};
+
+/// Per bound cell (row-major), conservative upper bounds of the ground height [m] and of the
+/// base slope |grad| [m/m].
+struct CellBounds {
+  std::vector<float> zmax, slope;
+};
+
+/// The bound cells grouped in square blocks: the max of the cells' height bounds per block
+/// (row-major) and over the whole grid [m].
+struct BlockMaxima {
+  int nx = 0, ny = 0;
+  std::vector<float> zmax;
+  double zmax_all = -kInf;
+};
+
+/// Samples per side of a bound cell, edges included.
+constexpr int kSamples = 5;
+
+/// Caches the cosine and sine of each ramp's, pit's and obstacle's yaw, and each ramp's slope
+/// tangent.
+void CacheTrig(Scene* scene) {
+  for (GroundRamp& r : scene->ramps) {
     r.cos_yaw = std::cos(r.yaw_rad);
     r.sin_yaw = std::sin(r.yaw_rad);
     r.tan_slope = std::tan(DegToRad(r.slope_deg));
   }
-  for (Pit& p : pits) {
+  for (Pit& p : scene->pits) {
     p.cos_yaw = std::cos(p.yaw_rad);
     p.sin_yaw = std::sin(p.yaw_rad);
   }
-  for (Obstacle& ob : obstacles) {
+  for (Obstacle& ob : scene->obstacles) {
     ob.cos_yaw = std::cos(ob.yaw_rad);
     ob.sin_yaw = std::sin(ob.yaw_rad);
   }
-  double x0 = start_xy.x() - 30, x1 = start_xy.x() + 30;
-  double y0 = start_xy.y() - 30, y1 = start_xy.y() + 30;
+}
+
+/// The world area every bump, ramp and pit reaches, and at least 30 m around the start [m].
+/// Precondition: the ramps' tan_slope is cached.
+Extent SceneExtent(const Scene& scene) {
+  double x0 = scene.start_xy.x() - 30, x1 = scene.start_xy.x() + 30;
+  double y0 = scene.start_xy.y() - 30, y1 = scene.start_xy.y() + 30;
   auto cover = [&](double x, double y, double r) {
     x0 = std::min(x0, x - r);
     x1 = std::max(x1, x + r);
     y0 = std::min(y0, y - r);
     y1 = std::max(y1, y + r);
   };
-  for (const GroundBump& b : bumps) cover(b.x, b.y, b.radius_m);
-  for (const GroundRamp& r : ramps) {
+  for (const GroundBump& b : scene.bumps) cover(b.x, b.y, b.radius_m);
+  for (const GroundRamp& r : scene.ramps) {
     cover(r.x, r.y, std::hypot(r.half_x_m, r.half_y_m) + r.height_m / r.tan_slope);
   }
-  for (const Pit& p : pits) cover(p.x, p.y, std::hypot(p.half_x_m, p.half_y_m));
+  for (const Pit& p : scene.pits) cover(p.x, p.y, std::hypot(p.half_x_m, p.half_y_m));
+  return {x0, x1, y0, y1};
+}
 
-  // Bound grid: sampled maxima of height and slope per cell, made conservative by a margin
-  // and (for the slope) by taking the neighbours' maxima too.
-  bound_x0_ = x0 - bound_cell_;
-  bound_y0_ = y0 - bound_cell_;
-  bound_nx_ = static_cast<int>(std::ceil((x1 - x0) / bound_cell_)) + 2;
-  bound_ny_ = static_cast<int>(std::ceil((y1 - y0) / bound_cell_)) + 2;
-  const std::size_t cells = static_cast<std::size_t>(bound_nx_) * bound_ny_;
-  // Per cell: sampled maxima of the visible ground, the base ground and the slope, and
-  // whether a pit shows in it.
-  std::vector<float> z_sampled(cells), base_sampled(cells), slope_sampled(cells);
-  std::vector<std::uint8_t> pit_sampled(cells, 0);
-  constexpr int kSamples = 5;  // per side, edges included
-  const double spacing = bound_cell_ / (kSamples - 1);
-  for (int iy = 0; iy < bound_ny_; ++iy) {
-    for (int ix = 0; ix < bound_nx_; ++ix) {
+/// Cells of side `cell` [m] over `extent`, with a margin of one cell on every side.
+GridLayout LayOutBoundGrid(const Extent& extent, double cell) {
+  GridLayout grid;
+  grid.x0 = extent.x0 - cell;
+  grid.y0 = extent.y0 - cell;
+  grid.cell = cell;
+  grid.nx = static_cast<int>(std::ceil((extent.x1 - extent.x0) / cell)) + 2;
+  grid.ny = static_cast<int>(std::ceil((extent.y1 - extent.y0) / cell)) + 2;
+  return grid;
+}
+
+/// Samples kSamples x kSamples points of each cell of `grid` on the ground of `scene`.
+CellSamples SampleBoundGrid(const Scene& scene, const GridLayout& grid) {
+  const std::size_t cells = static_cast<std::size_t>(grid.nx) * grid.ny;
+  CellSamples out;
+  out.z.resize(cells);
+  out.base.resize(cells);
+  out.slope.resize(cells);
+  out.pit.assign(cells, 0);
+  const double spacing = grid.cell / (kSamples - 1);
+  for (int iy = 0; iy < grid.ny; ++iy) {
+    for (int ix = 0; ix < grid.nx; ++ix) {
       double z = -kInf, zb = -kInf, g = 0;
       bool pit = false;
       for (int j = 0; j < kSamples; ++j) {
         for (int i = 0; i < kSamples; ++i) {
-          const double x = bound_x0_ + ix * bound_cell_ + i * spacing;
-          const double y = bound_y0_ + iy * bound_cell_ + j * spacing;
-          const double base = BaseHeight(x, y);
-          const double ground = GroundHeight(x, y);
+          const double x = grid.x0 + ix * grid.cell + i * spacing;
+          const double y = grid.y0 + iy * grid.cell + j * spacing;
+          const double base = scene.BaseHeight(x, y);
+          const double ground = scene.GroundHeight(x, y);
           z = std::max(z, ground);
           zb = std::max(zb, base);
           pit = pit || ground < base;
-          g = std::max(g, BaseGradient(x, y).norm());
+          g = std::max(g, scene.BaseGradient(x, y).norm());
         }
       }
-      const std::size_t k = static_cast<std::size_t>(iy) * bound_nx_ + ix;
-      z_sampled[k] = static_cast<float>(z);
-      base_sampled[k] = static_cast<float>(zb);
-      slope_sampled[k] = static_cast<float>(g);
-      pit_sampled[k] = pit ? 1 : 0;
+      const std::size_t k = static_cast<std::size_t>(iy) * grid.nx + ix;
+      out.z[k] = static_cast<float>(z);
+      out.base[k] = static_cast<float>(zb);
+      out.slope[k] = static_cast<float>(g);
+      out.pit[k] = pit ? 1 : 0;
     }
   }
-  bound_zmax_.assign(cells, 0.f);
-  bound_slope_.assign(cells, 0.f);
-  for (int iy = 0; iy < bound_ny_; ++iy) {
-    for (int ix = 0; ix < bound_nx_; ++ix) {
+  return out;
+}
+
+/// Makes the sampled maxima conservative: a margin for what falls between the samples, and
+/// (for the slope) the neighbours' maxima too.
+CellBounds BoundCells(const CellSamples& samples, const GridLayout& grid) {
+  const std::size_t cells = static_cast<std::size_t>(grid.nx) * grid.ny;
+  const double spacing = grid.cell / (kSamples - 1);
+  CellBounds out;
+  out.zmax.assign(cells, 0.f);
+  out.slope.assign(cells, 0.f);
+  for (int iy = 0; iy < grid.ny; ++iy) {
+    for (int ix = 0; ix < grid.nx; ++ix) {
       double g = 0, base_near = -kInf;
       bool pit_near = false;
-      for (int j = std::max(0, iy - 1); j <= std::min(bound_ny_ - 1, iy + 1); ++j) {
-        for (int i = std::max(0, ix - 1); i <= std::min(bound_nx_ - 1, ix + 1); ++i) {
-          const std::size_t n = static_cast<std::size_t>(j) * bound_nx_ + i;
-          g = std::max(g, static_cast<double>(slope_sampled[n]));
-          base_near = std::max(base_near, static_cast<double>(base_sampled[n]));
-          pit_near = pit_near || pit_sampled[n];
+      for (int j = std::max(0, iy - 1); j <= std::min(grid.ny - 1, iy + 1); ++j) {
+        for (int i = std::max(0, ix - 1); i <= std::min(grid.nx - 1, ix + 1); ++i) {
+          const std::size_t n = static_cast<std::size_t>(j) * grid.nx + i;
+          g = std::max(g, static_cast<double>(samples.slope[n]));
+          base_near = std::max(base_near, static_cast<double>(samples.base[n]));
+          pit_near = pit_near || samples.pit[n];
         }
       }
-      const std::size_t k = static_cast<std::size_t>(iy) * bound_nx_ + ix;
-      bound_slope_[k] = static_cast<float>(1.25 * g + 0.05);
-      double z = z_sampled[k] + bound_slope_[k] * spacing * 0.7072 + 1e-4;
+      const std::size_t k = static_cast<std::size_t>(iy) * grid.nx + ix;
+      out.slope[k] = static_cast<float>(1.25 * g + 0.05);
+      double z = samples.z[k] + out.slope[k] * spacing * 0.7072 + 1e-4;
       // Near a pit's edge the samples may miss a sliver of higher ground: bound by the base.
-      if (pit_near) z = std::max(z, base_near + bound_slope_[k] * bound_cell_ * 1.5 + 1e-4);
-      bound_zmax_[k] = static_cast<float>(z);
+      if (pit_near) z = std::max(z, base_near + out.slope[k] * grid.cell * 1.5 + 1e-4);
+      out.zmax[k] = static_cast<float>(z);
     }
   }
-  block_nx_ = (bound_nx_ + kBlockCells - 1) / kBlockCells;
-  block_ny_ = (bound_ny_ + kBlockCells - 1) / kBlockCells;
-  block_zmax_.assign(static_cast<std::size_t>(block_nx_) * block_ny_, -std::numeric_limits<float>::infinity());
-  bound_zmax_all_ = -kInf;
-  for (int iy = 0; iy < bound_ny_; ++iy) {
-    for (int ix = 0; ix < bound_nx_; ++ix) {
-      const float z = bound_zmax_[static_cast<std::size_t>(iy) * bound_nx_ + ix];
-      float& b = block_zmax_[static_cast<std::size_t>(iy / kBlockCells) * block_nx_ + ix / kBlockCells];
-      b = std::max(b, z);
-      bound_zmax_all_ = std::max(bound_zmax_all_, static_cast<double>(z));
-    }
-  }
+  return out;
+}
 
-  for (Obstacle& ob : obstacles) {
+/// Groups the cells of `grid` in blocks of `block_cells` x `block_cells` and takes the max of
+/// the height bounds `zmax` [m] per block and over all.
+BlockMaxima BuildBlockMaxima(const std::vector<float>& zmax, const GridLayout& grid, int block_cells) {
+  BlockMaxima out;
+  out.nx = (grid.nx + block_cells - 1) / block_cells;
+  out.ny = (grid.ny + block_cells - 1) / block_cells;
+  out.zmax.assign(static_cast<std::size_t>(out.nx) * out.ny, -std::numeric_limits<float>::infinity());
+  for (int iy = 0; iy < grid.ny; ++iy) {
+    for (int ix = 0; ix < grid.nx; ++ix) {
+      const float z = zmax[static_cast<std::size_t>(iy) * grid.nx + ix];
+      float& b = out.zmax[static_cast<std::size_t>(iy / block_cells) * out.nx + ix / block_cells];
+      b = std::max(b, z);
+      out.zmax_all = std::max(out.zmax_all, static_cast<double>(z));
+    }
+  }
+  return out;
+}
+
+/// Sets each obstacle's bounding sphere: centre in world and radius [m].
+void ObstacleBounds(std::vector<Obstacle>* obstacles) {
+  for (Obstacle& ob : *obstacles) {
     switch (ob.shape) {
       case Obstacle::Shape::kBox:
         ob.bound_centre = {ob.x, ob.y, 0.5 * (ob.z_min + ob.z_max)};
@@ -355,6 +430,28 @@ void Scene::Finish() {
         break;
     }
   }
+}
+
+}  // namespace
+
+void Scene::Finish() {
+  CacheTrig(this);
+  // Bound grid: sampled maxima of height and slope per cell, made conservative by a margin
+  // and (for the slope) by taking the neighbours' maxima too.
+  const GridLayout grid = LayOutBoundGrid(SceneExtent(*this), bound_cell_);
+  bound_x0_ = grid.x0;
+  bound_y0_ = grid.y0;
+  bound_nx_ = grid.nx;
+  bound_ny_ = grid.ny;
+  CellBounds bounds = BoundCells(SampleBoundGrid(*this, grid), grid);
+  bound_zmax_ = std::move(bounds.zmax);
+  bound_slope_ = std::move(bounds.slope);
+  BlockMaxima blocks = BuildBlockMaxima(bound_zmax_, grid, kBlockCells);
+  block_nx_ = blocks.nx;
+  block_ny_ = blocks.ny;
+  block_zmax_ = std::move(blocks.zmax);
+  bound_zmax_all_ = blocks.zmax_all;
+  ObstacleBounds(&obstacles);
 }
 
 SurfaceHit Scene::PlaneHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double t0,

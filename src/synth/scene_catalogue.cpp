@@ -213,6 +213,114 @@ Scene MakeForest(std::uint64_t seed) {
   return s;
 }
 
+/// The random scene keeps its way ahead clear: for the first kClearRunM metres, within
+/// |y| < kCorridorM [m].
+constexpr double kClearRunM = 7.0, kCorridorM = 1.5;
+
+/// Uniform position in [x0, x1] x [-y_max, y_max] off the random scene's way ahead: beyond the
+/// clear run, or beside the corridor, by at least `keep_off` [m]. Draws until one is.
+Eigen::Vector2d PlaceOffWay(Rng* rng, double x0, double x1, double y_max, double keep_off) {
+  for (;;) {
+    const Eigen::Vector2d p(rng->Uniform(x0, x1), rng->Uniform(-y_max, y_max));
+    if (p.x() > kClearRunM + keep_off || std::abs(p.y()) > kCorridorM + keep_off) return p;
+  }
+}
+
+/// The random scene's base ground: material, tilted plane, rolling slopes and ridges (steepest
+/// flanks 3 to 35 deg), and ramps off the way ahead.
+void AddRandomGround(Scene* s, Rng* rng) {
+  const Material grounds[] = {Material::kGrass, Material::kGravel, Material::kSoil, Material::kConcrete};
+  s->ground_material = grounds[static_cast<int>(rng->Uniform(0, 4))];
+  const double tilt = DegToRad(rng->Uniform(0, 4)), tilt_dir = rng->Uniform(0, 2 * kPi);
+  s->plane_gradient = std::tan(tilt) * Eigen::Vector2d(std::cos(tilt_dir), std::sin(tilt_dir));
+  const int bumps = static_cast<int>(rng->Uniform(0, 12));
+  for (int i = 0; i < bumps; ++i) {
+    GroundBump b;
+    b.x = rng->Uniform(-5, 30);
+    b.y = rng->Uniform(-15, 15);
+    b.amplitude_m = rng->Uniform(0.2, 1.5) * (rng->Uniform(0, 1) < 0.3 ? -1 : 1);
+    const double max_grad = std::tan(DegToRad(rng->Uniform(3, 35)));
+    b.radius_m = std::max(3.0, std::abs(b.amplitude_m) * 1.717 / max_grad);
+    s->bumps.push_back(b);
+  }
+  const int ramps = static_cast<int>(rng->Uniform(0, 4));
+  for (int i = 0; i < ramps; ++i) {
+    GroundRamp r;
+    const double half = rng->Uniform(0.5, 2.0), height = rng->Uniform(0.2, 1.0);
+    r.slope_deg = rng->Uniform(5, 35);
+    const double reach = half + height / std::tan(DegToRad(r.slope_deg));
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 25, 12, reach);
+    r.x = p.x();
+    r.y = p.y();
+    r.yaw_rad = rng->Uniform(0, kPi);
+    r.half_x_m = half;
+    r.half_y_m = rng->Uniform(0.5, 2.0);
+    r.height_m = height;
+    s->ramps.push_back(r);
+  }
+}
+
+/// The random scene's pits: maybe a ditch or trench across the way and a drop-off to a lower
+/// level (both beyond the clear run), and holes off the way ahead.
+void AddRandomPits(Scene* s, Rng* rng) {
+  if (rng->Uniform(0, 1) < 0.5) {  // a ditch or trench across the way, beyond the clear run
+    const double width = rng->Uniform(0.4, 1.6);
+    s->pits.push_back({kClearRunM + 1.0 + rng->Uniform(0, 8) + width / 2, rng->Uniform(-1, 1), rng->Uniform(-0.3, 0.3),
+                       width / 2, rng->Uniform(3, 9), rng->Uniform(0.2, 1.0)});
+  }
+  if (rng->Uniform(0, 1) < 0.35) {  // a drop-off to a lower level that runs on
+    const double edge = kClearRunM + 1.0 + rng->Uniform(0, 10);
+    s->pits.push_back({edge + 40.0, 0.0, rng->Uniform(-0.3, 0.3), 40.0, 60.0, rng->Uniform(0.3, 1.5)});
+  }
+  const int holes = static_cast<int>(rng->Uniform(0, 4));
+  for (int i = 0; i < holes; ++i) {
+    const double half = rng->Uniform(0.15, 0.6);
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 20, 8, 1.5 * half);
+    s->pits.push_back({p.x(), p.y(), rng->Uniform(0, kPi), half, rng->Uniform(0.15, 0.6), rng->Uniform(0.1, 0.5)});
+  }
+}
+
+/// The random scene's obstacles off the way ahead, on the finished ground: curbs, terraces,
+/// crates, rocks, trunks and logs.
+void AddRandomObstacles(Scene* s, Rng* rng) {
+  const int curbs = static_cast<int>(rng->Uniform(0, 4));
+  for (int i = 0; i < curbs; ++i) {
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 20, 8, 1.0);
+    s->obstacles.push_back(MakeBox(p.x(), p.y(), rng->Uniform(0, kPi), rng->Uniform(0.1, 0.2), rng->Uniform(0.5, 2.0),
+                                   rng->Uniform(0.03, 0.3), s->GroundHeight(p.x(), p.y()), Material::kConcrete));
+  }
+  const int terraces = static_cast<int>(rng->Uniform(0, 3));
+  for (int i = 0; i < terraces; ++i) {
+    const double half = rng->Uniform(0.8, 2.5);
+    const Eigen::Vector2d p = PlaceOffWay(rng, 3, 22, 10, half * 1.5);
+    s->obstacles.push_back(MakeBox(p.x(), p.y(), rng->Uniform(0, kPi), half, rng->Uniform(0.8, 2.5),
+                                   rng->Uniform(0.15, 0.6), s->GroundHeight(p.x(), p.y()), Material::kBrick));
+  }
+  const int crates = static_cast<int>(rng->Uniform(0, 6));
+  for (int i = 0; i < crates; ++i) {
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 22, 9, 0.7);
+    s->obstacles.push_back(MakeBox(p.x(), p.y(), rng->Uniform(0, kPi), rng->Uniform(0.15, 0.6), rng->Uniform(0.15, 0.6),
+                                   rng->Uniform(0.25, 1.2), s->GroundHeight(p.x(), p.y()), Material::kWood));
+  }
+  const int rocks = static_cast<int>(rng->Uniform(0, 11));
+  for (int i = 0; i < rocks; ++i) {
+    const double height = rng->Uniform(0.05, 0.5);
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 22, 9, 2.5 * height + 0.3);
+    AddRock(s, rng, p.x(), p.y(), height);
+  }
+  const int trunks = static_cast<int>(rng->Uniform(0, 16));
+  for (int i = 0; i < trunks; ++i) {
+    const Eigen::Vector2d p = PlaceOffWay(rng, 2, 28, 12, 0.5);
+    s->obstacles.push_back(MakeTrunk(*s, p.x(), p.y(), rng->Uniform(0.08, 0.4), rng->Uniform(4, 12)));
+  }
+  const int logs = static_cast<int>(rng->Uniform(0, 5));
+  for (int i = 0; i < logs; ++i) {
+    const double half_length = rng->Uniform(0.8, 2.2);
+    const Eigen::Vector2d p = PlaceOffWay(rng, 3, 20, 9, half_length);
+    s->obstacles.push_back(MakeLog(*s, p.x(), p.y(), rng->Uniform(0, kPi), rng->Uniform(0.06, 0.3), half_length));
+  }
+}
+
 /// Terrain composed from the elements of every scene, drawn from `seed`: rolling slopes and
 /// ridges, ditches, trenches and a drop-off to a lower level, ramps and terraces, curbs, crates,
 /// rocks, trunks and logs. The way ahead (|y| < 1.5 m) stays clear for the first 7 m, so the
@@ -220,95 +328,10 @@ Scene MakeForest(std::uint64_t seed) {
 Scene MakeRandom(std::uint64_t seed) {
   Scene s;
   Rng rng(seed * 2654435761ULL + 17);
-  constexpr double kClearRunM = 7.0, kCorridorM = 1.5;
-  const Material grounds[] = {Material::kGrass, Material::kGravel, Material::kSoil, Material::kConcrete};
-  s.ground_material = grounds[static_cast<int>(rng.Uniform(0, 4))];
-  const double tilt = DegToRad(rng.Uniform(0, 4)), tilt_dir = rng.Uniform(0, 2 * kPi);
-  s.plane_gradient = std::tan(tilt) * Eigen::Vector2d(std::cos(tilt_dir), std::sin(tilt_dir));
-  const int bumps = static_cast<int>(rng.Uniform(0, 12));
-  for (int i = 0; i < bumps; ++i) {  // rolling slopes and ridges, steepest flanks 3 to 35 deg
-    GroundBump b;
-    b.x = rng.Uniform(-5, 30);
-    b.y = rng.Uniform(-15, 15);
-    b.amplitude_m = rng.Uniform(0.2, 1.5) * (rng.Uniform(0, 1) < 0.3 ? -1 : 1);
-    const double max_grad = std::tan(DegToRad(rng.Uniform(3, 35)));
-    b.radius_m = std::max(3.0, std::abs(b.amplitude_m) * 1.717 / max_grad);
-    s.bumps.push_back(b);
-  }
-  // Anywhere off the way ahead: beyond the clear run, or beside the corridor.
-  auto place = [&](double x0, double x1, double y_max, double keep_off) {
-    for (;;) {
-      const Eigen::Vector2d p(rng.Uniform(x0, x1), rng.Uniform(-y_max, y_max));
-      if (p.x() > kClearRunM + keep_off || std::abs(p.y()) > kCorridorM + keep_off) return p;
-    }
-  };
-  const int ramps = static_cast<int>(rng.Uniform(0, 4));
-  for (int i = 0; i < ramps; ++i) {
-    GroundRamp r;
-    const double half = rng.Uniform(0.5, 2.0), height = rng.Uniform(0.2, 1.0);
-    r.slope_deg = rng.Uniform(5, 35);
-    const double reach = half + height / std::tan(DegToRad(r.slope_deg));
-    const Eigen::Vector2d p = place(2, 25, 12, reach);
-    r.x = p.x();
-    r.y = p.y();
-    r.yaw_rad = rng.Uniform(0, kPi);
-    r.half_x_m = half;
-    r.half_y_m = rng.Uniform(0.5, 2.0);
-    r.height_m = height;
-    s.ramps.push_back(r);
-  }
-  if (rng.Uniform(0, 1) < 0.5) {  // a ditch or trench across the way, beyond the clear run
-    const double width = rng.Uniform(0.4, 1.6);
-    s.pits.push_back({kClearRunM + 1.0 + rng.Uniform(0, 8) + width / 2, rng.Uniform(-1, 1), rng.Uniform(-0.3, 0.3),
-                      width / 2, rng.Uniform(3, 9), rng.Uniform(0.2, 1.0)});
-  }
-  if (rng.Uniform(0, 1) < 0.35) {  // a drop-off to a lower level that runs on
-    const double edge = kClearRunM + 1.0 + rng.Uniform(0, 10);
-    s.pits.push_back({edge + 40.0, 0.0, rng.Uniform(-0.3, 0.3), 40.0, 60.0, rng.Uniform(0.3, 1.5)});
-  }
-  const int holes = static_cast<int>(rng.Uniform(0, 4));
-  for (int i = 0; i < holes; ++i) {
-    const double half = rng.Uniform(0.15, 0.6);
-    const Eigen::Vector2d p = place(2, 20, 8, 1.5 * half);
-    s.pits.push_back({p.x(), p.y(), rng.Uniform(0, kPi), half, rng.Uniform(0.15, 0.6), rng.Uniform(0.1, 0.5)});
-  }
+  AddRandomGround(&s, &rng);
+  AddRandomPits(&s, &rng);
   s.Finish();  // the base ground and its pits are complete: objects below are placed on them
-  const int curbs = static_cast<int>(rng.Uniform(0, 4));
-  for (int i = 0; i < curbs; ++i) {
-    const Eigen::Vector2d p = place(2, 20, 8, 1.0);
-    s.obstacles.push_back(MakeBox(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.1, 0.2), rng.Uniform(0.5, 2.0),
-                                  rng.Uniform(0.03, 0.3), s.GroundHeight(p.x(), p.y()), Material::kConcrete));
-  }
-  const int terraces = static_cast<int>(rng.Uniform(0, 3));
-  for (int i = 0; i < terraces; ++i) {
-    const double half = rng.Uniform(0.8, 2.5);
-    const Eigen::Vector2d p = place(3, 22, 10, half * 1.5);
-    s.obstacles.push_back(MakeBox(p.x(), p.y(), rng.Uniform(0, kPi), half, rng.Uniform(0.8, 2.5),
-                                  rng.Uniform(0.15, 0.6), s.GroundHeight(p.x(), p.y()), Material::kBrick));
-  }
-  const int crates = static_cast<int>(rng.Uniform(0, 6));
-  for (int i = 0; i < crates; ++i) {
-    const Eigen::Vector2d p = place(2, 22, 9, 0.7);
-    s.obstacles.push_back(MakeBox(p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.15, 0.6), rng.Uniform(0.15, 0.6),
-                                  rng.Uniform(0.25, 1.2), s.GroundHeight(p.x(), p.y()), Material::kWood));
-  }
-  const int rocks = static_cast<int>(rng.Uniform(0, 11));
-  for (int i = 0; i < rocks; ++i) {
-    const double height = rng.Uniform(0.05, 0.5);
-    const Eigen::Vector2d p = place(2, 22, 9, 2.5 * height + 0.3);
-    AddRock(&s, &rng, p.x(), p.y(), height);
-  }
-  const int trunks = static_cast<int>(rng.Uniform(0, 16));
-  for (int i = 0; i < trunks; ++i) {
-    const Eigen::Vector2d p = place(2, 28, 12, 0.5);
-    s.obstacles.push_back(MakeTrunk(s, p.x(), p.y(), rng.Uniform(0.08, 0.4), rng.Uniform(4, 12)));
-  }
-  const int logs = static_cast<int>(rng.Uniform(0, 5));
-  for (int i = 0; i < logs; ++i) {
-    const double half_length = rng.Uniform(0.8, 2.2);
-    const Eigen::Vector2d p = place(3, 20, 9, half_length);
-    s.obstacles.push_back(MakeLog(s, p.x(), p.y(), rng.Uniform(0, kPi), rng.Uniform(0.06, 0.3), half_length));
-  }
+  AddRandomObstacles(&s, &rng);
   s.clear_run_m = kClearRunM;
   return s;
 }

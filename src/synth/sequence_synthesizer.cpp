@@ -7,6 +7,7 @@
 #include <iomanip>
 #include <numeric>
 #include <sstream>
+#include <utility>
 
 #include "ssta/core/error.h"
 #include "ssta/io/camera_calibration.h"
@@ -236,106 +237,117 @@ void RequireSynthFolder(const std::string& out_dir) {
   }
 }
 
-}  // namespace
-
-std::string SynthSummary::BriefReport() const {
-  std::ostringstream out;
-  out << std::fixed << std::setprecision(1) << "synth: " << frames_written << " frames ("
-      << frames_dropped << " dropped from cam1), " << imu_samples << " IMU samples, largest disparity "
-      << max_disparity_px << " px, " << render_ms_per_frame << " ms per stereo frame";
-  if (stale_files_removed > 0) out << "; removed " << stale_files_removed << " frame files of an earlier run";
-  return out.str();
-}
-
-Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& motion) {
-  const double p = DegToRad(rig.pitch_down_deg);
-  Eigen::Matrix3d r;
-  r.col(0) = Eigen::Vector3d(0, -1, 0);                         // camera x: body right
-  r.col(2) = Eigen::Vector3d(std::cos(p), 0, -std::sin(p));     // camera z: forward, pitched down
-  r.col(1) = r.col(2).cross(r.col(0));                          // camera y: down
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = r;
-  t.translation() = Eigen::Vector3d(rig.camera_forward_m, 0.5 * rig.baseline_m,
-                                    rig.camera_height_m - motion.body_height_m);
-  return t;
-}
-
-SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& out_dir,
-                                    const Progress& progress) {
-  std::string error;
-  if (!o.IsValid(&error)) throw Error(error);
-
+/// The scene of the options: the named scene with the textureless patches and added boxes.
+Scene BuildScene(const SynthOptions& o) {
   Scene scene = MakeScene(o.scene, o.seed, o.ramp_slope_deg);
   if (o.faults.textureless_patches > 0) AddTexturelessPatches(&scene, o.faults.textureless_patches, o.seed);
   for (const AddedBox& b : o.added_boxes) {
     AddBox(&scene, b.x, b.y, DegToRad(b.yaw_deg), b.length_m, b.width_m, b.height_m);
   }
-  const VehicleTrajectory trajectory(scene, o.motion);
-  const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
+  return scene;
+}
+
+/// Every camera frame's timestamp [ns] and true cam0 pose in the world.
+struct FramePlan {
   std::vector<std::int64_t> stamps;
-  std::vector<Eigen::Isometry3d> cam0_poses;
-  std::vector<Eigen::Vector3d> cam_positions;
+  std::vector<Eigen::Isometry3d> cam0_poses;     ///< world_T_cam0
+  std::vector<Eigen::Vector3d> cam_positions;    ///< cam0's optical centre in world [m]
+};
+
+/// The frames at the rig rate, the first kLeadInS after the first IMU sample, with cam0 at
+/// `body_T_cam0` on the vehicle.
+FramePlan PlanFrames(const SynthOptions& o, const VehicleTrajectory& trajectory, const Eigen::Isometry3d& body_T_cam0) {
+  FramePlan plan;
   for (int k = 0; k < o.frames; ++k) {
     const std::int64_t ns = kBaseNs + std::llround(kLeadInS * 1e9) + std::llround(k * 1e9 / o.rig.rate_hz);
-    stamps.push_back(ns);
-    cam0_poses.push_back(trajectory.WorldTBody(static_cast<double>(ns - kBaseNs) * 1e-9) * body_T_cam0);
-    cam_positions.push_back(cam0_poses.back().translation());
+    plan.stamps.push_back(ns);
+    plan.cam0_poses.push_back(trajectory.WorldTBody(static_cast<double>(ns - kBaseNs) * 1e-9) * body_T_cam0);
+    plan.cam_positions.push_back(plan.cam0_poses.back().translation());
   }
-  const Eigen::AlignedBox2d region = TruthRegion(cam_positions, o.render.max_label_range_m, o.grid_resolution_m);
-  const TerrainTruth truth(scene, o.vehicle, region, o.render.threads);
-  const StereoRenderer renderer(scene, o.rig, o.render, &truth, o.seed);
+  return plan;
+}
 
-  SynthSummary summary;
+/// The mounts cam0/ and cam1/sensor.yaml carry (T_BS in the body frame).
+struct WrittenMounts {
+  Eigen::Isometry3d cam0, cam1;
+};
+
+/// The true mounts of cam0 (`body_T_cam0`) and cam1 turned by the mount fault about cam0's
+/// optical centre.
+WrittenMounts WrittenMountsOf(const SynthOptions& o, const Eigen::Isometry3d& body_T_cam0) {
   const Eigen::Isometry3d body_T_cam1 = body_T_cam0 * Eigen::Translation3d(o.rig.baseline_m, 0, 0);
-  summary.body_T_cam0 = body_T_cam0;
   const Eigen::Matrix3d r_err = MountError(o.faults);
-  Eigen::Isometry3d written_cam0 = body_T_cam0, written_cam1 = body_T_cam1;
-  written_cam0.linear() = r_err * body_T_cam0.linear();
-  written_cam1.linear() = r_err * body_T_cam1.linear();
-  written_cam1.translation() =
+  WrittenMounts written{body_T_cam0, body_T_cam1};
+  written.cam0.linear() = r_err * body_T_cam0.linear();
+  written.cam1.linear() = r_err * body_T_cam1.linear();
+  written.cam1.translation() =
       body_T_cam0.translation() + r_err * (body_T_cam1.translation() - body_T_cam0.translation());
+  return written;
+}
 
+/// Makes the sequence's folders in `out_dir` (refused when it holds a recorded sequence) and
+/// removes the frame files of an earlier run; returns how many were removed.
+int PrepareFolder(const std::string& out_dir) {
   RequireSynthFolder(out_dir);
   for (const char* dir : {"cam0/data", "cam1/data", "imu0", "pose0", "gt/labels", "gt/disparity"}) {
     MakeDirectories(Join(out_dir, dir));
   }
   // The frames of an earlier, longer run would stay beside this one's and be scored.
+  int removed = 0;
   for (const char* dir : {"cam0/data", "cam1/data", "gt/labels", "gt/disparity"}) {
-    summary.stale_files_removed += RemoveFrameFiles(Join(out_dir, dir), ".png");
+    removed += RemoveFrameFiles(Join(out_dir, dir), ".png");
   }
+  return removed;
+}
 
-  // Calibration files.
-  CameraCalibration cam = renderer.Intrinsics();
-  cam.body_T_camera = written_cam0;
+/// cam0/ and cam1/sensor.yaml with the `written` mounts, gt/extrinsics.yaml with the true one
+/// (`body_T_cam0`), imu0/sensor.yaml and vehicle.yaml.
+void WriteCalibrationFiles(const SynthOptions& o, const CameraCalibration& intrinsics,
+                           const Eigen::Isometry3d& body_T_cam0, const WrittenMounts& written,
+                           const std::string& out_dir) {
+  CameraCalibration cam = intrinsics;
+  cam.body_T_camera = written.cam0;
   SaveCameraCalibration(cam, Join(out_dir, "cam0/sensor.yaml"), "ssta synth: cam0 (left)");
-  cam.body_T_camera = written_cam1;
+  cam.body_T_camera = written.cam1;
   SaveCameraCalibration(cam, Join(out_dir, "cam1/sensor.yaml"), "ssta synth: cam1 (right)");
   cam.body_T_camera = body_T_cam0;
   SaveCameraCalibration(cam, Join(out_dir, "gt/extrinsics.yaml"),
                         "ssta synth: the TRUE cam0 calibration and T_BS");
   WriteImuSensorYaml(o, Join(out_dir, "imu0/sensor.yaml"));
   WriteTextAtomically(Join(out_dir, "vehicle.yaml"), VehicleYaml(o.vehicle));
+}
 
-  // Frames.
-  const std::vector<int> dropped = DroppedFrames(o);
+/// What rendering and writing the frames gave.
+struct FrameOutputs {
+  std::vector<Eigen::Vector2d> seen;  ///< world (x, y) of labelled surface points (CollectSeenPoints)
+  std::vector<std::int64_t> dropped_timestamps_ns;  ///< frames left out of cam1
+  int frames_written = 0;
+  double max_disparity_px = 0;  ///< largest true disparity [px]
+  double render_ms = 0;         ///< wall time of all renders [ms]
+};
+
+/// Renders every frame of `plan` and writes cam0/, cam1/ (without the `dropped` frame indices),
+/// gt/labels/ and gt/disparity/ (16 bit, disparity * 256; 0 where the sky is seen) with the
+/// data.csv files.
+FrameOutputs WriteFrames(const SynthOptions& o, const StereoRenderer& renderer, const FramePlan& plan,
+                         const std::vector<int>& dropped, const std::string& out_dir, const Progress& progress) {
+  FrameOutputs out;
   std::ostringstream cam0_csv, cam1_csv;
   cam0_csv << "#timestamp [ns],filename\n";
   cam1_csv << "#timestamp [ns],filename\n";
-  std::vector<Eigen::Vector2d> seen;
-  double render_ms = 0;
   for (int k = 0; k < o.frames; ++k) {
-    const std::int64_t ns = stamps[static_cast<std::size_t>(k)];
-    const Eigen::Isometry3d& world_T_cam0 = cam0_poses[static_cast<std::size_t>(k)];
+    const std::int64_t ns = plan.stamps[static_cast<std::size_t>(k)];
+    const Eigen::Isometry3d& world_T_cam0 = plan.cam0_poses[static_cast<std::size_t>(k)];
     const auto start = std::chrono::steady_clock::now();
     const StereoFrame frame = renderer.Render(world_T_cam0, k);
-    render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-    CollectSeenPoints(frame, world_T_cam0, o.rig, &seen);
+    out.render_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    CollectSeenPoints(frame, world_T_cam0, o.rig, &out.seen);
 
     const std::string name = std::to_string(ns) + ".png";
     WriteImage(frame.left, Join(out_dir, "cam0/data/" + name));
     cam0_csv << ns << "," << name << "\n";
     if (std::binary_search(dropped.begin(), dropped.end(), k)) {
-      summary.dropped_timestamps_ns.push_back(ns);
+      out.dropped_timestamps_ns.push_back(ns);
     } else {
       WriteImage(frame.right, Join(out_dir, "cam1/data/" + name));
       cam1_csv << ns << "," << name << "\n";
@@ -345,20 +357,22 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
       const float d = frame.disparity[i];
       if (d > 0) {
         disparity[i] = static_cast<std::uint16_t>(std::clamp(std::lround(d * 256.0), 1L, 65535L));
-        summary.max_disparity_px = std::max(summary.max_disparity_px, static_cast<double>(d));
+        out.max_disparity_px = std::max(out.max_disparity_px, static_cast<double>(d));
       }
     }
     WriteImage(frame.labels, Join(out_dir, "gt/labels/" + name));
     WriteImage(disparity, Join(out_dir, "gt/disparity/" + name));
-    ++summary.frames_written;
+    ++out.frames_written;
     if (progress) progress(k + 1, o.frames);
   }
-  summary.frames_dropped = static_cast<int>(summary.dropped_timestamps_ns.size());
-  summary.render_ms_per_frame = render_ms / o.frames;
   WriteTextAtomically(Join(out_dir, "cam0/data.csv"), cam0_csv.str());
   WriteTextAtomically(Join(out_dir, "cam1/data.csv"), cam1_csv.str());
+  return out;
+}
 
-  // IMU and poses at the IMU rate, covering every frame.
+/// imu0/data.csv and pose0/data.csv at the IMU rate, from kLeadInS before the first frame to
+/// kLeadOutS after the last, with the IMU and pose faults; returns the number of samples.
+int WriteImuAndPoses(const SynthOptions& o, const VehicleTrajectory& trajectory, const std::string& out_dir) {
   const double t_end = kLeadInS + (o.frames - 1) / o.rig.rate_hz + kLeadOutS;
   const int samples = static_cast<int>(std::floor(t_end * o.motion.imu_rate_hz)) + 1;
   Rng imu_noise(o.seed * 6364136223846793005ULL + 23);
@@ -389,19 +403,24 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
     pose_csv << ns << "," << p.x() << "," << p.y() << "," << p.z() << "," << q.w() << "," << q.x()
              << "," << q.y() << "," << q.z() << "\n";
   }
-  summary.imu_samples = samples;
   WriteTextAtomically(Join(out_dir, "imu0/data.csv"), imu_csv.str());
   WriteTextAtomically(Join(out_dir, "pose0/data.csv"), pose_csv.str());
+  return samples;
+}
 
+/// A warning when the path runs past the distance the scene keeps clear; empty otherwise.
+std::string ClearRunWarning(const SynthOptions& o, const Scene& scene) {
   const double run_m = o.motion.speed_mps * (o.frames - 1) / o.rig.rate_hz + kLeadInS * o.motion.speed_mps;
-  if (run_m > scene.clear_run_m) {
-    std::ostringstream w;
-    w << std::fixed << std::setprecision(1) << "the path runs " << run_m << " m, past the "
-      << scene.clear_run_m << " m the " << o.scene
-      << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
-    summary.warning = w.str();
-  }
-  WriteGrid(truth, o, region, seen, Join(out_dir, "gt"));
+  if (!(run_m > scene.clear_run_m)) return "";
+  std::ostringstream w;
+  w << std::fixed << std::setprecision(1) << "the path runs " << run_m << " m, past the "
+    << scene.clear_run_m << " m the " << o.scene
+    << " scene keeps clear: the vehicle pose ignores obstacles and pits beyond";
+  return w.str();
+}
+
+/// gt/rig.yaml: the rig and scene rendered, and the boxes added with --add-box.
+void WriteRigYaml(const SynthOptions& o, const std::string& path) {
   std::ostringstream rig;
   rig << std::setprecision(10) << "# The rig and scene ssta synth rendered (for reports; the calibration is cam0/, cam1/).\n"
       << "scene: " << o.scene << "\nseed: " << o.seed << "\nwidth: " << o.rig.width << "\nheight: " << o.rig.height
@@ -414,9 +433,65 @@ SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& ou
         << ", " << b.yaw_deg << "]";
   }
   rig << "]\n";
-  WriteTextAtomically(Join(out_dir, "gt/rig.yaml"), rig.str());
-  WriteFaultsYaml(o, scene, body_T_cam0, written_cam0, dropped, summary,
-                  Join(out_dir, "gt/faults.yaml"));
+  WriteTextAtomically(path, rig.str());
+}
+
+}  // namespace
+
+std::string SynthSummary::BriefReport() const {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(1) << "synth: " << frames_written << " frames ("
+      << frames_dropped << " dropped from cam1), " << imu_samples << " IMU samples, largest disparity "
+      << max_disparity_px << " px, " << render_ms_per_frame << " ms per stereo frame";
+  if (stale_files_removed > 0) out << "; removed " << stale_files_removed << " frame files of an earlier run";
+  return out.str();
+}
+
+Eigen::Isometry3d TrueBodyTCam0(const RigOptions& rig, const MotionOptions& motion) {
+  const double p = DegToRad(rig.pitch_down_deg);
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(0, -1, 0);                         // camera x: body right
+  r.col(2) = Eigen::Vector3d(std::cos(p), 0, -std::sin(p));     // camera z: forward, pitched down
+  r.col(1) = r.col(2).cross(r.col(0));                          // camera y: down
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = r;
+  t.translation() = Eigen::Vector3d(rig.camera_forward_m, 0.5 * rig.baseline_m,
+                                    rig.camera_height_m - motion.body_height_m);
+  return t;
+}
+
+SynthSummary WriteSyntheticSequence(const SynthOptions& o, const std::string& out_dir,
+                                    const Progress& progress) {
+  std::string error;
+  if (!o.IsValid(&error)) throw Error(error);
+
+  const Scene scene = BuildScene(o);
+  const VehicleTrajectory trajectory(scene, o.motion);
+  const Eigen::Isometry3d body_T_cam0 = TrueBodyTCam0(o.rig, o.motion);
+  const FramePlan plan = PlanFrames(o, trajectory, body_T_cam0);
+  const Eigen::AlignedBox2d region = TruthRegion(plan.cam_positions, o.render.max_label_range_m, o.grid_resolution_m);
+  const TerrainTruth truth(scene, o.vehicle, region, o.render.threads);
+  const StereoRenderer renderer(scene, o.rig, o.render, &truth, o.seed);
+
+  SynthSummary summary;
+  summary.body_T_cam0 = body_T_cam0;
+  const WrittenMounts written = WrittenMountsOf(o, body_T_cam0);
+  summary.stale_files_removed = PrepareFolder(out_dir);
+  WriteCalibrationFiles(o, renderer.Intrinsics(), body_T_cam0, written, out_dir);
+
+  const std::vector<int> dropped = DroppedFrames(o);
+  FrameOutputs frames = WriteFrames(o, renderer, plan, dropped, out_dir, progress);
+  summary.frames_written = frames.frames_written;
+  summary.dropped_timestamps_ns = std::move(frames.dropped_timestamps_ns);
+  summary.frames_dropped = static_cast<int>(summary.dropped_timestamps_ns.size());
+  summary.max_disparity_px = frames.max_disparity_px;
+  summary.render_ms_per_frame = frames.render_ms / o.frames;
+  summary.imu_samples = WriteImuAndPoses(o, trajectory, out_dir);
+
+  summary.warning = ClearRunWarning(o, scene);
+  WriteGrid(truth, o, region, frames.seen, Join(out_dir, "gt"));
+  WriteRigYaml(o, Join(out_dir, "gt/rig.yaml"));
+  WriteFaultsYaml(o, scene, body_T_cam0, written.cam0, dropped, summary, Join(out_dir, "gt/faults.yaml"));
   return summary;
 }
 

@@ -124,78 +124,90 @@ double ShadeHit(const Scene& scene, const SurfaceHit& hit, const Eigen::Vector3d
   return albedo * (render.ambient + (lit ? render.sun_gain * sun : 0.0));
 }
 
-}  // namespace
-
-double StereoRenderer::Shade(const Eigen::Isometry3d& world_T_camera, double u, double v) const {
-  const double cu = 0.5 * (rig_.width - 1), cv = 0.5 * (rig_.height - 1);
+/// Grey value seen through image point (u, v) [px] of a camera at `world_T_camera`.
+double ShadeThrough(const Scene& scene, const RigOptions& rig, const RenderOptions& render,
+                    const Eigen::Isometry3d& world_T_camera, double u, double v) {
+  const double cu = 0.5 * (rig.width - 1), cv = 0.5 * (rig.height - 1);
   const Eigen::Vector3d d =
-      world_T_camera.linear() * Eigen::Vector3d((u - cu) / rig_.focal_px, (v - cv) / rig_.focal_px, 1);
-  const double t_max = render_.max_ray_m / d.norm();
-  const SurfaceHit hit = scene_.CastRay(world_T_camera.translation(), d, t_max);
-  if (!hit.hit) return SkyGrey(d, render_);
-  return ShadeHit(scene_, hit, d, hit.t / rig_.focal_px, render_);
+      world_T_camera.linear() * Eigen::Vector3d((u - cu) / rig.focal_px, (v - cv) / rig.focal_px, 1);
+  const double t_max = render.max_ray_m / d.norm();
+  const SurfaceHit hit = scene.CastRay(world_T_camera.translation(), d, t_max);
+  if (!hit.hit) return SkyGrey(d, render);
+  return ShadeHit(scene, hit, d, hit.t / rig.focal_px, render);
 }
 
-StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int frame_index) const {
-  const int w = rig_.width, h = rig_.height;
-  const double f = rig_.focal_px, cu = 0.5 * (w - 1), cv = 0.5 * (h - 1);
-  const Eigen::Isometry3d world_T_cam1 =
-      world_T_cam0 * Eigen::Translation3d(rig_.baseline_m, 0, 0);
-  StereoFrame out;
-  out.left = ImageU8(w, h);
-  out.right = ImageU8(w, h);
-  out.labels = ImageU8(w, h, kDontCare);
-  out.disparity = ImageF(w, h, 0.f);
-  out.depth = ImageF(w, h, 0.f);
-  out.occluded = ImageU8(w, h, 0);
-  ImageU8 raw_class(w, h, kDontCare);
-  ImageF right_depth(w, h, 0.f);
-  const int ss = render_.supersample;
+/// What a camera's pass reads: the renderer's scene, options, truth (may be null) and seed.
+struct RenderInputs {
+  const Scene& scene;
+  const RigOptions& rig;
+  const RenderOptions& render;
+  const TerrainTruth* truth;
+  std::uint64_t seed;
+};
 
-  for (int cam = 0; cam < 2; ++cam) {
-    const Eigen::Isometry3d& world_T_cam = cam == 0 ? world_T_cam0 : world_T_cam1;
-    const Eigen::Vector3d origin = world_T_cam.translation();
-    const Eigen::Matrix3d r = world_T_cam.linear();
-    ImageU8& image = cam == 0 ? out.left : out.right;
-    ParallelFor(h, render_.threads, [&](int v) {
-      // One noise stream per row keeps the bytes independent of the thread count.
-      Rng noise(Mix64(Mix64(seed_ * 1000003 + static_cast<std::uint64_t>(frame_index) * 2 + cam) + v));
-      for (int u = 0; u < w; ++u) {
-        const Eigen::Vector3d d = r * Eigen::Vector3d((u - cu) / f, (v - cv) / f, 1);
-        const double t_max = render_.max_ray_m / d.norm();
-        const SurfaceHit hit = scene_.CastRay(origin, d, t_max);
-        double grey;
-        if (ss > 1) {
-          grey = 0;
-          for (int j = 0; j < ss; ++j) {
-            for (int i = 0; i < ss; ++i) {
-              grey += Shade(world_T_cam, u + (i + 0.5) / ss - 0.5, v + (j + 0.5) / ss - 0.5);
-            }
-          }
-          grey /= ss * ss;
-        } else {
-          grey = hit.hit ? ShadeHit(scene_, hit, d, hit.t / f, render_) : SkyGrey(d, render_);
-        }
-        grey += render_.sensor_noise_grey * noise.Gaussian();
-        image(v, u) = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));
-        if (!hit.hit) continue;
-        if (cam == 1) {
-          right_depth(v, u) = static_cast<float>(hit.t);
-          continue;
-        }
-        out.depth(v, u) = static_cast<float>(hit.t);
-        out.disparity(v, u) = static_cast<float>(f * rig_.baseline_m / hit.t);
-        if (truth_ != nullptr && hit.t * d.norm() <= render_.max_label_range_m) raw_class(v, u) = truth_->ClassOf(hit);
-      }
-    });
+/// Where a camera's pass writes: its grey image and the z depth of each hit [m]; cam0's pass
+/// also the disparity [px] and the raw true class of each hit within the label range.
+struct CameraTargets {
+  ImageU8* image;
+  ImageF* depth;
+  ImageF* disparity;   ///< cam0 only
+  ImageU8* raw_class;  ///< cam0 only
+};
+
+/// Grey value of pixel (u, v) before the sensor noise: the mean over ss x ss subpixel rays
+/// (RenderOptions::supersample > 1), else the shade of `hit`, seen along the pixel's ray `d`.
+double PixelGrey(const RenderInputs& in, const Eigen::Isometry3d& world_T_cam, int u, int v, const SurfaceHit& hit,
+                 const Eigen::Vector3d& d) {
+  const int ss = in.render.supersample;
+  if (ss <= 1) return hit.hit ? ShadeHit(in.scene, hit, d, hit.t / in.rig.focal_px, in.render) : SkyGrey(d, in.render);
+  double grey = 0;
+  for (int j = 0; j < ss; ++j) {
+    for (int i = 0; i < ss; ++i) {
+      grey += ShadeThrough(in.scene, in.rig, in.render, world_T_cam, u + (i + 0.5) / ss - 0.5, v + (j + 0.5) / ss - 0.5);
+    }
   }
+  grey /= ss * ss;
+  return grey;
+}
 
-  // Occlusion: the left point must be what cam1 sees at u - d (rectified, same row and depth).
+/// Renders camera `cam` (0 left, 1 right) at `world_T_cam` into `targets`, rows spread over the
+/// threads; the sensor noise is seeded per frame, camera and row.
+void RenderCamera(const RenderInputs& in, const Eigen::Isometry3d& world_T_cam, int frame_index, int cam,
+                  const CameraTargets& targets) {
+  const int w = in.rig.width, h = in.rig.height;
+  const double f = in.rig.focal_px, cu = 0.5 * (w - 1), cv = 0.5 * (h - 1);
+  const Eigen::Vector3d origin = world_T_cam.translation();
+  const Eigen::Matrix3d r = world_T_cam.linear();
+  ParallelFor(h, in.render.threads, [&](int v) {
+    // One noise stream per row keeps the bytes independent of the thread count.
+    Rng noise(Mix64(Mix64(in.seed * 1000003 + static_cast<std::uint64_t>(frame_index) * 2 + cam) + v));
+    for (int u = 0; u < w; ++u) {
+      const Eigen::Vector3d d = r * Eigen::Vector3d((u - cu) / f, (v - cv) / f, 1);
+      const double t_max = in.render.max_ray_m / d.norm();
+      const SurfaceHit hit = in.scene.CastRay(origin, d, t_max);
+      double grey = PixelGrey(in, world_T_cam, u, v, hit, d);
+      grey += in.render.sensor_noise_grey * noise.Gaussian();
+      (*targets.image)(v, u) = static_cast<std::uint8_t>(std::clamp(std::lround(grey), 0L, 255L));
+      if (!hit.hit) continue;
+      (*targets.depth)(v, u) = static_cast<float>(hit.t);
+      if (cam == 1) continue;
+      (*targets.disparity)(v, u) = static_cast<float>(f * in.rig.baseline_m / hit.t);
+      if (in.truth != nullptr && hit.t * d.norm() <= in.render.max_label_range_m) {
+        (*targets.raw_class)(v, u) = in.truth->ClassOf(hit);
+      }
+    }
+  });
+}
+
+/// Marks the left pixels whose surface point cam1 does not see: cam1 must see it at u - d
+/// (rectified, same row and depth) in `right_depth` [m].
+void MarkOccluded(const ImageF& right_depth, StereoFrame* frame) {
+  const int w = frame->depth.width(), h = frame->depth.height();
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
-      const float z = out.depth(v, u);
+      const float z = frame->depth(v, u);
       if (z <= 0) continue;
-      const double ur = u - out.disparity(v, u);
+      const double ur = u - frame->disparity(v, u);
       const int u0 = static_cast<int>(std::floor(ur));
       bool visible = false;
       for (int uu = u0; uu <= u0 + 1; ++uu) {
@@ -203,16 +215,20 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
         const float zr = right_depth(v, uu);
         if (zr > 0 && zr > z * 0.97f - 0.01f) visible = true;
       }
-      if (!visible) out.occluded(v, u) = 1;
+      if (!visible) frame->occluded(v, u) = 1;
     }
   }
+}
 
-  // Labels: the raw class, except where a different class lies within the boundary band.
-  const int band = render_.boundary_band_px;
+/// The labels: the raw class, except where a different class lies within `band` pixels, and
+/// 255 (don't care) where the pixel is occluded in cam1.
+ImageU8 BandLabels(const ImageU8& raw_class, const ImageU8& occluded, int band) {
+  const int w = raw_class.width(), h = raw_class.height();
+  ImageU8 labels(w, h, kDontCare);
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
       const std::uint8_t c = raw_class(v, u);
-      if (c == kDontCare || out.occluded(v, u)) continue;
+      if (c == kDontCare || occluded(v, u)) continue;
       bool mixed = false;
       for (int dv = -band; dv <= band && !mixed; ++dv) {
         for (int du = -band; du <= band; ++du) {
@@ -224,9 +240,32 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
           }
         }
       }
-      if (!mixed) out.labels(v, u) = c;
+      if (!mixed) labels(v, u) = c;
     }
   }
+  return labels;
+}
+
+}  // namespace
+
+StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int frame_index) const {
+  const int w = rig_.width, h = rig_.height;
+  const Eigen::Isometry3d world_T_cam1 =
+      world_T_cam0 * Eigen::Translation3d(rig_.baseline_m, 0, 0);
+  StereoFrame out;
+  out.left = ImageU8(w, h);
+  out.right = ImageU8(w, h);
+  out.disparity = ImageF(w, h, 0.f);
+  out.depth = ImageF(w, h, 0.f);
+  out.occluded = ImageU8(w, h, 0);
+  ImageU8 raw_class(w, h, kDontCare);
+  ImageF right_depth(w, h, 0.f);
+
+  const RenderInputs in{scene_, rig_, render_, truth_, seed_};
+  RenderCamera(in, world_T_cam0, frame_index, 0, {&out.left, &out.depth, &out.disparity, &raw_class});
+  RenderCamera(in, world_T_cam1, frame_index, 1, {&out.right, &right_depth, nullptr, nullptr});
+  MarkOccluded(right_depth, &out);
+  out.labels = BandLabels(raw_class, out.occluded, render_.boundary_band_px);
   return out;
 }
 

@@ -42,9 +42,6 @@ class StereoRenderer {
   CameraCalibration Intrinsics() const;
 
  private:
-  /// Grey value seen through image point (u, v) [px] of a camera at `world_T_camera`.
-  double Shade(const Eigen::Isometry3d& world_T_camera, double u, double v) const;
-
   const Scene& scene_;
   RigOptions rig_;
   RenderOptions render_;
