@@ -77,27 +77,24 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
   if (any) RelabelSegments(segment_ids, new_class, &result->labels);
 }
 
-void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                            const AnalysisOptions& options, AnalysisResult* result) {
-  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
-                 cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
-             "RefineByFragmentPlanes: cloud, segment ids and labels differ in size");
-  SSTA_CHECK(focal_times_baseline > 0, "RefineByFragmentPlanes: focal_times_baseline must be positive");
-  if (!(options.fragment_tolerance_px > 0) || !result->quality.passed) return;
+namespace {
+
+/// The hosts each fragment (a small segment with points) touches, 4-neighbours in
+/// `segment_ids`, in the order met: a host has a well-determined plane, at least
+/// fragment_host_min_points points and more than twice the fragment's. A handful at most per
+/// fragment (kept as small vectors); empty for the other segments.
+std::vector<std::vector<int>> LinkFragmentsToHosts(const ImageI32& segment_ids,
+                                                   const std::vector<SegmentResult>& segments,
+                                                   const AnalysisOptions& options) {
   constexpr double kMinPlaneDistanceM = 0.05;  // planes nearer the camera have no stable disparity
-  const int num_segments = static_cast<int>(result->segments.size());
+  const int num_segments = static_cast<int>(segments.size());
   std::vector<char> fragment(num_segments, 0), surface(num_segments, 0);
-  for (const SegmentResult& seg : result->segments) {
+  for (const SegmentResult& seg : segments) {
     fragment[seg.id] = seg.small && seg.inliers > 0;
     surface[seg.id] = seg.inliers >= options.fragment_host_min_points && seg.has_plane &&
                       std::abs(seg.plane(3)) > kMinPlaneDistanceM;
   }
-  // A host has a well-determined plane: at least fragment_host_min_points points, and more
-  // than twice the fragment's.
-  auto hosts = [&](int host, int frag) {
-    return result->segments[host].inliers > 2 * result->segments[frag].inliers;
-  };
-  // The hosts each fragment touches (a handful at most; kept as small vectors).
+  auto hosts = [&](int host, int frag) { return segments[host].inliers > 2 * segments[frag].inliers; };
   std::vector<std::vector<int>> touches(num_segments);
   auto link = [&](int a, int b) {
     if (a < 0 || b < 0 || a == b) return;
@@ -109,7 +106,7 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
       if (std::find(t.begin(), t.end(), a) == t.end()) t.push_back(a);
     }
   };
-  const int w = cloud.width(), h = cloud.height();
+  const int w = segment_ids.width(), h = segment_ids.height();
   for (int v = 0; v < h; ++v) {
     const std::int32_t* row = segment_ids.row(v);
     const std::int32_t* below = v + 1 < h ? segment_ids.row(v + 1) : nullptr;
@@ -118,10 +115,27 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
       if (below && row[u] != below[u]) link(row[u], below[u]);
     }
   }
-  // Points of each fragment within the tolerance of each touched plane.
-  const double fb = focal_times_baseline;
-  std::vector<int> points(num_segments, 0);
-  std::vector<std::vector<int>> consistent(num_segments);
+  return touches;
+}
+
+/// Per segment, its points with depth (z > 0), and of those the ones within
+/// fragment_tolerance_px of the disparity of each touched host's plane (DisparityOffPlanePx).
+struct PlaneCounts {
+  std::vector<int> points;
+  std::vector<std::vector<int>> consistent;  // [id][k]: on the plane of host touches[id][k]
+};
+
+/// PlaneCounts of the segments that touch a host; fb = focal length * baseline [px m].
+PlaneCounts CountPlaneConsistentPoints(const Image3f& cloud, const ImageI32& segment_ids,
+                                       const std::vector<SegmentResult>& segments,
+                                       const std::vector<std::vector<int>>& touches, double fb,
+                                       const AnalysisOptions& options) {
+  const int num_segments = static_cast<int>(segments.size());
+  PlaneCounts counts;
+  counts.points.assign(num_segments, 0);
+  counts.consistent.resize(num_segments);
+  std::vector<int>& points = counts.points;
+  std::vector<std::vector<int>>& consistent = counts.consistent;
   for (int id = 0; id < num_segments; ++id) consistent[id].assign(touches[id].size(), 0);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const int id = segment_ids[i];
@@ -130,26 +144,49 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
     if (!(p.z() > 0)) continue;  // also NaN
     ++points[id];
     for (std::size_t k = 0; k < touches[id].size(); ++k) {
-      const Eigen::Vector4d& plane = result->segments[touches[id][k]].plane;
+      const Eigen::Vector4d& plane = segments[touches[id][k]].plane;
       consistent[id][k] += std::abs(DisparityOffPlanePx(plane, p, fb)) <= options.fragment_tolerance_px;
     }
   }
-  // Each fragment's host; a host may itself be a fragment of a larger host (it has more than
-  // twice the points, so the chains end): a fragment takes the verdict at the end of its chain,
-  // whatever the order of the segment ids.
-  std::vector<int> host(num_segments, -1), share_pct(num_segments, 0);
+  return counts;
+}
+
+/// Each segment's host, -1 for none: the touched host whose plane holds most of its points, if
+/// those are at least fragment_consistent_share of them; and that share [%], rounded.
+struct FragmentHosts {
+  std::vector<int> host, share_pct;
+};
+
+/// FragmentHosts from the hosts each segment touches and the points on their planes.
+FragmentHosts ChooseHosts(const std::vector<std::vector<int>>& touches, const PlaneCounts& counts,
+                          const AnalysisOptions& options) {
+  const int num_segments = static_cast<int>(touches.size());
+  FragmentHosts hosts;
+  hosts.host.assign(num_segments, -1);
+  hosts.share_pct.assign(num_segments, 0);
   for (int id = 0; id < num_segments; ++id) {
     int best = -1, best_count = 0;
     for (std::size_t k = 0; k < touches[id].size(); ++k) {
-      if (consistent[id][k] > best_count) {
-        best_count = consistent[id][k];
+      if (counts.consistent[id][k] > best_count) {
+        best_count = counts.consistent[id][k];
         best = touches[id][k];
       }
     }
-    if (best < 0 || best_count < options.fragment_consistent_share * points[id]) continue;
-    host[id] = best;
-    share_pct[id] = static_cast<int>(std::lround(100.0 * best_count / points[id]));
+    if (best < 0 || best_count < options.fragment_consistent_share * counts.points[id]) continue;
+    hosts.host[id] = best;
+    hosts.share_pct[id] = static_cast<int>(std::lround(100.0 * best_count / counts.points[id]));
   }
+  return hosts;
+}
+
+/// Gives each fragment that has a host its host's verdict and reason, and relabels its pixels.
+/// A host may itself be a fragment of a larger host (it has more than twice the points, so the
+/// chains end): a fragment takes the verdict at the end of its chain, whatever the order of the
+/// segment ids.
+void AdoptHostVerdicts(const FragmentHosts& hosts, const ImageI32& segment_ids, AnalysisResult* result) {
+  const std::vector<int>& host = hosts.host;
+  const std::vector<int>& share_pct = hosts.share_pct;
+  const int num_segments = static_cast<int>(host.size());
   std::vector<std::uint8_t> new_class(num_segments, 0);
   bool any = false;
   for (int id = 0; id < num_segments; ++id) {
@@ -164,6 +201,22 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
                  std::to_string(share_pct[id]) + "% of its points (" + std::string(ClassName(seg.verdict)) + ")";
   }
   if (any) RelabelSegments(segment_ids, new_class, &result->labels);
+}
+
+}  // namespace
+
+void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
+                            const AnalysisOptions& options, AnalysisResult* result) {
+  SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
+                 cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
+             "RefineByFragmentPlanes: cloud, segment ids and labels differ in size");
+  SSTA_CHECK(focal_times_baseline > 0, "RefineByFragmentPlanes: focal_times_baseline must be positive");
+  if (!(options.fragment_tolerance_px > 0) || !result->quality.passed) return;
+  const std::vector<std::vector<int>> touches = LinkFragmentsToHosts(segment_ids, result->segments, options);
+  const PlaneCounts counts =
+      CountPlaneConsistentPoints(cloud, segment_ids, result->segments, touches, focal_times_baseline, options);
+  const FragmentHosts hosts = ChooseHosts(touches, counts, options);
+  AdoptHostVerdicts(hosts, segment_ids, result);
 }
 
 void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {

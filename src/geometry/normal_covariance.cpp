@@ -76,12 +76,88 @@ SSTA_NOINLINE void CovarianceRow(int begin, int end, int r, double min_count,
   }
 }
 
+/// The per-row structure of arrays of the covariance sweep, `width` floats each: the trace-1
+/// covariance entries, then the eigenvectors, so that the eigen solve runs as one branch-free
+/// loop the compiler vectorises.
+struct CovarianceRowArrays {
+  float* cxx;
+  float* cxy;
+  float* cxz;
+  float* cyy;
+  float* cyz;
+  float* czz;
+  float* nx;
+  float* ny;
+  float* nz;
+};
+
+/// CovarianceRowArrays in `storage`, resized to 9 x width floats (its capacity is kept).
+CovarianceRowArrays MakeCovarianceRowArrays(int width, std::vector<float>* storage) {
+  storage->resize(static_cast<std::size_t>(width) * 9);
+  CovarianceRowArrays a;
+  a.cxx = storage->data();
+  a.cxy = a.cxx + width;
+  a.cxz = a.cxy + width;
+  a.cyy = a.cxz + width;
+  a.cyz = a.cyy + width;
+  a.czz = a.cyz + width;
+  a.nx = a.czz + width;
+  a.ny = a.nx + width;
+  a.nz = a.ny + width;
+  return a;
+}
+
+/// Columns [first, end) of a row; empty when end <= first.
+struct ColumnSpan {
+  int first, end;
+};
+
+/// The span from the first to the last pixel of a row whose radius is max_r [px]. Such pixels
+/// lie in [max_r, width - max_r) since the border cuts every radius.
+inline ColumnSpan FullRadiusSpan(const std::uint8_t* radius, int width, int max_r) {
+  int first_full = width, end_full = 0;
+  for (int u = 0; u < width; ++u) {
+    if (radius[u] == max_r) {
+      first_full = std::min(first_full, u);
+      end_full = u + 1;
+    }
+  }
+  return {first_full, end_full};
+}
+
+/// Trace-1 covariances of the pixels of row v whose radius r [px] is neither 0 nor
+/// `kernel_radius` (the radius whose pixels CovarianceRow took on this row; 0 when it ran on
+/// none), one by one from box sums over the integral rows v - r and v + r + 1.
+void PartialRadiusCovariances(const internal::IntegralRowRing<std::uint64_t, 10>& rows, int v,
+                              const std::uint8_t* radius, int width, int kernel_radius,
+                              const MinCounts& min_counts, const CovarianceRowArrays& out) {
+  constexpr int kC = 10;  // n, x, y, z, xx, xy, xz, yy, yz, zz
+  const std::size_t plane = rows.plane();
+  for (int u = 0; u < width; ++u) {
+    const int r = radius[u];
+    if (r == 0 || r == kernel_radius) continue;
+    const std::uint64_t* top = rows.Row(v - r);
+    const std::uint64_t* bottom = rows.Row(v + r + 1);
+    double s[kC];
+    for (int k = 0; k < kC; ++k) {
+      s[k] = static_cast<double>(BoxSum<std::int64_t>(top, bottom, plane, u - r, u + r + 1, k));
+    }
+    float c[6];
+    UnitTraceCovariance(s, min_counts.full[r], c);
+    out.cxx[u] = c[0];
+    out.cxy[u] = c[1];
+    out.cxz[u] = c[2];
+    out.cyy[u] = c[3];
+    out.cyz[u] = c[4];
+    out.czz[u] = c[5];
+  }
+}
+
 }  // namespace
 
 // Sums over the window of 1, x, y, z and the six products, as integers in units of a per-frame
 // quantum q (and q^2): exact box sums whatever the magnitude of the frame's other sums.
 void NormalEstimator::ComputeCovariance(const Image3f& cloud, int v_begin, int v_end, Band* band) {
-  constexpr int kC = 10;  // n, x, y, z, xx, xy, xz, yy, yz, zz
   Buffers& b = *buffers_;
   const int width = cloud.width();
   const int height = cloud.height();
@@ -110,66 +186,31 @@ void NormalEstimator::ComputeCovariance(const Image3f& cloud, int v_begin, int v
   };
 
   const std::size_t row_size = rows.row_size();
-  const std::size_t plane = rows.plane();
   band->strip_u64.resize(row_size);
   std::uint64_t* strip = band->strip_u64.data();
-  // Per-row structure-of-arrays: the trace-1 covariance entries, then the eigenvectors, so that
-  // the eigen solve runs as one branch-free loop the compiler vectorises.
-  band->row_soa.resize(static_cast<std::size_t>(width) * 9);
-  float* cxx = band->row_soa.data();
-  float* cxy = cxx + width;
-  float* cxz = cxy + width;
-  float* cyy = cxz + width;
-  float* cyz = cyy + width;
-  float* czz = cyz + width;
-  float* nx = czz + width;
-  float* ny = nx + width;
-  float* nz = ny + width;
+  const CovarianceRowArrays soa = MakeCovarianceRowArrays(width, &band->row_soa);
   const MinCounts min_counts(max_r);
   for (int v = v_begin; v < v_end; ++v) {
     rows.BuildUpTo(v + max_r + 1, add);
     std::uint8_t* radius = b.radius.row(v);
     const bool full_rows = v >= max_r && v + max_r + 1 <= height;
     // The vectorised full-radius kernel runs over the span of pixels that use the full radius
-    // only (none when no pixel is far enough to reach it, as on most of a VGA yard frame);
-    // such pixels lie in [max_r, width - max_r) since the border cuts every radius.
-    int first_full = width, end_full = 0;
-    if (full_rows) {
-      for (int u = 0; u < width; ++u) {
-        if (radius[u] == max_r) {
-          first_full = std::min(first_full, u);
-          end_full = u + 1;
-        }
-      }
-    }
-    if (end_full > first_full) {
+    // only (none when no pixel is far enough to reach it, as on most of a VGA yard frame).
+    const ColumnSpan full =
+        full_rows ? FullRadiusSpan(radius, width, max_r) : ColumnSpan{width, 0};
+    if (full.end > full.first) {
       StripSums(rows.Row(v - max_r), rows.Row(v + max_r + 1), row_size, strip);
-      CovarianceRow(first_full, end_full, max_r, min_counts.full[max_r], strip, plane, cxx, cxy,
-                    cxz, cyy, cyz, czz);
+      CovarianceRow(full.first, full.end, max_r, min_counts.full[max_r], strip, rows.plane(),
+                    soa.cxx, soa.cxy, soa.cxz, soa.cyy, soa.cyz, soa.czz);
     }
-    for (int u = 0; u < width; ++u) {
-      const int r = radius[u];
-      if (r == 0 || (r == max_r && full_rows)) continue;
-      const std::uint64_t* top = rows.Row(v - r);
-      const std::uint64_t* bottom = rows.Row(v + r + 1);
-      double s[kC];
-      for (int k = 0; k < kC; ++k) {
-        s[k] = static_cast<double>(BoxSum<std::int64_t>(top, bottom, plane, u - r, u + r + 1, k));
-      }
-      float c[6];
-      UnitTraceCovariance(s, min_counts.full[r], c);
-      cxx[u] = c[0];
-      cxy[u] = c[1];
-      cxz[u] = c[2];
-      cyy[u] = c[3];
-      cyz[u] = c[4];
-      czz[u] = c[5];
-    }
-    SmallestEigenvectorsOfRow(width, cxx, cxy, cxz, cyy, cyz, czz, nx, ny, nz);
+    PartialRadiusCovariances(rows, v, radius, width, full_rows ? max_r : 0, min_counts, soa);
+    SmallestEigenvectorsOfRow(width, soa.cxx, soa.cxy, soa.cxz, soa.cyy, soa.cyz, soa.czz, soa.nx,
+                              soa.ny, soa.nz);
     const Eigen::Vector3f* points = cloud.row(v);
     Eigen::Vector3f* normals = b.normals.row(v);
     for (int u = 0; u < width; ++u) {
-      FinishNormal(Eigen::Vector3f(nx[u], ny[u], nz[u]), points[u], &normals[u], &radius[u]);
+      FinishNormal(Eigen::Vector3f(soa.nx[u], soa.ny[u], soa.nz[u]), points[u], &normals[u],
+                   &radius[u]);
     }
   }
 }

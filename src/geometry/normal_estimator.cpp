@@ -188,6 +188,213 @@ void NormalEstimator::ComputeSubsampled(const Image3f& cloud) {
   }
 }
 
+namespace {
+
+/// Inverse-depth jump [1/m] that makes a depth edge between two valid points with `gap` invalid
+/// pixels between them, for gap = 0 .. max_gap: factor * sqrt(1 + gap).
+void EdgeThresholds(double max_depth_change_factor, int max_gap, std::vector<float>* threshold) {
+  threshold->resize(static_cast<std::size_t>(max_gap) + 1);
+  for (int gap = 0; gap <= max_gap; ++gap) {
+    (*threshold)[gap] = static_cast<float>(max_depth_change_factor * std::sqrt(1.0 + gap));
+  }
+}
+
+/// Extremes of a frame's valid points, gathered row by row in raster order: the largest
+/// |x|, |y| or z [m] and inverse depth [1/m], and the normalised image coordinates X/Z at the
+/// leftmost and rightmost valid columns and Y/Z at the first valid point of the top and bottom
+/// rows with valid points (for PinholeScale).
+struct FrameExtremes {
+  float max_abs = 0.0f, max_rho = 0.0f;
+  int u_min = std::numeric_limits<int>::max(), u_max = -1, v_min = -1, v_max = -1;
+  double xhat_at_u_min = 0.0, xhat_at_u_max = 0.0, yhat_at_v_min = 0.0, yhat_at_v_max = 0.0;
+};
+
+/// What the raster scan for depth edges reads and writes besides the cloud.
+struct EdgeScan {
+  const float* threshold;  // [gap]: EdgeThresholds [1/m]
+  int max_gap;             // points at the ends of longer gaps are not compared
+  std::int32_t* last_row;  // per column, the row of the last valid point above, -1 for none
+  float* last_rho;         // per column, its inverse depth [1/m]
+  ImageF* inverse_depth;   // 1/Z [1/m], 0 where the point is invalid
+  ImageU8* edge;           // 1 at depth-edge pixels
+};
+
+/// Scans row v of the cloud: its inverse depth, the depth edges between each valid point and the
+/// valid point before it in its row and in its column (marking both ends, on earlier rows too),
+/// and its valid points' extremes, taken into `extremes`. Returns the row's valid points.
+int ScanRowForEdges(const Image3f& cloud, int v, const EdgeScan& scan, FrameExtremes* extremes) {
+  const int width = cloud.width(), max_gap = scan.max_gap;
+  const Eigen::Vector3f* points = cloud.row(v);
+  float* rho_row = scan.inverse_depth->row(v);
+  ImageU8& edge_image = *scan.edge;
+  std::uint8_t* edge = edge_image.row(v);
+  const float* threshold = scan.threshold;
+  std::int32_t* last_row = scan.last_row;
+  float* last_rho_column = scan.last_rho;
+  FrameExtremes e = *extremes;  // a local copy, which the edge stores cannot alias
+  int last_u = -1, row_valid = 0;
+  float last_rho = 0.0f;
+  for (int u = 0; u < width; ++u) {
+    const Eigen::Vector3f& p = points[u];
+    if (!IsValidPoint(p)) {
+      rho_row[u] = 0.0f;
+      continue;
+    }
+    ++row_valid;
+    const float rho = 1.0f / p.z();
+    rho_row[u] = rho;
+    e.max_abs = std::max(e.max_abs, std::max(std::max(std::abs(p.x()), std::abs(p.y())), p.z()));
+    e.max_rho = std::max(e.max_rho, rho);
+    if (last_u >= 0) {
+      const int gap = u - last_u - 1;
+      if (gap <= max_gap && std::abs(rho - last_rho) > threshold[gap]) {
+        edge[u] = 1;
+        edge[last_u] = 1;
+      }
+    } else if (u < e.u_min) {
+      e.u_min = u;
+      e.xhat_at_u_min = p.x() / p.z();
+    }
+    const int row_above = last_row[u];
+    if (row_above >= 0) {
+      const int gap = v - row_above - 1;
+      if (gap <= max_gap && std::abs(rho - last_rho_column[u]) > threshold[gap]) {
+        edge[u] = 1;
+        edge_image(row_above, u) = 1;
+      }
+    }
+    if (v != e.v_max) {
+      if (e.v_min < 0) {
+        e.v_min = v;
+        e.yhat_at_v_min = p.y() / p.z();
+      }
+      e.v_max = v;
+      e.yhat_at_v_max = p.y() / p.z();
+    }
+    last_row[u] = v;
+    last_rho_column[u] = rho;
+    last_u = u;
+    last_rho = rho;
+  }
+  if (last_u > e.u_max) {
+    e.u_max = last_u;
+    e.xhat_at_u_max = points[last_u].x() / points[last_u].z();
+  }
+  *extremes = e;
+  return row_valid;
+}
+
+/// Pinhole scale [px] along one image axis (X/Z = (u - cu) / fx) from the valid pixels at
+/// positions a and b [px] with normalised coordinates at_a and at_b: 0 when they do not
+/// determine it.
+inline double PinholeScale(int a, int b, double at_a, double at_b) {
+  return (b > a && at_b != at_a) ? (b - a) / (at_b - at_a) : 0.0;
+}
+
+/// Summed-area table of the edge map, (width + 1) x (height + 1) row-major: entry (v, u)
+/// counts the edge pixels in rows < v and columns < u.
+void BuildEdgeIntegral(const ImageU8& edge_map, std::vector<std::int32_t>* edge_integral) {
+  const int width = edge_map.width();
+  const int height = edge_map.height();
+  const std::size_t stride = static_cast<std::size_t>(width) + 1;
+  edge_integral->resize(stride * (height + 1));
+  std::int32_t* integral = edge_integral->data();
+  std::fill(integral, integral + stride, 0);
+  for (int v = 0; v < height; ++v) {
+    const std::uint8_t* edge = edge_map.row(v);
+    const std::int32_t* prev = integral + stride * v;
+    std::int32_t* cur = integral + stride * (v + 1);
+    std::int32_t acc = 0;
+    cur[0] = 0;
+    for (int u = 0; u < width; ++u) {
+      acc += edge[u];
+      cur[u + 1] = prev[u + 1] + acc;
+    }
+  }
+}
+
+/// Depth-dependent radius [px] at inverse depth rho [1/m]: the window side
+/// smoothing_size_px * sqrt(Z / kReferenceDepthM), clamped, halved.
+inline int DepthRadius(float rho, int smoothing_size_px) {
+  const double scale = std::clamp(std::sqrt(1.0 / (rho * kReferenceDepthM)), kMinDepthScale, kMaxDepthScale);
+  return static_cast<int>(smoothing_size_px * scale) / 2;
+}
+
+/// at_most[k] for k = near_radius .. far_radius - 1: the smallest inverse depth [1/m] whose
+/// DepthRadius is <= k (0 elsewhere). DepthRadius is non-increasing in rho (each rounded step
+/// is monotonic), so a bisection over the float bit patterns finds each.
+void DepthRadiusThresholds(int smoothing_size_px, int near_radius, int far_radius, std::vector<float>* at_most) {
+  at_most->assign(static_cast<std::size_t>(far_radius) + 1, 0.0f);
+  for (int k = near_radius; k < far_radius; ++k) {
+    std::uint32_t lo = 0x00800000u, hi = 0x7f7fffffu;  // smallest normal .. largest float
+    while (lo < hi) {
+      const std::uint32_t mid = lo + (hi - lo) / 2;
+      float rho;
+      std::memcpy(&rho, &mid, sizeof rho);
+      if (DepthRadius(rho, smoothing_size_px) <= k) hi = mid; else lo = mid + 1;
+    }
+    std::memcpy(&(*at_most)[k], &lo, sizeof lo);
+  }
+}
+
+/// What a pixel's window radius depends on besides its inverse depth and position.
+struct RadiusRule {
+  int base_radius;                    // smoothing_size_px / 2 [px]
+  bool depth_dependent;               // the radius follows the inverse depth (at_most)
+  int near_radius, far_radius;        // DepthRadius at the largest and the smallest rho [px]
+  const float* at_most;               // DepthRadiusThresholds
+  const std::int32_t* edge_integral;  // BuildEdgeIntegral
+  int width, height;
+};
+
+/// Edge pixels in the window of radius r [px] around pixel (v, u) (inside the image).
+inline std::int32_t EdgesInWindow(const std::int32_t* integral, std::size_t stride, int v, int u, int r) {
+  const std::int32_t* top = integral + stride * (v - r);
+  const std::int32_t* bottom = integral + stride * (v + r + 1);
+  return bottom[u + r + 1] - bottom[u - r] - top[u + r + 1] + top[u - r];
+}
+
+/// Window radii [px] of row v (0: no normal) from its inverse depths rho [1/m].
+///
+/// The chessboard distance D to the nearest edge pixel changes by at most 1 between
+/// neighbours, and a pixel whose radius the edges cut has D = r + 1 at most: so the next pixel's
+/// radius is at most r + 1, and the shrinking starts there instead of at the smoothing radius
+/// (same result, since every window larger than the first edge-free one holds an edge). The
+/// depth-dependent radius walks from the left neighbour's along at_most: the same integers as
+/// DepthRadius, without a square root and a division per pixel.
+void RowRadii(const float* rho, int v, const RadiusRule& rule, std::uint8_t* r_out) {
+  const int width = rule.width, base_radius = rule.base_radius;
+  const int near_radius = rule.near_radius;
+  const bool depth_dependent = rule.depth_dependent;
+  const float* at_most = rule.at_most;
+  const std::int32_t* integral = rule.edge_integral;
+  const std::size_t stride = static_cast<std::size_t>(width) + 1;
+  const int border_v = std::min(v, rule.height - 1 - v);
+  int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
+  int depth_r = rule.far_radius;
+  for (int u = 0; u < width; ++u) {
+    if (!(rho[u] > 0.0f)) {
+      r_out[u] = 0;
+      edge_bound = std::numeric_limits<int>::max();
+      continue;
+    }
+    int r = base_radius;
+    if (depth_dependent) {
+      const float p = std::max(rho[u], std::numeric_limits<float>::min());
+      while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
+      while (p < at_most[depth_r]) ++depth_r;
+      r = depth_r;
+    }
+    const int uncut = std::min({r, border_v, u, width - 1 - u});
+    r = std::min(uncut, edge_bound);
+    while (r >= kMinRadiusPx && EdgesInWindow(integral, stride, v, u, r) > 0) --r;
+    edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
+    r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
+  }
+}
+
+}  // namespace
+
 // One raster pass: inverse depth per pixel, depth-edge pixels (horizontal and vertical
 // neighbours, bridging short gaps of invalid pixels), the largest coordinate (for the fixed-point
 // scales) and the pinhole scale fx, fy from the extreme valid pixels.
@@ -202,85 +409,22 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
   // A gap of invalid pixels longer than this cannot fit inside any window with valid pixels on
   // both of its sides, so the points at its ends need no comparison.
   const int max_gap = 2 * b.max_radius_px - 1;
-  std::vector<float>& threshold = b.edge_threshold;
-  threshold.resize(static_cast<std::size_t>(max_gap) + 1);
-  for (int gap = 0; gap <= max_gap; ++gap) {
-    threshold[gap] = static_cast<float>(options_.max_depth_change_factor * std::sqrt(1.0 + gap));
-  }
+  EdgeThresholds(options_.max_depth_change_factor, max_gap, &b.edge_threshold);
 
   b.edge.Fill(0);
   b.row_points.assign(static_cast<std::size_t>(height), 0);
   b.last_valid_row.assign(width, -1);
   b.last_inverse_depth.assign(width, 0.0f);
-  float max_abs = 0.0f, max_rho = 0.0f;
-  int u_min = std::numeric_limits<int>::max(), u_max = -1, v_min = -1, v_max = -1;
-  double xhat_at_u_min = 0.0, xhat_at_u_max = 0.0, yhat_at_v_min = 0.0, yhat_at_v_max = 0.0;
-  std::int32_t* last_row = b.last_valid_row.data();
-  float* last_rho_column = b.last_inverse_depth.data();
-
+  const EdgeScan scan{b.edge_threshold.data(), max_gap, b.last_valid_row.data(), b.last_inverse_depth.data(),
+                      &b.inverse_depth, &b.edge};
+  FrameExtremes extremes;
   for (int v = 0; v < height; ++v) {
-    const Eigen::Vector3f* points = cloud.row(v);
-    float* rho_row = b.inverse_depth.row(v);
-    std::uint8_t* edge = b.edge.row(v);
-    int last_u = -1;
-    float last_rho = 0.0f;
-    int row_valid = 0;
-    for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3f& p = points[u];
-      if (!IsValidPoint(p)) {
-        rho_row[u] = 0.0f;
-        continue;
-      }
-      ++row_valid;
-      const float rho = 1.0f / p.z();
-      rho_row[u] = rho;
-      max_abs = std::max(max_abs, std::max(std::max(std::abs(p.x()), std::abs(p.y())), p.z()));
-      max_rho = std::max(max_rho, rho);
-      if (last_u >= 0) {
-        const int gap = u - last_u - 1;
-        if (gap <= max_gap && std::abs(rho - last_rho) > threshold[gap]) {
-          edge[u] = 1;
-          edge[last_u] = 1;
-        }
-      } else if (u < u_min) {
-        u_min = u;
-        xhat_at_u_min = p.x() / p.z();
-      }
-      const int row_above = last_row[u];
-      if (row_above >= 0) {
-        const int gap = v - row_above - 1;
-        if (gap <= max_gap && std::abs(rho - last_rho_column[u]) > threshold[gap]) {
-          edge[u] = 1;
-          b.edge(row_above, u) = 1;
-        }
-      }
-      if (v != v_max) {
-        if (v_min < 0) {
-          v_min = v;
-          yhat_at_v_min = p.y() / p.z();
-        }
-        v_max = v;
-        yhat_at_v_max = p.y() / p.z();
-      }
-      last_row[u] = v;
-      last_rho_column[u] = rho;
-      last_u = u;
-      last_rho = rho;
-    }
-    b.row_points[static_cast<std::size_t>(v)] = row_valid;
-    if (last_u > u_max) {
-      u_max = last_u;
-      xhat_at_u_max = points[last_u].x() / points[last_u].z();
-    }
+    b.row_points[static_cast<std::size_t>(v)] = ScanRowForEdges(cloud, v, scan, &extremes);
   }
-  b.max_abs_coordinate_m = max_abs;
-  b.max_inverse_depth = max_rho;
-  b.fx_px = (u_max > u_min && xhat_at_u_max != xhat_at_u_min)
-                ? (u_max - u_min) / (xhat_at_u_max - xhat_at_u_min)
-                : 0.0;
-  b.fy_px = (v_max > v_min && yhat_at_v_max != yhat_at_v_min)
-                ? (v_max - v_min) / (yhat_at_v_max - yhat_at_v_min)
-                : 0.0;
+  b.max_abs_coordinate_m = extremes.max_abs;
+  b.max_inverse_depth = extremes.max_rho;
+  b.fx_px = PinholeScale(extremes.u_min, extremes.u_max, extremes.xhat_at_u_min, extremes.xhat_at_u_max);
+  b.fy_px = PinholeScale(extremes.v_min, extremes.v_max, extremes.yhat_at_v_min, extremes.yhat_at_v_max);
 }
 
 // Radius per pixel: the smoothing radius (depth-dependent if asked), cut by the image border and
@@ -288,87 +432,20 @@ void NormalEstimator::PrepareFrame(const Image3f& cloud) {
 // table). Edge pixels themselves get no normal: their window would reach across the edge.
 void NormalEstimator::ComputeWindowRadii(const Image3f& cloud) {
   Buffers& b = *buffers_;
-  const int width = cloud.width();
-  const int height = cloud.height();
-  const std::size_t stride = static_cast<std::size_t>(width) + 1;
-  b.edge_integral.resize(stride * (height + 1));
-  std::int32_t* integral = b.edge_integral.data();
-  std::fill(integral, integral + stride, 0);
-  for (int v = 0; v < height; ++v) {
-    const std::uint8_t* edge = b.edge.row(v);
-    const std::int32_t* prev = integral + stride * v;
-    std::int32_t* cur = integral + stride * (v + 1);
-    std::int32_t acc = 0;
-    cur[0] = 0;
-    for (int u = 0; u < width; ++u) {
-      acc += edge[u];
-      cur[u + 1] = prev[u + 1] + acc;
-    }
-  }
-  auto edges_in_window = [&](int v, int u, int r) {
-    const std::int32_t* top = integral + stride * (v - r);
-    const std::int32_t* bottom = integral + stride * (v + r + 1);
-    return bottom[u + r + 1] - bottom[u - r] - top[u + r + 1] + top[u - r];
-  };
-
-  // The chessboard distance D to the nearest edge pixel changes by at most 1 between
-  // neighbours, and a pixel whose radius the edges cut has D = r + 1 at most: so the next pixel's
-  // radius is at most r + 1, and the shrinking starts there instead of at the smoothing radius
-  // (same result, since every window larger than the first edge-free one holds an edge).
-  const int base_radius = options_.smoothing_size_px / 2;
-  // Depth-dependent radius of inverse depth rho: non-increasing in rho (each rounded step is
-  // monotonic), so rather than a square root and a division per pixel, the smallest rho at
-  // which it is <= k is found once per k (bisection over the float bit patterns), and each
-  // pixel walks from its left neighbour's radius - the same integers.
-  auto depth_radius = [&](float rho) {
-    const double scale =
-        std::clamp(std::sqrt(1.0 / (rho * kReferenceDepthM)), kMinDepthScale, kMaxDepthScale);
-    return static_cast<int>(options_.smoothing_size_px * scale) / 2;
-  };
-  const int far_radius = depth_radius(std::numeric_limits<float>::min());
-  const int near_radius = depth_radius(std::numeric_limits<float>::max());
-  std::vector<float>& at_most = b.radius_threshold;  // [k]: smallest rho with radius <= k
+  BuildEdgeIntegral(b.edge, &b.edge_integral);
+  // Rather than a square root and a division per pixel, the depth-dependent radius comes from
+  // the smallest rho at which it is <= k, found once per k.
+  const int size = options_.smoothing_size_px;
+  const int far_radius = DepthRadius(std::numeric_limits<float>::min(), size);
+  const int near_radius = DepthRadius(std::numeric_limits<float>::max(), size);
   if (options_.depth_dependent_smoothing) {
-    at_most.assign(static_cast<std::size_t>(far_radius) + 1, 0.0f);
-    for (int k = near_radius; k < far_radius; ++k) {
-      std::uint32_t lo = 0x00800000u, hi = 0x7f7fffffu;  // smallest normal .. largest float
-      while (lo < hi) {
-        const std::uint32_t mid = lo + (hi - lo) / 2;
-        float rho;
-        std::memcpy(&rho, &mid, sizeof rho);
-        if (depth_radius(rho) <= k) hi = mid; else lo = mid + 1;
-      }
-      std::memcpy(&at_most[k], &lo, sizeof lo);
-    }
+    DepthRadiusThresholds(size, near_radius, far_radius, &b.radius_threshold);
   }
+  const RadiusRule rule{size / 2, options_.depth_dependent_smoothing, near_radius, far_radius,
+                        b.radius_threshold.data(), b.edge_integral.data(), cloud.width(), cloud.height()};
   // Rows are independent once the edge table is built: the bands run in parallel.
   ForEachBand(b.band_rows, [&](int, int v_begin, int v_end) {
-    for (int v = v_begin; v < v_end; ++v) {
-      const float* rho = b.inverse_depth.row(v);
-      std::uint8_t* r_out = b.radius.row(v);
-      const int border_v = std::min(v, height - 1 - v);
-      int edge_bound = std::numeric_limits<int>::max();  // upper bound on this pixel's radius
-      int depth_r = far_radius;
-      for (int u = 0; u < width; ++u) {
-        if (!(rho[u] > 0.0f)) {
-          r_out[u] = 0;
-          edge_bound = std::numeric_limits<int>::max();
-          continue;
-        }
-        int r = base_radius;
-        if (options_.depth_dependent_smoothing) {
-          const float p = std::max(rho[u], std::numeric_limits<float>::min());
-          while (depth_r > near_radius && p >= at_most[depth_r - 1]) --depth_r;
-          while (p < at_most[depth_r]) ++depth_r;
-          r = depth_r;
-        }
-        const int uncut = std::min({r, border_v, u, width - 1 - u});
-        r = std::min(uncut, edge_bound);
-        while (r >= kMinRadiusPx && edges_in_window(v, u, r) > 0) --r;
-        edge_bound = r < uncut ? r + 1 : std::numeric_limits<int>::max();
-        r_out[u] = static_cast<std::uint8_t>(r >= kMinRadiusPx ? r : 0);
-      }
-    }
+    for (int v = v_begin; v < v_end; ++v) RowRadii(b.inverse_depth.row(v), v, rule, b.radius.row(v));
   });
 }
 

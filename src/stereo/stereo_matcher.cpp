@@ -122,32 +122,37 @@ void DropTexturelessPixels(const ImageU8& left, int block, double min_std, Image
   }
 }
 
-/// Sub-pixel refinement (StereoMatcherOptions::subpixel_window_px): Gauss-Newton steps on the
-/// grey-level residual L(u) - R(u - d), aggregated over a window with box sums. Its buffers are
-/// kept per thread (no frame-sized allocation per call).
-void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int iterations, ImageF* disparity,
-                    const ImageI32* surface_ids = nullptr) {
-  const int w = disparity->width(), h = disparity->height();
+/// RefineSubpixel's buffers, kept per thread (no frame-sized allocation per call); each plane
+/// holds one value per pixel of the disparity, row-major.
+struct SubpixelBuffers {
+  std::vector<float> original;          // the disparity before the steps [px]
+  std::vector<float> grad;              // RightGradient [grey levels / px]
+  std::vector<float> terms;             // 3 planes: per-pixel terms of GaussNewtonStep
+  std::vector<float> sums;              // 3 planes: their window sums
+  std::vector<std::uint8_t> refinable;  // RefinableMask
+};
+
+/// Plane k of a buffer of w x h float planes, as a cv::Mat (no copy).
+cv::Mat PlaneMat(std::vector<float>& buffer, int w, int h, std::size_t k = 0) {
+  return cv::Mat(h, w, CV_32F, buffer.data() + static_cast<std::size_t>(w) * h * k);
+}
+
+/// buffers->refinable: 1 at the pixels whose window (window x window px) may be refined. Only
+/// windows whose disparities agree within 1 px (and hold no hole) are refined; with surface ids,
+/// also only windows of one id >= 0 (ids as floats: exact below 2^24). erode and dilate leave
+/// pixels outside the image out of the window. The planes of `sums` and `terms` serve as
+/// scratch until the steps fill them.
+void RefinableMask(const ImageI32* surface_ids, int w, int h, int window, SubpixelBuffers* buffers) {
   const std::size_t plane = static_cast<std::size_t>(w) * h;
-  thread_local std::vector<float> original, grad, terms, sums;
-  thread_local std::vector<std::uint8_t> refinable;
-  original.assign(disparity->data(), disparity->data() + plane);
-  grad.resize(plane);
-  terms.resize(3 * plane);
-  sums.resize(3 * plane);
-  refinable.resize(plane);
-  auto mat = [&](std::vector<float>& buffer, std::size_t k = 0) {  // plane k of a buffer, no copy
-    return cv::Mat(h, w, CV_32F, buffer.data() + plane * k);
-  };
-  // Only windows whose disparities agree within 1 px (and hold no hole) are refined; with
-  // surface ids, also only windows of one id >= 0 (ids as floats: exact below 2^24). erode and
-  // dilate leave pixels outside the image out of the window. The planes of `sums` and `terms`
-  // serve as scratch until the steps fill them.
+  std::vector<float>& original = buffers->original;
+  std::vector<float>& sums = buffers->sums;
+  std::vector<float>& terms = buffers->terms;
+  std::vector<std::uint8_t>& refinable = buffers->refinable;
   const cv::Mat kernel = cv::Mat::ones(window, window, CV_8U);
   {
-    cv::Mat lo = mat(sums, 0), hi = mat(sums, 1);
-    cv::erode(mat(original), lo, kernel);
-    cv::dilate(mat(original), hi, kernel);
+    cv::Mat lo = PlaneMat(sums, w, h, 0), hi = PlaneMat(sums, w, h, 1);
+    cv::erode(PlaneMat(original, w, h), lo, kernel);
+    cv::dilate(PlaneMat(original, w, h), hi, kernel);
     const float* lo_d = sums.data();
     const float* hi_d = lo_d + plane;
     for (std::size_t i = 0; i < plane; ++i) refinable[i] = original[i] > 0.0f && lo_d[i] > 0.0f && hi_d[i] - lo_d[i] <= 1.0f;
@@ -155,63 +160,97 @@ void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int i
   if (surface_ids != nullptr) {
     float* ids = terms.data();
     for (std::size_t i = 0; i < plane; ++i) ids[i] = static_cast<float>(std::max((*surface_ids)[i], -1));
-    cv::Mat lo = mat(terms, 1), hi = mat(terms, 2);
-    cv::erode(mat(terms, 0), lo, kernel);
-    cv::dilate(mat(terms, 0), hi, kernel);
+    cv::Mat lo = PlaneMat(terms, w, h, 1), hi = PlaneMat(terms, w, h, 2);
+    cv::erode(PlaneMat(terms, w, h, 0), lo, kernel);
+    cv::dilate(PlaneMat(terms, w, h, 0), hi, kernel);
     const float* id_lo = ids + plane;
     const float* id_hi = id_lo + plane;
     for (std::size_t i = 0; i < plane; ++i) refinable[i] &= id_lo[i] >= 0.0f && id_lo[i] == id_hi[i];
   }
-  // Central difference of the right image along u (0 at the first and last column).
+}
+
+/// Central difference of the right image along u [grey levels / px] (0 at the first and last
+/// column), into `grad` (one value per pixel, row-major).
+void RightGradient(const ImageU8& right, std::vector<float>* grad) {
+  const int w = right.width(), h = right.height();
   for (int v = 0; v < h; ++v) {
     const std::uint8_t* line = right.row(v);
-    float* g = grad.data() + static_cast<std::size_t>(v) * w;
+    float* g = grad->data() + static_cast<std::size_t>(v) * w;
     g[0] = 0.0f;
     g[w - 1] = 0.0f;
     for (int u = 1; u < w - 1; ++u) g[u] = 0.5f * (static_cast<float>(line[u + 1]) - static_cast<float>(line[u - 1]));
   }
-  float* mean_d = terms.data();        // the window's disparities (their mean after the sums)
-  float* correction = mean_d + plane;  // -(L - R_warped) * gradient
-  float* weight = correction + plane;  // gradient^2
+}
+
+/// One Gauss-Newton step of every refinable pixel's disparity [px] on the grey-level residual
+/// L(u) - R(u - d), aggregated over its window (window x window px) with box sums; where the
+/// step would leave the original disparity by more than 1 px, the original is kept.
+void GaussNewtonStep(const ImageU8& left, const ImageU8& right, int window, SubpixelBuffers* buffers,
+                     ImageF* disparity) {
+  const int w = disparity->width(), h = disparity->height();
+  const std::size_t plane = static_cast<std::size_t>(w) * h;
+  float* mean_d = buffers->terms.data();  // the window's disparities (their mean after the sums)
+  float* correction = mean_d + plane;     // -(L - R_warped) * gradient
+  float* weight = correction + plane;     // gradient^2
   const float area = static_cast<float>(window * window);
-  for (int iteration = 0; iteration < iterations; ++iteration) {
-    for (int v = 0; v < h; ++v) {
-      const std::uint8_t* lv = left.row(v);
-      const std::uint8_t* rv = right.row(v);
-      const float* gv = grad.data() + static_cast<std::size_t>(v) * w;
-      const float* dv = disparity->row(v);
-      const std::size_t o = static_cast<std::size_t>(v) * w;
-      for (int u = 0; u < w; ++u) {
-        const float x = static_cast<float>(u) - dv[u];
-        if (!(dv[u] > 0.0f) || x < 1.0f || x > static_cast<float>(w - 2)) {
-          mean_d[o + u] = correction[o + u] = weight[o + u] = 0.0f;
-          continue;
-        }
-        const int i = static_cast<int>(x);
-        const float a = x - static_cast<float>(i);
-        const float rw = rv[i] + a * (static_cast<float>(rv[i + 1]) - rv[i]);
-        const float gw = gv[i] + a * (gv[i + 1] - gv[i]);
-        // R(u - d - delta) ~ rw - delta * gw = L(u)  =>  delta = -(L - rw) * gw / gw^2.
-        mean_d[o + u] = dv[u];
-        correction[o + u] = -(static_cast<float>(lv[u]) - rw) * gw;
-        weight[o + u] = gw * gw;
+  for (int v = 0; v < h; ++v) {
+    const std::uint8_t* lv = left.row(v);
+    const std::uint8_t* rv = right.row(v);
+    const float* gv = buffers->grad.data() + static_cast<std::size_t>(v) * w;
+    const float* dv = disparity->row(v);
+    const std::size_t o = static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const float x = static_cast<float>(u) - dv[u];
+      if (!(dv[u] > 0.0f) || x < 1.0f || x > static_cast<float>(w - 2)) {
+        mean_d[o + u] = correction[o + u] = weight[o + u] = 0.0f;
+        continue;
       }
+      const int i = static_cast<int>(x);
+      const float a = x - static_cast<float>(i);
+      const float rw = rv[i] + a * (static_cast<float>(rv[i + 1]) - rv[i]);
+      const float gw = gv[i] + a * (gv[i + 1] - gv[i]);
+      // R(u - d - delta) ~ rw - delta * gw = L(u)  =>  delta = -(L - rw) * gw / gw^2.
+      mean_d[o + u] = dv[u];
+      correction[o + u] = -(static_cast<float>(lv[u]) - rw) * gw;
+      weight[o + u] = gw * gw;
     }
-    // Window sums, the image mirrored at its borders (BORDER_REFLECT_101).
-    for (std::size_t k = 0; k < 3; ++k) {
-      cv::Mat out = mat(sums, k);
-      cv::boxFilter(mat(terms, k), out, CV_32F, cv::Size(window, window), cv::Point(-1, -1), false,
-                    cv::BORDER_REFLECT_101);
-    }
-    const float* sum_d = sums.data();
-    const float* sum_c = sum_d + plane;
-    const float* sum_g = sum_c + plane;
-    float* d = disparity->data();
-    for (std::size_t i = 0; i < plane; ++i) {
-      if (!refinable[i] || !(sum_g[i] > 1e-3f)) continue;
-      const float refined = sum_d[i] / area + sum_c[i] / sum_g[i];
-      d[i] = std::abs(refined - original[i]) <= 1.0f ? refined : original[i];
-    }
+  }
+  // Window sums, the image mirrored at its borders (BORDER_REFLECT_101).
+  for (std::size_t k = 0; k < 3; ++k) {
+    cv::Mat out = PlaneMat(buffers->sums, w, h, k);
+    cv::boxFilter(PlaneMat(buffers->terms, w, h, k), out, CV_32F, cv::Size(window, window), cv::Point(-1, -1), false,
+                  cv::BORDER_REFLECT_101);
+  }
+  const float* sum_d = buffers->sums.data();
+  const float* sum_c = sum_d + plane;
+  const float* sum_g = sum_c + plane;
+  const std::uint8_t* refinable = buffers->refinable.data();
+  const float* original = buffers->original.data();
+  float* d = disparity->data();
+  for (std::size_t i = 0; i < plane; ++i) {
+    if (!refinable[i] || !(sum_g[i] > 1e-3f)) continue;
+    const float refined = sum_d[i] / area + sum_c[i] / sum_g[i];
+    d[i] = std::abs(refined - original[i]) <= 1.0f ? refined : original[i];
+  }
+}
+
+/// Sub-pixel refinement (StereoMatcherOptions::subpixel_window_px): Gauss-Newton steps on the
+/// grey-level residual L(u) - R(u - d), aggregated over a window with box sums. Its buffers are
+/// kept per thread (no frame-sized allocation per call).
+void RefineSubpixel(const ImageU8& left, const ImageU8& right, int window, int iterations, ImageF* disparity,
+                    const ImageI32* surface_ids = nullptr) {
+  const int w = disparity->width(), h = disparity->height();
+  const std::size_t plane = static_cast<std::size_t>(w) * h;
+  thread_local SubpixelBuffers buffers;
+  buffers.original.assign(disparity->data(), disparity->data() + plane);
+  buffers.grad.resize(plane);
+  buffers.terms.resize(3 * plane);
+  buffers.sums.resize(3 * plane);
+  buffers.refinable.resize(plane);
+  RefinableMask(surface_ids, w, h, window, &buffers);
+  RightGradient(right, &buffers.grad);
+  for (int iteration = 0; iteration < iterations; ++iteration) {
+    GaussNewtonStep(left, right, window, &buffers, disparity);
   }
 }
 
