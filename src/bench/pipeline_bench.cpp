@@ -297,7 +297,11 @@ double PeakResidentMib() {
   return static_cast<double>(usage.ru_maxrss) / 1024.0;  // Linux reports KiB
 }
 
-BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options) {
+namespace {
+
+/// How many frames the first pass measures after the warm-up. Throws ssta::Error on invalid
+/// options or config, or when the sequence has fewer frames than the warm-up needs plus one.
+int MeasuredFrames(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
   if (!config.IsValid(&error)) throw Error("config: " + error);
@@ -306,18 +310,33 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
     throw Error(sequence.root() + ": " + std::to_string(available) + " frames, the bench needs at least " +
                 std::to_string(options.warmup_frames + 1) + " (warm-up + 1)");
   }
-  const int measured = options.max_frames > 0 ? std::min(options.max_frames, available - options.warmup_frames)
-                                              : available - options.warmup_frames;
+  return options.max_frames > 0 ? std::min(options.max_frames, available - options.warmup_frames)
+                                : available - options.warmup_frames;
+}
 
-  SequenceRun run(sequence, config, {1, options.warmup_frames + measured, false});
-  const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
-  const RigChain chain(body_T_camera, run.geometry());
-  MapMetadata metadata;
-  metadata.vehicle = config.vehicle;
-  TraversabilityMap map(config.map.FusionFor(run.geometry().f * run.geometry().baseline_m, config.stereo.disparity_sigma_px),
-                        metadata);
-  std::vector<ClassifiedPoint> points;  // the map points of the frame, reused as build-map does
+/// The rows of the first pass, by index (MakeReportRows).
+enum StageRow { kRead, kRectify, kMatch, kTriangulate, kNormals, kSegment, kAnalyze, kFrame, kMap, kEndToEnd };
 
+/// The first pass's rows, empty, in StageRow order: the stages of a frame, with `with_map` the
+/// map update and end to end, with refinement.online the refiner's row last (ground evidence +
+/// window update + the solves when due, every solve_every_frames frames: the median is a frame
+/// without a solve, the mean amortizes them).
+std::vector<BenchRow> MakeReportRows(const Config& config, const PipelineBenchOptions& options) {
+  std::vector<BenchRow> rows;
+  for (const char* name :
+       {"read images", "rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)"}) {
+    rows.push_back({name, {}, {}});
+  }
+  if (options.with_map) {
+    rows.push_back({"map update", {}, {}});
+    rows.push_back({"end to end", {}, {}});
+  }
+  if (config.refinement.online) rows.push_back({"refine (online)", {}, {}});
+  return rows;
+}
+
+/// The report before the first frame: what is run, on what machine, and its empty rows.
+BenchReport NewReport(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options) {
   BenchReport report;
   report.source = sequence.root();
   report.width = sequence.calibration().left.width;
@@ -326,78 +345,124 @@ BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, con
   report.warmup_frames = options.warmup_frames;
   report.threads = static_cast<int>(std::thread::hardware_concurrency());
   report.with_map = options.with_map;
-  enum Row { kRead, kRectify, kMatch, kTriangulate, kNormals, kSegment, kAnalyze, kFrame, kMap, kEndToEnd };
-  for (const char* name :
-       {"read images", "rectify", "match", "triangulate", "normals", "segment", "analyze", "frame (Process)"}) {
-    report.rows.push_back({name, {}, {}});
+  report.rows = MakeReportRows(config, options);
+  return report;
+}
+
+/// A map at config.map for the run's rig and the config's vehicle, with nothing fused yet.
+TraversabilityMap EmptyMap(const Config& config, const SequenceRun& run) {
+  MapMetadata metadata;
+  metadata.vehicle = config.vehicle;
+  return TraversabilityMap(
+      config.map.FusionFor(run.geometry().f * run.geometry().baseline_m, config.stereo.disparity_sigma_px), metadata);
+}
+
+/// What the frames of the first pass work on: the run, its rig chain, the map they are fused
+/// into with the frame's map points (reused as build-map does) and, with refinement.online,
+/// the mount refiner. The bench keeps the configured mount; it measures the refiner's cost only.
+struct StagePass {
+  StagePass(const Sequence& sequence, const Config& config, int frames)
+      : run(sequence, config, {1, frames, false}),
+        chain(sequence.calibration().left.body_T_camera, run.geometry()),
+        map(EmptyMap(config, run)) {
+    const Eigen::Isometry3d& body_T_camera = sequence.calibration().left.body_T_camera;
+    if (config.refinement.online) refiner.emplace(config.refinement, body_T_camera, body_T_camera);
   }
-  if (options.with_map) {
-    report.rows.push_back({"map update", {}, {}});
-    report.rows.push_back({"end to end", {}, {}});
-  }
-  // With refinement.online: ground evidence + window update + the solves when due (every
-  // solve_every_frames frames: the median is a frame without a solve, the mean amortizes them).
-  // The bench keeps the configured mount; it measures the cost only.
+
+  SequenceRun run;
+  RigChain chain;
+  TraversabilityMap map;
+  std::vector<ClassifiedPoint> points;
   std::optional<OnlineMountRefiner> refiner;
-  const std::size_t refine_row = report.rows.size();
-  if (config.refinement.online) {
-    refiner.emplace(config.refinement, body_T_camera, body_T_camera);
-    report.rows.push_back({"refine (online)", {}, {}});
+};
+
+/// Wall and process CPU time of one step [ms].
+struct StepTime {
+  double wall_ms = 0.0;
+  double cpu_ms = 0.0;
+};
+
+/// What one frame of the first pass took: its image read, Process (with the stages' own
+/// times), the map update (with `with_map`) and the refiner's update (with a refiner), and the
+/// points the map was given (0 without map).
+struct FrameTimings {
+  StepTime read;
+  StageTimings stages;
+  StepTime frame;
+  std::optional<StepTime> map;
+  std::optional<StepTime> refine;
+  std::size_t points_given = 0;
+};
+
+/// Reads `frame`'s images, processes them, fuses the result into the pass's map with
+/// `with_map` and feeds the pass's refiner when it has one, timing each step.
+FrameTimings TimeFrame(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options,
+                       const StereoFrame& frame, StagePass* pass) {
+  FrameTimings out;
+  const Timer read_timer;
+  const StereoImages images = sequence.ReadImages(frame);
+  out.read = {read_timer.WallMs(), read_timer.CpuMs()};
+  const std::int64_t t = frame.timestamp_ns;
+  const Eigen::Isometry3d world_T_body = PoseOrLevelled(pass->run, t);
+  const Eigen::Vector3d up_camera = pass->chain.UpInCamera(UpInBody(world_T_body));
+
+  const Timer frame_timer;
+  FrameResult result = pass->run.pipeline().Process(images.left, images.right, up_camera);
+  out.frame = {frame_timer.WallMs(), frame_timer.CpuMs()};
+  result.timestamp_ns = t;
+  out.stages = result.timings;
+
+  if (options.with_map) {
+    const Timer map_timer;
+    const Eigen::Isometry3d world_T_rectified = pass->chain.WorldTRectified(world_T_body);
+    FuseFrame(result, world_T_rectified, config, pass->run.geometry(), &pass->points, &pass->map);
+    out.map = StepTime{map_timer.WallMs(), map_timer.CpuMs()};
+    out.points_given = pass->points.size();
   }
+  if (pass->refiner) {
+    const Timer refine_timer;
+    pass->refiner->AddFrame(ExtractGroundEvidence(result, pass->chain.camera_R_rectified(), UpInBody(world_T_body),
+                                                  config.refinement));
+    out.refine = StepTime{refine_timer.WallMs(), refine_timer.CpuMs()};
+  }
+  return out;
+}
 
+/// Appends one measured frame's times to the report's rows (MakeReportRows).
+void RecordTimings(const FrameTimings& t, BenchReport* report) {
+  std::vector<BenchRow>& rows = report->rows;
+  rows[kRead].wall_ms.push_back(t.read.wall_ms);
+  rows[kRead].cpu_ms.push_back(t.read.cpu_ms);
+  const StageTimings& s = t.stages;
+  const double stages[] = {s.rectify_ms, s.match_ms, s.triangulate_ms, s.normals_ms, s.segment_ms, s.analyze_ms};
+  for (int r = kRectify; r <= kAnalyze; ++r) rows[r].wall_ms.push_back(stages[r - kRectify]);
+  rows[kFrame].wall_ms.push_back(t.frame.wall_ms);
+  rows[kFrame].cpu_ms.push_back(t.frame.cpu_ms);
+  if (t.map) {
+    rows[kMap].wall_ms.push_back(t.map->wall_ms);
+    rows[kMap].cpu_ms.push_back(t.map->cpu_ms);
+    rows[kEndToEnd].wall_ms.push_back(t.read.wall_ms + t.frame.wall_ms + t.map->wall_ms);
+    rows[kEndToEnd].cpu_ms.push_back(t.read.cpu_ms + t.frame.cpu_ms + t.map->cpu_ms);
+  }
+  if (t.refine) {  // the refiner's row is the last
+    rows.back().wall_ms.push_back(t.refine->wall_ms);
+    rows.back().cpu_ms.push_back(t.refine->cpu_ms);
+  }
+}
+
+}  // namespace
+
+BenchReport RunPipelineBench(const Sequence& sequence, const Config& config, const PipelineBenchOptions& options) {
+  const int measured = MeasuredFrames(sequence, config, options);
+  StagePass pass(sequence, config, options.warmup_frames + measured);
+  BenchReport report = NewReport(sequence, config, options);
   for (int k = 0; k < options.warmup_frames + measured; ++k) {
-    const StereoFrame& frame = run.frames()[static_cast<std::size_t>(k)];
-    const Timer read_timer;
-    const StereoImages images = sequence.ReadImages(frame);
-    const double read_wall = read_timer.WallMs(), read_cpu = read_timer.CpuMs();
-    const std::int64_t t = frame.timestamp_ns;
-    const Eigen::Isometry3d world_T_body = PoseOrLevelled(run, t);
-    const Eigen::Vector3d up_camera = chain.UpInCamera(UpInBody(world_T_body));
-
-    const Timer frame_timer;
-    FrameResult result = run.pipeline().Process(images.left, images.right, up_camera);
-    const double frame_wall = frame_timer.WallMs(), frame_cpu = frame_timer.CpuMs();
-    result.timestamp_ns = t;
-
-    double map_wall = 0, map_cpu = 0;
-    std::size_t points_given = 0;
-    if (options.with_map) {
-      const Timer map_timer;
-      const Eigen::Isometry3d world_T_rectified = chain.WorldTRectified(world_T_body);
-      FuseFrame(result, world_T_rectified, config, run.geometry(), &points, &map);
-      map_wall = map_timer.WallMs();
-      map_cpu = map_timer.CpuMs();
-      points_given = points.size();
-    }
-    double refine_wall = 0, refine_cpu = 0;
-    if (refiner) {
-      const Timer refine_timer;
-      refiner->AddFrame(ExtractGroundEvidence(result, chain.camera_R_rectified(), UpInBody(world_T_body),
-                                              config.refinement));
-      refine_wall = refine_timer.WallMs();
-      refine_cpu = refine_timer.CpuMs();
-    }
+    const StereoFrame& frame = pass.run.frames()[static_cast<std::size_t>(k)];
+    const FrameTimings timings = TimeFrame(sequence, config, options, frame, &pass);
     if (k < options.warmup_frames) continue;
-
-    const StageTimings& s = result.timings;
-    report.rows[kRead].wall_ms.push_back(read_wall);
-    report.rows[kRead].cpu_ms.push_back(read_cpu);
-    const double stages[] = {s.rectify_ms, s.match_ms, s.triangulate_ms, s.normals_ms, s.segment_ms, s.analyze_ms};
-    for (int r = kRectify; r <= kAnalyze; ++r) report.rows[r].wall_ms.push_back(stages[r - kRectify]);
-    report.rows[kFrame].wall_ms.push_back(frame_wall);
-    report.rows[kFrame].cpu_ms.push_back(frame_cpu);
-    if (options.with_map) {
-      report.rows[kMap].wall_ms.push_back(map_wall);
-      report.rows[kMap].cpu_ms.push_back(map_cpu);
-      report.rows[kEndToEnd].wall_ms.push_back(read_wall + frame_wall + map_wall);
-      report.rows[kEndToEnd].cpu_ms.push_back(read_cpu + frame_cpu + map_cpu);
-    }
-    if (refiner) {
-      report.rows[refine_row].wall_ms.push_back(refine_wall);
-      report.rows[refine_row].cpu_ms.push_back(refine_cpu);
-    }
-    report.series.push_back({k - options.warmup_frames, map_wall, points_given,
-                             options.with_map ? map.NumNodes() : 0, CurrentResidentMib()});
+    RecordTimings(timings, &report);
+    report.series.push_back({k - options.warmup_frames, timings.map ? timings.map->wall_ms : 0.0,
+                             timings.points_given, options.with_map ? pass.map.NumNodes() : 0, CurrentResidentMib()});
   }
   report.peak_rss_mib = PeakResidentMib();
   AddWholeRun(sequence, config, options.warmup_frames, measured, &report);

@@ -109,26 +109,7 @@ std::string DisparityEvalSummary::ToJson() const {
   json.String(prediction);
   json.Key("truth");
   json.String(truth);
-  json.Key("pairs");
-  json.Integer(pairs);
-  json.Key("truth_pixels");
-  json.Integer(truth_pixels);
-  json.Key("matched_pixels");
-  json.Integer(matched_pixels);
-  json.Key("bad_matched_pixels");
-  json.Integer(bad_matched_pixels);
-  json.Key("max_error_px");
-  json.Number(rule.max_error_px);
-  json.Key("max_error_ratio");
-  json.Number(rule.max_error_ratio);
-  json.Key("d1_all");
-  json.Number(D1All());
-  json.Key("d1_matched");
-  json.Number(D1Matched());
-  json.Key("epe_px");
-  json.Number(EndPointErrorPx());
-  json.Key("density");
-  json.Number(Density());
+  internal::WriteDisparityScoreFields(*this, &json);
   json.EndObject();
   return json.Take();
 }
@@ -197,5 +178,32 @@ DisparityEvalSummary EvaluateDisparityFiles(const std::string& prediction, const
   }
   return total;
 }
+
+namespace internal {
+
+void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* json) {
+  json->Key("pairs");
+  json->Integer(summary.pairs);
+  json->Key("truth_pixels");
+  json->Integer(summary.truth_pixels);
+  json->Key("matched_pixels");
+  json->Integer(summary.matched_pixels);
+  json->Key("bad_matched_pixels");
+  json->Integer(summary.bad_matched_pixels);
+  json->Key("max_error_px");
+  json->Number(summary.rule.max_error_px);
+  json->Key("max_error_ratio");
+  json->Number(summary.rule.max_error_ratio);
+  json->Key("d1_all");
+  json->Number(summary.D1All());
+  json->Key("d1_matched");
+  json->Number(summary.D1Matched());
+  json->Key("epe_px");
+  json->Number(summary.EndPointErrorPx());
+  json->Key("density");
+  json->Number(summary.Density());
+}
+
+}  // namespace internal
 
 }  // namespace ssta

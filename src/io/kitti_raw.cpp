@@ -150,15 +150,11 @@ std::vector<double> ParseOxtsRow(const std::string& text, const std::string& pat
 
 }  // namespace internal
 
-Sequence Sequence::OpenKittiRaw(const std::string& path) {
-  const fs::path drive(path);
-  if (!fs::is_directory(drive)) throw Error(path + ": KITTI drive folder not found");
-  SequenceData seq;
-  seq.root = path;
-  seq.format = "kitti_raw";
+namespace {
 
-  // Calibration: rectified cam0/cam1 intrinsics from P_rect, body (= OXTS IMU) to camera from
-  // the IMU->velodyne->camera chain and R_rect_00.
+/// The rectified stereo calibration of the drive: cam0/cam1 intrinsics from P_rect, body
+/// (= OXTS IMU) to camera from the IMU->velodyne->camera chain and R_rect_00.
+StereoCalibration ReadKittiCalibration(const fs::path& drive) {
   const std::string cam_file = FindCalib(drive, "calib_cam_to_cam.txt");
   const std::string velo_file = FindCalib(drive, "calib_velo_to_cam.txt");
   const std::string imu_file = FindCalib(drive, "calib_imu_to_velo.txt");
@@ -193,34 +189,48 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
   const double baseline = -p1[3] / p1[0];
   CameraCalibration right = left;
   right.body_T_camera = left.body_T_camera * Eigen::Translation3d(baseline, 0, 0);
-  seq.calibration = StereoCalibration{left, right};
+  StereoCalibration calibration{left, right};
   std::string error;
-  if (!seq.calibration.IsValid(&error)) throw Error(cam_file + ": " + error);
+  if (!calibration.IsValid(&error)) throw Error(cam_file + ": " + error);
+  return calibration;
+}
 
-  // Frames: image_00 / image_01 by index (the synced drive has one row per index).
+/// The frames of a drive and the ones skipped for a missing image.
+struct KittiFrames {
+  std::vector<StereoFrame> frames;
+  std::vector<SkippedFrame> skipped;
+};
+
+/// The stereo frames of the drive: image_00 / image_01 by index (the synced drive has one
+/// timestamp row per index), a frame whose image file is missing skipped with the reason.
+KittiFrames ListKittiFrames(const fs::path& drive) {
   const auto left_times = ReadTimestamps((drive / "image_00/timestamps.txt").string());
   const auto right_times = ReadTimestamps((drive / "image_01/timestamps.txt").string());
   if (left_times.empty()) throw Error((drive / "image_00/timestamps.txt").string() + ": lists no frames (an empty sequence)");
   if (left_times.size() != right_times.size()) {
-    throw Error(path + ": image_00 and image_01 list " + std::to_string(left_times.size()) + " and " +
+    throw Error(drive.string() + ": image_00 and image_01 list " + std::to_string(left_times.size()) + " and " +
                 std::to_string(right_times.size()) + " timestamps");
   }
+  KittiFrames out;
   for (std::size_t i = 0; i < left_times.size(); ++i) {
     const std::string l = Indexed(drive / "image_00/data", i, ".png");
     const std::string r = Indexed(drive / "image_01/data", i, ".png");
     if (!fs::exists(l)) {
-      seq.skipped.push_back({left_times[i], "cam0 image missing: " + l});
+      out.skipped.push_back({left_times[i], "cam0 image missing: " + l});
     } else if (!fs::exists(r)) {
-      seq.skipped.push_back({left_times[i], "cam1 image missing: " + r});
+      out.skipped.push_back({left_times[i], "cam1 image missing: " + r});
     } else {
-      seq.frames.push_back({left_times[i], l, r});
+      out.frames.push_back({left_times[i], l, r});
     }
   }
+  return out;
+}
 
-  // OXTS -> poses (KITTI devkit: Mercator at the first latitude, R = Rz(yaw) Ry(pitch) Rx(roll),
-  // relative to the first pose).
+/// The drive's OXTS readings as poses T_WB, as KITTI's development kit converts them: Mercator
+/// at the first latitude, R = Rz(yaw) Ry(pitch) Rx(roll), relative to the first pose.
+std::vector<PoseSample> ReadOxtsPoses(const fs::path& drive) {
   const auto oxts_times = ReadTimestamps((drive / "oxts/timestamps.txt").string());
-  seq.pose_path = (drive / "oxts").string();
+  std::vector<PoseSample> poses;
   double scale = 0.0;
   Eigen::Isometry3d first_inv = Eigen::Isometry3d::Identity();
   for (std::size_t i = 0; i < oxts_times.size(); ++i) {
@@ -237,8 +247,25 @@ Sequence Sequence::OpenKittiRaw(const std::string& path) {
     t.translation() << mx, my, alt;
     if (i == 0) first_inv = t.inverse();
     const Eigen::Isometry3d pose = first_inv * t;
-    seq.poses.push_back({oxts_times[i], pose.translation(), Eigen::Quaterniond(pose.rotation()).normalized()});
+    poses.push_back({oxts_times[i], pose.translation(), Eigen::Quaterniond(pose.rotation()).normalized()});
   }
+  return poses;
+}
+
+}  // namespace
+
+Sequence Sequence::OpenKittiRaw(const std::string& path) {
+  const fs::path drive(path);
+  if (!fs::is_directory(drive)) throw Error(path + ": KITTI drive folder not found");
+  SequenceData seq;
+  seq.root = path;
+  seq.format = "kitti_raw";
+  seq.calibration = ReadKittiCalibration(drive);
+  KittiFrames frames = ListKittiFrames(drive);
+  seq.frames = std::move(frames.frames);
+  seq.skipped = std::move(frames.skipped);
+  seq.pose_path = (drive / "oxts").string();
+  seq.poses = ReadOxtsPoses(drive);
   return Sequence(std::move(seq));
 }
 

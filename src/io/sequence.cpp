@@ -217,6 +217,129 @@ std::string DescribeSkipped(const std::vector<SkippedFrame>& skipped) {
   return out.str();
 }
 
+namespace {
+
+/// The frames of a sequence and the ones skipped, with the reason, in time order.
+struct AslFrames {
+  std::vector<StereoFrame> frames;
+  std::vector<SkippedFrame> skipped;
+};
+
+/// Pairs the cam0 and cam1 image lists exactly or to the nearest within 1 ms; a cam0 frame
+/// without a partner or with a missing image, and a cam1 row no cam0 frame pairs with, are
+/// skipped with the reason.
+AslFrames PairAslFrames(const std::string& cam0, const std::string& cam1) {
+  const auto left = ReadImageList(cam0);
+  const auto right = ReadImageList(cam1);
+  if (left.empty()) throw Error(cam0 + "/data.csv: lists no frames (an empty sequence)");
+  const auto times = [](const std::vector<internal::ImageListEntry>& list) {
+    std::vector<std::int64_t> out;
+    for (const auto& entry : list) out.push_back(entry.timestamp_ns);
+    return out;
+  };
+  const std::vector<std::ptrdiff_t> paired = PairNearestWithin1Ms(times(left), times(right));
+  AslFrames out;
+  std::vector<bool> right_used(right.size(), false);
+  for (std::size_t i = 0; i < left.size(); ++i) {
+    const auto& l = left[i];
+    if (paired[i] < 0) {
+      out.skipped.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
+      continue;
+    }
+    const auto j = static_cast<std::size_t>(paired[i]);
+    right_used[j] = true;  // paired: a missing image skips the pair once, as one frame
+    if (!fs::exists(l.file)) {
+      out.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
+      continue;
+    }
+    if (!fs::exists(right[j].file)) {
+      out.skipped.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
+      continue;
+    }
+    out.frames.push_back({l.timestamp_ns, l.file, right[j].file});
+  }
+  // cam1 rows that no cam0 frame pairs with are reported too (a cut recording, a dropped frame).
+  for (std::size_t k = 0; k < right.size(); ++k) {
+    if (right_used[k]) continue;
+    out.skipped.push_back({right[k].timestamp_ns, fs::exists(right[k].file)
+                                                      ? "cam1 frame without a cam0 frame within 1 ms"
+                                                      : "cam1 frame without a cam0 frame, and its image is missing: " +
+                                                            right[k].file});
+  }
+  std::sort(out.skipped.begin(), out.skipped.end(),
+            [](const SkippedFrame& a, const SkippedFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
+  return out;
+}
+
+/// The IMU of an ASL sequence: its samples, the file they were read from, and its mount T_BS.
+struct AslImu {
+  std::vector<ImuSample> samples;
+  std::string path;  ///< "" without imu0/data.csv
+  Eigen::Isometry3d body_T_imu = Eigen::Isometry3d::Identity();
+};
+
+/// The IMU mount T_BS of imu0/sensor.yaml (`imu_yaml`); identity when the file or its T_BS
+/// data is absent.
+Eigen::Isometry3d ReadBodyTImu(const std::string& imu_yaml) {
+  Eigen::Isometry3d body_T_imu = Eigen::Isometry3d::Identity();
+  if (!fs::exists(imu_yaml)) return body_T_imu;
+  const YAML::Node root = internal::ParseYaml(ReadTextFile(imu_yaml), imu_yaml);
+  if (!root["T_BS"] || !root["T_BS"]["data"]) return body_T_imu;
+  internal::YamlSection t_bs(root["T_BS"], imu_yaml, "T_BS");
+  std::vector<double> m;
+  t_bs.ReadList("data", &m, 16);
+  Eigen::Matrix4d mat;
+  for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
+  const Eigen::Matrix3d r = mat.topLeftCorner<3, 3>();
+  if (!(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-4)) {
+    throw Error(imu_yaml + ": T_BS: not a rigid transform");
+  }
+  body_T_imu.matrix() = mat;
+  return body_T_imu;
+}
+
+/// The samples of imu0/data.csv under `root` and the mount of imu0/sensor.yaml; no samples and
+/// an identity mount when the sequence has no imu0/data.csv.
+AslImu ReadAslImu(const std::string& root) {
+  AslImu imu;
+  const std::string imu_csv = root + "/imu0/data.csv";
+  if (!fs::exists(imu_csv)) return imu;
+  imu.samples = internal::ParseAslImuCsv(ReadTextFile(imu_csv), imu_csv);
+  // A present IMU file without samples is a broken recording, not a sequence without an IMU.
+  if (imu.samples.empty()) throw Error(imu_csv + ": no IMU samples (remove imu0/ if the platform has no IMU)");
+  imu.path = imu_csv;
+  imu.body_T_imu = ReadBodyTImu(root + "/imu0/sensor.yaml");
+  return imu;
+}
+
+/// The poses of an ASL sequence and the file they were read from.
+struct AslPoses {
+  std::vector<PoseSample> samples;
+  std::string path;  ///< "" without a pose file
+};
+
+/// The poses of pose0/data.csv under `root`, else of EuRoC's state_groundtruth_estimate0/data.csv;
+/// none when neither exists.
+AslPoses ReadAslPoses(const std::string& root) {
+  AslPoses poses;
+  std::string pose_csv = root + "/pose0/data.csv";
+  if (!fs::exists(pose_csv)) pose_csv = root + "/state_groundtruth_estimate0/data.csv";
+  if (!fs::exists(pose_csv)) return poses;
+  poses.samples = internal::ParseAslPoseCsv(ReadTextFile(pose_csv), pose_csv);
+  poses.path = pose_csv;
+  return poses;
+}
+
+/// The vehicle.yaml shipped with the sequence: in the folder given (`path`), else in its root.
+std::optional<std::string> FindVehicleConfig(const std::string& path, const std::string& root) {
+  for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(root) / "vehicle.yaml"}) {
+    if (fs::exists(candidate)) return candidate.string();
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
 Sequence Sequence::OpenAsl(const std::string& path) {
   if (!fs::is_directory(path)) throw Error(path + ": sequence folder not found");
   SequenceData seq;
@@ -228,83 +351,17 @@ Sequence Sequence::OpenAsl(const std::string& path) {
     if (!fs::is_directory(dir)) throw Error(dir + ": camera folder not found (expected the ASL layout, docs/interfaces.md, section 2)");
   }
   seq.calibration = LoadStereoCalibration(cam0 + "/sensor.yaml", cam1 + "/sensor.yaml");
-
-  const auto left = ReadImageList(cam0);
-  const auto right = ReadImageList(cam1);
-  if (left.empty()) throw Error(cam0 + "/data.csv: lists no frames (an empty sequence)");
-  const auto times = [](const std::vector<internal::ImageListEntry>& list) {
-    std::vector<std::int64_t> out;
-    for (const auto& entry : list) out.push_back(entry.timestamp_ns);
-    return out;
-  };
-  const std::vector<std::ptrdiff_t> paired = PairNearestWithin1Ms(times(left), times(right));
-  std::vector<bool> right_used(right.size(), false);
-  for (std::size_t i = 0; i < left.size(); ++i) {
-    const auto& l = left[i];
-    if (paired[i] < 0) {
-      seq.skipped.push_back({l.timestamp_ns, "no cam1 frame within 1 ms"});
-      continue;
-    }
-    const auto j = static_cast<std::size_t>(paired[i]);
-    right_used[j] = true;  // paired: a missing image skips the pair once, as one frame
-    if (!fs::exists(l.file)) {
-      seq.skipped.push_back({l.timestamp_ns, "cam0 image missing: " + l.file});
-      continue;
-    }
-    if (!fs::exists(right[j].file)) {
-      seq.skipped.push_back({l.timestamp_ns, "cam1 image missing: " + right[j].file});
-      continue;
-    }
-    seq.frames.push_back({l.timestamp_ns, l.file, right[j].file});
-  }
-  // cam1 rows that no cam0 frame pairs with are reported too (a cut recording, a dropped frame).
-  for (std::size_t k = 0; k < right.size(); ++k) {
-    if (right_used[k]) continue;
-    seq.skipped.push_back({right[k].timestamp_ns, fs::exists(right[k].file)
-                                                      ? "cam1 frame without a cam0 frame within 1 ms"
-                                                      : "cam1 frame without a cam0 frame, and its image is missing: " +
-                                                            right[k].file});
-  }
-  std::sort(seq.skipped.begin(), seq.skipped.end(),
-            [](const SkippedFrame& a, const SkippedFrame& b) { return a.timestamp_ns < b.timestamp_ns; });
-
-  const std::string imu_csv = seq.root + "/imu0/data.csv";
-  if (fs::exists(imu_csv)) {
-    seq.imu = internal::ParseAslImuCsv(ReadTextFile(imu_csv), imu_csv);
-    // A present IMU file without samples is a broken recording, not a sequence without an IMU.
-    if (seq.imu.empty()) throw Error(imu_csv + ": no IMU samples (remove imu0/ if the platform has no IMU)");
-    seq.imu_path = imu_csv;
-    const std::string imu_yaml = seq.root + "/imu0/sensor.yaml";
-    if (fs::exists(imu_yaml)) {
-      const YAML::Node root = internal::ParseYaml(ReadTextFile(imu_yaml), imu_yaml);
-      if (root["T_BS"] && root["T_BS"]["data"]) {
-        internal::YamlSection t_bs(root["T_BS"], imu_yaml, "T_BS");
-        std::vector<double> m;
-        t_bs.ReadList("data", &m, 16);
-        Eigen::Matrix4d mat;
-        for (int i = 0; i < 16; ++i) mat(i / 4, i % 4) = m[i];
-        const Eigen::Matrix3d r = mat.topLeftCorner<3, 3>();
-        if (!(r * r.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-4)) {
-          throw Error(imu_yaml + ": T_BS: not a rigid transform");
-        }
-        seq.body_T_imu.matrix() = mat;
-      }
-    }
-  }
-
-  std::string pose_csv = seq.root + "/pose0/data.csv";
-  if (!fs::exists(pose_csv)) pose_csv = seq.root + "/state_groundtruth_estimate0/data.csv";
-  if (fs::exists(pose_csv)) {
-    seq.poses = internal::ParseAslPoseCsv(ReadTextFile(pose_csv), pose_csv);
-    seq.pose_path = pose_csv;
-  }
-
-  for (const auto& candidate : {fs::path(path) / "vehicle.yaml", fs::path(seq.root) / "vehicle.yaml"}) {
-    if (fs::exists(candidate)) {
-      seq.vehicle_config = candidate.string();
-      break;
-    }
-  }
+  AslFrames frames = PairAslFrames(cam0, cam1);
+  seq.frames = std::move(frames.frames);
+  seq.skipped = std::move(frames.skipped);
+  AslImu imu = ReadAslImu(seq.root);
+  seq.imu = std::move(imu.samples);
+  seq.imu_path = std::move(imu.path);
+  seq.body_T_imu = imu.body_T_imu;
+  AslPoses poses = ReadAslPoses(seq.root);
+  seq.poses = std::move(poses.samples);
+  seq.pose_path = std::move(poses.path);
+  seq.vehicle_config = FindVehicleConfig(path, seq.root);
   return Sequence(std::move(seq));
 }
 

@@ -138,19 +138,91 @@ std::string HashText(std::uint64_t hash) {
   return text;
 }
 
+/// Emits `key` with the first three rows of `t` (4x4 row-major; the last row is 0 0 0 1) as
+/// one flow list of 12 numbers.
+void EmitMountMatrix(const char* key, const Eigen::Isometry3d& t, YAML::Emitter* out) {
+  *out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) *out << ShortestDecimal(t.matrix()(i, j));
+  }
+  *out << YAML::EndSeq;
+}
+
+/// Emits the refined_mount section: the configured and the refined body_T_cam0.
+void EmitRefinedMount(const RefinedMount& mount, YAML::Emitter* out) {
+  *out << YAML::Key << "refined_mount" << YAML::Value << YAML::BeginMap;
+  EmitMountMatrix("configured_body_T_cam0", mount.configured, out);
+  EmitMountMatrix("refined_body_T_cam0", mount.refined, out);
+  *out << YAML::EndMap;
+}
+
+/// Emits the notes section, one quoted note per line.
+void EmitNotes(const std::vector<std::string>& notes, YAML::Emitter* out) {
+  *out << YAML::Key << "notes" << YAML::Value << YAML::BeginSeq;
+  for (const std::string& note : notes) *out << YAML::DoubleQuoted << note;
+  *out << YAML::EndSeq;
+}
+
+/// Emits the merged_from section, one flow map per source map.
+void EmitMergedFrom(const std::vector<MapSource>& sources, YAML::Emitter* out) {
+  *out << YAML::Key << "merged_from" << YAML::Value << YAML::BeginSeq;
+  for (const MapSource& source : sources) {
+    *out << YAML::Flow << YAML::BeginMap;
+    *out << YAML::Key << "file" << YAML::Value << YAML::DoubleQuoted << source.file;
+    *out << YAML::Key << "checksum" << YAML::Value << source.checksum;
+    *out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::string& name : source.sequences) *out << YAML::DoubleQuoted << name;
+    *out << YAML::EndSeq;
+    *out << YAML::Key << "frames_inserted" << YAML::Value << source.frames_inserted;
+    *out << YAML::Key << "software_version" << YAML::Value << YAML::DoubleQuoted << source.software_version;
+    *out << YAML::EndMap;
+  }
+  *out << YAML::EndSeq;
+}
+
+/// Emits the recordings section, one flow map per recording: its frames' stamps and their
+/// image hashes, 16 hex digits each, in one string.
+void EmitRecordings(const std::vector<RecordingFingerprint>& recordings, YAML::Emitter* out) {
+  *out << YAML::Key << "recordings" << YAML::Value << YAML::BeginSeq;
+  for (const RecordingFingerprint& r : recordings) {
+    std::string hashes;
+    hashes.reserve(16 * r.image_hashes.size());
+    for (const std::uint64_t h : r.image_hashes) hashes += HashText(h);
+    *out << YAML::Flow << YAML::BeginMap;
+    *out << YAML::Key << "sequence" << YAML::Value << YAML::DoubleQuoted << r.sequence;
+    *out << YAML::Key << "frames" << YAML::Value << r.frames();
+    *out << YAML::Key << "fingerprint" << YAML::Value << r.Digest();
+    *out << YAML::Key << "stamps_ns" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+    for (const std::int64_t t : r.stamps_ns) *out << t;
+    *out << YAML::EndSeq;
+    *out << YAML::Key << "image_hashes" << YAML::Value << YAML::DoubleQuoted << hashes;
+    *out << YAML::EndMap;
+  }
+  *out << YAML::EndSeq;
+}
+
+/// Emits the sensor_path section: x, y, z of each kept origin, to the millimetre (the path is
+/// for pictures and reports), in one flow list.
+void EmitSensorPath(const std::vector<Eigen::Vector3d>& path, YAML::Emitter* out) {
+  *out << YAML::Key << "sensor_path" << YAML::Value << YAML::Flow << YAML::BeginSeq;
+  for (const Eigen::Vector3d& p : path) {
+    for (int i = 0; i < 3; ++i) *out << ShortestDecimal(std::round(p[i] * 1000.0) / 1000.0);
+  }
+  *out << YAML::EndSeq;
+}
+
+/// The metadata of `map` as YAML: the always written keys, then each optional section the map
+/// has. Doubles go out as their shortest exact decimal text (plain scalars, read back as doubles).
 std::string MetadataYaml(const TraversabilityMap& map) {
-  const MapOptions& o = map.options();
   const MapMetadata& m = map.metadata();
   YAML::Emitter out;
-  // Doubles go out as their shortest exact decimal text (plain scalars, read back as doubles).
-  const auto num = [](double v) { return ShortestDecimal(v); };
   out << YAML::BeginMap;
   out << YAML::Key << "format_version" << YAML::Value << kMapFormatVersion;
   out << YAML::Key << "software_version" << YAML::Value << SSTA_VERSION;
   out << YAML::Key << "frames_inserted" << YAML::Value << map.frames_inserted();
   out << YAML::Key << "last_timestamp_ns" << YAML::Value << map.last_timestamp_ns();
   out << YAML::Key << "map_options" << YAML::Value << YAML::BeginMap;
-  EmitFields(o, MapOptions::Fields(), &out);
+  EmitFields(map.options(), MapOptions::Fields(), &out);
   out << YAML::EndMap;
   out << YAML::Key << "vehicle" << YAML::Value << YAML::BeginMap;
   EmitFields(m.vehicle, VehicleOptions::Fields(), &out);
@@ -160,68 +232,12 @@ std::string MetadataYaml(const TraversabilityMap& map) {
   out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
   for (const std::string& s : m.sequences) out << YAML::DoubleQuoted << s;
   out << YAML::EndSeq;
-  if (m.refined_mount) {
-    // 4x4 row-major, the first three rows (the last is 0 0 0 1).
-    auto matrix = [&](const char* key, const Eigen::Isometry3d& t) {
-      out << YAML::Key << key << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 4; ++j) out << num(t.matrix()(i, j));
-      }
-      out << YAML::EndSeq;
-    };
-    out << YAML::Key << "refined_mount" << YAML::Value << YAML::BeginMap;
-    matrix("configured_body_T_cam0", m.refined_mount->configured);
-    matrix("refined_body_T_cam0", m.refined_mount->refined);
-    out << YAML::EndMap;
-  }
+  if (m.refined_mount) EmitRefinedMount(*m.refined_mount, &out);
   if (!m.world_frame.empty()) out << YAML::Key << "world_frame" << YAML::Value << YAML::DoubleQuoted << m.world_frame;
-  if (!m.notes.empty()) {
-    out << YAML::Key << "notes" << YAML::Value << YAML::BeginSeq;
-    for (const std::string& note : m.notes) out << YAML::DoubleQuoted << note;
-    out << YAML::EndSeq;
-  }
-  if (!m.merged_from.empty()) {
-    out << YAML::Key << "merged_from" << YAML::Value << YAML::BeginSeq;
-    for (const MapSource& source : m.merged_from) {
-      out << YAML::Flow << YAML::BeginMap;
-      out << YAML::Key << "file" << YAML::Value << YAML::DoubleQuoted << source.file;
-      out << YAML::Key << "checksum" << YAML::Value << source.checksum;
-      out << YAML::Key << "sequences" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      for (const std::string& name : source.sequences) out << YAML::DoubleQuoted << name;
-      out << YAML::EndSeq;
-      out << YAML::Key << "frames_inserted" << YAML::Value << source.frames_inserted;
-      out << YAML::Key << "software_version" << YAML::Value << YAML::DoubleQuoted << source.software_version;
-      out << YAML::EndMap;
-    }
-    out << YAML::EndSeq;
-  }
-  if (!m.recordings.empty()) {
-    // Per recording its frames' stamps and their image hashes, 16 hex digits each, in one string.
-    out << YAML::Key << "recordings" << YAML::Value << YAML::BeginSeq;
-    for (const RecordingFingerprint& r : m.recordings) {
-      std::string hashes;
-      hashes.reserve(16 * r.image_hashes.size());
-      for (const std::uint64_t h : r.image_hashes) hashes += HashText(h);
-      out << YAML::Flow << YAML::BeginMap;
-      out << YAML::Key << "sequence" << YAML::Value << YAML::DoubleQuoted << r.sequence;
-      out << YAML::Key << "frames" << YAML::Value << r.frames();
-      out << YAML::Key << "fingerprint" << YAML::Value << r.Digest();
-      out << YAML::Key << "stamps_ns" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-      for (const std::int64_t t : r.stamps_ns) out << t;
-      out << YAML::EndSeq;
-      out << YAML::Key << "image_hashes" << YAML::Value << YAML::DoubleQuoted << hashes;
-      out << YAML::EndMap;
-    }
-    out << YAML::EndSeq;
-  }
-  if (!map.sensor_path().empty()) {
-    // x, y, z of each kept origin, to the millimetre: the path is for pictures and reports.
-    out << YAML::Key << "sensor_path" << YAML::Value << YAML::Flow << YAML::BeginSeq;
-    for (const Eigen::Vector3d& p : map.sensor_path()) {
-      for (int i = 0; i < 3; ++i) out << num(std::round(p[i] * 1000.0) / 1000.0);
-    }
-    out << YAML::EndSeq;
-  }
+  if (!m.notes.empty()) EmitNotes(m.notes, &out);
+  if (!m.merged_from.empty()) EmitMergedFrom(m.merged_from, &out);
+  if (!m.recordings.empty()) EmitRecordings(m.recordings, &out);
+  if (!map.sensor_path().empty()) EmitSensorPath(map.sensor_path(), &out);
   out << YAML::EndMap;
   if (!out.good()) throw InternalError(std::string("map metadata YAML: ") + out.GetLastError());
   return out.c_str();
@@ -374,10 +390,19 @@ void CheckNodeStream(const char* begin, const char* end, unsigned max_depth, std
   }
 }
 
-void ReadMetadata(const std::string& yaml, const std::string& path, int* format, MapOptions* options,
-                  MapMetadata* metadata, std::uint64_t* frames, std::int64_t* last_ts,
-                  std::string* software_version, std::vector<Eigen::Vector3d>* sensor_path) {
-  internal::YamlSection root(internal::ParseYaml(yaml, path), path, "");
+/// What the metadata YAML of a map file says.
+struct FileMetadata {
+  int format_version = 0;
+  std::string software_version;
+  std::uint64_t frames_inserted = 0;
+  std::int64_t last_timestamp_ns = 0;
+  MapOptions options;
+  MapMetadata metadata;
+  std::vector<Eigen::Vector3d> sensor_path;
+};
+
+/// The format_version of the metadata `root`, one this build reads.
+int ReadFormatVersion(internal::YamlSection& root, const std::string& path) {
   if (!root.Has("format_version")) {
     throw Error(path + ": not an SSTA map (its header has no '#@ssta format_version')");
   }
@@ -388,91 +413,153 @@ void ReadMetadata(const std::string& yaml, const std::string& path, int* format,
                 "); use a newer ssta");
   }
   if (version < 1) throw Error(root.Name("format_version") + ": must be >= 1");
-  *format = version;
-  *software_version = root.Require<std::string>("software_version");
-  *frames = root.Require<std::uint64_t>("frames_inserted");
-  *last_ts = root.Require<std::int64_t>("last_timestamp_ns");
+  return version;
+}
 
+/// The map_options section, checked.
+MapOptions ReadMapOptions(internal::YamlSection& root, const std::string& path) {
+  MapOptions options;
   internal::YamlSection o = root.Child("map_options");
-  ReadFields(o, MapOptions::Fields(), options);
+  ReadFields(o, MapOptions::Fields(), &options);
   std::string error;
-  if (!options->IsValid(&error)) throw Error(path + ": map_options." + error);
+  if (!options.IsValid(&error)) throw Error(path + ": map_options." + error);
+  return options;
+}
 
+/// The vehicle section, checked.
+VehicleOptions ReadVehicle(internal::YamlSection& root, const std::string& path) {
+  VehicleOptions vehicle;
   internal::YamlSection v = root.Child("vehicle");
-  ReadFields(v, VehicleOptions::Fields(), &metadata->vehicle);
-  if (!metadata->vehicle.IsValid(&error)) throw Error(path + ": vehicle." + error);
+  ReadFields(v, VehicleOptions::Fields(), &vehicle);
+  std::string error;
+  if (!vehicle.IsValid(&error)) throw Error(path + ": vehicle." + error);
+  return vehicle;
+}
 
-  metadata->calibration_summary = root.Require<std::string>("calibration_summary");
-  metadata->sequences = root.Require<std::vector<std::string>>("sequences");
-  if (root.Has("refined_mount")) {
-    internal::YamlSection r = root.Child("refined_mount");
-    auto matrix = [&](const char* key) {
-      if (!r.Has(key)) throw Error(r.Name(key) + ": missing");
-      std::vector<double> v;
-      r.ReadList(key, &v, 12);
-      Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-      for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 4; ++j) t.matrix()(i, j) = v[4 * i + j];
-      }
-      std::string why;
-      if (!IsRigidTransform(t.matrix(), &why)) throw Error(r.Name(key) + ": not a rigid transform: " + why);
-      return t;
-    };
-    metadata->refined_mount = RefinedMount{matrix("configured_body_T_cam0"), matrix("refined_body_T_cam0")};
+/// The rigid transform `key` of the refined_mount section `r`, 12 numbers: the first three
+/// rows of the 4x4 row-major matrix.
+Eigen::Isometry3d ReadMountMatrix(internal::YamlSection& r, const char* key) {
+  if (!r.Has(key)) throw Error(r.Name(key) + ": missing");
+  std::vector<double> v;
+  r.ReadList(key, &v, 12);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) t.matrix()(i, j) = v[4 * i + j];
   }
-  if (root.Has("world_frame")) metadata->world_frame = root.Require<std::string>("world_frame");
-  if (root.Has("notes")) metadata->notes = root.Require<std::vector<std::string>>("notes");
-  if (root.Has("merged_from")) {
-    const YAML::Node list = internal::ParseYaml(yaml, path)["merged_from"];
-    if (!list.IsSequence()) throw Error(root.Name("merged_from") + ": must be a list");
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      internal::YamlSection entry(list[i], path, "merged_from[" + std::to_string(i) + "]");
-      MapSource source;
-      source.file = entry.Require<std::string>("file");
-      source.checksum = entry.Require<std::string>("checksum");
-      source.sequences = entry.Require<std::vector<std::string>>("sequences");
-      source.frames_inserted = entry.Require<std::uint64_t>("frames_inserted");
-      source.software_version = entry.Require<std::string>("software_version");
-      metadata->merged_from.push_back(std::move(source));
-    }
+  std::string why;
+  if (!IsRigidTransform(t.matrix(), &why)) throw Error(r.Name(key) + ": not a rigid transform: " + why);
+  return t;
+}
+
+/// The refined_mount section: the configured and the refined body_T_cam0.
+RefinedMount ReadRefinedMount(internal::YamlSection& root) {
+  internal::YamlSection r = root.Child("refined_mount");
+  return RefinedMount{ReadMountMatrix(r, "configured_body_T_cam0"), ReadMountMatrix(r, "refined_body_T_cam0")};
+}
+
+/// The merged_from section of the metadata `yaml`: the source maps.
+std::vector<MapSource> ReadMergedFrom(const std::string& yaml, const std::string& path,
+                                      const internal::YamlSection& root) {
+  std::vector<MapSource> sources;
+  const YAML::Node list = internal::ParseYaml(yaml, path)["merged_from"];
+  if (!list.IsSequence()) throw Error(root.Name("merged_from") + ": must be a list");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    internal::YamlSection entry(list[i], path, "merged_from[" + std::to_string(i) + "]");
+    MapSource source;
+    source.file = entry.Require<std::string>("file");
+    source.checksum = entry.Require<std::string>("checksum");
+    source.sequences = entry.Require<std::vector<std::string>>("sequences");
+    source.frames_inserted = entry.Require<std::uint64_t>("frames_inserted");
+    source.software_version = entry.Require<std::string>("software_version");
+    sources.push_back(std::move(source));
   }
-  if (root.Has("recordings")) {
-    const YAML::Node list = internal::ParseYaml(yaml, path)["recordings"];
-    if (!list.IsSequence()) throw Error(root.Name("recordings") + ": must be a list");
-    for (std::size_t i = 0; i < list.size(); ++i) {
-      internal::YamlSection entry(list[i], path, "recordings[" + std::to_string(i) + "]");
-      RecordingFingerprint r;
-      r.sequence = entry.Require<std::string>("sequence");
-      r.stamps_ns = entry.Require<std::vector<std::int64_t>>("stamps_ns");
-      const std::string hashes = entry.Require<std::string>("image_hashes");
-      const auto frames = entry.Require<std::uint64_t>("frames");
-      if (frames != r.stamps_ns.size() || hashes.size() != 16 * r.stamps_ns.size() ||
-          hashes.find_first_not_of("0123456789abcdef") != std::string::npos) {
-        throw Error(entry.Name("image_hashes") + ": needs 16 hex digits for each of the " +
-                    std::to_string(r.stamps_ns.size()) + " stamps and 'frames' their count");
-      }
-      for (std::size_t k = 0; k < hashes.size(); k += 16) {
-        r.image_hashes.push_back(std::strtoull(hashes.substr(k, 16).c_str(), nullptr, 16));
-      }
-      if (entry.Require<std::string>("fingerprint") != r.Digest()) {
-        throw Error(entry.Name("fingerprint") + ": does not match its stamps and image hashes");
-      }
-      metadata->recordings.push_back(std::move(r));
-    }
+  return sources;
+}
+
+/// One entry of the recordings section, its image hashes and fingerprint checked against its
+/// stamps.
+RecordingFingerprint ReadRecording(internal::YamlSection& entry) {
+  RecordingFingerprint r;
+  r.sequence = entry.Require<std::string>("sequence");
+  r.stamps_ns = entry.Require<std::vector<std::int64_t>>("stamps_ns");
+  const std::string hashes = entry.Require<std::string>("image_hashes");
+  const auto frames = entry.Require<std::uint64_t>("frames");
+  if (frames != r.stamps_ns.size() || hashes.size() != 16 * r.stamps_ns.size() ||
+      hashes.find_first_not_of("0123456789abcdef") != std::string::npos) {
+    throw Error(entry.Name("image_hashes") + ": needs 16 hex digits for each of the " +
+                std::to_string(r.stamps_ns.size()) + " stamps and 'frames' their count");
   }
-  sensor_path->clear();
-  if (root.Has("sensor_path")) {
-    const auto values = root.Require<std::vector<double>>("sensor_path");
-    if (values.size() % 3 != 0) {
-      throw Error(root.Name("sensor_path") + ": needs x, y, z triples (" + std::to_string(values.size()) +
-                  " numbers)");
-    }
-    for (std::size_t i = 0; i < values.size(); i += 3) {
-      const Eigen::Vector3d p(values[i], values[i + 1], values[i + 2]);
-      if (!p.allFinite()) throw Error(root.Name("sensor_path") + ": point " + std::to_string(i / 3) + " is not finite");
-      sensor_path->push_back(p);
-    }
+  for (std::size_t k = 0; k < hashes.size(); k += 16) {
+    r.image_hashes.push_back(std::strtoull(hashes.substr(k, 16).c_str(), nullptr, 16));
   }
+  if (entry.Require<std::string>("fingerprint") != r.Digest()) {
+    throw Error(entry.Name("fingerprint") + ": does not match its stamps and image hashes");
+  }
+  return r;
+}
+
+/// The recordings section of the metadata `yaml`: the fingerprints of the recordings fused.
+std::vector<RecordingFingerprint> ReadRecordings(const std::string& yaml, const std::string& path,
+                                                 const internal::YamlSection& root) {
+  std::vector<RecordingFingerprint> recordings;
+  const YAML::Node list = internal::ParseYaml(yaml, path)["recordings"];
+  if (!list.IsSequence()) throw Error(root.Name("recordings") + ": must be a list");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    internal::YamlSection entry(list[i], path, "recordings[" + std::to_string(i) + "]");
+    recordings.push_back(ReadRecording(entry));
+  }
+  return recordings;
+}
+
+/// The sensor_path section: x, y, z triples, each finite.
+std::vector<Eigen::Vector3d> ReadSensorPath(internal::YamlSection& root) {
+  std::vector<Eigen::Vector3d> path;
+  const auto values = root.Require<std::vector<double>>("sensor_path");
+  if (values.size() % 3 != 0) {
+    throw Error(root.Name("sensor_path") + ": needs x, y, z triples (" + std::to_string(values.size()) +
+                " numbers)");
+  }
+  for (std::size_t i = 0; i < values.size(); i += 3) {
+    const Eigen::Vector3d p(values[i], values[i + 1], values[i + 2]);
+    if (!p.allFinite()) throw Error(root.Name("sensor_path") + ": point " + std::to_string(i / 3) + " is not finite");
+    path.push_back(p);
+  }
+  return path;
+}
+
+/// Reads the metadata YAML of the map file `path`: the always written keys, then each optional
+/// section it has. Throws ssta::Error naming the file and key.
+FileMetadata ReadMetadata(const std::string& yaml, const std::string& path) {
+  internal::YamlSection root(internal::ParseYaml(yaml, path), path, "");
+  FileMetadata out;
+  out.format_version = ReadFormatVersion(root, path);
+  out.software_version = root.Require<std::string>("software_version");
+  out.frames_inserted = root.Require<std::uint64_t>("frames_inserted");
+  out.last_timestamp_ns = root.Require<std::int64_t>("last_timestamp_ns");
+  out.options = ReadMapOptions(root, path);
+  MapMetadata& m = out.metadata;
+  m.vehicle = ReadVehicle(root, path);
+  m.calibration_summary = root.Require<std::string>("calibration_summary");
+  m.sequences = root.Require<std::vector<std::string>>("sequences");
+  if (root.Has("refined_mount")) m.refined_mount = ReadRefinedMount(root);
+  if (root.Has("world_frame")) m.world_frame = root.Require<std::string>("world_frame");
+  if (root.Has("notes")) m.notes = root.Require<std::vector<std::string>>("notes");
+  if (root.Has("merged_from")) m.merged_from = ReadMergedFrom(yaml, path, root);
+  if (root.Has("recordings")) m.recordings = ReadRecordings(yaml, path, root);
+  if (root.Has("sensor_path")) out.sensor_path = ReadSensorPath(root);
+  return out;
+}
+
+/// The state of a map holding `metadata`, without its tree and file checksum.
+std::unique_ptr<internal::MapImpl> ImplWithMetadata(FileMetadata metadata) {
+  auto impl = std::make_unique<internal::MapImpl>();
+  impl->options = std::move(metadata.options);
+  impl->metadata = std::move(metadata.metadata);
+  impl->frames_inserted = metadata.frames_inserted;
+  impl->last_timestamp_ns = metadata.last_timestamp_ns;
+  impl->software_version = std::move(metadata.software_version);
+  impl->sensor_path = std::move(metadata.sensor_path);
+  return impl;
 }
 
 }  // namespace
@@ -515,11 +602,10 @@ TraversabilityMap TraversabilityMap::Load(const std::string& path) {
 TraversabilityMap internal::TraversabilityMapAccess::LoadFromBytes(const std::string& bytes, const std::string& path) {
   const Header header = ParseHeader(bytes, path);
 
-  auto impl = std::make_unique<TraversabilityMap::Impl>();
   // The metadata (and with it the format version) is read before the node stream is trusted.
-  int format = kMapFormatVersion;
-  ReadMetadata(header.metadata_yaml, path, &format, &impl->options, &impl->metadata,
-               &impl->frames_inserted, &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
+  FileMetadata metadata = ReadMetadata(header.metadata_yaml, path);
+  const int format = metadata.format_version;
+  auto impl = ImplWithMetadata(std::move(metadata));
   const std::size_t data_end = VerifyTrailer(bytes, path, &impl->file_checksum);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
   if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
@@ -591,8 +677,8 @@ MapFileReader::MapFileReader(const std::string& path) : path_(path), file_(path,
     hash = Fnv1a(hash, chunk.data(), static_cast<std::size_t>(n));
     left -= static_cast<std::uint64_t>(n);
   }
-  auto impl = std::make_unique<MapImpl>();
-  RequireHash(recorded, hash, path, &impl->file_checksum);
+  std::string file_checksum;
+  RequireHash(recorded, hash, path, &file_checksum);
 
   // Pass 2: the header's lines up to 'data', as Load reads them, then the nodes on demand.
   file_.seekg(0);
@@ -604,8 +690,10 @@ MapFileReader::MapFileReader(const std::string& path) : path_(path), file_(path,
   }
   const Header header = ParseHeader(header_text, path);
   if (header.data_begin > data_end) throw Error(path + ": truncated or corrupt map (no node data)");
-  ReadMetadata(header.metadata_yaml, path, &format_, &impl->options, &impl->metadata, &impl->frames_inserted,
-               &impl->last_timestamp_ns, &impl->software_version, &impl->sensor_path);
+  FileMetadata metadata = ReadMetadata(header.metadata_yaml, path);
+  format_ = metadata.format_version;
+  auto impl = ImplWithMetadata(std::move(metadata));
+  impl->file_checksum = std::move(file_checksum);
   if (std::abs(header.resolution - impl->options.resolution_m) > 1e-9 * impl->options.resolution_m) {
     throw Error(path + ": corrupt map (header res " + std::to_string(header.resolution) +
                 " differs from map_options.resolution_m)");

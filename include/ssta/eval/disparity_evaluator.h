@@ -7,6 +7,10 @@
 
 namespace ssta {
 
+namespace internal {
+class JsonWriter;  // include/ssta/core/json_writer.h
+}  // namespace internal
+
 /// The bad-pixel rule of a disparity score (KITTI's D1): a pixel with a truth disparity is bad
 /// when its estimate is off by more than `max_error_px` AND by more than `max_error_ratio` of
 /// the truth, or when it has no estimate.
@@ -69,5 +73,14 @@ ImageF ReadDisparityPng(const std::string& path);
 /// missing, unreadable or of another size than its truth.
 DisparityEvalSummary EvaluateDisparityFiles(const std::string& prediction, const std::string& truth,
                                             const DisparityEvalOptions& options = {});
+
+namespace internal {
+
+/// Writes the score of `summary` as fields of the JSON object being built: "pairs",
+/// "truth_pixels", "matched_pixels", "bad_matched_pixels", "max_error_px", "max_error_ratio",
+/// "d1_all", "d1_matched", "epe_px", "density" (DisparityEvalSummary::ToJson, the stereo bench).
+void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* json);
+
+}  // namespace internal
 
 }  // namespace ssta
