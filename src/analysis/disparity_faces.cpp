@@ -87,7 +87,7 @@ struct FaceTest {
 
 /// The face test for pinhole f, cu, cv [px] and the up vector in the camera frame.
 FaceTest MakeFaceTest(double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                      const AnalysisOptions& options) {
+                      const LabelRefinementOptions& options) {
   // Pixels rising steeper than kGrowSeedSlopeDeg are surely on a face: their window's mean
   // disparity (the face's, constant along the column) is kept to grow the face along the column.
   constexpr double kGrowSeedSlopeDeg = 70.0;
@@ -181,7 +181,7 @@ void MarkFaceRow(const ColumnWindowSums& sums, const RowRuns& runs, const FaceTe
 }  // namespace
 
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                            const AnalysisOptions& options, ImageU8* labels) {
+                            const LabelRefinementOptions& options, ImageU8* labels) {
   if (options.face_window_px == 0) return;
   SSTA_CHECK(disparity.width() == labels->width() && disparity.height() == labels->height(),
              "RefineByDisparityFaces: disparity and labels differ in size");
@@ -191,7 +191,7 @@ void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double
 }
 
 void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                        const AnalysisOptions& options, DisparityFaces* faces) {
+                        const LabelRefinementOptions& options, DisparityFaces* faces) {
   faces->seeds.clear();
   if (faces->marks.width() != disparity.width() || faces->marks.height() != disparity.height()) {
     faces->marks = ImageU8(disparity.width(), disparity.height(), 0);
@@ -221,7 +221,7 @@ void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv,
   }
 }
 
-void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const LabelRefinementOptions& options,
                          ImageU8* labels) {
   if (options.face_window_px == 0) return;
   SSTA_CHECK(faces.marks.width() == labels->width() && faces.marks.height() == labels->height() &&

@@ -35,7 +35,7 @@ void RelabelSegments(const ImageI32& segment_ids, const std::vector<std::uint8_t
 }  // namespace
 
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                             const AnalysisOptions& options, AnalysisResult* result) {
+                             const LabelRefinementOptions& options, AnalysisResult* result) {
   SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
                  cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
              "RefineByGroundDisparity: cloud, segment ids and labels differ in size");
@@ -85,7 +85,7 @@ namespace {
 /// fragment (kept as small vectors); empty for the other segments.
 std::vector<std::vector<int>> LinkFragmentsToHosts(const ImageI32& segment_ids,
                                                    const std::vector<SegmentResult>& segments,
-                                                   const AnalysisOptions& options) {
+                                                   const LabelRefinementOptions& options) {
   constexpr double kMinPlaneDistanceM = 0.05;  // planes nearer the camera have no stable disparity
   const int num_segments = static_cast<int>(segments.size());
   std::vector<char> fragment(num_segments, 0), surface(num_segments, 0);
@@ -129,7 +129,7 @@ struct PlaneCounts {
 PlaneCounts CountPlaneConsistentPoints(const Image3f& cloud, const ImageI32& segment_ids,
                                        const std::vector<SegmentResult>& segments,
                                        const std::vector<std::vector<int>>& touches, double fb,
-                                       const AnalysisOptions& options) {
+                                       const LabelRefinementOptions& options) {
   const int num_segments = static_cast<int>(segments.size());
   PlaneCounts counts;
   counts.points.assign(num_segments, 0);
@@ -159,7 +159,7 @@ struct FragmentHosts {
 
 /// FragmentHosts from the hosts each segment touches and the points on their planes.
 FragmentHosts ChooseHosts(const std::vector<std::vector<int>>& touches, const PlaneCounts& counts,
-                          const AnalysisOptions& options) {
+                          const LabelRefinementOptions& options) {
   const int num_segments = static_cast<int>(touches.size());
   FragmentHosts hosts;
   hosts.host.assign(num_segments, -1);
@@ -206,7 +206,7 @@ void AdoptHostVerdicts(const FragmentHosts& hosts, const ImageI32& segment_ids, 
 }  // namespace
 
 void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                            const AnalysisOptions& options, AnalysisResult* result) {
+                            const LabelRefinementOptions& options, AnalysisResult* result) {
   SSTA_CHECK(cloud.width() == segment_ids.width() && cloud.height() == segment_ids.height() &&
                  cloud.width() == result->labels.width() && cloud.height() == result->labels.height(),
              "RefineByFragmentPlanes: cloud, segment ids and labels differ in size");
@@ -219,7 +219,7 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
   AdoptHostVerdicts(hosts, segment_ids, result);
 }
 
-void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
+void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels) {
   const int r = options.undecided_fill_radius_px;
   if (r <= 0) return;
   constexpr std::uint8_t kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
@@ -273,7 +273,7 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels) {
 }
 
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
-                           const AnalysisOptions& options, AnalysisResult* result) {
+                           const LabelRefinementOptions& options, AnalysisResult* result) {
   if (!options.undecided_height_fill || !result->quality.passed || !result->ground.found) return;
   ImageU8& labels = result->labels;
   SSTA_CHECK(cloud.width() == labels.width() && cloud.height() == labels.height(),

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 
+#include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/vehicle_options.h"
 #include "ssta/core/image.h"

@@ -9,6 +9,7 @@
 
 #include "analytic_world.h"
 #include "ssta/analysis/label_refinements.h"
+#include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/surface_analyzer.h"
 
 namespace ssta {

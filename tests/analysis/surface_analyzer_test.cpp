@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include "analytic_world.h"
+#include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/surface_analyzer.h"
 
 namespace ssta {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <algorithm>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -8,9 +9,21 @@
 #include "ssta/analysis/label_rule.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/image.h"
+#include "ssta/core/option_fields.h"
 #include "ssta/stereo/rectifier.h"
 
 namespace ssta {
+
+/// YAML section `analysis`: the whole SSTA stage after segmentation (paper section III-E), one
+/// section for users. The code reads its halves: AnalyzeSurfaces the paper's analysis
+/// (SurfaceAnalysisOptions), the label refinements their own (LabelRefinementOptions). The
+/// YAML keys and their order in written files follow Fields().
+struct AnalysisOptions : SurfaceAnalysisOptions, LabelRefinementOptions {
+  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
+  static const OptionFields<AnalysisOptions>& Fields();
+  /// The first field out of its range, as "key: requirement" in `*error`.
+  bool IsValid(std::string* error) const;
+};
 
 /// What the stages before the analysis produced for one frame, all on the rectified common
 /// area (`geometry`'s crop) and in the rectified cam0 frame.

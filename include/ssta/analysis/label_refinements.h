@@ -1,8 +1,9 @@
 #pragma once
 
 // The label refinements FrameAnalyzer runs after the paper's analysis (AnalyzeSurfaces,
-// surface_analyzer.h), each turned on by its fields of AnalysisOptions. They change the labels,
-// and some the verdicts of segments, where the paper's one plane per segment errs on stereo data:
+// surface_analyzer.h), each turned on by its fields of LabelRefinementOptions. They change the
+// labels, and some the verdicts of segments, where the paper's one plane per segment errs on
+// stereo data:
 //   1. per-pixel slopes          RefineByPixelSlope       src/analysis/pixel_slopes.cpp
 //   2. ground consistency        RefineByGroundDisparity  src/analysis/label_refinements.cpp
 //   3. fragments                 RefineByFragmentPlanes   src/analysis/label_refinements.cpp
@@ -24,7 +25,89 @@
 
 namespace ssta {
 
-/// Per-pixel slope refinement (AnalysisOptions::pixel_slopes): each pixel labelled
+/// What the label refinements read: the other half of the YAML section `analysis`
+/// (AnalysisOptions, frame_analysis.h), after the paper's analysis (SurfaceAnalysisOptions),
+/// in the order FrameAnalyzer runs them, then the texture test FramePipeline applies after them.
+struct LabelRefinementOptions {
+  // Refinement 1, per-pixel slopes (RefineByPixelSlope).
+
+  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
+  /// is in a worse slope class takes that class. On smooth terrain a hillside has no segment
+  /// boundary, and one PCA slope for the whole segment averages its steep flank away. With
+  /// step_reference local (a segment's verdict is then its slope's alone) a semi-traversable
+  /// pixel whose own normal is gentler than semi_slope_deg also becomes traversable: the same
+  /// average hides a hillside's gentle parts. false: the paper, one verdict per segment.
+  bool pixel_slopes = true;
+  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
+  /// segment [px, odd]; 1: the pixel's own normal.
+  int pixel_slope_window_px = 31;
+
+  // Refinement 2, ground consistency (RefineByGroundDisparity); refinement 6 uses the tolerance.
+
+  /// A point whose disparity lies within this of the dominant ground plane's disparity on the
+  /// same pixel ray is on the ground within stereo noise [px]. Disparity noise does not grow
+  /// with range, so the test holds as well at 10 m as at 2 m, where slopes of noisy far patches
+  /// do not. 0: off.
+  double ground_tolerance_px = 1.0;
+  /// Least share of a small segment's points that must be ground-consistent for the segment to
+  /// be taken as ground (traversable), (0, 1].
+  double ground_consistent_share = 0.9;
+
+  // Refinement 3, fragments on a neighbour's plane (RefineByFragmentPlanes).
+
+  /// A small segment whose points lie within this of the plane of an adjacent large segment, in
+  /// disparity along their pixel rays, is a piece of that surface that stereo noise broke off
+  /// [px]. 0: off.
+  double fragment_tolerance_px = 1.5;
+  /// Least share of a small segment's points that must lie that close, (0, 1].
+  double fragment_consistent_share = 0.9;
+  /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
+  /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
+  int fragment_host_min_points = 1000;
+
+  // Refinement 4, thin vertical faces from the disparity (RefineByDisparityFaces).
+
+  /// Rows of the disparity fitted along each image column [px, odd, >= 3]; 0: off.
+  int face_window_px = 0;
+  /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
+  /// varies from column to column while curbs and steps run across many; 1: each column alone.
+  int face_columns_px = 17;
+  /// A face is grown along the column from its surest pixels (steeper than 70 deg) over the
+  /// rows within the window whose disparity is the face's within this [px]; 0: off.
+  double face_grow_tolerance_px = 0.25;
+  /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
+  double face_min_slope_deg = 35.0;
+
+  // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).
+
+  /// The half side of the square window around an undecided pixel [px]; 0: off.
+  int undecided_fill_radius_px = 4;
+  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
+  double undecided_fill_share = 0.9;
+
+  // Refinement 6, undecided pixels by their own height (FillUndecidedByHeight).
+
+  /// true: undecided pixels that no consensus fills each take the step class of their own
+  /// point's height above the dominant ground plane where that is drivable (traversable, or
+  /// semi-traversable above the plane); other points stay undecided.
+  bool undecided_height_fill = true;
+
+  // After the analysis (FramePipeline).
+
+  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
+  /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
+  /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
+  double label_min_texture = 2.0;
+  /// The texture tests (label_min_texture here, map.min_texture) ask for at least this many
+  /// times the image's own sensor noise (ImageNoiseSigma) when that is more than their grey
+  /// levels: a block whose grey levels vary no more than noise would has no texture to match,
+  /// and a noisy camera's sky otherwise passes a fixed threshold and matches at random depths.
+  /// A pure-noise block's standard deviation is the noise's, within a spread of sigma /
+  /// sqrt(2 (n - 1)) (0.08 sigma over a 9 x 9 block), so 1.5 keeps it out. 0: off.
+  double texture_noise_multiple = 1.5;
+};
+
+/// Per-pixel slope refinement (LabelRefinementOptions::pixel_slopes): each pixel labelled
 /// traversable or semi-traversable in `labels` takes the worse of its label and the slope class
 /// of its own normal against `up_camera`. `normals` has the labels' size (NaN: left as is).
 /// With window_px > 1 each pixel's normal is first averaged over a window_px box restricted to
@@ -41,13 +124,13 @@ void RefineByPixelSlope(const Image3f& normals, const Eigen::Vector3d& up_camera
 /// gives each traversable or semi-traversable label the worse of it and its slope's class.
 /// The two in turn give exactly RefineByPixelSlope's labels. With `gentler_too`, a
 /// semi-traversable label whose slope is traversable also becomes traversable: for labels that
-/// come from segments' slopes alone (AnalysisOptions::step_reference local), where a segment's
-/// one plane averages a hillside whose slope crosses semi_slope_deg within it.
+/// come from segments' slopes alone (SurfaceAnalysisOptions::step_reference local), where a
+/// segment's one plane averages a hillside whose slope crosses semi_slope_deg within it.
 void PixelSlopeClasses(const Image3f& normals, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
                        const ImageI32* segment_ids, int window_px, ImageU8* slope_classes);
 void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels, bool gentler_too = false);
 
-/// Ground consistency of small segments (AnalysisOptions::ground_tolerance_px > 0; needs a
+/// Ground consistency of small segments (LabelRefinementOptions::ground_tolerance_px > 0; needs a
 /// dominant ground plane that passed the quality check, else does nothing). A point is
 /// ground-consistent when |d - d_ground| <= ground_tolerance_px, with d = focal_times_baseline / Z
 /// its disparity and d_ground the disparity of the ground plane along the same pixel ray. A small
@@ -58,9 +141,9 @@ void ApplyPixelSlopeClasses(const ImageU8& slope_classes, ImageU8* labels, bool 
 /// Updates result->labels and the verdicts and reasons of the segments it changes.
 /// `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                             const AnalysisOptions& options, AnalysisResult* result);
+                             const LabelRefinementOptions& options, AnalysisResult* result);
 
-/// Fragments (AnalysisOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
+/// Fragments (LabelRefinementOptions::fragment_tolerance_px > 0; needs a frame that passed the quality
 /// check, else does nothing). Far from the camera, stereo noise breaks a ramp or the ground into
 /// small segments whose own planes tilt at random and whose centroids may stand off the dominant
 /// plane: as obstacles (small_segments: all) they paint ramps and far ground non-traversable.
@@ -74,9 +157,9 @@ void RefineByGroundDisparity(const Image3f& cloud, const ImageI32& segment_ids, 
 /// Updates result->labels (pixels with depth) and the verdicts and reasons of the segments it
 /// changes. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, double focal_times_baseline,
-                            const AnalysisOptions& options, AnalysisResult* result);
+                            const LabelRefinementOptions& options, AnalysisResult* result);
 
-/// Thin vertical faces (AnalysisOptions::face_window_px > 0): a traversable, semi-traversable or
+/// Thin vertical faces (LabelRefinementOptions::face_window_px > 0): a traversable, semi-traversable or
 /// undecided pixel whose surface climbs along its image column steeper than face_min_slope_deg
 /// becomes non-traversable. The disparity is fitted by a line over face_window_px rows around the
 /// pixel (a window with an invalid pixel or a jump over 0.5 px between rows is skipped); with d
@@ -94,7 +177,7 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
 /// `disparity` [px] and `labels` share the cropped rectified image's size; `f`, `cu`, `cv` are its
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                            const AnalysisOptions& options, ImageU8* labels);
+                            const LabelRefinementOptions& options, ImageU8* labels);
 
 /// RefineByDisparityFaces in two steps, so that the costly one can run beside the label steps
 /// before it: FindDisparityFaces reads the disparity only and marks, per pixel, what the test
@@ -106,19 +189,19 @@ struct DisparityFaces {
   std::vector<std::pair<int, float>> seeds;  ///< pixels marked 2 (raster order): index, face disparity
 };
 void FindDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
-                        const AnalysisOptions& options, DisparityFaces* faces);
-void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const AnalysisOptions& options,
+                        const LabelRefinementOptions& options, DisparityFaces* faces);
+void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, const LabelRefinementOptions& options,
                          ImageU8* labels);
 
-/// Undecided pixels amid a consensus (AnalysisOptions::undecided_fill_radius_px > 0): an
+/// Undecided pixels amid a consensus (LabelRefinementOptions::undecided_fill_radius_px > 0): an
 /// undecided pixel (4) takes the class (1..3) that at least undecided_fill_share of the decided
 /// pixels in the (2 r + 1)^2 window around it hold. Tiny segments along obstacle outlines and
 /// in far ground get no verdict of their own (too few points for a plane); where everything
 /// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
 /// edge against the ground), they stay undecided. One pass on the labels as they were.
-void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
+void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels);
 
-/// Undecided pixels by their own height (AnalysisOptions::undecided_height_fill; needs a frame
+/// Undecided pixels by their own height (LabelRefinementOptions::undecided_height_fill; needs a frame
 /// that passed the quality check, else does nothing). Pixels without a normal (the smoothing
 /// window broke on a depth edge) and segments of a few points get no verdict, and where an
 /// obstacle's edge meets the ground no consensus fills them: the 3-5 rows on top of a curb, the
@@ -132,9 +215,9 @@ void FillUndecidedByConsensus(const AnalysisOptions& options, ImageU8* labels);
 /// where above it the top of a curb or a step faces the camera as much as its front does.
 /// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
-                           const AnalysisOptions& options, AnalysisResult* result);
+                           const LabelRefinementOptions& options, AnalysisResult* result);
 
-/// Local steps (AnalysisOptions::step_reference "local"): the step of the rule of
+/// Local steps (SurfaceAnalysisOptions::step_reference "local"): the step of the rule of
 /// docs/interfaces.md, section 3, measured on the frame's own points below the camera (above it
 /// lies nothing the wheels meet, and the sky's false matches lie there). The points go into a grid
 /// of horizontal cells (half the step radius wide, in the frame levelled by `up_camera`), each

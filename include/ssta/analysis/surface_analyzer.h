@@ -13,6 +13,7 @@
 #include "ssta/core/option_fields.h"
 #include "ssta/core/vehicle_options.h"
 #include "ssta/core/classes.h"
+#include "ssta/core/enum_table.h"
 #include "ssta/core/image.h"
 
 namespace ssta {
@@ -61,12 +62,15 @@ enum class StepReference {
 StepReference ParseStepReference(const std::string& name);
 std::string StepReferenceName(StepReference reference);
 
-/// YAML section `analysis`: the SSTA stage after segmentation (paper section III-E). One struct
-/// for the whole stage; its fields come in the order the stage uses them: the paper's analysis
-/// (AnalyzeSurfaces), the rules AnalyzeSurfaces adds to it, then each label refinement
-/// (label_refinements.h) in the order FrameAnalyzer runs them. The YAML keys and their order in
-/// written files follow Fields(), not this order.
-struct AnalysisOptions {
+/// The names of StepReference and SmallSegmentPolicy in config files: one table each for
+/// parsing, naming and the config's choice.
+const EnumTable<StepReference>& StepReferenceNames();
+const EnumTable<SmallSegmentPolicy>& SmallSegmentPolicyNames();
+
+/// What AnalyzeSurfaces reads: the paper's analysis (section III-E) and the rules it adds. Half
+/// of the YAML section `analysis` (AnalysisOptions, frame_analysis.h); the label refinements
+/// after it are the other half (LabelRefinementOptions, label_refinements.h).
+struct SurfaceAnalysisOptions {
   // The paper's analysis (AnalyzeSurfaces).
 
   /// inliers_min = ratio * width * height (paper eq. 4): smaller segments get no verdict of
@@ -85,89 +89,8 @@ struct AnalysisOptions {
   SmallSegmentPolicy small_segments = SmallSegmentPolicy::kAll;
   /// Fewest points for the slope of a small segment to count [points].
   int min_plane_points = 30;
-
-  // Refinement 1, per-pixel slopes (RefineByPixelSlope).
-
-  /// true: after the segment verdicts, a traversable or semi-traversable pixel whose own normal
-  /// is in a worse slope class takes that class. On smooth terrain a hillside has no segment
-  /// boundary, and one PCA slope for the whole segment averages its steep flank away. With
-  /// step_reference local (a segment's verdict is then its slope's alone) a semi-traversable
-  /// pixel whose own normal is gentler than semi_slope_deg also becomes traversable: the same
-  /// average hides a hillside's gentle parts. false: the paper, one verdict per segment.
-  bool pixel_slopes = true;
-  /// Per-pixel slopes use the mean normal of a box of this side around the pixel, within its
-  /// segment [px, odd]; 1: the pixel's own normal.
-  int pixel_slope_window_px = 31;
-
-  // Refinement 2, ground consistency (RefineByGroundDisparity); refinement 6 uses the tolerance.
-
-  /// A point whose disparity lies within this of the dominant ground plane's disparity on the
-  /// same pixel ray is on the ground within stereo noise [px]. Disparity noise does not grow
-  /// with range, so the test holds as well at 10 m as at 2 m, where slopes of noisy far patches
-  /// do not. 0: off.
-  double ground_tolerance_px = 1.0;
-  /// Least share of a small segment's points that must be ground-consistent for the segment to
-  /// be taken as ground (traversable), (0, 1].
-  double ground_consistent_share = 0.9;
-
-  // Refinement 3, fragments on a neighbour's plane (RefineByFragmentPlanes).
-
-  /// A small segment whose points lie within this of the plane of an adjacent large segment, in
-  /// disparity along their pixel rays, is a piece of that surface that stereo noise broke off
-  /// [px]. 0: off.
-  double fragment_tolerance_px = 1.5;
-  /// Least share of a small segment's points that must lie that close, (0, 1].
-  double fragment_consistent_share = 0.9;
-  /// Fewest points of a segment whose plane hosts fragments (it must also have more than twice
-  /// the fragment's points); below inliers_min, a ramp seen from afar is itself a small segment.
-  int fragment_host_min_points = 1000;
-
-  // Refinement 4, thin vertical faces from the disparity (RefineByDisparityFaces).
-
-  /// Rows of the disparity fitted along each image column [px, odd, >= 3]; 0: off.
-  int face_window_px = 0;
-  /// Neighbouring columns whose fits are pooled with a pixel's own [px, odd]: SGBM's noise
-  /// varies from column to column while curbs and steps run across many; 1: each column alone.
-  int face_columns_px = 17;
-  /// A face is grown along the column from its surest pixels (steeper than 70 deg) over the
-  /// rows within the window whose disparity is the face's within this [px]; 0: off.
-  double face_grow_tolerance_px = 0.25;
-  /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
-  double face_min_slope_deg = 35.0;
-
-  // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).
-
-  /// The half side of the square window around an undecided pixel [px]; 0: off.
-  int undecided_fill_radius_px = 4;
-  /// Least share of the window's decided pixels (classes 1..3) that must agree on one class.
-  double undecided_fill_share = 0.9;
-
-  // Refinement 6, undecided pixels by their own height (FillUndecidedByHeight).
-
-  /// true: undecided pixels that no consensus fills each take the step class of their own
-  /// point's height above the dominant ground plane where that is drivable (traversable, or
-  /// semi-traversable above the plane); other points stay undecided.
-  bool undecided_height_fill = true;
-
-  // After the analysis (FramePipeline).
-
-  /// Pixels whose left-image standard deviation over the stereo block is below this [grey
-  /// levels] are labelled unknown (0) once the analysis is done: the sky, blank walls, where the
-  /// matcher's disparity is a guess. The analysis still uses their points. 0: off.
-  double label_min_texture = 2.0;
-  /// The texture tests (label_min_texture here, map.min_texture) ask for at least this many
-  /// times the image's own sensor noise (ImageNoiseSigma) when that is more than their grey
-  /// levels: a block whose grey levels vary no more than noise would has no texture to match,
-  /// and a noisy camera's sky otherwise passes a fixed threshold and matches at random depths.
-  /// A pure-noise block's standard deviation is the noise's, within a spread of sigma /
-  /// sqrt(2 (n - 1)) (0.08 sigma over a 9 x 9 block), so 1.5 keeps it out. 0: off.
-  double texture_noise_multiple = 1.5;
-
-  /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
-  static const OptionFields<AnalysisOptions>& Fields();
-  /// The first field out of its range, as "key: requirement" in `*error`.
-  bool IsValid(std::string* error) const;
 };
+
 
 /// One superpixel surface: its PCA plane and verdict.
 struct SegmentResult {
@@ -233,7 +156,7 @@ struct AnalysisResult {
   GroundPlane ground;
   QualityCheck quality;
   int inliers_min = 0;       ///< the eq. 4 threshold used [px]
-  int min_plane_points = 0;  ///< AnalysisOptions::min_plane_points used
+  int min_plane_points = 0;  ///< SurfaceAnalysisOptions::min_plane_points used
   int depth_pixels = 0;      ///< pixels with a valid 3D point
   /// Class per pixel (image size): 0 without depth, 4 undecided, else the segment's verdict.
   ImageU8 labels;
@@ -255,7 +178,7 @@ struct AnalysisResult {
 /// Thread-safe (pure function).
 AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids, int num_segments,
                                const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
-                               const AnalysisOptions& options, const DepthNoise& noise = {});
+                               const SurfaceAnalysisOptions& options, const DepthNoise& noise = {});
 
 /// The ground's roughness beyond its smooth bend and the stereo noise: sqrt(r^2 - noise_rms^2)
 /// with r the smaller of rms_m and smooth_rms_m, 0 when the noise explains all of it [m].

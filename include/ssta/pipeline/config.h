@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "ssta/analysis/surface_analyzer.h"
+#include "ssta/analysis/frame_analysis.h"
 #include "ssta/core/vehicle_options.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/sensors/gravity_provider.h"
