@@ -96,8 +96,10 @@ std::vector<DistanceBand> BandAccumulator::Finish() const {
   return bands;
 }
 
-std::string BandsReport(const std::vector<DistanceBand>& bands) {
+std::string BandsReport(const std::vector<DistanceBand>& bands, const std::string& path_source) {
+  if (bands.empty()) return "";
   std::string out =
+      "by distance from the path (" + path_source + "):\n"
       "distance [m]   scored accuracy coverage  recall: trav   semi    non   unsafe  f.blocked  accuracy within\n";
   for (const DistanceBand& b : bands) {
     const ConfusionMatrix& m = b.matrix;

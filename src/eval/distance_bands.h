@@ -44,9 +44,10 @@ class BandAccumulator {
   std::vector<DistanceBand> bands_;
 };
 
-/// A table for a terminal: per band the scored samples, accuracy, coverage, recall of each
-/// class, the unsafe and falsely blocked rates, and the accuracy within.
-std::string BandsReport(const std::vector<DistanceBand>& bands);
+/// A table for a terminal under the line "by distance from the path (PATH_SOURCE):": per band
+/// the scored samples, accuracy, coverage, recall of each class, the unsafe and falsely blocked
+/// rates, and the accuracy within. "" without bands.
+std::string BandsReport(const std::vector<DistanceBand>& bands, const std::string& path_source);
 
 /// {"path", "band_m", "bands": [{"from_m", "to_m", "scored", "accuracy", "coverage",
 ///  "mean_iou", "accuracy_within", "metrics": {...}, "metrics_within": {...}}, ...]}.

@@ -136,24 +136,13 @@ std::string FootprintEvalSummary::BriefReport() const {
   out += "partly known to the map: " + std::to_string(partly_known) + " (" + share(partly_known) +
          "), mean known share " + Fixed(mean_fraction_known, 3) + "\n";
   out += matrix.BriefReport("footprints");
-  if (!by_distance.empty()) {
-    out += "by distance from the path (" + path_source + "):\n";
-    out += internal::BandsReport(by_distance);
-  }
+  out += internal::BandsReport(by_distance, path_source);
   return out;
 }
 
 std::string FootprintEvalSummary::ToJson() const {
   internal::JsonWriter json;
-  json.BeginObject();
-  json.Key("kind");
-  json.String("footprints");
-  json.Key("unit");
-  json.String("footprints");
-  json.Key("prediction");
-  json.String(prediction);
-  json.Key("truth");
-  json.String(truth);
+  internal::BeginSummaryJson("footprints", "footprints", prediction, truth, &json);
   json.Key("footprint");
   json.BeginObject();
   json.Key("length_m");

@@ -165,24 +165,13 @@ std::string GridEvalSummary::BriefReport() const {
   out += "scored truth cells outside the predicted grid (scored as unknown): " +
          std::to_string(scored_cells_outside_prediction) + "\n";
   out += matrix.BriefReport("cells");
-  if (!by_distance.empty()) {
-    out += "by distance from the path (" + path_source + "):\n";
-    out += internal::BandsReport(by_distance);
-  }
+  out += internal::BandsReport(by_distance, path_source);
   return out;
 }
 
 std::string GridEvalSummary::ToJson() const {
   internal::JsonWriter json;
-  json.BeginObject();
-  json.Key("kind");
-  json.String("grid");
-  json.Key("unit");
-  json.String("cells");
-  json.Key("prediction");
-  json.String(prediction);
-  json.Key("truth");
-  json.String(truth);
+  internal::BeginSummaryJson("grid", "cells", prediction, truth, &json);
   json.Key("truth_grid");
   WriteGridJson(truth_grid, &json);
   json.Key("prediction_grid");

@@ -167,15 +167,7 @@ std::string LabelEvalSummary::BriefReport() const {
 
 std::string LabelEvalSummary::ToJson() const {
   internal::JsonWriter json;
-  json.BeginObject();
-  json.Key("kind");
-  json.String("labels");
-  json.Key("unit");
-  json.String("pixels");
-  json.Key("prediction");
-  json.String(prediction_dir);
-  json.Key("truth");
-  json.String(truth_dir);
+  internal::BeginSummaryJson("labels", "pixels", prediction_dir, truth_dir, &json);
   json.Key("frames_truth");
   json.Integer(static_cast<std::int64_t>(frames.size()));
   json.Key("frames_predicted");

@@ -2,6 +2,19 @@
 
 namespace ssta::internal {
 
+void BeginSummaryJson(const char* kind, const char* unit, const std::string& prediction, const std::string& truth,
+                      JsonWriter* json) {
+  json->BeginObject();
+  json->Key("kind");
+  json->String(kind);
+  json->Key("unit");
+  json->String(unit);
+  json->Key("prediction");
+  json->String(prediction);
+  json->Key("truth");
+  json->String(truth);
+}
+
 void WriteMetricsJson(const ConfusionMatrix& matrix, JsonWriter* json) {
   json->BeginObject();
   json->Key("scored");

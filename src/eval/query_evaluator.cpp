@@ -132,15 +132,7 @@ std::string QueryEvalSummary::BriefReport() const {
 
 std::string QueryEvalSummary::ToJson() const {
   internal::JsonWriter json;
-  json.BeginObject();
-  json.Key("kind");
-  json.String("query");
-  json.Key("unit");
-  json.String("points");
-  json.Key("prediction");
-  json.String(prediction);
-  json.Key("truth");
-  json.String(truth);
+  internal::BeginSummaryJson("query", "points", prediction, truth, &json);
   json.Key("rows");
   json.Integer(rows);
   json.Key("outside_truth");
