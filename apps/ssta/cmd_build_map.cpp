@@ -6,6 +6,7 @@
 
 #include "bag_options.h"
 #include "commands.h"
+#include "map_arguments.h"
 #include "progress.h"
 #include "ssta/files/file_util.h"
 #include "ssta/pictures/map_picture.h"

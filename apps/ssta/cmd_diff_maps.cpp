@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/core/error.h"
 #include "ssta/pictures/map_diff_picture.h"
 

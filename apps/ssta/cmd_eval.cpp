@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/eval/class_grid.h"
 #include "ssta/eval/footprint_evaluator.h"
 #include "ssta/eval/grid_evaluator.h"

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/core/classes.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"

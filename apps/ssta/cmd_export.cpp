@@ -10,6 +10,7 @@
 #include <system_error>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/pictures/map_picture.h"
 #include "ssta/mapping/traversability_map.h"

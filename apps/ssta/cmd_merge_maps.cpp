@@ -5,6 +5,7 @@
 #include <system_error>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
 #include "ssta/mapping/map_merge.h"

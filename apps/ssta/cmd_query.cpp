@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "commands.h"
+#include "map_arguments.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/files/file_util.h"
 #include "ssta/mapping/traversability_map.h"
