@@ -12,11 +12,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-bool NamesAFolder(const std::string& path) {
-  std::error_code ec;
-  return path.empty() || path.back() == '/' || fs::is_directory(path, ec);
-}
-
 // A file to write, or a prefix to which extensions are added: its folder must exist, and the
 // path must not name a folder.
 CLI::Validator FileOrPrefix(bool prefix) {

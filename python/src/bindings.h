@@ -25,7 +25,7 @@ namespace ssta::python {
 
 namespace py = pybind11;
 
-/// Raised as Python's FileNotFoundError with `filename` set (module.cpp translates it).
+/// Raised as Python's FileNotFoundError with `filename` set (RegisterErrors translates it).
 class MissingFile : public std::runtime_error {
  public:
   MissingFile(const std::string& message, std::string path)

@@ -16,10 +16,6 @@
 namespace ssta::python {
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Config: sections as attributes, each key read and written through its OptionField, so the
-// values, kinds and checks are the YAML reader's own.
-
 std::vector<std::string> SectionNames() {
   Config c;
   std::vector<std::string> names;

@@ -18,9 +18,6 @@
 namespace ssta::python {
 namespace {
 
-// ---------------------------------------------------------------------------------------------
-// Calibration
-
 Eigen::Isometry3d RigidArg(const py::handle& value, const char* name) {
   const auto a = MatrixArg(value, name, 4, 4);
   if (a.shape(0) != 4) throw py::value_error(std::string(name) + ": expected shape (4, 4)");
@@ -120,9 +117,6 @@ Raises ValueError naming the argument or key (as sensor.yaml's checks) for a bad
       .def_property_readonly("is_rectified", &StereoCalibration::IsRectified,
                              "Identical intrinsics, no distortion, baseline along camera x: used as is.");
 }
-
-// ---------------------------------------------------------------------------------------------
-// Frames
 
 struct SegmentRow {
   std::int32_t id, inliers;

@@ -1,5 +1,5 @@
 // The Python module of a map-only build (cmake -DSSTA_MAP_ONLY=ON): ssta.Map and ssta.Error
-// over ssta::map, with none of the frames, configs and builds that module.cpp binds.
+// over ssta::map, with none of the frames, configs and builds that the full module binds.
 
 #include "bindings.h"
 

@@ -165,9 +165,13 @@ std::string ParentFolderProblem(const std::string& path) {
                                 : "the folder " + parent.string() + " does not exist";
 }
 
-std::string OutputFileProblem(const std::string& path) {
+bool NamesAFolder(const std::string& path) {
   std::error_code ec;
-  if (path.empty() || path.back() == '/' || fs::is_directory(path, ec)) return "is a folder; give a file name";
+  return path.empty() || path.back() == '/' || fs::is_directory(path, ec);
+}
+
+std::string OutputFileProblem(const std::string& path) {
+  if (NamesAFolder(path)) return "is a folder; give a file name";
   return ParentFolderProblem(path);
 }
 

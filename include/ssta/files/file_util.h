@@ -19,8 +19,11 @@ void WriteFileAtomically(const std::string& path, const std::function<void(const
 /// `path` has none.
 std::string ParentFolderProblem(const std::string& path);
 
+/// Whether `path` names a folder: empty, ending in '/', or an existing folder.
+bool NamesAFolder(const std::string& path);
+
 /// What keeps a file from being written at `path`: "is a folder; give a file name" when it
-/// names a folder (or ends in '/'), else ParentFolderProblem; "" when it can be written. The
+/// names a folder (NamesAFolder), else ParentFolderProblem; "" when it can be written. The
 /// check `--map FILE` and Python's map paths make before any work.
 std::string OutputFileProblem(const std::string& path);
 
