@@ -106,6 +106,9 @@ void RegisterCalibrateMount(CLI::App& app) {
       ->check(CLI::IsMember({"path", "body", "gravity"}));
   cmd->add_option("--report", args->report, "write the estimate, its uncertainty and the frames as JSON")
       ->check(OutputFile());
+  cmd->add_flag("--oracle-disparity", args->options.oracle_disparity,
+                "use the sequence's gt/disparity instead of stereo matching (synthetic sequences): the ground "
+                "model's error apart from the matcher's");
   cmd->add_flag("--quiet,-q", args->quiet, "no progress and no report on stdout");
   cmd->callback([args] {
     std::string error;

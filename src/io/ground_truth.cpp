@@ -9,9 +9,12 @@ namespace ssta {
 std::string TruthFramePath(const Sequence& sequence, const std::string& kind, std::int64_t timestamp_ns) {
   namespace fs = std::filesystem;
   const std::string name = std::to_string(timestamp_ns) + ".png";
-  fs::path gt = fs::path(sequence.root()) / "gt" / kind / name;
-  if (!fs::exists(gt)) gt = fs::path(sequence.root()).parent_path() / "gt" / kind / name;
-  return gt.string();
+  const fs::path own = fs::path(sequence.root()) / "gt" / kind / name;
+  if (fs::exists(own)) return own.string();
+  // A dataset's cameras may sit one folder down (mav0/): its truth beside them. When neither
+  // exists, the sequence's own path is the one an error names.
+  const fs::path above = fs::path(sequence.root()).parent_path() / "gt" / kind / name;
+  return fs::exists(above) ? above.string() : own.string();
 }
 
 ImageF ReadTrueDisparity(const Sequence& sequence, std::int64_t timestamp_ns) {

@@ -132,7 +132,7 @@ MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, 
                                 const Progress& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
-  SequenceRun run(sequence, config, options.frames);
+  SequenceRun run(sequence, config, options.frames, Oracles{options.oracle_disparity, false});
   const StereoCalibration& rig = sequence.calibration();
   const std::vector<std::optional<Eigen::Isometry3d>> poses = PathPoses(sequence, run, options.refinement);
 

@@ -97,6 +97,27 @@ TEST_F(MountCalibrationTest, ErrorFreeSequenceNeedsNoCorrection) {
             << c.refinement.roll_correction_deg << " deg\n";
 }
 
+TEST_F(MountCalibrationTest, TrueDisparityLeavesTheGroundModelsErrorAlone) {
+  MountCalibrationOptions options;
+  options.oracle_disparity = true;
+  const MountCalibration c = CalibrateMount(Sequence::Open(Faulty()), Config{}, options);
+  ASSERT_EQ(c.refinement.status, RefinementStatus::kDetermined) << c.BriefReport();
+  EXPECT_LT(AngleDeg(TrueRotation(Faulty()), c.refinement.body_T_camera_refined.linear()), 0.2) << c.BriefReport();
+  EXPECT_TRUE(c.skipped.empty()) << c.BriefReport();
+
+  // The oracle reads the truth: without gt/disparity no frame is usable, and the error names
+  // the sequence's own truth file.
+  const std::string copy = Faulty() + "_without_disparity";
+  fs::copy(Faulty(), copy, fs::copy_options::recursive);
+  fs::remove_all(copy + "/gt/disparity");
+  try {
+    CalibrateMount(Sequence::Open(copy), Config{}, options);
+    FAIL() << "calibrated without the true disparity";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(copy + "/gt/disparity/"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(MountCalibrationTest, NoUsableGroundPlaneIsAnError) {
   MountCalibrationOptions options;
   options.frames.max_frames = 3;

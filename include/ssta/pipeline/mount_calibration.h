@@ -17,6 +17,9 @@ namespace ssta {
 struct MountCalibrationOptions {
   RefinementOptions refinement;
   FrameSelection frames;  ///< which frames, and whether one that cannot be used is an error
+  /// Each frame's true disparity (gt/disparity/<ts>.png of a synthetic sequence) instead of
+  /// stereo matching: what is left is the ground model's error, apart from the matcher's.
+  bool oracle_disparity = false;
 
   /// Checks the fields; the message starts with the key name.
   bool IsValid(std::string* error) const;
