@@ -77,13 +77,14 @@ TEST(MountRefiner, RecoversPitchAndRollOnAnalyticGround) {
   EXPECT_NEAR(r.pitch_correction_deg, -3.0, 0.3);
   EXPECT_NEAR(r.roll_correction_deg, -1.5, 0.3);
   // The terrain tilts about body x only, by 0.5 deg (1 sigma) from frame to frame: the measured
-  // scatter, not the 1 deg prior, sets the sigma. Roll: 0.5 / sqrt(30) = 0.09 deg and the
-  // 0.08 deg systematic term in quadrature, 0.12; pitch: the systematic term and little more.
+  // scatter, not the 1 deg prior, sets the statistical part of the sigma. Roll: 0.5 / sqrt(30)
+  // = 0.09 deg and the systematic term in quadrature; pitch: the systematic term and little more.
+  const double systematic = options.systematic_sigma_deg;
   EXPECT_NEAR(r.tilt_scatter_axes_deg[0], 0.5, 0.15);
   EXPECT_LT(r.tilt_scatter_axes_deg[1], 0.1);
-  EXPECT_NEAR(r.roll_sigma_deg, 0.12, 0.04);
-  EXPECT_GE(r.pitch_sigma_deg, options.systematic_sigma_deg);
-  EXPECT_LT(r.pitch_sigma_deg, 0.1);
+  EXPECT_NEAR(std::sqrt(r.roll_sigma_deg * r.roll_sigma_deg - systematic * systematic), 0.09, 0.04);
+  EXPECT_GE(r.pitch_sigma_deg, systematic);
+  EXPECT_LT(r.pitch_sigma_deg, std::hypot(0.05, systematic));
   EXPECT_EQ(r.frames_used, 30);
   EXPECT_EQ(r.points_used, 30 * 300);
   EXPECT_NEAR(r.residual_rms_m, 0.02, 0.005);
@@ -296,9 +297,11 @@ TEST(MountRefiner, PathReferenceRecoversTheMountOnRollingGround) {
   const double error_deg = AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear());
   std::cout << "rolling ground, path reference: " << error_deg << " deg off, sigma pitch " << r.pitch_sigma_deg
             << " roll " << r.roll_sigma_deg << " deg\n";
-  // 0.43 deg today: the 0.2 deg aim is not reached on this ground, and the sigma (about 0.1 deg)
-  // does not cover it.
+  // 0.43 deg: the 0.2 deg aim is not reached on this ground. The frames agree with each other
+  // (statistical sigma about 0.1 deg) while sharing the model's bias (one plane per frame over
+  // curved, twisted ground); the systematic term covers it within two sigmas of the angle.
   EXPECT_LT(error_deg, 0.5) << r.BriefReport();
+  EXPECT_LT(error_deg, 2.0 * std::hypot(r.pitch_sigma_deg, r.roll_sigma_deg)) << r.BriefReport();
   EXPECT_LT(std::max(r.pitch_sigma_deg, r.roll_sigma_deg), 0.3) << r.BriefReport();
 
   // The ground ahead against the plane under the wheels now is wrong by far more here.
