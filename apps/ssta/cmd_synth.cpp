@@ -1,8 +1,5 @@
 // `ssta synth`: renders a synthetic stereo sequence with exact ground truth.
 
-#include <unistd.h>
-
-#include <cstdio>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -11,6 +8,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "progress.h"
 #include "ssta/core/error.h"
 #include "ssta/pipeline/config.h"
 #include "ssta/synth/sequence_synthesizer.h"
@@ -205,15 +203,10 @@ void RunSynth(const CLI::App& cmd, SynthArgs* args) {
   if (!args->config_files.empty()) args->options.vehicle = LoadLayeredConfig(nullptr, args->config_files).vehicle;
   std::string error;
   if (!args->options.IsValid(&error)) throw Error(NameTheOption(error));
-  const bool tty = isatty(fileno(stderr)) != 0;
-  Progress progress;
-  if (tty) {
-    progress = [](int done, int total) {
-      std::cerr << "\rsynth: frame " << done << " / " << total << std::flush;
-      if (done == total) std::cerr << "\n";
-    };
-  }
-  const synth::SynthSummary summary = synth::WriteSyntheticSequence(args->options, args->out_dir, progress);
+  ProgressLine progress("synth");
+  const synth::SynthSummary summary = synth::WriteSyntheticSequence(
+      args->options, args->out_dir, [&progress](int done, int total) { progress.Update(done, total); });
+  progress.Finish();
   std::cout << summary.BriefReport() << "\n";
   if (!summary.warning.empty()) std::cerr << "ssta synth: warning: " << summary.warning << "\n";
 }
