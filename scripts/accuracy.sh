@@ -15,7 +15,9 @@
 # planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
 # over all seen ground and within 10 m. The last row pools the samples of every scene. A second
 # table pools the footprints per 2 m band of distance from the path, with each class's recall.
-# SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels.
+# SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
+# PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
+# --padding), as a planner that pads its robot would.
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -62,7 +64,7 @@ for run in "${runs[@]}"; do
   "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "$@" >/dev/null
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
   "$ssta" eval grid --pred "$out/$name/grid" --gt "$seq" --json "$out/$name/grid.json" >/dev/null
-  "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported \
+  "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported --padding "${PADDING:-0}" \
     --json "$out/$name/footprints.json" >/dev/null
 done
 

@@ -138,7 +138,8 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   std::string error;
   if (!args.footprint.IsValid(&error)) {  // named by the option that set the key
     for (const auto& [key, flag] : {std::pair<std::string, std::string>{"length_m", "--length"},
-                                    {"width_m", "--width"}, {"step_m", "--step"}, {"yaws_deg", "--yaws"}}) {
+                                    {"width_m", "--width"}, {"step_m", "--step"}, {"yaws_deg", "--yaws"},
+                                    {"padding_m", "--padding"}}) {
       if (error.rfind(key, 0) == 0) error = flag + error.substr(key.size());
     }
     throw Error(error);
@@ -148,7 +149,8 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   RequireMapForTruthVehicle(map, args.eval.prediction, args.eval.sequence);
   std::unique_ptr<ExportedSurface> exported;
   if (args.as_exported) {
-    const double reach = 0.5 * std::hypot(args.footprint.length_m, args.footprint.width_m);
+    const double pad = 2.0 * args.footprint.padding_m;
+    const double reach = 0.5 * std::hypot(args.footprint.length_m + pad, args.footprint.width_m + pad);
     const Eigen::Vector2d size(truth.classes.width() * truth.resolution_m, truth.classes.height() * truth.resolution_m);
     const Eigen::Vector2d margin = Eigen::Vector2d::Constant(reach);
     exported = std::make_unique<ExportedSurface>(
@@ -156,7 +158,8 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   }
   const DrivenPath path = ReadDrivenPath(args.eval.sequence);
   const auto oracle = [&](const FootprintPose& pose) {
-    const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, args.footprint.length_m, args.footprint.width_m};
+    const double pad = 2.0 * args.footprint.padding_m;
+    const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, args.footprint.length_m + pad, args.footprint.width_m + pad};
     const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
     return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
   };
@@ -264,6 +267,10 @@ void AddFootprintsEval(CLI::App* eval) {
       ->capture_default_str();
   footprints->add_option("--yaws", fp_args->footprint.yaws_deg, "headings [deg], comma-separated")
       ->delimiter(',')
+      ->capture_default_str();
+  footprints->add_option("--padding", fp_args->footprint.padding_m,
+                         "ask the map about the rectangle grown by this on every side, as a planner pads its "
+                         "footprint; the truth stays --length x --width [m]")
       ->capture_default_str();
   AddAsExported(footprints,
                 "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "

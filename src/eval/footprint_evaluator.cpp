@@ -67,6 +67,9 @@ bool FootprintEvalOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(length_m) && length_m > 0.0)) return Fail(error, "length_m: must be a positive number of metres");
   if (!(std::isfinite(width_m) && width_m > 0.0)) return Fail(error, "width_m: must be a positive number of metres");
   if (!(std::isfinite(step_m) && step_m > 0.0)) return Fail(error, "step_m: must be a positive number of metres");
+  if (!(std::isfinite(padding_m) && padding_m >= 0.0)) {
+    return Fail(error, "padding_m: must be a number of metres >= 0");
+  }
   if (yaws_deg.empty()) return Fail(error, "yaws_deg: needs at least one heading");
   for (const double yaw : yaws_deg) {
     if (!std::isfinite(yaw)) return Fail(error, "yaws_deg: headings must be finite numbers of degrees");
@@ -128,7 +131,9 @@ std::string FootprintEvalSummary::BriefReport() const {
   std::string yaws;
   for (const double yaw : options.yaws_deg) yaws += (yaws.empty() ? "" : ", ") + Fixed(yaw, 1);
   out += "footprint " + Fixed(options.length_m, 2) + " x " + Fixed(options.width_m, 2) + " m, every " +
-         Fixed(options.step_m, 2) + " m, headings " + yaws + " deg\n";
+         Fixed(options.step_m, 2) + " m, headings " + yaws + " deg";
+  if (options.padding_m > 0.0) out += ", the map asked with " + Fixed(options.padding_m, 2) + " m of padding";
+  out += "\n";
   out += "poses: " + std::to_string(poses) + ", partly unseen in the truth (unscored): " +
          std::to_string(partly_unseen) + "\n";
   const std::int64_t scored = matrix.Scored();
@@ -151,6 +156,8 @@ std::string FootprintEvalSummary::ToJson() const {
   json.Number(options.width_m);
   json.Key("step_m");
   json.Number(options.step_m);
+  json.Key("padding_m");
+  json.Number(options.padding_m);
   json.Key("yaws_deg");
   json.BeginInlineArray();
   for (const double yaw : options.yaws_deg) json.Number(yaw);

@@ -447,6 +447,17 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   EXPECT_NE(r.output.find("answered traversable or semi): 50 of 50 (1.0000)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("answered non-traversable): 0 of 1518 (0.0000)"), std::string::npos) << r.output;
 
+  // Padded by 0.1 m, the map is asked about 0.5 m squares: 7 x 7 centres around the patch are
+  // blocked; the truth, and so which footprints count as blocked or free, stays the 0.3 m square.
+  r = RunSsta(eval + " --length 0.3 --yaws 0 --padding 0.1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the map asked with 0.10 m of padding"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered traversable or semi): 25 of 25 (1.0000)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("answered non-traversable): 49 of 759 (0.0646)"), std::string::npos) << r.output;
+  r = RunSsta(eval + " --padding -0.1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--padding: must be a number of metres >= 0"), std::string::npos) << r.output;
+
   r = RunSsta(eval + " --length 0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--length: must be a positive number"), std::string::npos) << r.output;

@@ -22,6 +22,9 @@ struct FootprintEvalOptions {
   double step_m = 0.5;
   /// Headings [deg from +x towards +y]; a rectangle is the same at yaw and yaw + 180.
   std::vector<double> yaws_deg = {0.0, 45.0, 90.0, 135.0};
+  /// The map is asked about the rectangle grown by this on every side, as a planner pads its
+  /// robot's footprint; the truth stays the robot's own rectangle [m], >= 0.
+  double padding_m = 0.0;
 
   /// True when every field is finite and in range; otherwise `*error` (when not null) gets a
   /// message that starts with the key ("length_m: must be positive").
