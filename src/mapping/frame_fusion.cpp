@@ -175,11 +175,13 @@ namespace {
 class FrameFusion {
  public:
   /// Precondition: `sensor_origin_world` is finite and inside the map.
-  /// `max_step_m`: the map's vehicle's, the scale of the class votes' noise weighting.
-  FrameFusion(TravOcTree& tree, const MapOptions& options, double max_step_m, const Eigen::Vector3d& sensor_origin_world,
-              InsertScratch* scratch, InsertStats* stats)
-      : tree_(tree), options_(options), vote_sigma_m_(options.class_vote_noise_steps * max_step_m),
-        origin_world_(sensor_origin_world), scratch_(*scratch), stats_(*stats) {}
+  /// `vehicle`: the map's, whose max_step_m and step_radius_m scale the class votes' noise
+  /// weighting.
+  FrameFusion(TravOcTree& tree, const MapOptions& options, const VehicleOptions& vehicle,
+              const Eigen::Vector3d& sensor_origin_world, InsertScratch* scratch, InsertStats* stats)
+      : tree_(tree), options_(options), vote_sigma_m_(options.class_vote_noise_steps * vehicle.max_step_m),
+        vote_smear_m_(options.class_vote_smear_radii * vehicle.step_radius_m), origin_world_(sensor_origin_world),
+        scratch_(*scratch), stats_(*stats) {}
 
   /// 1. One accumulator per voxel of the in-range points (hits), one per voxel of the points
   /// beyond range (far), keyed by the voxel's Morton code.
@@ -209,12 +211,14 @@ class FrameFusion {
   /// last_seen_ns; with a verdict also the class log-odds, the observation count and the means.
   void UpdateHit(const VoxelAccumulator& acc, std::int64_t timestamp_ns, TravNode* node) const;
 
-  /// The weight of a frame's class vote for a voxel (class_vote_noise_steps).
+  /// The weight of a frame's class vote for a voxel (class_vote_noise_steps,
+  /// class_vote_smear_radii).
   double VoteWeight(const VoxelAccumulator& acc) const;
 
   TravOcTree& tree_;
   const MapOptions& options_;
   double vote_sigma_m_;  ///< height sigma at which a vote counts half; 0: every vote counts 1
+  double vote_smear_m_;  ///< horizontal sigma at which a vote counts half; 0: no such weighting
   const Eigen::Vector3d& origin_world_;
   InsertScratch& scratch_;
   InsertStats& stats_;
@@ -359,9 +363,19 @@ inline void FrameFusion::UpdateFree(TravNode* node) const {
 }
 
 inline double FrameFusion::VoteWeight(const VoxelAccumulator& acc) const {
-  if (vote_sigma_m_ <= 0.0 || acc.surface_count == 0) return 1.0;
-  const double variance = acc.surface_var_sum / acc.surface_count;
-  return 1.0 / (1.0 + variance / (vote_sigma_m_ * vote_sigma_m_));
+  if (acc.surface_count == 0) return 1.0;
+  double weight = 1.0;
+  if (vote_sigma_m_ > 0.0) {
+    const double variance = acc.surface_var_sum / acc.surface_count;
+    weight /= 1.0 + variance / (vote_sigma_m_ * vote_sigma_m_);
+  }
+  // Points given a height sigma but no horizontal one (InsertFrame's callers may) are not
+  // weighed by it.
+  const double xy_variance = acc.surface_xy_var_sum / acc.surface_count;
+  if (vote_smear_m_ > 0.0 && std::isfinite(xy_variance)) {
+    weight /= 1.0 + xy_variance / (vote_smear_m_ * vote_smear_m_);
+  }
+  return weight;
 }
 
 inline void FrameFusion::UpdateHit(const VoxelAccumulator& acc, std::int64_t timestamp_ns, TravNode* node) const {
@@ -450,7 +464,7 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   }
 
   if (!impl_->insert_scratch) impl_->insert_scratch = std::make_shared<internal::InsertScratch>();
-  internal::FrameFusion fusion(tree, impl_->options, impl_->metadata.vehicle.max_step_m, sensor_origin_world,
+  internal::FrameFusion fusion(tree, impl_->options, impl_->metadata.vehicle, sensor_origin_world,
                                impl_->insert_scratch.get(), &stats);
   fusion.GroupPointsByVoxel(points);
   fusion.PlaceRayEnds();

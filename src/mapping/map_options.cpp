@@ -44,6 +44,10 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                         "a frame's vote counts 1 / (1 + (sigma / (k vehicle.max_step_m))^2), sigma the height "
                         "noise of its points in the voxel, k this (0: every vote counts 1)")
                     .AbsentMeans(0.0));
+    f.push_back(Real<O>("class_vote_smear_radii", &O::class_vote_smear_radii, Closed(0, 100), "",
+                        "a frame's vote also counts 1 / (1 + (sigma_xy / (k vehicle.step_radius_m))^2), sigma_xy "
+                        "the horizontal noise of its points in the voxel, k this (0: no such weighting)")
+                    .AbsentMeans(0.0));
     f.push_back(Real<O>("class_prior_traversable_log_odds", &O::class_prior_traversable_log_odds, Closed(0, 10), "",
                         "added to the traversable log-odds when a column is judged: weak evidence leaves open "
                         "ground traversable with a lower confidence instead of blocking it")

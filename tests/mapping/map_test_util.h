@@ -22,6 +22,7 @@ inline MapOptions PlainVotes(MapOptions o = MapOptions{}) {
   o.class_worst_share = 0.0;
   o.class_obstacle_gain = 1.0;
   o.class_vote_noise_steps = 0.0;
+  o.class_vote_smear_radii = 0.0;
   o.class_prior_traversable_log_odds = 0.0;
   return o;
 }

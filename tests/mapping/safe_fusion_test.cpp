@@ -92,8 +92,34 @@ TEST(SafeFusion, ARockRingOneClearViewSawIsKeptUnderNoisyFarViews) {
   MapOptions plain = Options();
   plain.class_obstacle_gain = 1.0;
   plain.class_vote_noise_steps = 0.0;
+  plain.class_vote_smear_radii = 0.0;
   plain.class_prior_traversable_log_odds = 0.0;
   EXPECT_EQ(ClassAt(build(plain), C(17), C(20)), TravClass::kTraversable);
+}
+
+TEST(SafeFusion, FarViewsWhoseDepthNoiseSmearsAnObstacleSidewaysDoNotBlockTheFloorBehindIt) {
+  // A strip of floor that three near views (horizontal sigma 1 cm) see traversable, and that
+  // four far views call non-traversable: an obstacle's points their depth noise moved along
+  // the ray, 1.2 m sideways at 1 sigma (vertical noise 2 cm: a ray grazes the ground).
+  const auto strip = [](int ix, int) { return ix == 25 || ix == 26; };
+  const auto none = [](int, int) { return false; };
+  auto build = [&](const MapOptions& options) {
+    TraversabilityMap map(options);
+    for (int k = 0; k < 3; ++k) map.InsertFrame(Floor(0.02f, none), kSensor, k);
+    for (int k = 3; k < 7; ++k) {
+      std::vector<ClassifiedPoint> far = Floor(0.02f, strip);
+      for (ClassifiedPoint& p : far) p.horizontal_sigma_m = 1.2f;
+      map.InsertFrame(far, kSensor, k);
+    }
+    return map;
+  };
+  // Each far vote counts 1 / (1 + (1.2 / (3 x 0.2))^2) = 1/5 of a near one.
+  EXPECT_EQ(ClassAt(build(Options()), C(25), C(10)), TravClass::kTraversable);
+  EXPECT_EQ(ClassAt(build(Options()), C(10), C(10)), TravClass::kTraversable);
+  // Weighed by their height noise alone, the four far views outvote the three near ones.
+  MapOptions unweighted = Options();
+  unweighted.class_vote_smear_radii = 0.0;
+  EXPECT_EQ(ClassAt(build(unweighted), C(25), C(10)), TravClass::kNonTraversable);
 }
 
 TEST(SafeFusion, ALipBandEveryViewSawSurvivesASurfaceThatLooksWhole) {

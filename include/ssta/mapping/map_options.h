@@ -59,6 +59,13 @@ struct MapOptions {
   /// map's vehicle): a view that resolves a jump of max_step at k sigma counts fully, a far view
   /// whose noise is as large as the jump it should judge counts little. 0: every vote counts 1.
   double class_vote_noise_steps = 0.5;
+  /// A frame's class vote for a voxel also counts 1 / (1 + (sigma_xy / (k step_radius))^2), with
+  /// sigma_xy the stereo noise of its points' horizontal position there and k this value
+  /// (vehicle.step_radius_m from the map's vehicle). Depth noise moves a far point along its
+  /// ray, mostly sideways over the ground: an obstacle's far views land their votes in the
+  /// columns behind and before it, and those would otherwise count as much as a near view's.
+  /// 0: no such weighting; >= 0.
+  double class_vote_smear_radii = 3.0;
   /// Added to the traversable class's log-odds when a column is judged: open ground is most of
   /// any terrain, so frames' evidence must beat this before a column is an obstacle. Weak,
   /// noisy evidence leaves the column traversable with a lower confidence (and a higher cost)
