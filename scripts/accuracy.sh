@@ -64,7 +64,7 @@ for run in "${runs[@]}"; do
   "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "$@" >/dev/null
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
   "$ssta" eval grid --pred "$out/$name/grid" --gt "$seq" --json "$out/$name/grid.json" >/dev/null
-  "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported --padding "${PADDING:-0}" \
+  "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported ${PADDING:+--padding "$PADDING"} \
     --json "$out/$name/footprints.json" >/dev/null
 done
 
