@@ -147,10 +147,12 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   const ClassGrid truth = ReadGroundTruthGrid(args.eval.sequence);
   const TraversabilityMap map = LoadMapForConfig(args.eval.prediction, args.config);
   RequireMapForTruthVehicle(map, args.eval.prediction, args.eval.sequence);
+  // The rectangle the map is asked about: the robot's, grown by the padding on every side.
+  const double query_length_m = args.footprint.length_m + 2.0 * args.footprint.padding_m;
+  const double query_width_m = args.footprint.width_m + 2.0 * args.footprint.padding_m;
   std::unique_ptr<ExportedSurface> exported;
   if (args.as_exported) {
-    const double pad = 2.0 * args.footprint.padding_m;
-    const double reach = 0.5 * std::hypot(args.footprint.length_m + pad, args.footprint.width_m + pad);
+    const double reach = 0.5 * std::hypot(query_length_m, query_width_m);
     const Eigen::Vector2d size(truth.classes.width() * truth.resolution_m, truth.classes.height() * truth.resolution_m);
     const Eigen::Vector2d margin = Eigen::Vector2d::Constant(reach);
     exported = std::make_unique<ExportedSurface>(
@@ -158,8 +160,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   }
   const DrivenPath path = ReadDrivenPath(args.eval.sequence);
   const auto oracle = [&](const FootprintPose& pose) {
-    const double pad = 2.0 * args.footprint.padding_m;
-    const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, args.footprint.length_m + pad, args.footprint.width_m + pad};
+    const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, query_length_m, query_width_m};
     const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
     return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
   };

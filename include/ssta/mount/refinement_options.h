@@ -89,9 +89,7 @@ struct RefinementOptions {
   /// shares, so no scatter shows them (a disparity bias tilts every frame's ground alike, the
   /// poses' own roll and pitch errors, ground whose plane ahead differs from the wheel plane
   /// later standing on it in the same way all along a drive). 0.2: the RMS per angle of the
-  /// errors left on the twelve rendered tuning drives (docs/mount_calibration.md, Measured);
-  /// leaving stretches of a drive out (a block jackknife) moves the estimate by a tenth of
-  /// that, so the error is shared by the whole drive.
+  /// errors left on the twelve rendered tuning drives (docs/mount_calibration.md, Measured).
   double systematic_sigma_deg = 0.2;
   /// Prior on the mount correction: zero with this 1-sigma per angle [deg].
   double prior_sigma_deg = 5.0;
