@@ -72,6 +72,14 @@ void Explain(const ExplainArgs& args) {
   std::cout << "frames: " << c.observations << " gave a class; votes as class log-odds " << Three(why.frame_log_odds, 2)
             << "; probabilities " << Three(why.frame_probability, 3) << " (with the open-ground prior "
             << Fixed(map.options().class_prior_traversable_log_odds, 2) << ")\n";
+  const auto& l = why.frame_log_odds;
+  if (l[0] != 0.0 || l[1] != 0.0 || l[2] != 0.0) {
+    const double views = why.evidence_views;
+    const double needed = map.options().class_min_evidence_views;
+    std::cout << "evidence: " << Fixed(views, 2) << " clear views (a verdict from " << Fixed(needed, 2) << ")"
+              << (views < needed ? ": too weak, no view resolved this ground: no verdict from the frames" : "")
+              << "\n";
+  }
   std::cout << "frames' means: slope " << Fixed(c.frame_mean_slope_deg, 2) << " deg, step "
             << Fixed(c.frame_mean_step_m, 3) << " m; largest step a frame saw " << Fixed(c.max_step_m, 3) << " m\n";
   std::cout << "free space: occupancy log-odds " << Fixed(why.occupancy_log_odds, 2) << " (probability "

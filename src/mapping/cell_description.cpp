@@ -56,8 +56,7 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
   if (!cell.occupied) return cell;  // free space has no class
 
   const auto& l = node->class_log_odds;
-  const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
-  if (!has_evidence) {
+  if (!HasClassEvidence(l, map.options())) {
     cell.cls = TravClass::kUndecided;
     return cell;
   }

@@ -4,6 +4,7 @@
 // queries, file I/O) and reachable from the exporters and tests through
 // TraversabilityMapAccess.
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -60,6 +61,26 @@ inline std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>&
   }
   for (double& x : p) x /= total;
   return p;
+}
+
+/// The evidence in a voxel's class log-odds, in clear views: the largest |L_k| over what one
+/// clear vote for class k adds (class_hit_log_odds, times class_obstacle_gain for an obstacle).
+inline double ClassEvidenceViews(const std::array<float, 3>& log_odds, const MapOptions& options) {
+  double views = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    const double one_view = options.class_hit_log_odds * (k == 2 ? options.class_obstacle_gain : 1.0);
+    views = std::max(views, std::abs(static_cast<double>(log_odds[static_cast<std::size_t>(k)])) / one_view);
+  }
+  return views;
+}
+
+/// Whether a voxel's class log-odds are a verdict: nonzero, and at least
+/// MapOptions::class_min_evidence_views clear views. Each vote already counts by how well its
+/// view resolves the step radius, so weaker evidence means no view resolved the ground: the
+/// open-ground prior must not answer for it.
+inline bool HasClassEvidence(const std::array<float, 3>& log_odds, const MapOptions& options) {
+  if (log_odds[0] == 0.0f && log_odds[1] == 0.0f && log_odds[2] == 0.0f) return false;
+  return ClassEvidenceViews(log_odds, options) >= options.class_min_evidence_views;
 }
 
 /// Whether `node` is occupied: its occupancy at or above the tree's threshold.

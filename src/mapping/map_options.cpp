@@ -5,6 +5,55 @@
 #include "ssta/core/error.h"
 
 namespace ssta {
+namespace {
+
+/// The class evidence's fields, appended to `f` in the order MapOptions::Fields lists them.
+void AddClassEvidenceFields(OptionFields<MapOptions>* f) {
+  using O = MapOptions;
+  f->push_back(Real<O>("class_hit_log_odds", &O::class_hit_log_odds, Above(0), "",
+                       "added to the observed class's log-odds"));
+  f->push_back(Real<O>("class_miss_log_odds", &O::class_miss_log_odds, {-HUGE_VAL, 0, true, false}, "",
+                       "added to the two other classes' log-odds"));
+  f->push_back(Real<O>("class_free_decay_log_odds", &O::class_free_decay_log_odds, AtLeast(0), "",
+                       "a ray through a voxel moves its class log-odds this much towards 0"));
+  f->push_back(Real<O>("class_obstacle_gain", &O::class_obstacle_gain, Closed(1, 10), "",
+                       "a frame's non-traversable verdict adds this many times the hit (and miss) log-odds: "
+                       "missing an obstacle costs more than a false alarm")
+                   .AbsentMeans(1.0));
+  f->push_back(Real<O>("class_worst_share", &O::class_worst_share, Closed(0, 1), "",
+                       "a frame's verdict for a voxel is the worst class this share of its points reach, each "
+                       "class counted with the worse ones: a voxel on the edge of an obstacle band is the "
+                       "band's (0: the plurality of its points)")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_vote_noise_steps", &O::class_vote_noise_steps, Closed(0, 10), "",
+                       "a frame's vote counts 1 / (1 + (sigma / (k vehicle.max_step_m))^2), sigma the height "
+                       "noise of its points in the voxel, k this (0: every vote counts 1)")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_vote_smear_radii", &O::class_vote_smear_radii, Closed(0, 100), "",
+                       "a frame's vote also counts 1 / (1 + (sigma_xy / (k vehicle.step_radius_m))^2), sigma_xy "
+                       "the horizontal noise of its points in the voxel, k this (0: no such weighting)")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_prior_traversable_log_odds", &O::class_prior_traversable_log_odds, Closed(0, 10), "",
+                       "added to the traversable log-odds when a column is judged: weak evidence leaves open "
+                       "ground traversable with a lower confidence instead of blocking it")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_min_evidence_views", &O::class_min_evidence_views, Closed(0, 100), "views",
+                       "a voxel's votes are a verdict only when some class's log-odds reaches this many "
+                       "clear views from 0 (a clear view adds class_hit_log_odds, times class_obstacle_gain "
+                       "for an obstacle): ground no view resolved is undecided, not traversable by the "
+                       "prior alone (0: any vote is a verdict)")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_surface_miss_prob", &O::class_surface_miss_prob, ClosedOpen(0, 1), "",
+                       "chance that a fused surface finding open ground misses a hazard the frames saw (a "
+                       "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "
+                       "much of a uniform one before they multiply the frames' (0: its word is final)")
+                   .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
+  f->push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
+}
+
+}  // namespace
+
 const OptionFields<MapOptions>& MapOptions::Fields() {
   using O = MapOptions;
   static const OptionFields<O> fields = [] {
@@ -25,40 +74,7 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                       return o.occupied_threshold_prob > o.occupancy_clamp_min_prob &&
                              o.occupied_threshold_prob < o.occupancy_clamp_max_prob;
                     }, "must lie strictly between occupancy_clamp_min_prob and occupancy_clamp_max_prob"));
-    f.push_back(Real<O>("class_hit_log_odds", &O::class_hit_log_odds, Above(0), "",
-                        "added to the observed class's log-odds"));
-    f.push_back(Real<O>("class_miss_log_odds", &O::class_miss_log_odds, {-HUGE_VAL, 0, true, false}, "",
-                        "added to the two other classes' log-odds"));
-    f.push_back(Real<O>("class_free_decay_log_odds", &O::class_free_decay_log_odds, AtLeast(0), "",
-                        "a ray through a voxel moves its class log-odds this much towards 0"));
-    f.push_back(Real<O>("class_obstacle_gain", &O::class_obstacle_gain, Closed(1, 10), "",
-                        "a frame's non-traversable verdict adds this many times the hit (and miss) log-odds: "
-                        "missing an obstacle costs more than a false alarm")
-                    .AbsentMeans(1.0));
-    f.push_back(Real<O>("class_worst_share", &O::class_worst_share, Closed(0, 1), "",
-                        "a frame's verdict for a voxel is the worst class this share of its points reach, each "
-                        "class counted with the worse ones: a voxel on the edge of an obstacle band is the "
-                        "band's (0: the plurality of its points)")
-                    .AbsentMeans(0.0));
-    f.push_back(Real<O>("class_vote_noise_steps", &O::class_vote_noise_steps, Closed(0, 10), "",
-                        "a frame's vote counts 1 / (1 + (sigma / (k vehicle.max_step_m))^2), sigma the height "
-                        "noise of its points in the voxel, k this (0: every vote counts 1)")
-                    .AbsentMeans(0.0));
-    f.push_back(Real<O>("class_vote_smear_radii", &O::class_vote_smear_radii, Closed(0, 100), "",
-                        "a frame's vote also counts 1 / (1 + (sigma_xy / (k vehicle.step_radius_m))^2), sigma_xy "
-                        "the horizontal noise of its points in the voxel, k this (0: no such weighting)")
-                    .AbsentMeans(0.0));
-    f.push_back(Real<O>("class_prior_traversable_log_odds", &O::class_prior_traversable_log_odds, Closed(0, 10), "",
-                        "added to the traversable log-odds when a column is judged: weak evidence leaves open "
-                        "ground traversable with a lower confidence instead of blocking it")
-                    .AbsentMeans(0.0));
-    f.push_back(Real<O>("class_surface_miss_prob", &O::class_surface_miss_prob, ClosedOpen(0, 1), "",
-                        "chance that a fused surface finding open ground misses a hazard the frames saw (a "
-                        "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "
-                        "much of a uniform one before they multiply the frames' (0: its word is final)")
-                    .AbsentMeans(0.0));
-    f.push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
-    f.push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
+    AddClassEvidenceFields(&f);
     f.push_back(Real<O>("free_space_clearance_m", &O::free_space_clearance_m, Closed(0, 5), "m",
                         "rays stop clearing where they come this close (in height) to their end: "
                         "clearance / sin(elevation) short, at most 2 m (0: off)"));

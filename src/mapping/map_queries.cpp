@@ -148,7 +148,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, vehicle.step_radius_m);
   const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
   const auto& l = node->class_log_odds;
-  const bool has_evidence = l[0] != 0.0f || l[1] != 0.0f || l[2] != 0.0f;
+  const bool has_evidence = internal::HasClassEvidence(l, map.options());
   if (why != nullptr) {
     why->surface = surface;
     why->surface_columns = static_cast<int>(samples.size());
@@ -413,6 +413,7 @@ ColumnExplanation TraversabilityMap::ExplainColumn(double x, double y) const {
   const TravNode* node = ColumnTop(tree, &key);  // the voxel TopSurfaceAt described
   if (node == nullptr) return why;
   for (int k = 0; k < 3; ++k) why.frame_log_odds[static_cast<std::size_t>(k)] = node->class_log_odds[static_cast<std::size_t>(k)];
+  why.evidence_views = internal::ClassEvidenceViews(node->class_log_odds, options());
   why.occupancy_log_odds = node->getLogOdds();
   why.occupancy = node->getOccupancy();
   why.occupied_threshold = tree.getOccupancyThres();

@@ -15,8 +15,8 @@
 namespace ssta::testing {
 
 /// The class evidence of the plain log-odds model: the plurality of a voxel's points is the
-/// frame's vote, every vote counts alike (no obstacle gain, no noise weighting) and there is no
-/// prior for open ground. The tests that check its formulas use it;
+/// frame's vote, every vote counts alike (no obstacle gain, no noise weighting), there is no
+/// prior for open ground and any nonzero evidence is a verdict. The tests that check its formulas use it;
 /// safe_fusion_test.cpp checks what the shipped weighting adds.
 inline MapOptions PlainVotes(MapOptions o = MapOptions{}) {
   o.class_worst_share = 0.0;
@@ -24,6 +24,7 @@ inline MapOptions PlainVotes(MapOptions o = MapOptions{}) {
   o.class_vote_noise_steps = 0.0;
   o.class_vote_smear_radii = 0.0;
   o.class_prior_traversable_log_odds = 0.0;
+  o.class_min_evidence_views = 0.0;
   return o;
 }
 

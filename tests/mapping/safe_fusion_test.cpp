@@ -218,6 +218,57 @@ TEST(SafeFusion, FarNoiseLeavesALevelFloorTraversableWithALowerConfidence) {
   EXPECT_EQ(near.TopSurfaceAt(C(31), C(31)).cls, TravClass::kNonTraversable);
 }
 
+TEST(SafeFusion, WithAnEvidenceFloorGroundNoViewResolvedIsUndecided) {
+  // Six views from about 17 m on the default rig (height sigma 0.35 m, horizontal 1.4 m): each
+  // vote counts 1 / (1 + (0.35 / 0.1)^2) / (1 + (1.4 / 0.6)^2) = 0.0117 of a clear one, so six
+  // of them are 0.07 clear views, under the quarter map.class_min_evidence_views asks. Whether
+  // they call a patch non-traversable (a slope just over the limit, say) or the floor around
+  // it traversable, no view resolved that ground: it is undecided, where the open-ground prior
+  // alone (the floor off) makes both traversable. Two near views of a 0.3 m box there decide.
+  const auto patch = [](int ix, int iy) { return ix >= 30 && ix < 33 && iy >= 30 && iy < 33; };
+  auto build = [&](const MapOptions& options, bool near_views) {
+    TraversabilityMap map(options);
+    for (int k = 0; k < 6; ++k) {
+      std::vector<ClassifiedPoint> far = Floor(0.35f, patch);
+      for (ClassifiedPoint& p : far) p.horizontal_sigma_m = 1.4f;
+      map.InsertFrame(far, kSensor, k);
+    }
+    for (int k = 6; near_views && k < 8; ++k) {
+      map.InsertFrame(Floor(0.02f, patch, [&](int ix, int iy) { return patch(ix, iy) ? 0.3 : 0.0; }), kSensor, k);
+    }
+    return map;
+  };
+  MapOptions floor = Options();
+  floor.class_min_evidence_views = 0.25;
+  const TraversabilityMap far = build(floor, false);
+  EXPECT_EQ(ClassAt(far, C(31), C(31)), TravClass::kUndecided);
+  EXPECT_EQ(ClassAt(far, C(5), C(5)), TravClass::kUndecided);
+  EXPECT_NEAR(far.ExplainColumn(C(5), C(5)).evidence_views, 6 * 0.0117, 0.005);
+  EXPECT_NEAR(far.ExplainColumn(C(31), C(31)).evidence_views, 6 * 0.0117, 0.005);
+  const TraversabilityMap seen = build(floor, true);
+  EXPECT_EQ(ClassAt(seen, C(31), C(31)), TravClass::kNonTraversable);
+  EXPECT_EQ(ClassAt(seen, C(5), C(5)), TravClass::kTraversable);
+
+  const TraversabilityMap prior = build(Options(), false);  // the shipped default: no floor
+  EXPECT_EQ(ClassAt(prior, C(31), C(31)), TravClass::kTraversable);
+  EXPECT_EQ(ClassAt(prior, C(5), C(5)), TravClass::kTraversable);
+}
+
+TEST(SafeFusion, AnEvidenceFloorLeavesTheFusedSurfaceItsSay) {
+  // Two views of level floor whose labels call a patch red, at a height sigma of 0.3 m (0.1 of
+  // a clear vote each: 0.2 clear views) but placed to a centimetre sideways: the frames give no
+  // verdict under the floor, and the fused surface, level, judges the patch alone.
+  const auto patch = [](int ix, int iy) { return ix >= 30 && ix < 33 && iy >= 30 && iy < 33; };
+  MapOptions floor = Options();
+  floor.class_min_evidence_views = 0.25;
+  TraversabilityMap map(floor);
+  for (int k = 0; k < 2; ++k) map.InsertFrame(Floor(0.3f, patch), kSensor, k);
+  const ColumnExplanation why = map.ExplainColumn(C(31), C(31));
+  EXPECT_NEAR(why.evidence_views, 0.2, 0.01);
+  EXPECT_EQ(why.rule, JudgeRule::kSurfaceAlone);
+  EXPECT_EQ(why.cell.cls, TravClass::kTraversable);
+}
+
 /// An organized cloud rendered by ray casting a world of height `ground(x)` (x forward, level
 /// across) from a pinhole camera at height `camera_z` pitched `pitch_deg` down (f 400 px,
 /// 32 x 240, principal point at the centre), in the rectified camera frame (x right, y down,

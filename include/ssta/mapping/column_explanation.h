@@ -40,6 +40,9 @@ struct ColumnExplanation {
   /// The top voxel's class log-odds for classes 1..3: the frames' weighted votes (a lip or an
   /// obstacle counts more than open ground; docs: maps/README.md, "fusion"). 0 without votes.
   std::array<double, 3> frame_log_odds{0.0, 0.0, 0.0};
+  /// That evidence in clear views (the largest |L_k| over one clear vote's, obstacle gain
+  /// included); under MapOptions::class_min_evidence_views the frames give no verdict.
+  double evidence_views = 0.0;
   /// The frames' class probabilities (with the open-ground prior); NaN without votes.
   std::array<double, 3> frame_probability{kNaN, kNaN, kNaN};
   /// Free-space evidence: the top voxel's occupancy log-odds (hits raise it, rays that pass

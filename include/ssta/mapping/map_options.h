@@ -71,6 +71,18 @@ struct MapOptions {
   /// noisy evidence leaves the column traversable with a lower confidence (and a higher cost)
   /// instead of blocking it; >= 0.
   double class_prior_traversable_log_odds = 0.5;
+  /// A voxel's votes are a verdict only when some class's log-odds has moved at least this
+  /// many clear views from 0 (|L_k| >= this * class_hit_log_odds, times class_obstacle_gain
+  /// for the non-traversable class). Each vote already counts by how well its view resolves
+  /// the step radius (class_vote_noise_steps, class_vote_smear_radii): 0.25 is one view whose
+  /// height noise is half max_step and whose sideways smear is three step radii, both at the
+  /// edge of resolving the step. Weaker evidence is ground no view resolved: the voxel is then
+  /// undecided (class 4) instead of traversable by the open-ground prior alone; the fused
+  /// surface may still judge it. Off by default: on the tuning scenes 0.25 turns 2.5 % of the
+  /// truly blocked footprints from unsafe to undecided (far slopes just over the limit), but a
+  /// short drive on a low-resolution rig leaves a tenth of its map undecided
+  /// (docs/accuracy.md). 0: any nonzero vote is a verdict; >= 0.
+  double class_min_evidence_views = 0.0;
   /// The chance that a fused surface which finds open ground misses a hazard the frames saw: a
   /// lip whose floor is hidden (the surface ends at the edge, where stereo smears the upper
   /// level a cell or two beyond it) or an obstacle thinner than a cell. Where the surface

@@ -30,9 +30,12 @@ inline constexpr int kMapFormatVersion = 2;
 /// header); the file format is described in maps/README.md.
 ///
 /// Semantics (the exact formulas; L1..L3 are the class log-odds of a voxel):
-///  - class: for an occupied voxel, argmax_k (Lk + P [k = 1]) when some Lk != 0 (ties go to
-///    the worse class; P = options().class_prior_traversable_log_odds), kUndecided when all are
-///    0; kUnknown for free or unobserved voxels.
+///  - class: for an occupied voxel with evidence, argmax_k (Lk + P [k = 1]) (ties go to the
+///    worse class; P = options().class_prior_traversable_log_odds); kUndecided without;
+///    kUnknown for free or unobserved voxels. Evidence: some Lk != 0 and at least options().
+///    class_min_evidence_views clear views (|Lk| over class_hit_log_odds, times
+///    class_obstacle_gain for k = 3): weaker votes are ground no view resolved, which the prior
+///    alone would call open.
 ///  - probability of class c: exp(Lc + P [c = 1]) / sum_k exp(Lk + P [k = 1]).
 ///  - cost: traversable 0.25 min(1, 1.5 (1 - confidence)), so 0 when certain and up to 0.25
 ///    when barely more probable than the others; non-traversable 1; semi-traversable
