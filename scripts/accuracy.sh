@@ -17,7 +17,9 @@
 # table pools the footprints per 2 m band of distance from the path, with each class's recall.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
-# --padding), as a planner that pads its robot would.
+# --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
+# footprints are listed in out/accuracy/<set>/<scene>/footprint_misses.csv, nearest the path
+# first.
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -65,7 +67,7 @@ for run in "${runs[@]}"; do
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
   "$ssta" eval grid --pred "$out/$name/grid" --gt "$seq" --json "$out/$name/grid.json" >/dev/null
   "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported ${PADDING:+--padding "$PADDING"} \
-    --json "$out/$name/footprints.json" >/dev/null
+    --json "$out/$name/footprints.json" --misses "$out/$name/footprint_misses.csv" >/dev/null
 done
 
 python3 - "$out" "$seqs" "$frames" "${runs[@]}" <<'PY'

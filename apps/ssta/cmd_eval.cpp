@@ -130,6 +130,7 @@ struct FootprintArguments {
   FootprintEvalOptions footprint;
   bool as_exported = false;
   GridExportOptions exported;  // the export's steps, for --as-exported
+  std::string misses_path;     // --misses: the unsafe and falsely blocked poses as CSV
 };
 
 // A map's footprint verdicts over the truth grid: QueryFootprint, reading the surface as the
@@ -278,12 +279,25 @@ void AddFootprintsEval(CLI::App* eval) {
                 "--as-exported does",
                 &fp_args->as_exported, &fp_args->exported);
   footprints->add_option("--json", fp_args->eval.json_path, "also write the summary as JSON to this file")->check(OutputFile());
+  footprints->add_option("--misses", fp_args->misses_path,
+                         "also write every unsafe and falsely blocked footprint to this CSV file (kind, x, y, yaw, "
+                         "truth, answer, fraction known, distance from the path), unsafe first, nearest the path "
+                         "first: where to look with `ssta explain`")
+      ->check(OutputFile());
   footprints->footer(
       "A pose is scored when every truth cell under it is 1..3 (seen); its truth is their worst class, "
       "the map's answer the worst class of the cells it knows (0 when none). unsafe: truly "
       "non-traversable footprints answered traversable or semi-traversable; falsely blocked: truly "
       "traversable ones answered non-traversable.");
-  footprints->callback([fp_args] { Report(EvaluateMapFootprints(*fp_args), fp_args->eval); });
+  footprints->callback([fp_args] {
+    const FootprintEvalSummary summary = EvaluateMapFootprints(*fp_args);
+    Report(summary, fp_args->eval);
+    if (!fp_args->misses_path.empty()) {
+      WriteTextAtomically(fp_args->misses_path, summary.MissesCsv());
+      std::cout << "misses: " << fp_args->misses_path << " (" << summary.unsafe << " unsafe, "
+                << summary.falsely_blocked << " falsely blocked)\n";
+    }
+  });
 }
 
 }  // namespace

@@ -112,11 +112,22 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
                    "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
         summary.matrix.Add(t, answer.worst);
         if (bands) bands->Add(centre, t, answer.worst);
+        const bool unsafe = t == 3 && (answer.worst == 1 || answer.worst == 2);
+        if (unsafe || (t != 3 && answer.worst == 3)) {
+          const double distance = path.empty() ? std::numeric_limits<double>::quiet_NaN()
+                                               : internal::DistanceToPath(centre, path);
+          summary.misses.push_back({unsafe, pose, t, answer.worst, answer.fraction_known, distance});
+        }
         if (answer.fraction_known < 1.0) ++summary.partly_known;
         known_sum += answer.fraction_known;
       }
     }
   }
+  // Unsafe first, each kind nearest to the path first; stable, so lattice order otherwise.
+  std::stable_sort(summary.misses.begin(), summary.misses.end(), [](const FootprintMiss& a, const FootprintMiss& b) {
+    if (a.unsafe != b.unsafe) return a.unsafe;
+    return a.distance_from_path_m < b.distance_from_path_m;
+  });
   summary.unsafe = summary.matrix.Unsafe();
   summary.falsely_blocked = summary.matrix.FalselyBlocked();
   if (bands) summary.by_distance = bands->Finish();
@@ -124,6 +135,17 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
   summary.mean_fraction_known = scored > 0 ? known_sum / static_cast<double>(scored)
                                            : std::numeric_limits<double>::quiet_NaN();
   return summary;
+}
+
+std::string FootprintEvalSummary::MissesCsv() const {
+  std::string out = "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m\n";
+  for (const FootprintMiss& m : misses) {
+    out += std::string(m.unsafe ? "unsafe" : "falsely_blocked") + "," + Fixed(m.pose.x_m, 3) + "," +
+           Fixed(m.pose.y_m, 3) + "," + Fixed(RadToDeg(m.pose.yaw_rad), 1) + "," + std::to_string(m.truth) + "," +
+           std::to_string(m.answer) + "," + Fixed(m.fraction_known, 3) + "," + Fixed(m.distance_from_path_m, 2) +
+           "\n";
+  }
+  return out;
 }
 
 std::string FootprintEvalSummary::BriefReport() const {

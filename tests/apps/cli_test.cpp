@@ -435,8 +435,13 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   // 5 x 5 around the patch, which the export judges floor.
   const std::string eval = "eval footprints --map " + (dir / "m.ot") + " --gt " + (dir / "seq") +
                            " --width 0.3 --step 0.1";
-  auto r = RunSsta(eval + " --length 0.3 --yaws 0 --json " + (dir / "f.json"));
+  auto r = RunSsta(eval + " --length 0.3 --yaws 0 --json " + (dir / "f.json") + " --misses " + (dir / "m.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("misses: " + (dir / "m.csv") + " (25 unsafe, 25 falsely blocked)"), std::string::npos)
+      << r.output;
+  const std::string misses = ReadTextFile(dir / "m.csv");
+  EXPECT_EQ(std::count(misses.begin(), misses.end(), '\n'), 1 + 25 + 25) << misses;
+  EXPECT_EQ(misses.find("unsafe,"), misses.find('\n') + 1) << misses;  // the unsafe ones first
   EXPECT_NE(r.output.find("poses: 900, partly unseen in the truth (unscored): 116"), std::string::npos) << r.output;
   // Shares of the truly blocked and of the truly free footprints.
   EXPECT_NE(r.output.find("answered traversable or semi): 25 of 25 (1.0000)"), std::string::npos) << r.output;

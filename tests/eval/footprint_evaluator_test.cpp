@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -102,6 +103,44 @@ TEST(eval_Footprints, SplitsPosesByTheirDistanceFromThePath) {
   EXPECT_EQ(s.by_distance.back().matrix_within.Scored(), s.matrix.Scored());
   EXPECT_NEAR(s.by_distance.back().accuracy_within, s.matrix.Accuracy(), kTol);
   EXPECT_NE(s.ToJson().find("\"by_distance_from_path\""), std::string::npos);
+}
+
+TEST(eval_Footprints, ListsEachUnsafeAndFalselyBlockedPoseNearestThePathFirst) {
+  // 0.3 m squares on every cell, the path along y = -1 m. The oracle blocks the poses whose
+  // centre lies in column 10 and calls everything else traversable: the 16 centres around the
+  // block are unsafe, and column 10's scored centres (bottom rows 1..38, all truly
+  // traversable) falsely blocked.
+  FootprintEvalOptions options;
+  options.length_m = options.width_m = 0.3;
+  options.step_m = 0.1;
+  options.yaws_deg = {0.0};
+  const std::vector<Eigen::Vector2d> path = {{0.0, -1.0}, {4.0, -1.0}};
+  const FootprintEvalSummary s = ScoreFootprints(
+      Truth(), options,
+      [](const FootprintPose& pose) { return Always(std::abs(pose.x_m - 1.05) < 1e-9 ? 3 : 1, 1.0); }, path);
+  EXPECT_EQ(s.unsafe, 16);
+  EXPECT_EQ(s.falsely_blocked, 38);
+  ASSERT_EQ(s.misses.size(), 16u + 38u);
+  for (std::size_t i = 0; i < s.misses.size(); ++i) {
+    const FootprintMiss& m = s.misses[i];
+    EXPECT_EQ(m.unsafe, i < 16) << i;
+    EXPECT_EQ(m.truth, m.unsafe ? 3 : 1) << i;
+    EXPECT_EQ(m.answer, m.unsafe ? 1 : 3) << i;
+    EXPECT_NEAR(m.distance_from_path_m, m.pose.y_m + 1.0, 1e-9) << i;  // the centre's y + 1
+    if (i > 0 && m.unsafe == s.misses[i - 1].unsafe) {
+      EXPECT_GE(m.distance_from_path_m, s.misses[i - 1].distance_from_path_m) << i;
+    }
+  }
+  // The block's 4 x 4 centres: columns and bottom rows 19..22, nearest row first.
+  EXPECT_NEAR(s.misses.front().pose.y_m, 1.95, 1e-9);
+  EXPECT_NEAR(s.misses[15].pose.y_m, 2.25, 1e-9);
+  EXPECT_NEAR(s.misses[16].pose.x_m, 1.05, 1e-9);
+  EXPECT_NEAR(s.misses[16].pose.y_m, 0.15, 1e-9);  // bottom row 1: row 0 reaches outside
+
+  const std::string csv = s.MissesCsv();
+  EXPECT_EQ(csv.rfind("kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m\n", 0), 0u) << csv;
+  EXPECT_NE(csv.find("\nfalsely_blocked,1.050,0.150,0.0,1,3,1.000,1.15\n"), std::string::npos) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 16 + 38);
 }
 
 TEST(eval_Footprints, DiagonalFootprintsCoverTheirDiagonalCells) {

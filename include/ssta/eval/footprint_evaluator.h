@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -48,6 +49,19 @@ struct FootprintAnswer {
 
 using FootprintOracle = std::function<FootprintAnswer(const FootprintPose&)>;
 
+/// A scored footprint the method answered unsafely (truly non-traversable, answered
+/// traversable or semi) or blocked falsely (truly free, answered non-traversable): where a
+/// planner would be misled, for a person to look at (`ssta explain` on its cells).
+struct FootprintMiss {
+  bool unsafe = false;  ///< true: unsafe; false: falsely blocked
+  FootprintPose pose;
+  std::uint8_t truth = 0;   ///< the worst truth class under it
+  std::uint8_t answer = 0;  ///< FootprintAnswer::worst
+  double fraction_known = 0.0;
+  /// Its centre's distance from the path [m]; NaN without a path.
+  double distance_from_path_m = std::numeric_limits<double>::quiet_NaN();
+};
+
 /// Result of ScoreFootprints.
 struct FootprintEvalSummary {
   std::string prediction;          ///< what answered (the map file)
@@ -76,6 +90,9 @@ struct FootprintEvalSummary {
   std::vector<DistanceBand> by_distance;
   std::string path_source;
   static constexpr double kDistanceBandM = 2.0;
+  /// Every unsafe and falsely blocked pose: the unsafe ones first, each kind nearest to the
+  /// path first (in lattice order without a path).
+  std::vector<FootprintMiss> misses;
 
   std::string BriefReport() const;
   /// {"kind": "footprints", "unit": "footprints", "prediction", "truth", "footprint":
@@ -83,6 +100,10 @@ struct FootprintEvalSummary {
   ///  "falsely_blocked", "partly_known", "mean_fraction_known", "metrics": {...}} with
   /// "metrics" as described at ConfusionMatrix.
   std::string ToJson() const;
+  /// `misses` as CSV: a header line "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,
+  /// distance_from_path_m", then one line per miss (kind "unsafe" or "falsely_blocked";
+  /// distance "nan" without a path).
+  std::string MissesCsv() const;
 };
 
 /// Asks `oracle` about every footprint of the lattice (FootprintEvalOptions) whose centre cell
