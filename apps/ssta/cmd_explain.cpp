@@ -72,8 +72,7 @@ void Explain(const ExplainArgs& args) {
   std::cout << "frames: " << c.observations << " gave a class; votes as class log-odds " << Three(why.frame_log_odds, 2)
             << "; probabilities " << Three(why.frame_probability, 3) << " (with the open-ground prior "
             << Fixed(map.options().class_prior_traversable_log_odds, 2) << ")\n";
-  const auto& l = why.frame_log_odds;
-  if (l[0] != 0.0 || l[1] != 0.0 || l[2] != 0.0) {
+  if (why.evidence_views > 0.0) {  // the frames voted
     const double views = why.evidence_views;
     const double needed = map.options().class_min_evidence_views;
     std::cout << "evidence: " << Fixed(views, 2) << " clear views (a verdict from " << Fixed(needed, 2) << ")"

@@ -133,6 +133,12 @@ constexpr int kSemi = static_cast<int>(TravClass::kSemiTraversable);
 constexpr int kNon = static_cast<int>(TravClass::kNonTraversable);
 }  // namespace
 
+bool ConfusionMatrix::IsUnsafe(std::uint8_t truth, std::uint8_t predicted) {
+  return truth == kNon && (predicted == kTrav || predicted == kSemi);
+}
+bool ConfusionMatrix::IsFalselyBlocked(std::uint8_t truth, std::uint8_t predicted) {
+  return (truth == kTrav || truth == kSemi) && predicted == kNon;
+}
 std::int64_t ConfusionMatrix::Unsafe() const { return counts_[kNon][kTrav] + counts_[kNon][kSemi]; }
 double ConfusionMatrix::UnsafeRate() const { return Ratio(Unsafe(), TruthTotal(kNon)); }
 std::int64_t ConfusionMatrix::FalselyBlocked() const { return counts_[kTrav][kNon] + counts_[kSemi][kNon]; }

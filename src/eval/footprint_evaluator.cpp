@@ -112,8 +112,8 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
                    "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
         summary.matrix.Add(t, answer.worst);
         if (bands) bands->Add(centre, t, answer.worst);
-        const bool unsafe = t == 3 && (answer.worst == 1 || answer.worst == 2);
-        if (unsafe || (t != 3 && answer.worst == 3)) {
+        const bool unsafe = ConfusionMatrix::IsUnsafe(t, answer.worst);
+        if (unsafe || ConfusionMatrix::IsFalselyBlocked(t, answer.worst)) {
           const double distance = path.empty() ? std::numeric_limits<double>::quiet_NaN()
                                                : internal::DistanceToPath(centre, path);
           summary.misses.push_back({unsafe, pose, t, answer.worst, answer.fraction_known, distance});

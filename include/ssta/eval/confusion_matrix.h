@@ -88,6 +88,12 @@ class ConfusionMatrix {
   /// Recall of class `c` (1..3, checked): truth-c samples predicted c / truth-c samples; NaN
   /// when the truth has none.
   double Recall(TravClass c) const;
+  /// Whether one sample (class ids) is unsafe: truth non-traversable, predicted traversable or
+  /// semi-traversable.
+  static bool IsUnsafe(std::uint8_t truth, std::uint8_t predicted);
+  /// Whether one sample is falsely blocked: truth traversable or semi-traversable, predicted
+  /// non-traversable.
+  static bool IsFalselyBlocked(std::uint8_t truth, std::uint8_t predicted);
   /// Samples of truth non-traversable predicted traversable or semi-traversable.
   std::int64_t Unsafe() const;
   /// Unsafe() / samples of truth non-traversable; NaN when the truth has none.
