@@ -8,6 +8,44 @@
 
 namespace ssta::internal {
 
+namespace {
+
+/// One column's point, from the bottom row up: image row, world point, height sigma.
+struct ColumnPoint {
+  int v;
+  Eigen::Vector3f p;
+  float sigma;
+};
+
+/// Whether the view over column point `a` (an index) lands on the wall of a pit that hides
+/// its floor: the next point B lies lower than A by more than `semi_step` beyond the noise, and
+/// the surface at B rises more steeply than the vehicle may climb (tan_max_slope): the first
+/// point beyond B that stands three sigmas (at least 1 cm) above it lies no farther from the
+/// camera than that rise allows, give or take three sigmas of B's range. B is then on a face
+/// towards the camera, not on a floor; the floor lies below the ray over A, lower than B, at a
+/// depth no view from here bounds.
+bool LandsOnAPitsWall(const std::vector<ColumnPoint>& column, std::size_t a, const Eigen::Vector2f& origin,
+                      float semi_step, float tan_max_slope, float per_m2) {
+  const ColumnPoint& top = column[a];
+  const ColumnPoint& b = column[a + 1];
+  if (top.p.z() - b.p.z() <= semi_step + 3.0f * std::hypot(top.sigma, b.sigma)) return false;
+  const float range_b = (b.p.head<2>() - origin).norm();
+  // The horizontal range stands in for the depth (the camera looks along the ground).
+  const float range_sigma = per_m2 * range_b * range_b;
+  const float min_rise = std::max(0.01f, 3.0f * b.sigma);
+  constexpr std::size_t kMaxWallPoints = 32;
+  for (std::size_t j = a + 2; j < column.size() && j < a + 2 + kMaxWallPoints; ++j) {
+    const ColumnPoint& w = column[j];
+    const float rise = w.p.z() - b.p.z();
+    if (rise < min_rise) continue;
+    const float run = (w.p.head<2>() - origin).norm() - range_b;
+    return run <= rise / tan_max_slope + 3.0f * range_sigma;
+  }
+  return false;
+}
+
+}  // namespace
+
 ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_rectified, double depth_noise_per_m2,
                         const VehicleOptions& vehicle, double range_m, int stride) {
   SSTA_CHECK(stride >= 1, "FindHiddenDrops: stride must be at least 1");
@@ -22,12 +60,6 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
   const auto tan_max_slope = static_cast<float>(std::tan(vehicle.max_slope_deg * 3.14159265358979 / 180.0));
   const float camera_z = world_T.translation().z();
   const auto max_range = static_cast<float>(range_m);
-  // One column's points from the bottom row up: image row, world point, height sigma.
-  struct ColumnPoint {
-    int v;
-    Eigen::Vector3f p;
-    float sigma;
-  };
   std::vector<ColumnPoint> column;
   column.reserve(static_cast<std::size_t>(cloud.height()));
   for (int u = 0; u < cloud.width(); u += stride) {
@@ -50,10 +82,13 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
       if (tan_ray <= 0.0f) continue;  // a ray over A that rises lands on nothing below it
       if (i + 1 < column.size()) {
         // The next view up the column lands beyond A and lower by more than the vehicle may
-        // step, beyond the noise of both heights.
+        // step, beyond the noise of both heights; or lower by less, on the wall of a pit.
         const ColumnPoint& b = column[i + 1];
-        if (a.p.z() - b.p.z() <= max_step + 3.0f * std::hypot(a.sigma, b.sigma)) continue;
         if ((b.p.head<2>() - origin).norm() <= range_a) continue;
+        if (a.p.z() - b.p.z() <= max_step + 3.0f * std::hypot(a.sigma, b.sigma) &&
+            !LandsOnAPitsWall(column, i, origin, semi_step, tan_max_slope, per_m2)) {
+          continue;
+        }
       } else {
         // Nothing beyond A in this column: had a floor lain within max_step below A, the ray
         // over A would have met it within range (before range_a + max_step / tan_ray).

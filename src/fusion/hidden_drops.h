@@ -15,8 +15,11 @@ namespace ssta::internal {
 /// `vehicle.semi_step_m`, beyond noise, of A's height) whose next point B lies farther from the
 /// camera and lower than A by more than `vehicle.max_step_m` plus three sigmas of the two
 /// heights' stereo noise is an edge: whatever joins A to B is hidden below the ray over A. So
-/// is a point A with nothing beyond it in its column whose ray, had a floor lain within
-/// max_step_m below A, would have met it before `range_m` (the map's range). A
+/// is a point A whose next point B lies lower by less, but by more than `vehicle.semi_step_m`
+/// beyond the noise, on a face that rises towards B's neighbours more steeply than
+/// `vehicle.max_slope_deg`: the far wall of a pit, whose floor lies below the ray, deeper than
+/// the wall shows. So is a point A with nothing beyond it in its column whose ray, had a floor
+/// lain within max_step_m below A, would have met it before `range_m` (the map's range). A
 /// ray that descends more steeply than `vehicle.max_slope_deg` hides a drop no wheel may take;
 /// a flatter one may hide a drivable slope (the far side of a ramp's crest), which nearer views
 /// show. A and the points before it within the step radius of A get 255 min(1, tan(ray) /

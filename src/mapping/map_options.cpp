@@ -116,7 +116,8 @@ const OptionFields<MappingOptions>& MappingOptions::Fields() {
                             "classification keeps the matcher's. 0: off"));
     f.push_back(Flag<O>("hidden_drops", &O::hidden_drops,
                         "the lip of a drop-off whose foot a frame cannot see (a view over an edge that lands "
-                        "lower by more than vehicle.max_step_m beyond noise) is non-traversable"));
+                        "lower by more than vehicle.max_step_m beyond noise, or on the far wall of a pit "
+                        "that hides its floor) is non-traversable"));
     f.push_back(Flag<O>("auto_range", &O::auto_range,
                         "the range follows the rig: the depth at which its stereo depth noise reaches "
                         "range_depth_sigma_m replaces max_range_m"));

@@ -351,6 +351,27 @@ TEST(HiddenDrops, ACliffsLipIsMarkedWhetherItsFloorIsSeenOrNot) {
   EXPECT_NEAR(p.max_weight, 255.0 * (0.8 / 6.0) / std::tan(DegToRad(25.0)), 4.0);
 }
 
+TEST(HiddenDrops, APitsNearEdgeIsMarkedWhereItsFarWallHidesTheFloor) {
+  VehicleOptions vehicle;  // semi step 0.1 m, max step 0.2 m, max slope 25 deg
+  Eigen::Isometry3d world_T;
+  // A pit 0.3 m deep over x in [3.0, 3.5), seen from 1.1 m up: the ray over its near edge
+  // descends at tan 1.1 / 3 and meets the far wall 0.18 m down, less than the vehicle may step,
+  // with the floor hidden below it. The pit is at least 0.18 m deep and no view from here says
+  // how much more: the edge is a lip, suspected by tan(ray) / tan(25 deg).
+  const auto pit = [](double depth) {
+    return [depth](double x) { return x >= 3.0 && x < 3.5 ? -depth : 0.0; };
+  };
+  const Image3f hidden = Render(1.1, 20.0, pit(0.3), &world_T);
+  const LipProfile p = Profile(hidden, FindHiddenDrops(hidden, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.last_x, 3.0, 0.03);
+  EXPECT_NEAR(p.first_x, 2.8, 0.04);
+  EXPECT_NEAR(p.max_weight, 255.0 * (1.1 / 3.0) / std::tan(DegToRad(25.0)), 4.0);
+  // 0.15 m deep, the same pit shows its floor before the far wall: the view lands on a floor
+  // 0.15 m down, a step the vehicle may take, and nothing is marked.
+  const Image3f shallow = Render(1.1, 20.0, pit(0.15), &world_T);
+  EXPECT_TRUE(std::isnan(Profile(shallow, FindHiddenDrops(shallow, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
+}
+
 TEST(HiddenDrops, ARampsCrestWhoseFarSideIsSeenAndADitchsFarEdgeAreNot) {
   VehicleOptions vehicle;
   Eigen::Isometry3d world_T;
