@@ -17,18 +17,16 @@ struct ColumnPoint {
   float sigma;
 };
 
-/// Whether the view over column point `a` (an index) lands on the wall of a pit that hides
-/// its floor: the next point B lies lower than A by more than `semi_step` beyond the noise, and
-/// the surface at B rises more steeply than the vehicle may climb (tan_max_slope): the first
-/// point beyond B that stands three sigmas (at least 1 cm) above it lies no farther from the
-/// camera than that rise allows, give or take three sigmas of B's range. B is then on a face
+/// Whether the view over column point `a` (an index), whose next point B lies lower, lands on
+/// the wall of a pit that hides its floor: the surface at B rises more steeply than the
+/// vehicle may climb (tan_max_slope): the first point beyond B that stands three sigmas (at
+/// least 1 cm) above it lies no farther from the camera than that rise allows, give or take
+/// three sigmas of B's range. B is then on a face
 /// towards the camera, not on a floor; the floor lies below the ray over A, lower than B, at a
 /// depth no view from here bounds.
 bool LandsOnAPitsWall(const std::vector<ColumnPoint>& column, std::size_t a, const Eigen::Vector2f& origin,
-                      float semi_step, float tan_max_slope, float per_m2) {
-  const ColumnPoint& top = column[a];
+                      float tan_max_slope, float per_m2) {
   const ColumnPoint& b = column[a + 1];
-  if (top.p.z() - b.p.z() <= semi_step + 3.0f * std::hypot(top.sigma, b.sigma)) return false;
   const float range_b = (b.p.head<2>() - origin).norm();
   // The horizontal range stands in for the depth (the camera looks along the ground).
   const float range_sigma = per_m2 * range_b * range_b;
@@ -84,11 +82,11 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
         // The next view up the column lands beyond A and lower by more than the vehicle may
         // step, beyond the noise of both heights; or lower by less, on the wall of a pit.
         const ColumnPoint& b = column[i + 1];
+        const float drop = a.p.z() - b.p.z();
+        const float noise = 3.0f * std::hypot(a.sigma, b.sigma);
+        if (drop <= semi_step + noise) continue;
         if ((b.p.head<2>() - origin).norm() <= range_a) continue;
-        if (a.p.z() - b.p.z() <= max_step + 3.0f * std::hypot(a.sigma, b.sigma) &&
-            !LandsOnAPitsWall(column, i, origin, semi_step, tan_max_slope, per_m2)) {
-          continue;
-        }
+        if (drop <= max_step + noise && !LandsOnAPitsWall(column, i, origin, tan_max_slope, per_m2)) continue;
       } else {
         // Nothing beyond A in this column: had a floor lain within max_step below A, the ray
         // over A would have met it within range (before range_a + max_step / tan_ray).
