@@ -17,24 +17,22 @@ struct ColumnPoint {
   float sigma;
 };
 
-/// Whether the view over column point `a` (an index), whose next point B lies lower, lands on
-/// the wall of a pit that hides its floor: the surface at B rises more steeply than the
-/// vehicle may climb (tan_max_slope): the first point beyond B that stands three sigmas (at
+/// Whether column point `b` (an index), where the view over the point before it lands lower,
+/// lies on the wall of a pit that hides its floor: the surface at B rises more steeply than the
+/// vehicle may climb (tan_max_slope). The first point beyond B that stands three sigmas (at
 /// least 1 cm) above it lies no farther from the camera than that rise allows, give or take
-/// three sigmas of B's range. B is then on a face
-/// towards the camera, not on a floor; the floor lies below the ray over A, lower than B, at a
-/// depth no view from here bounds.
-bool LandsOnAPitsWall(const std::vector<ColumnPoint>& column, std::size_t a, const Eigen::Vector2f& origin,
-                      float tan_max_slope, float per_m2) {
-  const ColumnPoint& b = column[a + 1];
-  const float range_b = (b.p.head<2>() - origin).norm();
+/// three sigmas of B's range `range_b`. B is then on a face towards the camera, not on a floor;
+/// the floor lies below the view, lower than B, at a depth no view from here bounds.
+bool OnAPitsWall(const std::vector<ColumnPoint>& column, std::size_t b, float range_b, const Eigen::Vector2f& origin,
+                 float tan_max_slope, float per_m2) {
+  const ColumnPoint& base = column[b];
   // The horizontal range stands in for the depth (the camera looks along the ground).
   const float range_sigma = per_m2 * range_b * range_b;
-  const float min_rise = std::max(0.01f, 3.0f * b.sigma);
+  const float min_rise = std::max(0.01f, 3.0f * base.sigma);
   constexpr std::size_t kMaxWallPoints = 32;
-  for (std::size_t j = a + 2; j < column.size() && j < a + 2 + kMaxWallPoints; ++j) {
+  for (std::size_t j = b + 1; j < column.size() && j <= b + kMaxWallPoints; ++j) {
     const ColumnPoint& w = column[j];
-    const float rise = w.p.z() - b.p.z();
+    const float rise = w.p.z() - base.p.z();
     if (rise < min_rise) continue;
     const float run = (w.p.head<2>() - origin).norm() - range_b;
     return run <= rise / tan_max_slope + 3.0f * range_sigma;
@@ -85,8 +83,9 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
         const float drop = a.p.z() - b.p.z();
         const float noise = 3.0f * std::hypot(a.sigma, b.sigma);
         if (drop <= semi_step + noise) continue;
-        if ((b.p.head<2>() - origin).norm() <= range_a) continue;
-        if (drop <= max_step + noise && !LandsOnAPitsWall(column, i, origin, tan_max_slope, per_m2)) continue;
+        const float range_b = (b.p.head<2>() - origin).norm();
+        if (range_b <= range_a) continue;
+        if (drop <= max_step + noise && !OnAPitsWall(column, i + 1, range_b, origin, tan_max_slope, per_m2)) continue;
       } else {
         // Nothing beyond A in this column: had a floor lain within max_step below A, the ray
         // over A would have met it within range (before range_a + max_step / tan_ray).

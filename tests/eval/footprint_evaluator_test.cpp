@@ -34,12 +34,21 @@ ClassGrid Truth() {
 
 FootprintAnswer Always(std::uint8_t cls, double known) { return {cls, known}; }
 
-TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
-  // 0.3 x 0.3 m at yaw 0 on every cell centre: the cell and its 8 neighbours.
+/// 0.3 x 0.3 m squares at yaw 0 on every cell centre: each covers its cell and its 8 neighbours.
+FootprintEvalOptions SquaresOnEveryCell() {
   FootprintEvalOptions options;
   options.length_m = options.width_m = 0.3;
   options.step_m = 0.1;
   options.yaws_deg = {0.0};
+  return options;
+}
+
+/// A path along y = -1 m, under the grid: a pose's distance from it is its centre's y + 1.
+const std::vector<Eigen::Vector2d> kPathBelow = {{0.0, -1.0}, {4.0, -1.0}};
+
+TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
+  // 0.3 x 0.3 m at yaw 0 on every cell centre: the cell and its 8 neighbours.
+  const FootprintEvalOptions options = SquaresOnEveryCell();
   int asked = 0;
   const FootprintEvalSummary s = ScoreFootprints(Truth(), options, [&](const FootprintPose& pose) {
     ++asked;
@@ -82,11 +91,8 @@ TEST(eval_Footprints, SplitsPosesByTheirDistanceFromThePath) {
   // The path runs along y = -1 m: a pose's distance is its centre's y + 1, so the first band
   // (under 2 m) holds the centres with y < 1 m: bottom rows 1..9 (row 0 reaches outside the
   // grid), columns 1..38, less the don't-care cell and its 8 neighbours.
-  FootprintEvalOptions options;
-  options.length_m = options.width_m = 0.3;
-  options.step_m = 0.1;
-  options.yaws_deg = {0.0};
-  const std::vector<Eigen::Vector2d> path = {{0.0, -1.0}, {4.0, -1.0}};
+  const FootprintEvalOptions options = SquaresOnEveryCell();
+  const std::vector<Eigen::Vector2d>& path = kPathBelow;
   const FootprintEvalSummary s =
       ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(1, 1.0); }, path);
   ASSERT_EQ(s.by_distance.size(), 3u);  // centres up to y = 3.85: distances below 6 m
@@ -110,11 +116,8 @@ TEST(eval_Footprints, ListsEachUnsafeAndFalselyBlockedPoseNearestThePathFirst) {
   // centre lies in column 10 and calls everything else traversable: the 16 centres around the
   // block are unsafe, and column 10's scored centres (bottom rows 1..38, all truly
   // traversable) falsely blocked.
-  FootprintEvalOptions options;
-  options.length_m = options.width_m = 0.3;
-  options.step_m = 0.1;
-  options.yaws_deg = {0.0};
-  const std::vector<Eigen::Vector2d> path = {{0.0, -1.0}, {4.0, -1.0}};
+  const FootprintEvalOptions options = SquaresOnEveryCell();
+  const std::vector<Eigen::Vector2d>& path = kPathBelow;
   const FootprintEvalSummary s = ScoreFootprints(
       Truth(), options,
       [](const FootprintPose& pose) { return Always(std::abs(pose.x_m - 1.05) < 1e-9 ? 3 : 1, 1.0); }, path);
