@@ -286,7 +286,8 @@ void AddFootprintsEval(CLI::App* eval) {
       ->check(OutputFile());
   footprints->footer(
       "A pose is scored when every truth cell under it is 1..3 (seen); its truth is their worst class, "
-      "the map's answer the worst class of the cells it knows (0 when none). unsafe: truly "
+      "the map's answer the worst class of the cells it knows (non-traversable, then undecided, then semi, then "
+      "traversable; 0 when it knows none). unsafe: truly "
       "non-traversable footprints answered traversable or semi-traversable; falsely blocked: truly "
       "traversable ones answered non-traversable.");
   footprints->callback([fp_args] {

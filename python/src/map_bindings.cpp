@@ -482,7 +482,8 @@ Args:
         counts: an obstacle under any part of it is under the robot.
 {as_exported}
 Returns:
-    A structured array of N rows: worst (uint8, the worst 1..3 class under it, 0 when none),
+    A structured array of N rows: worst (uint8, the worst class under it: 3, then 4 (undecided),
+    then 2, then 1; 0 when no cell is observed),
     mean_cost, max_cost (float64; NaN when no cell has a cost), fraction_observed (float64,
     observed columns / columns), cells and observed_cells (int32); the vehicle's attitude on
     the plane fitted to the fused heights under it: pitch_deg (float64, nose up positive),

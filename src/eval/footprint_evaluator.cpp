@@ -107,7 +107,7 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
           continue;
         }
         const FootprintAnswer answer = oracle(pose);
-        SSTA_CHECK(answer.worst <= 3, "ScoreFootprints: the oracle answered a class above 3");
+        SSTA_CHECK(answer.worst <= 4, "ScoreFootprints: the oracle answered a class above 4");
         SSTA_CHECK(answer.fraction_known >= 0.0 && answer.fraction_known <= 1.0,
                    "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
         summary.matrix.Add(t, answer.worst);

@@ -202,11 +202,15 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   }
 }
 
+/// Rank of a class in worst-of answers (footprints, paths, coarse pixels): an undecided surface
+/// outranks traversable and semi-traversable ones (the map saw something there it cannot
+/// judge) and yields to an obstacle; unknown ranks lowest.
 int Severity(TravClass c) {
   switch (c) {
     case TravClass::kTraversable: return 1;
     case TravClass::kSemiTraversable: return 2;
-    case TravClass::kNonTraversable: return 3;
+    case TravClass::kUndecided: return 3;
+    case TravClass::kNonTraversable: return 4;
     default: return 0;
   }
 }

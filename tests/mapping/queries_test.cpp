@@ -331,6 +331,44 @@ void ExpectSlopeAndStepAgreeWithClass(const CellInfo& cell, const VehicleOptions
   }
 }
 
+TEST(FootprintQuery, AColumnWithoutAVerdictMakesTheAnswerUndecidedUnlessAnObstacleBlocksIt) {
+  // A floor at x in [0, 2): traversable except for one undecided column (x, y in [1.0, 1.1);
+  // its point carries no class, as a frame that could not judge it sends) and, beside it, a
+  // semi-traversable column at x in [1.1, 1.2) and a non-traversable one at x in [1.5, 1.6).
+  std::vector<ClassifiedPoint> points;
+  for (int ix = 0; ix < 20; ++ix) {
+    for (int iy = 0; iy < 20; ++iy) {
+      TravClass cls = TravClass::kTraversable;
+      if (iy == 10 && ix == 10) cls = TravClass::kUndecided;
+      if (iy == 10 && ix == 11) cls = TravClass::kSemiTraversable;
+      if (iy == 10 && ix == 15) cls = TravClass::kNonTraversable;
+      points.push_back(testing::Pt(testing::C(ix), testing::C(iy), testing::C(0), cls));
+    }
+  }
+  TraversabilityMap map(testing::OctoMapCarving());
+  map.InsertFrame(points, {1.0, 1.0, 3.0}, 1);
+  ASSERT_EQ(map.TopSurfaceAt(1.05, 1.05).cls, TravClass::kUndecided);
+  ASSERT_EQ(map.TopSurfaceAt(1.15, 1.05).cls, TravClass::kSemiTraversable);
+  // Over open floor only: traversable. Over the undecided column: the map does not know what
+  // stands there, so the footprint is not called traversable, nor semi-traversable beside the
+  // semi column; every column counts as observed (the undecided one holds a surface).
+  EXPECT_EQ(map.QueryFootprint({0.5, 0.5, 0.0, 0.4, 0.4}).worst, TravClass::kTraversable);
+  const FootprintResult undecided = map.QueryFootprint({1.0, 1.05, 0.0, 0.4, 0.1});
+  EXPECT_EQ(undecided.worst, TravClass::kUndecided);
+  EXPECT_DOUBLE_EQ(undecided.fraction_observed, 1.0);
+  EXPECT_EQ(map.QueryFootprint({1.1, 1.05, 0.0, 0.2, 0.1}).worst, TravClass::kUndecided);
+  EXPECT_EQ(map.QueryFootprint({1.15, 1.05, 0.0, 0.1, 0.1}).worst, TravClass::kSemiTraversable);
+  // An obstacle under the footprint blocks it whatever else lies there.
+  EXPECT_EQ(map.QueryFootprint({1.3, 1.05, 0.0, 0.6, 0.1}).worst, TravClass::kNonTraversable);
+  // A path over the same row: the undecided sample is reported as such, the obstacle blocks.
+  const PathResult path = map.QueryPath({{0.55, 1.05}, {1.45, 1.05}}, 0.0);
+  EXPECT_FALSE(path.blocked);
+  EXPECT_EQ(path.worst, TravClass::kUndecided);
+  const PathResult through = map.QueryPath({{0.55, 1.05}, {1.85, 1.05}}, 0.0);
+  EXPECT_TRUE(through.blocked);
+  EXPECT_EQ(through.worst, TravClass::kNonTraversable);
+}
+
 TEST(ColumnVerdict, SlopeAndStepAreThoseThatDecidedTheClassAndTheFramesMeansAreKept) {
   const VehicleOptions vehicle;  // the maps' (MapMetadata's default)
   const double x = testing::C(20), y = testing::C(20);

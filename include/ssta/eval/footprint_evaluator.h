@@ -40,8 +40,9 @@ struct FootprintPose {
 };
 
 /// What the scored method (a map's footprint query) says about a footprint: the worst class
-/// 1..3 among the cells it knows, 0 when it knows none of them, and the share of the cells it
-/// knows.
+/// among the cells it knows (1..3, or 4 where an undecided cell outranks the verdicts 1 and 2),
+/// 0 when it knows none of them, and the share of the cells it knows. An undecided answer is
+/// neither unsafe nor falsely blocked.
 struct FootprintAnswer {
   std::uint8_t worst = 0;
   double fraction_known = 0.0;

@@ -126,10 +126,13 @@ struct FootprintQuery {
 };
 
 /// The ground under a footprint: one top-surface cell per map column the rectangle touches
-/// (the column under (x, y) when none does). An undecided top surface (class 4)
-/// counts as observed but gives no verdict: `worst` stays kUnknown if all cells are such.
+/// (the column under (x, y) when none does). An undecided top surface (class 4) counts as
+/// observed: the map saw a surface there but cannot tell what it is, so a footprint over one
+/// is not answered traversable or semi-traversable. Worst to best: non-traversable (3), then
+/// undecided (4), semi-traversable (2), traversable (1).
 struct FootprintResult {
-  TravClass worst = TravClass::kUnknown;  ///< worst of the 1..3 verdicts; kUnknown if none
+  /// The worst class of the observed cells in that order (3 > 4 > 2 > 1); kUnknown if none.
+  TravClass worst = TravClass::kUnknown;
   /// Mean cost over the observed cells that have one (class 1..3); NaN when there are none.
   double mean_cost = std::numeric_limits<double>::quiet_NaN();
   double max_cost = std::numeric_limits<double>::quiet_NaN();  ///< NaN when no cell has a cost
@@ -156,7 +159,9 @@ struct FootprintResult {
 struct PathSample {
   Eigen::Vector2d point = Eigen::Vector2d::Zero();  ///< on the polyline, in W [m]
   double distance_m = 0.0;                          ///< arc length from the first vertex [m]
-  TravClass cls = TravClass::kUnknown;  ///< worst 1..3 verdict across the width; else kUnknown
+  /// The worst class across the width, as FootprintResult::worst orders them (an undecided cell
+  /// outranks semi-traversable and traversable ones); kUnknown if no cell was observed.
+  TravClass cls = TravClass::kUnknown;
   double cost = std::numeric_limits<double>::quiet_NaN();  ///< max cost across the width
   double fraction_observed = 0.0;  ///< observed lateral cells (as FootprintResult) / lateral cells
   CellInfo cell;                   ///< the cell that set `cls` (the centre cell if none did)
@@ -165,7 +170,7 @@ struct PathSample {
 /// A polyline checked against the map.
 struct PathResult {
   std::vector<PathSample> samples;  ///< every resolution/2 along the polyline, ends included
-  TravClass worst = TravClass::kUnknown;  ///< worst sample verdict; kUnknown if none
+  TravClass worst = TravClass::kUnknown;  ///< worst sample class (as PathSample::cls); kUnknown if none
   /// Mean of the sample costs that are finite; NaN when none is.
   double mean_cost = std::numeric_limits<double>::quiet_NaN();
   double fraction_observed = 0.0;  ///< mean of the samples' fraction_observed
