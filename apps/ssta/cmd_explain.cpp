@@ -44,6 +44,9 @@ const char* RuleSentence(JudgeRule rule) {
     case JudgeRule::kProduct:
       return "the surface sees the whole disc and found open ground: its probabilities, mixed with "
              "class_surface_miss_prob of a uniform one, multiply the frames'";
+    case JudgeRule::kPriorWithheld:
+      return "the frames' votes lean to an obstacle, too weakly (under class_prior_min_evidence_views) for "
+             "the open-ground prior to overrule them: undecided";
     default: return "no class: nothing observed here, or no evidence to judge by";
   }
 }

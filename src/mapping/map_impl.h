@@ -83,6 +83,18 @@ inline bool HasClassEvidence(const std::array<float, 3>& log_odds, const MapOpti
   return ClassEvidenceViews(log_odds, options) >= options.class_min_evidence_views;
 }
 
+/// Whether the open-ground prior alone would make the voxel traversable on too little evidence
+/// (MapOptions::class_prior_min_evidence_views): without the prior the non-traversable class
+/// is the most probable (ties to the worse), with it traversable is, and the votes hold fewer
+/// clear views than the floor. Such a voxel is undecided.
+inline bool PriorAloneWouldOpen(const std::array<float, 3>& log_odds, const MapOptions& options) {
+  if (options.class_prior_min_evidence_views <= 0.0) return false;
+  if (log_odds[2] < log_odds[0] || log_odds[2] < log_odds[1]) return false;  // the votes do not lean to an obstacle
+  const double with_prior = static_cast<double>(log_odds[0]) + options.class_prior_traversable_log_odds;
+  if (!(with_prior > log_odds[2] && with_prior > log_odds[1])) return false;  // the prior does not open it
+  return ClassEvidenceViews(log_odds, options) < options.class_prior_min_evidence_views;
+}
+
 /// Whether `node` is occupied: its occupancy at or above the tree's threshold.
 inline bool NodeOccupied(const TravOcTree& tree, const TravNode& node) {
   return node.getLogOdds() >= tree.getOccupancyThresLog();

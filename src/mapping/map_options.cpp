@@ -43,6 +43,12 @@ void AddClassEvidenceFields(OptionFields<MapOptions>* f) {
                        "for an obstacle): ground no view resolved is undecided, not traversable by the "
                        "prior alone (0: any vote is a verdict)")
                    .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_prior_min_evidence_views", &O::class_prior_min_evidence_views, Closed(0, 100),
+                       "views",
+                       "the open-ground prior may make a voxel whose votes lean to an obstacle traversable only "
+                       "when they hold this many clear views; weaker, it is undecided, not open by the prior's "
+                       "word (0: the prior always answers)")
+                   .AbsentMeans(0.0));
   f->push_back(Real<O>("class_surface_miss_prob", &O::class_surface_miss_prob, ClosedOpen(0, 1), "",
                        "chance that a fused surface finding open ground misses a hazard the frames saw (a "
                        "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "

@@ -179,6 +179,17 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
       rule = JudgeRule::kProduct;
     }
   }
+  if (judge == ClassJudge::kFrames && has_evidence && internal::PriorAloneWouldOpen(l, map.options())) {
+    // The votes lean to a worse class on too little evidence for the prior to overrule them.
+    cell->cls = TravClass::kUndecided;
+    cell->decided_by = ClassJudge::kNone;
+    cell->confidence = cell->probability = cell->slope_deg = cell->step_m = cell->cost = kNaN;
+    if (why != nullptr) {
+      why->rule = JudgeRule::kPriorWithheld;
+      why->frame_probability = frames;
+    }
+    return;
+  }
   const int best = MostProbableClass(posterior);
   if (judge == ClassJudge::kBoth) {
     const bool frames_class = MostProbableClass(frames) == best, surface_class = MostProbableClass(s) == best;
@@ -403,6 +414,7 @@ const char* JudgeRuleName(JudgeRule rule) {
     case JudgeRule::kFramesSurfacePartial: return "frames (surface partial)";
     case JudgeRule::kWorseOfTwo: return "worse of two";
     case JudgeRule::kProduct: return "product";
+    case JudgeRule::kPriorWithheld: return "prior withheld";
     default: return "none";
   }
 }

@@ -223,8 +223,8 @@ TEST(SafeFusion, WithAnEvidenceFloorGroundNoViewResolvedIsUndecided) {
   // vote counts 1 / (1 + (0.35 / 0.1)^2) / (1 + (1.4 / 0.6)^2) = 0.0117 of a clear one, so six
   // of them are 0.07 clear views, under the quarter map.class_min_evidence_views asks. Whether
   // they call a patch non-traversable (a slope just over the limit, say) or the floor around
-  // it traversable, no view resolved that ground: it is undecided, where the open-ground prior
-  // alone (the floor off) makes both traversable. Two near views of a 0.3 m box there decide.
+  // it traversable, no view resolved that ground: it is undecided. Two near views of a 0.3 m
+  // box there decide.
   const auto patch = [](int ix, int iy) { return ix >= 30 && ix < 33 && iy >= 30 && iy < 33; };
   auto build = [&](const MapOptions& options, bool near_views) {
     TraversabilityMap map(options);
@@ -249,7 +249,19 @@ TEST(SafeFusion, WithAnEvidenceFloorGroundNoViewResolvedIsUndecided) {
   EXPECT_EQ(ClassAt(seen, C(31), C(31)), TravClass::kNonTraversable);
   EXPECT_EQ(ClassAt(seen, C(5), C(5)), TravClass::kTraversable);
 
-  const TraversabilityMap prior = build(Options(), false);  // the shipped default: no floor
+  // The shipped defaults (no evidence floor): the floor, whose weak votes lean to open ground,
+  // is traversable by the prior; the patch, whose weak votes lean to an obstacle, is undecided
+  // (map.class_prior_min_evidence_views, 0.25): the prior does not overrule them.
+  const TraversabilityMap shipped = build(Options(), false);
+  EXPECT_EQ(ClassAt(shipped, C(5), C(5)), TravClass::kTraversable);
+  const ColumnExplanation withheld = shipped.ExplainColumn(C(31), C(31));
+  EXPECT_EQ(withheld.cell.cls, TravClass::kUndecided);
+  EXPECT_EQ(withheld.rule, JudgeRule::kPriorWithheld);
+  EXPECT_EQ(ClassAt(build(Options(), true), C(31), C(31)), TravClass::kNonTraversable);
+  // With that floor off, the prior alone makes both traversable.
+  MapOptions prior_answers = Options();
+  prior_answers.class_prior_min_evidence_views = 0.0;
+  const TraversabilityMap prior = build(prior_answers, false);
   EXPECT_EQ(ClassAt(prior, C(31), C(31)), TravClass::kTraversable);
   EXPECT_EQ(ClassAt(prior, C(5), C(5)), TravClass::kTraversable);
 }

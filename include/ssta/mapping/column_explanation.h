@@ -26,10 +26,14 @@ enum class JudgeRule : std::uint8_t {
   /// The surface, seeing the whole disc, found open ground: its class probabilities multiplied
   /// the frames'.
   kProduct,
+  /// The frames decided, and their votes lean to an obstacle, but hold fewer clear views than
+  /// MapOptions::class_prior_min_evidence_views: the open-ground prior does not answer for the
+  /// column, which is undecided.
+  kPriorWithheld,
 };
 
 /// Lower-case name, as `ssta explain` prints it: "none", "surface alone", "frames alone",
-/// "frames (surface partial)", "worse of two", "product".
+/// "frames (surface partial)", "worse of two", "product", "prior withheld".
 const char* JudgeRuleName(JudgeRule rule);
 
 /// The evidence behind TopSurfaceAt(x, y).
