@@ -85,6 +85,14 @@ TEST(eval_Footprints, SquareFootprintsCoverTheirThreeByThreeCells) {
   const FootprintEvalSummary u = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(0, 0.0); });
   EXPECT_EQ(u.unsafe + u.falsely_blocked, 0);
   EXPECT_NEAR(u.matrix.Coverage(), 0.0, kTol);
+  // Undecided everywhere (a map that sees surfaces it cannot judge): neither unsafe nor blocked,
+  // each class's recall 0, every footprint counted in the undecided column.
+  const FootprintEvalSummary d = ScoreFootprints(Truth(), options, [](const FootprintPose&) { return Always(4, 1.0); });
+  EXPECT_EQ(d.unsafe + d.falsely_blocked, 0);
+  EXPECT_EQ(d.matrix.Count(3, 4), 16);
+  EXPECT_EQ(d.matrix.Count(1, 4) + d.matrix.Count(2, 4), 1410 + 9);
+  EXPECT_NEAR(d.matrix.Recall(TravClass::kTraversable), 0.0, kTol);
+  EXPECT_NEAR(d.matrix.Recall(TravClass::kNonTraversable), 0.0, kTol);
 }
 
 TEST(eval_Footprints, SplitsPosesByTheirDistanceFromThePath) {
