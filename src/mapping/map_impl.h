@@ -90,8 +90,8 @@ inline bool HasClassEvidence(const std::array<float, 3>& log_odds, const MapOpti
 inline bool PriorAloneWouldOpen(const std::array<float, 3>& log_odds, const MapOptions& options) {
   if (options.class_prior_min_evidence_views <= 0.0) return false;
   if (log_odds[2] < log_odds[0] || log_odds[2] < log_odds[1]) return false;  // the votes do not lean to an obstacle
-  const double with_prior = static_cast<double>(log_odds[0]) + options.class_prior_traversable_log_odds;
-  if (!(with_prior > log_odds[2] && with_prior > log_odds[1])) return false;  // the prior does not open it
+  // L3 is the largest, so the prior opens the voxel exactly when it lifts L1 above L3.
+  if (!(static_cast<double>(log_odds[0]) + options.class_prior_traversable_log_odds > log_odds[2])) return false;
   return ClassEvidenceViews(log_odds, options) < options.class_prior_min_evidence_views;
 }
 

@@ -123,10 +123,11 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
   return true;
 }
 
-/// A column's class from the frames' evidence and the fused surface around it. Each has its
-/// blind spot: a frame sees a lip or the ring around a rock that the fused surface lacks the
-/// columns to show (the floor below a drop-off is hidden, a rock's top is never seen), and the
-/// fused surface shows a jump between columns that no single frame saw both sides of. So:
+/// A column's class from the frames' evidence and the fused surface around it (`cell` holds
+/// DescribeCell's answer for the column's top voxel on entry). Each has its blind spot: a frame
+/// sees a lip or the ring around a rock that the fused surface lacks the columns to show (the
+/// floor below a drop-off is hidden, a rock's top is never seen), and the fused surface shows a
+/// jump between columns that no single frame saw both sides of. So:
 ///  - a surface that finds a slope or a jump (its most probable class is not traversable)
 ///    makes the column the worse of the two verdicts (WorseOfClasses): either one's hazard counts;
 ///  - a surface that finds open ground vouches for it only where it sees every column that
@@ -179,11 +180,10 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
       rule = JudgeRule::kProduct;
     }
   }
-  if (judge == ClassJudge::kFrames && has_evidence && internal::PriorAloneWouldOpen(l, map.options())) {
-    // The votes lean to a worse class on too little evidence for the prior to overrule them.
-    cell->cls = TravClass::kUndecided;
-    cell->decided_by = ClassJudge::kNone;
-    cell->confidence = cell->probability = cell->slope_deg = cell->step_m = cell->cost = kNaN;
+  if (judge == ClassJudge::kFrames && internal::PriorAloneWouldOpen(l, map.options())) {
+    // The frames decide (so they have evidence), and their votes lean to an obstacle on too
+    // little of it for the prior to overrule them: the column stays undecided, as DescribeCell
+    // (which `cell` comes from) left it.
     if (why != nullptr) {
       why->rule = JudgeRule::kPriorWithheld;
       why->frame_probability = frames;
