@@ -1,6 +1,9 @@
 #include "ssta/mount/ground_evidence.h"
 
+#include <algorithm>
 #include <cmath>
+
+#include <Eigen/Cholesky>
 
 namespace ssta {
 
@@ -61,13 +64,14 @@ GroundEvidence ExtractGroundEvidence(const FrameResult& frame, const Eigen::Matr
 DrivenOverGround::DrivenOverGround(const std::vector<std::optional<Eigen::Isometry3d>>& world_T_body,
                                    std::size_t frame, const Eigen::Isometry3d& body_T_camera,
                                    const RefinementOptions& options)
-    : half_length_(options.path_half_length_m), half_width_(options.path_half_width_m) {
+    : half_length_(options.path_half_length_m), half_width_(options.path_half_width_m), body_T_camera_(body_T_camera) {
   if (frame >= world_T_body.size() || !world_T_body[frame]) return;
   for (std::size_t j = frame + 1; j < world_T_body.size(); ++j) {
     if (!world_T_body[j]) continue;
     const Eigen::Isometry3d later_T_body = world_T_body[j]->inverse() * *world_T_body[frame];
     later_T_camera_.push_back(later_T_body * body_T_camera);
     up_.push_back(later_T_body.linear().transpose() * Eigen::Vector3d::UnitZ());
+    origin_.push_back(later_T_body.inverse().translation());
   }
 }
 
@@ -91,6 +95,59 @@ Eigen::Vector3d DrivenOverGround::MeanUp(const std::vector<Eigen::Vector3d>& poi
     if (j >= 0) sum += up_[static_cast<std::size_t>(j)];
   }
   return sum.norm() > 0.0 ? Eigen::Vector3d(sum.normalized()) : Eigen::Vector3d::UnitZ();
+}
+
+Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>& points,
+                                             std::vector<double>* bend) const {
+  if (bend) bend->assign(points.size(), 0.0);
+  // Each point's body, and its height above that body's ground: the later bodies' origins
+  // stand the median of those heights above the ground under them.
+  std::vector<int> body(points.size(), -1);
+  std::vector<double> heights;
+  heights.reserve(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    body[k] = Find(points[k]);
+    if (body[k] >= 0) heights.push_back(-(later_T_camera_[static_cast<std::size_t>(body[k])] * points[k]).z());
+  }
+  if (heights.size() < 3) return MeanUp(points);
+  std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
+  const double origin_height = heights[heights.size() / 2];
+  // Normal equations of z = a + b x + c y over (x, y) centred on their mean, for conditioning.
+  std::vector<Eigen::Vector3d> samples;  // (x, y, z of the body's ground plane there) in this frame's body
+  samples.reserve(heights.size());
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    if (body[k] < 0) continue;
+    const Eigen::Vector3d& n = up_[static_cast<std::size_t>(body[k])];
+    if (n.z() < 0.1) continue;  // a body on its side has no ground plane to speak of
+    const Eigen::Vector3d ground = origin_[static_cast<std::size_t>(body[k])] - origin_height * n;
+    const Eigen::Vector3d q = body_T_camera_ * points[k];
+    samples.emplace_back(q.x(), q.y(), ground.z() - (n.x() * (q.x() - ground.x()) + n.y() * (q.y() - ground.y())) / n.z());
+    centre += q.head<2>();
+  }
+  if (samples.size() < 3) return MeanUp(points);
+  centre /= static_cast<double>(samples.size());
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& s : samples) {
+    const Eigen::Vector3d row(1.0, s.x() - centre.x(), s.y() - centre.y());
+    normal += row * row.transpose();
+    rhs += row * s.z();
+  }
+  // A strip whose width or length is nearly zero has no slope that way.
+  const double sxx = normal(1, 1), syy = normal(2, 2), sxy = normal(1, 2);
+  const double smallest = 0.5 * (sxx + syy - std::sqrt((sxx - syy) * (sxx - syy) + 4.0 * sxy * sxy));
+  if (!(smallest / static_cast<double>(samples.size()) > 1e-4)) return MeanUp(points);  // [m^2]
+  const Eigen::Vector3d abc = normal.ldlt().solve(rhs);
+  if (bend) {
+    std::size_t i = 0;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      if (body[k] < 0 || up_[static_cast<std::size_t>(body[k])].z() < 0.1) continue;
+      const Eigen::Vector3d& s = samples[i++];
+      (*bend)[k] = s.z() - (abc[0] + abc[1] * (s.x() - centre.x()) + abc[2] * (s.y() - centre.y()));
+    }
+  }
+  return Eigen::Vector3d(-abc[1], -abc[2], 1.0).normalized();
 }
 
 }  // namespace ssta

@@ -155,12 +155,19 @@ struct MountProblem {
   std::vector<FramePlane> blocks;     // one per frame of the window
 };
 
-/// The correction tilts about two axes perpendicular to the window's mean reference normal
-/// (body x and y for the body reference): rotation about the ground normal is unobservable.
+/// The correction tilts about the two body axes perpendicular to the body's vertical: the body
+/// axis nearest the window's mean reference normal (body z, or x for an IMU-style body whose x
+/// is up). Rotation about the vertical is what ground cannot show on level ground, and it stays
+/// as configured; a mount's pitch and roll error is a rotation about the other two, and stays
+/// representable when the frames' mean reference leans (rolling ground seen from its foot).
 Eigen::Matrix<double, 3, 2> CorrectionAxes(const std::deque<GroundEvidence>& window, GroundReference reference) {
   Eigen::Vector3d mean_up = Eigen::Vector3d::Zero();
   for (const GroundEvidence& f : window) mean_up += ReferenceNormal(f, reference);
-  return TiltAxes(mean_up.normalized());
+  Eigen::Index axis = 2;
+  mean_up.cwiseAbs().maxCoeff(&axis);
+  Eigen::Vector3d vertical = Eigen::Vector3d::Zero();
+  vertical[axis] = mean_up[axis] < 0.0 ? -1.0 : 1.0;
+  return TiltAxes(vertical);
 }
 
 /// What one solve assumes about the noise: the 1-sigma of the frames' tilt prior [rad], whether
@@ -520,7 +527,13 @@ MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eig
       const std::size_t n = std::min<std::size_t>(kept.size(), static_cast<std::size_t>(options.points_per_frame));
       const double step = static_cast<double>(kept.size()) / static_cast<double>(n);
       for (std::size_t k = 0; k < n; ++k) e.camera_points.push_back(kept[static_cast<std::size_t>(k * step)]);
-      e.path_up_body = driven.MeanUp(e.camera_points);
+      // The plane the points should lie on if the ground were the later bodies' wheel planes,
+      // and each point moved along body z by how far that ground bends away from it there: one
+      // plane per frame then holds on curved ground, whatever weight each point gets.
+      std::vector<double> bend;
+      e.path_up_body = driven.ExpectedUp(e.camera_points, &bend);
+      const Eigen::Vector3d body_z_in_camera = through.linear().transpose() * Eigen::Vector3d::UnitZ();
+      for (std::size_t k = 0; k < e.camera_points.size(); ++k) e.camera_points[k] -= bend[k] * body_z_in_camera;
       refiner.AddFrame(std::move(e));
       ++on_path;
     }

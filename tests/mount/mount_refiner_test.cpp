@@ -7,6 +7,8 @@
 #include <iostream>
 #include <optional>
 #include <random>
+#include <string>
+#include <utility>
 
 #include "ssta/core/error.h"
 #include "ssta/mount/mount_refiner.h"
@@ -287,22 +289,27 @@ MountRefinementResult SolveRollingDrive(const RefinementOptions& options, const 
 }
 
 TEST(MountRefiner, PathReferenceRecoversTheMountOnRollingGround) {
-  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
   RefinementOptions options;
   ASSERT_EQ(options.ground_reference, GroundReference::kPath);
-  const MountRefinementResult r = SolveRollingDrive(options, configured, 40);
-  ASSERT_TRUE(r.applied()) << r.BriefReport();
-  EXPECT_EQ(r.reference, "path");
-  EXPECT_GE(r.frames_used, 15);
-  const double error_deg = AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear());
-  std::cout << "rolling ground, path reference: " << error_deg << " deg off, sigma pitch " << r.pitch_sigma_deg
-            << " roll " << r.roll_sigma_deg << " deg\n";
-  // 0.43 deg: the 0.2 deg aim is not reached on this ground. The frames agree with each other
-  // (statistical sigma about 0.1 deg) while sharing the model's bias (one plane per frame over
-  // curved, twisted ground); the systematic term covers it within two sigmas of the angle.
-  EXPECT_LT(error_deg, 0.5) << r.BriefReport();
-  EXPECT_LT(error_deg, 2.0 * std::hypot(r.pitch_sigma_deg, r.roll_sigma_deg)) << r.BriefReport();
-  EXPECT_LT(std::max(r.pitch_sigma_deg, r.roll_sigma_deg), 0.3) << r.BriefReport();
+  // The frames look at the swell ahead, which leans about 11 deg from their bodies' z on
+  // average. Measured: 0.06-0.11 deg off from every error below; 0.16-0.47 deg with the
+  // correction about axes perpendicular to that mean and one plane per frame over the bend.
+  double error_deg = 0.0;
+  for (const auto& [pitch, roll] : {std::pair{3.0, 1.5}, {-3.0, -1.5}, {0.0, 1.5}, {1.0, 0.0}}) {
+    SCOPED_TRACE(std::to_string(pitch) + " / " + std::to_string(roll) + " deg injected");
+    const MountRefinementResult r = SolveRollingDrive(options, WrongMount(pitch, roll), 40);
+    ASSERT_TRUE(r.applied()) << r.BriefReport();
+    EXPECT_EQ(r.reference, "path");
+    EXPECT_GE(r.frames_used, 15);
+    const double error = AngleDeg(TrueMount().linear(), r.body_T_camera_refined.linear());
+    std::cout << "rolling ground, path reference, " << pitch << " / " << roll << " deg injected: " << error
+              << " deg off, sigma pitch " << r.pitch_sigma_deg << " roll " << r.roll_sigma_deg << " deg\n";
+    EXPECT_LT(error, 0.15) << r.BriefReport();
+    EXPECT_LT(error, std::hypot(r.pitch_sigma_deg, r.roll_sigma_deg)) << r.BriefReport();
+    EXPECT_LT(std::max(r.pitch_sigma_deg, r.roll_sigma_deg), 0.3) << r.BriefReport();
+    error_deg = std::max(error_deg, error);
+  }
+  const Eigen::Isometry3d configured = WrongMount(3.0, 1.5);
 
   // The ground ahead against the plane under the wheels now is wrong by far more here.
   options.ground_reference = GroundReference::kBody;

@@ -48,7 +48,7 @@ GroundEvidence ExtractGroundEvidence(const FrameResult& frame, const Eigen::Matr
 /// The ground the vehicle drives over later, seen from one frame (GroundReference::kPath): for a
 /// point in that frame's original cam0 frame, the later frame whose body stands on it (within
 /// path_half_length_m along that body's x and path_half_width_m along its y; the nearest along
-/// x), and that body's z in this frame's body.
+/// x), and the ground that body stands on, in this frame's body.
 class DrivenOverGround {
  public:
   /// `world_T_body`: the pose of every frame of the drive, in order (nullopt: none); `frame`
@@ -61,12 +61,24 @@ class DrivenOverGround {
   /// Mean body z, in this frame's body, of the later bodies standing on `points`; body z when
   /// none does (unit).
   Eigen::Vector3d MeanUp(const std::vector<Eigen::Vector3d>& points) const;
+  /// The normal, in this frame's body, of the plane a least-squares fit through `points` finds
+  /// if the ground under each point is the wheel plane of the later body standing on it:
+  /// parallel to that body's x-y plane, as far below its origin as the points lie in the median
+  /// over all bodies. On curved
+  /// ground one plane over a long stretch tilts by how its points spread, not by the mean of the
+  /// bodies' tilts; this is the normal to compare it with. MeanUp when fewer than 3 points have a
+  /// body or they span no plane (a strip under 1 cm wide, in the RMS). `bend`, when given,
+  /// receives per point how far that ground lies above the fitted plane along this frame's
+  /// body z [m] (0 for a point no body stands on).
+  Eigen::Vector3d ExpectedUp(const std::vector<Eigen::Vector3d>& points, std::vector<double>* bend = nullptr) const;
 
  private:
   int Find(const Eigen::Vector3d& p_camera) const;
   double half_length_, half_width_;
+  Eigen::Isometry3d body_T_camera_ = Eigen::Isometry3d::Identity();
   std::vector<Eigen::Isometry3d> later_T_camera_;
-  std::vector<Eigen::Vector3d> up_;  ///< later body z in this frame's body
+  std::vector<Eigen::Vector3d> up_;      ///< later body z in this frame's body
+  std::vector<Eigen::Vector3d> origin_;  ///< later body origin in this frame's body [m]
 };
 
 }  // namespace ssta
