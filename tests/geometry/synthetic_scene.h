@@ -69,6 +69,7 @@ inline NormalOptions FixedWindow13() {
   NormalOptions options;
   options.smoothing_size_px = 13;
   options.depth_dependent_smoothing = false;
+  options.subsample = 1;  // a normal per pixel: the tests compare each pixel's window
   return options;
 }
 

@@ -73,9 +73,10 @@ struct NormalOptions {
   /// estimator runs on the cloud's (even row, even column) points with half the smoothing size
   /// (the same metric window, a quarter of the points), and each pixel with a valid point takes
   /// the normal of its 2 x 2 block's even pixel (NaN when that one has none). About 3x faster;
-  /// planes stay exact (< 0.05 degree, tested), depth-edge gaps widen to whole blocks. Off by
-  /// default: it costs 0.02 to 0.04 of mean IoU on the rendered scenes (docs/performance.md).
-  int subsample = 1;
+  /// planes stay exact (< 0.05 degree, tested), depth-edge gaps widen to whole blocks. The
+  /// default: it answers fewer truly blocked footprints drivable than 1 on the tuning scenes
+  /// (docs/accuracy.md) and takes about two thirds off the normals' time.
+  int subsample = 2;
 
   /// Threads the sweep over the image runs on, in bands of rows (OpenCV's parallel_for_): 0 =
   /// OpenCV's thread count (cv::getNumThreads(), all cores unless the application set it), 1 =
