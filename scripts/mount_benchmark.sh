@@ -52,7 +52,11 @@ for run in "${runs[@]}"; do
   fi
   echo "mount: $name ($pitch / $roll deg injected)" >&2
   mkdir -p "$out/$name"
-  "$ssta" calibrate-mount --sequence "$seq" --out-dir "$out/$name/rig" --report "$out/$name/report.json" -q "$@"
+  # A solve not better determined than its prior exits non-zero and still writes its report:
+  # the table lists it with its status.
+  rm -f "$out/$name/report.json"
+  "$ssta" calibrate-mount --sequence "$seq" --out-dir "$out/$name/rig" --report "$out/$name/report.json" -q "$@" ||
+    [ -f "$out/$name/report.json" ]
 done
 
 python3 - "$out" "$seqs" "$frames" "${runs[@]}" <<'PY'
