@@ -27,26 +27,16 @@ cd "$(dirname "$0")/.."
 # builds be compared on the same rendered scenes.
 ssta=${SSTA:-build/apps/ssta}
 synth=${SSTA_SYNTH:-$ssta}
-set_name=${1:-tuning}
-shift || true
-frames=60
-if [ $# -gt 0 ] && [ "$1" != "--" ]; then
-  frames=$1
-  shift
+. scripts/scene_sets.sh
+parse_set_args 60 "$@"
+if ! scene_set "$set_name"; then
+  echo "usage: scripts/accuracy.sh tuning|report [FRAMES] [-- args]" >&2
+  exit 2
 fi
-[ "${1:-}" = "--" ] && shift
-case "$set_name" in
-  tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
-  report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
-  *) echo "usage: scripts/accuracy.sh tuning|report [FRAMES] [-- args]" >&2; exit 2 ;;
-esac
 out=${OUT:-out/accuracy}/$set_name
 seqs=${SEQS:-out/accuracy/sequences}  # rendered once, shared by every run
 mkdir -p "$out" "$seqs"
 
-runs=()
-for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done
-for seed in $random_seeds; do runs+=("random:$seed"); done
 if [ -n "${SCENES:-}" ]; then read -r -a runs <<< "$SCENES"; fi
 
 for run in "${runs[@]}"; do
@@ -60,10 +50,10 @@ for run in "${runs[@]}"; do
   fi
   echo "accuracy: $name" >&2
   if [ -z "${MAP_ONLY:-}" ]; then
-    "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q "$@"
+    "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q "${args[@]}"
     "$ssta" eval labels --pred "$out/$name/classified" --gt "$seq" --json "$out/$name/labels.json" >/dev/null
   fi
-  "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "$@" >/dev/null
+  "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "${args[@]}" >/dev/null
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
   "$ssta" eval grid --pred "$out/$name/grid" --gt "$seq" --json "$out/$name/grid.json" >/dev/null
   "$ssta" eval footprints --map "$out/$name/map.ot" --gt "$seq" --as-exported ${PADDING:+--padding "$PADDING"} \

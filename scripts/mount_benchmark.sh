@@ -14,26 +14,16 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ssta=${SSTA:-build/apps/ssta}
-set_name=${1:-tuning}
-shift || true
-frames=40
-if [ $# -gt 0 ] && [ "$1" != "--" ]; then
-  frames=$1
-  shift
+. scripts/scene_sets.sh
+parse_set_args 40 "$@"
+if ! scene_set "$set_name"; then
+  echo "usage: scripts/mount_benchmark.sh tuning|report [FRAMES] [-- args]" >&2
+  exit 2
 fi
-[ "${1:-}" = "--" ] && shift
-case "$set_name" in
-  tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
-  report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
-  *) echo "usage: scripts/mount_benchmark.sh tuning|report [FRAMES] [-- args]" >&2; exit 2 ;;
-esac
 out=${OUT:-out/mount}/$set_name
 seqs=${SEQS:-out/mount/sequences}
 mkdir -p "$out" "$seqs"
 
-runs=()
-for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done
-for seed in $random_seeds; do runs+=("random:$seed"); done
 pitches=(3 -2 1 -3)
 rolls=(1.5 -2.5 -3 2)
 
@@ -55,7 +45,7 @@ for run in "${runs[@]}"; do
   # A solve not better determined than its prior exits non-zero and still writes its report:
   # the table lists it with its status.
   rm -f "$out/$name/report.json"
-  "$ssta" calibrate-mount --sequence "$seq" --out-dir "$out/$name/rig" --report "$out/$name/report.json" -q "$@" ||
+  "$ssta" calibrate-mount --sequence "$seq" --out-dir "$out/$name/rig" --report "$out/$name/report.json" -q "${args[@]}" ||
     [ -f "$out/$name/report.json" ]
 done
 

@@ -1,0 +1,32 @@
+# The two sets of rendered scenes of docs/accuracy.md (tune on one, report on the other) and
+# the command line the scripts that run over them share. Sourced by scripts/accuracy.sh and
+# scripts/mount_benchmark.sh.
+
+# parse_set_args DEFAULT_FRAMES [SET [FRAMES]] [-- ARGS...]: sets set_name (default tuning),
+# frames (DEFAULT_FRAMES unless given) and the array args (what follows --).
+parse_set_args() {
+  frames=$1
+  shift
+  set_name=${1:-tuning}
+  [ $# -gt 0 ] && shift
+  if [ $# -gt 0 ] && [ "$1" != "--" ]; then
+    frames=$1
+    shift
+  fi
+  [ "${1:-}" = "--" ] && shift
+  args=("$@")
+}
+
+# scene_set NAME: sets the array runs to the set's scene:seed pairs, the named scenes first;
+# returns 2 for a name that is neither tuning nor report.
+scene_set() {
+  local named_seed random_seeds scene seed
+  case "$1" in
+    tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
+    report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
+    *) return 2 ;;
+  esac
+  runs=()
+  for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done
+  for seed in $random_seeds; do runs+=("random:$seed"); done
+}
