@@ -29,10 +29,6 @@ ssta=${SSTA:-build/apps/ssta}
 synth=${SSTA_SYNTH:-$ssta}
 . scripts/scene_sets.sh
 parse_set_args 60 "$@"
-if ! scene_set "$set_name"; then
-  echo "usage: scripts/accuracy.sh tuning|report [FRAMES] [-- args]" >&2
-  exit 2
-fi
 out=${OUT:-out/accuracy}/$set_name
 seqs=${SEQS:-out/accuracy/sequences}  # rendered once, shared by every run
 mkdir -p "$out" "$seqs"

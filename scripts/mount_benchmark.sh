@@ -16,10 +16,6 @@ cd "$(dirname "$0")/.."
 ssta=${SSTA:-build/apps/ssta}
 . scripts/scene_sets.sh
 parse_set_args 40 "$@"
-if ! scene_set "$set_name"; then
-  echo "usage: scripts/mount_benchmark.sh tuning|report [FRAMES] [-- args]" >&2
-  exit 2
-fi
 out=${OUT:-out/mount}/$set_name
 seqs=${SEQS:-out/mount/sequences}
 mkdir -p "$out" "$seqs"
@@ -27,6 +23,7 @@ mkdir -p "$out" "$seqs"
 pitches=(3 -2 1 -3)
 rolls=(1.5 -2.5 -3 2)
 
+drives=()  # what the table reads: "scene seed pitch roll sequence"
 i=0
 for run in "${runs[@]}"; do
   scene=${run%%:*}
@@ -36,6 +33,7 @@ for run in "${runs[@]}"; do
   i=$((i + 1))
   name=$scene-$seed
   seq=$seqs/$name-$frames-p$pitch-r$roll
+  drives+=("$scene $seed $pitch $roll $seq")
   if [ ! -f "$seq/gt/rig.yaml" ]; then  # written last
     "$ssta" synth --scene "$scene" --seed "$seed" --frames "$frames" --mount-pitch-error-deg "$pitch" \
       --mount-roll-error-deg "$roll" --out "$seq" >/dev/null
@@ -49,10 +47,9 @@ for run in "${runs[@]}"; do
     [ -f "$out/$name/report.json" ]
 done
 
-python3 - "$out" "$seqs" "$frames" "${runs[@]}" <<'PY'
+python3 - "$out" "${drives[@]}" <<'PY'
 import json, math, re, sys
-out, seqs, frames, runs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
-pitches, rolls = ["3", "-2", "1", "-3"], ["1.5", "-2.5", "-3", "2"]
+out, drives = sys.argv[1], [d.split(" ", 4) for d in sys.argv[2:]]
 
 def true_rotation(path):
     text = open(path).read()
@@ -69,14 +66,11 @@ def angle_deg(a, b):
 print("| drive | injected pitch / roll [deg] | error [deg] | sigma pitch / roll [deg] | error / sigma of the angle | frames' ground tilt RMS [deg] | status |")
 print("|---|---|---|---|---|---|---|")
 errors = []
-for i, run in enumerate(runs):
-    scene, seed = run.split(":")
-    name = f"{scene}-{seed}"
-    p, r = pitches[i % 4], rolls[i % 4]
-    report = json.load(open(f"{out}/{name}/report.json"))["refinement"]
+for scene, seed, p, r, seq in drives:
+    report = json.load(open(f"{out}/{scene}-{seed}/report.json"))["refinement"]
     refined = report["body_T_camera_refined"]
     rotation = [row[:3] for row in refined[:3]]
-    truth = true_rotation(f"{seqs}/{name}-{frames}-p{p}-r{r}/gt/extrinsics.yaml")
+    truth = true_rotation(f"{seq}/gt/extrinsics.yaml")
     error = angle_deg(truth, rotation)
     errors.append(error)
     sp, sr = report["pitch_sigma_deg"], report["roll_sigma_deg"]

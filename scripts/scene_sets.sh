@@ -3,8 +3,11 @@
 # scripts/mount_benchmark.sh.
 
 # parse_set_args DEFAULT_FRAMES [SET [FRAMES]] [-- ARGS...]: sets set_name (default tuning),
-# frames (DEFAULT_FRAMES unless given) and the array args (what follows --).
+# frames (DEFAULT_FRAMES unless given), the array args (what follows --) and the array runs,
+# the set's scene:seed pairs, the named scenes first. A set that is neither tuning nor report
+# prints the calling script's usage and exits with 2.
 parse_set_args() {
+  local named_seed random_seeds scene seed
   frames=$1
   shift
   set_name=${1:-tuning}
@@ -15,16 +18,10 @@ parse_set_args() {
   fi
   [ "${1:-}" = "--" ] && shift
   args=("$@")
-}
-
-# scene_set NAME: sets the array runs to the set's scene:seed pairs, the named scenes first;
-# returns 2 for a name that is neither tuning nor report.
-scene_set() {
-  local named_seed random_seeds scene seed
-  case "$1" in
+  case "$set_name" in
     tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
     report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
-    *) return 2 ;;
+    *) echo "usage: scripts/$(basename "$0") tuning|report [FRAMES] [-- args]" >&2; exit 2 ;;
   esac
   runs=()
   for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done

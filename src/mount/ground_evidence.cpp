@@ -119,7 +119,10 @@ Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>&
   for (std::size_t k = 0; k < points.size(); ++k) {
     if (body[k] < 0) continue;
     const Eigen::Vector3d& n = up_[static_cast<std::size_t>(body[k])];
-    if (n.z() < 0.1) continue;  // a body on its side has no ground plane to speak of
+    if (n.z() < 0.1) {  // a body on its side has no ground plane to speak of
+      body[k] = -1;
+      continue;
+    }
     const Eigen::Vector3d ground = origin_[static_cast<std::size_t>(body[k])] - origin_height * n;
     const Eigen::Vector3d q = body_T_camera_ * points[k];
     samples.emplace_back(q.x(), q.y(), ground.z() - (n.x() * (q.x() - ground.x()) + n.y() * (q.y() - ground.y())) / n.z());
@@ -142,7 +145,7 @@ Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>&
   if (bend) {
     std::size_t i = 0;
     for (std::size_t k = 0; k < points.size(); ++k) {
-      if (body[k] < 0 || up_[static_cast<std::size_t>(body[k])].z() < 0.1) continue;
+      if (body[k] < 0) continue;
       const Eigen::Vector3d& s = samples[i++];
       (*bend)[k] = s.z() - (abc[0] + abc[1] * (s.x() - centre.x()) + abc[2] * (s.y() - centre.y()));
     }

@@ -513,6 +513,7 @@ MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eig
   MountRefinementResult result;
   for (int round = 0; round < kRounds; ++round) {
     MountRefiner refiner(path_options, body_T_camera);
+    const Eigen::Vector3d body_z_in_camera = through.linear().transpose() * Eigen::Vector3d::UnitZ();
     int on_path = 0;
     for (std::size_t i = 0; i < frames.size(); ++i) {
       if (!frames[i].usable) continue;
@@ -532,7 +533,6 @@ MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eig
       // plane per frame then holds on curved ground, whatever weight each point gets.
       std::vector<double> bend;
       e.path_up_body = driven.ExpectedUp(e.camera_points, &bend);
-      const Eigen::Vector3d body_z_in_camera = through.linear().transpose() * Eigen::Vector3d::UnitZ();
       for (std::size_t k = 0; k < e.camera_points.size(); ++k) e.camera_points[k] -= bend[k] * body_z_in_camera;
       refiner.AddFrame(std::move(e));
       ++on_path;

@@ -292,8 +292,9 @@ TEST(MountRefiner, PathReferenceRecoversTheMountOnRollingGround) {
   RefinementOptions options;
   ASSERT_EQ(options.ground_reference, GroundReference::kPath);
   // The frames look at the swell ahead, which leans about 11 deg from their bodies' z on
-  // average. Measured: 0.06-0.11 deg off from every error below; 0.16-0.47 deg with the
-  // correction about axes perpendicular to that mean and one plane per frame over the bend.
+  // average. Measured: 0.06-0.09 deg off from every error below; 0.16-0.47 deg when the
+  // correction turns about axes perpendicular to that mean and one plane per frame is fitted
+  // over the bend.
   double error_deg = 0.0;
   for (const auto& [pitch, roll] : {std::pair{3.0, 1.5}, {-3.0, -1.5}, {0.0, 1.5}, {1.0, 0.0}}) {
     SCOPED_TRACE(std::to_string(pitch) + " / " + std::to_string(roll) + " deg injected");

@@ -64,12 +64,11 @@ class DrivenOverGround {
   /// The normal, in this frame's body, of the plane a least-squares fit through `points` finds
   /// if the ground under each point is the wheel plane of the later body standing on it:
   /// parallel to that body's x-y plane, as far below its origin as the points lie in the median
-  /// over all bodies. On curved
-  /// ground one plane over a long stretch tilts by how its points spread, not by the mean of the
-  /// bodies' tilts; this is the normal to compare it with. MeanUp when fewer than 3 points have a
-  /// body or they span no plane (a strip under 1 cm wide, in the RMS). `bend`, when given,
-  /// receives per point how far that ground lies above the fitted plane along this frame's
-  /// body z [m] (0 for a point no body stands on).
+  /// over all bodies. On curved ground one plane over a long stretch tilts by how its points
+  /// spread, not by the mean of the bodies' tilts; this is the normal to compare it with. MeanUp
+  /// when fewer than 3 points have a body or they span no plane (a strip under 1 cm wide, in the
+  /// RMS). `bend`, when given, receives per point how far that ground lies above the fitted
+  /// plane along this frame's body z [m] (0 for a point no body stands on).
   Eigen::Vector3d ExpectedUp(const std::vector<Eigen::Vector3d>& points, std::vector<double>* bend = nullptr) const;
 
  private:
