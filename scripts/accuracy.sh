@@ -19,7 +19,9 @@
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
 # footprints are listed in out/accuracy/<set>/<scene>/footprint_misses.csv, nearest the path
-# first.
+# first. A last table gives each pooled figure's 90 % interval over the set's scenes
+# (scripts/accuracy_compare.py, which also says whether one run beats another: pass it both
+# runs' out/accuracy/<set> folders).
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -161,3 +163,8 @@ if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
 PY
+
+echo
+names=()
+for run in "${runs[@]}"; do names+=("${run%%:*}-${run##*:}"); done
+python3 scripts/accuracy_compare.py "$out" --scenes "$(IFS=,; echo "${names[*]}")"
