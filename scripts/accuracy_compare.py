@@ -17,6 +17,11 @@ the set holds, with replacement, seeded so that a rerun prints the same figures)
 comparison draws the same scenes for both runs (paired), which cancels what the scenes have in
 common. The verdict column says which run is better where the interval of the difference excludes
 0, and "within noise" where it does not.
+
+Unsafe and falsely blocked count only answers of a class. A change that turns answers undecided
+(class 4: the map saw a surface it cannot judge) lowers both without telling a planner more: the
+rows "free answered drivable" (what a planner may use), "blocked answered non-traversable" and
+"blocked answered undecided" show such a shift.
 """
 import json
 import os
@@ -74,6 +79,14 @@ def non_recall(m):
     return ratio(m[3][3], sum(m[3]))
 
 
+def blocked_undecided(m):  # truly non-traversable answered undecided (class 4)
+    return ratio(m[3][4], sum(m[3]))
+
+
+def free_drivable(m):  # truly traversable or semi answered traversable or semi
+    return ratio(sum(m[t][a] for t in (1, 2) for a in (1, 2)), sum(m[1]) + sum(m[2]))
+
+
 def trav_called_non(m):
     return ratio(m[1][3], sum(m[1]))
 
@@ -82,8 +95,12 @@ def trav_called_non(m):
 METRICS = [
     ("footprints unsafe", "feet", unsafe, "%", True),
     ("footprints falsely blocked", "feet", falsely_blocked, "%", True),
+    ("footprints free answered drivable", "feet", free_drivable, "%", False),
+    ("footprints blocked answered non-traversable", "feet", non_recall, "%", False),
+    ("footprints blocked answered undecided", "feet", blocked_undecided, "%", True),
     ("footprints within 10 m unsafe", "feet10", unsafe, "%", True),
     ("footprints within 10 m falsely blocked", "feet10", falsely_blocked, "%", True),
+    ("footprints within 10 m free answered drivable", "feet10", free_drivable, "%", False),
     ("map accuracy within 10 m", "cells10", accuracy, "", False),
     ("cells within 10 m unsafe", "cells10", unsafe, "%", True),
     ("cells within 10 m falsely blocked", "cells10", falsely_blocked, "%", True),

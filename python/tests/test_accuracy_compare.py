@@ -46,6 +46,27 @@ def test_one_run_pools_the_scenes_and_its_interval_spans_them(tmp_path):
     assert rows["footprints unsafe"] == ["20.0 %", "10.0 % to 30.0 %"]
     # Every scene blocks 5 % of its free footprints: every draw does too.
     assert rows["footprints falsely blocked"] == ["5.0 %", "5.0 % to 5.0 %"]
+    # The rest of the free footprints are answered drivable, the rest of the blocked ones
+    # non-traversable, none undecided.
+    assert rows["footprints free answered drivable"] == ["95.0 %", "95.0 % to 95.0 %"]
+    assert rows["footprints blocked answered non-traversable"][0] == "80.0 %"
+    assert rows["footprints blocked answered undecided"] == ["0.0 %", "0.0 % to 0.0 %"]
+
+
+def test_answers_turned_undecided_show_as_a_loss_where_unsafe_and_falsely_blocked_do_not(tmp_path):
+    base = write_run(tmp_path / "base", {"s%d" % i: (50, 10, 500, 25) for i in range(4)})
+    # Every scene answers 20 of its 25 falsely blocked free footprints undecided instead.
+    undecided = tmp_path / "undecided"
+    for i in range(4):
+        doc = footprints(50, 10, 500, 25)
+        m = doc["metrics"]["confusion"]
+        m[1][3], m[1][4] = 5, 20
+        (undecided / ("s%d" % i)).mkdir(parents=True)
+        (undecided / ("s%d" % i) / "footprints.json").write_text(json.dumps(doc))
+    rows = run(base, undecided)
+    assert rows["footprints falsely blocked"][2:] == ["-4.0 points", "-4.0 points to -4.0 points", "new better"]
+    assert rows["footprints free answered drivable"][2:] == ["+0.0 points", "+0.0 points to +0.0 points",
+                                                             "within noise"]
 
 
 def test_a_difference_every_scene_shows_is_a_verdict_and_one_scene_alone_is_noise(tmp_path):
