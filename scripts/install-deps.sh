@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ccache pkg-config
   libeigen3-dev libopencv-dev libpcl-dev liboctomap-dev libceres-dev
-  libyaml-cpp-dev libpng-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
+  libyaml-cpp-dev libpng-dev libjpeg-dev libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev
   clang libclang-rt-14-dev
   # ROS bags: ROS 1 through rosbag and the message packages, ROS 2 (MCAP, sqlite3) read by SSTA
   librosbag-dev libsensor-msgs-dev libnav-msgs-dev libtf2-msgs-dev libgeometry-msgs-dev

@@ -2,10 +2,10 @@
 
 #include <map>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "ssta/core/error.h"
+#include "ssta/io/image_codec.h"
 
 namespace ssta::internal {
 namespace {
@@ -71,13 +71,9 @@ cv::Mat GreyFromCompressed(const RosCompressedImage& m, const std::string& where
   if (m.format.rfind("bayer", 0) == 0) {
     throw Error(where + ": a compressed Bayer mosaic (" + m.format + ") is not read; record the raw Image or a debayered topic");
   }
-  cv::Mat grey;
-  if (!m.data.empty()) {
-    const cv::Mat buffer(1, static_cast<int>(m.data.size()), CV_8UC1, const_cast<std::uint8_t*>(m.data.data()));
-    grey = cv::imdecode(buffer, cv::IMREAD_GRAYSCALE);
-  }
-  if (grey.empty()) throw Error(where + ": the compressed image (" + m.format + ") cannot be decoded");
-  return grey;
+  if (m.data.empty()) throw Error(where + ": the compressed image (" + m.format + ") is empty");
+  const ImageU8 grey = DecodeGrey(m.data.data(), m.data.size(), where + " (" + m.format + ")");
+  return cv::Mat(grey.height(), grey.width(), CV_8UC1, const_cast<std::uint8_t*>(grey.data())).clone();
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -173,6 +174,16 @@ bool NamesAFolder(const std::string& path) {
 std::string OutputFileProblem(const std::string& path) {
   if (NamesAFolder(path)) return "is a folder; give a file name";
   return ParentFolderProblem(path);
+}
+
+void WriteFileBytes(const std::vector<unsigned char>& bytes, const std::string& path) {
+  WriteFileAtomically(path, [&](const std::string& tmp) {
+    FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) throw Error(path + ": cannot open for writing");
+    const std::size_t n = std::fwrite(bytes.data(), 1, bytes.size(), f);
+    const int rc = std::fclose(f);
+    if (n != bytes.size() || rc != 0) throw Error(path + ": write failed (disk full?)");
+  });
 }
 
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,

@@ -39,26 +39,16 @@ std::vector<unsigned char> Encode(const void* pixels, int width, int height, png
   return bytes;
 }
 
-void WriteBytes(const std::vector<unsigned char>& bytes, const std::string& path) {
-  WriteFileAtomically(path, [&](const std::string& tmp) {
-    FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw Error(path + ": cannot open for writing");
-    const std::size_t n = std::fwrite(bytes.data(), 1, bytes.size(), f);
-    const int rc = std::fclose(f);
-    if (n != bytes.size() || rc != 0) throw Error(path + ": write failed (disk full?)");
-  });
-}
-
 }  // namespace
 
 void WritePng(const ImageU8& image, const std::string& path) {
-  WriteBytes(Encode(image.data(), image.width(), image.height(), PNG_FORMAT_GRAY, PNG_IMAGE_FLAG_COLORSPACE_NOT_sRGB,
+  WriteFileBytes(Encode(image.data(), image.width(), image.height(), PNG_FORMAT_GRAY, PNG_IMAGE_FLAG_COLORSPACE_NOT_sRGB,
                     path),
              path);
 }
 
 void WritePng(const ImageRgb& image, const std::string& path) {
-  WriteBytes(Encode(image.data(), image.width(), image.height(), PNG_FORMAT_RGB, 0, path), path);
+  WriteFileBytes(Encode(image.data(), image.width(), image.height(), PNG_FORMAT_RGB, 0, path), path);
 }
 
 }  // namespace ssta

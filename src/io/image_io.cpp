@@ -3,12 +3,12 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
-
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
+#include "ssta/io/image_codec.h"
 
 namespace ssta {
 namespace {
@@ -32,8 +32,7 @@ std::uint32_t BigEndian32(const unsigned char* p) {
 }
 
 /// Walks a PNG's chunks and checks each one's CRC, so that a truncated or damaged file is
-/// reported here in one line: handed to OpenCV, libpng would print its own complaint to
-/// stderr first.
+/// reported in one line naming the damaged chunk before any decoding.
 void CheckPng(const std::string& bytes, const std::string& path) {
   const auto* p = reinterpret_cast<const unsigned char*>(bytes.data());
   std::size_t pos = 8;  // after the signature
@@ -51,95 +50,61 @@ void CheckPng(const std::string& bytes, const std::string& path) {
   throw Error(path + ": truncated PNG (the file ends before its IEND chunk)");
 }
 
-cv::Mat ReadMat(const std::string& path, int flags) {
+/// The file's bytes, checked for truncation where the format allows it cheaply.
+std::string ReadImageBytes(const std::string& path) {
   if (!std::filesystem::exists(path)) throw Error(path + ": image file not found");
-  const std::string bytes = ReadTextFile(path);
-  static const std::string kPngSignature("\x89PNG\r\n\x1a\n", 8);
-  if (bytes.compare(0, kPngSignature.size(), kPngSignature) == 0) CheckPng(bytes, path);
+  std::string bytes = ReadTextFile(path);
+  if (IsPng(bytes.data(), bytes.size())) CheckPng(bytes, path);
   // JPEG: a file cut short lacks the end-of-image marker near its end (some writers pad after
-  // it); libjpeg would only warn on stderr and decode the rest as grey.
-  if (bytes.compare(0, 2, "\xff\xd8") == 0) {
+  // it); libjpeg would only warn and decode the rest as grey.
+  if (IsJpeg(bytes.data(), bytes.size())) {
     const std::size_t tail = bytes.size() > 1024 ? bytes.size() - 1024 : 2;
     if (bytes.find("\xff\xd9", tail) == std::string::npos) throw Error(path + ": truncated JPEG (no end-of-image marker)");
   }
-  cv::Mat m;
-  try {
-    const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
-    m = cv::imdecode(buffer, flags);
-  } catch (const cv::Exception& e) {
-    throw Error(path + ": cannot decode image: " + e.what());
-  }
-  if (m.empty()) throw Error(path + ": cannot decode image (corrupt or truncated?)");
-  return m;
+  return bytes;
 }
 
-template <typename T>
-Image<T> FromMat(const cv::Mat& m) {
-  Image<T> out(m.cols, m.rows);
-  for (int v = 0; v < m.rows; ++v) {
-    const T* src = m.ptr<T>(v);
-    std::copy(src, src + m.cols, out.row(v));
+/// A one-channel PNG of `bit_depth` as stored, or an error saying what the file holds.
+StoredPng ReadOneChannelPng(const std::string& path, int bit_depth, const char* expected) {
+  const std::string bytes = ReadImageBytes(path);
+  StoredPng png = DecodePngAsStored(bytes.data(), bytes.size(), path);
+  if (png.channels != 1 || png.bit_depth != bit_depth) {
+    throw Error(path + ": expected " + expected + ", found " + std::to_string(png.channels) + " channel(s) of " +
+                std::to_string(png.bit_depth) + " bits");
   }
-  return out;
+  return png;
 }
 
-void WriteMat(const cv::Mat& m, const std::string& path, const std::vector<int>& params = {}) {
+void WriteBytesOf(const std::vector<unsigned char>& bytes, const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
-  WriteFileAtomically(path, [&](const std::string& tmp) {
-    std::vector<uchar> buffer;
-    bool ok = false;
-    try {
-      ok = cv::imencode(ext, m, buffer, params);
-    } catch (const cv::Exception& e) {
-      throw Error(path + ": cannot encode image: " + e.what());
-    }
-    if (!ok) throw Error(path + ": cannot encode image as " + ext);
-    FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw Error(path + ": cannot open for writing");
-    const size_t n = std::fwrite(buffer.data(), 1, buffer.size(), f);
-    const int rc = std::fclose(f);
-    if (n != buffer.size() || rc != 0) throw Error(path + ": write failed (disk full?)");
-  });
-}
-
-/// An RGB image written as OpenCV wants it (BGR), with imencode's `params`.
-void WriteRgb(const ImageRgb& image, const std::string& path, const std::vector<int>& params) {
-  cv::Mat rgb(image.height(), image.width(), CV_8UC3, const_cast<Rgb8*>(image.data()));
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  WriteMat(bgr, path, params);
+  if (ext != ".png" && ext != ".PNG") throw Error(path + ": images are written as PNG (name the file .png)");
+  WriteFileBytes(bytes, path);
 }
 
 }  // namespace
 
 ImageU8 ReadGreyImage(const std::string& path) {
-  return FromMat<std::uint8_t>(ReadMat(path, cv::IMREAD_GRAYSCALE));
+  const std::string bytes = ReadImageBytes(path);
+  return DecodeGrey(bytes.data(), bytes.size(), path);
 }
 
 ImageU8 ReadLabelImage(const std::string& path) {
-  const cv::Mat m = ReadMat(path, cv::IMREAD_UNCHANGED);
-  if (m.type() != CV_8UC1) throw Error(path + ": expected an 8-bit single-channel label image");
-  return FromMat<std::uint8_t>(m);
+  return ReadOneChannelPng(path, 8, "an 8-bit single-channel label image").u8;
 }
 
 ImageU16 ReadImageU16(const std::string& path) {
-  const cv::Mat m = ReadMat(path, cv::IMREAD_UNCHANGED);
-  if (m.type() != CV_16UC1) throw Error(path + ": expected a 16-bit single-channel image");
-  return FromMat<std::uint16_t>(m);
+  return ReadOneChannelPng(path, 16, "a 16-bit single-channel image").u16;
 }
 
-void WriteImage(const ImageU8& image, const std::string& path) {
-  WriteMat(cv::Mat(image.height(), image.width(), CV_8UC1, const_cast<std::uint8_t*>(image.data())), path);
-}
+// Level 1 is fast (the per-frame outputs); the compact form takes zlib's strongest.
+void WriteImage(const ImageU8& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
 
-void WriteImage(const ImageU16& image, const std::string& path) {
-  WriteMat(cv::Mat(image.height(), image.width(), CV_16UC1, const_cast<std::uint16_t*>(image.data())), path);
-}
+void WriteImage(const ImageU16& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
 
-void WriteImage(const ImageRgb& image, const std::string& path) { WriteRgb(image, path, {}); }
+void WriteImage(const ImageRgb& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
 
 void WriteImageCompact(const ImageRgb& image, const std::string& path) {
-  WriteRgb(image, path, {cv::IMWRITE_PNG_COMPRESSION, 9});
+  WriteBytesOf(EncodePng(image, 9, path), path);
 }
 
 }  // namespace ssta

@@ -2,6 +2,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace ssta {
 
@@ -13,6 +14,10 @@ namespace ssta {
 /// files written again and again (maps and their checkpoints), as it reads the whole folder.
 void WriteFileAtomically(const std::string& path, const std::function<void(const std::string& tmp_path)>& write,
                          bool remove_stale = false);
+
+/// Writes `bytes` to `path` with WriteFileAtomically; ssta::Error names the file when it cannot
+/// be opened or written in full (a full disk).
+void WriteFileBytes(const std::vector<unsigned char>& bytes, const std::string& path);
 
 /// What keeps a file from being written at `path` for lack of a folder: "the folder F does not
 /// exist" or "F is a file, not a folder" (F its parent); "" when the parent is a folder or
