@@ -1,5 +1,6 @@
 #include "ssta/io/image_codec.h"
 
+#include <cctype>
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
@@ -206,6 +207,36 @@ std::vector<unsigned char> Encode(const void* pixels, int width, int height, int
   return bytes;
 }
 
+/// A binary PGM (P5, 8-bit): the map's `grid` export (map_server's format). Its header is
+/// "P5", width, height and maxval, separated by whitespace and comments ('#' to the line's end),
+/// then one whitespace byte before the pixels.
+ImageU8 DecodePgm(const unsigned char* data, std::size_t size, const std::string& where) {
+  std::size_t pos = 2;
+  const auto number = [&]() {
+    while (pos < size && (std::isspace(data[pos]) || data[pos] == '#')) {
+      if (data[pos] == '#') {
+        while (pos < size && data[pos] != '\n') ++pos;
+      } else {
+        ++pos;
+      }
+    }
+    long value = -1;
+    while (pos < size && std::isdigit(data[pos]) && value < 1000000) value = (value < 0 ? 0 : 10 * value) + (data[pos++] - '0');
+    return value;
+  };
+  const long width = number(), height = number(), maxval = number();
+  if (width <= 0 || height <= 0 || width > 100000 || height > 100000 || maxval <= 0 || maxval > 255 || pos >= size ||
+      !std::isspace(data[pos])) {
+    throw Error(where + ": cannot decode PGM: a bad header (8-bit binary P5 is read)");
+  }
+  ++pos;
+  const std::size_t count = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (size - pos < count) throw Error(where + ": cannot decode PGM: the data ends early (truncated)");
+  ImageU8 image(static_cast<int>(width), static_cast<int>(height));
+  std::memcpy(image.data(), data + pos, count);
+  return image;
+}
+
 }  // namespace
 
 bool IsPng(const void* data, std::size_t size) {
@@ -236,7 +267,8 @@ ImageU8 DecodeGrey(const void* data, std::size_t size, const std::string& where)
     }
     return image;
   }
-  throw Error(where + ": not a PNG or JPEG image (the formats read: PNG, JPEG)");
+  if (size >= 2 && bytes[0] == 'P' && bytes[1] == '5') return DecodePgm(bytes, size, where);
+  throw Error(where + ": not a PNG, JPEG or PGM image (the formats read: PNG, JPEG, 8-bit binary PGM)");
 }
 
 StoredPng DecodePngAsStored(const void* data, std::size_t size, const std::string& where) {

@@ -101,7 +101,7 @@ const std::vector<BadInput>& Cases() {
        kStrict, {"{seq}/cam1/data/" + std::string(kSecond) + ".png: corrupt PNG (CRC error in its IDAT chunk)"}},
       {"UnreadablePng",
        [](auto& s, auto&) { std::ofstream(s + "/cam1/data/" + std::string(kFirst) + ".png") << "not a png"; }, kStrict,
-       {"{seq}/cam1/data/" + std::string(kFirst) + ".png: not a PNG or JPEG image"}},
+       {"{seq}/cam1/data/" + std::string(kFirst) + ".png: not a PNG, JPEG or PGM image"}},
       {"LeftAndRightOfDifferentSizes",
        [](auto& s, auto&) { WriteImage(ImageU8(640, 480, 128), s + "/cam1/data/" + std::string(kFirst) + ".png"); },
        kStrict, {"{seq}/cam1/data/" + std::string(kFirst) + ".png: image is 640x480 px", "says 752x480"}},

@@ -76,6 +76,18 @@ TEST(ImageCodec, GreyDecodingMatchesOpenCvForEveryLayout) {
   }
 }
 
+TEST(ImageCodec, BinaryPgmsDecodeAsOpenCvReadsThem) {
+  const cv::Mat grid = Textured(CV_8UC1, 13);
+  std::vector<unsigned char> bytes = Encoded(grid, ".pgm");
+  EXPECT_EQ(GreyDifferences(DecodeGrey(bytes.data(), bytes.size(), "grid.pgm"), bytes), 0);
+  // A comment in the header, as map_server's tools write one.
+  const std::string commented = "P5\n# grid\n3 2\n255\n\x01\x02\x03\x04\x05\x06";
+  const ImageU8 small = DecodeGrey(commented.data(), commented.size(), "c.pgm");
+  ASSERT_EQ(small.width(), 3);
+  ASSERT_EQ(small.height(), 2);
+  EXPECT_EQ(small(1, 2), 6);
+}
+
 TEST(ImageCodec, OneChannelPngsDecodeAsStoredAndOthersSayWhatTheyHold) {
   const cv::Mat depth = Textured(CV_16UC1, 8);
   std::vector<unsigned char> bytes = Encoded(depth, ".png");
@@ -139,7 +151,11 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
     return std::string("no error");
   };
   const std::string text = "not an image";
-  EXPECT_EQ(message({text.begin(), text.end()}), "cam0/1.png: not a PNG or JPEG image (the formats read: PNG, JPEG)");
+  EXPECT_EQ(message({text.begin(), text.end()}),
+            "cam0/1.png: not a PNG, JPEG or PGM image (the formats read: PNG, JPEG, 8-bit binary PGM)");
+  const std::string short_pgm = "P5 4 2 255\n1234567";
+  EXPECT_EQ(message({short_pgm.begin(), short_pgm.end()}),
+            "cam0/1.png: cannot decode PGM: the data ends early (truncated)");
   std::vector<unsigned char> png = Encoded(Textured(CV_8UC1, 11), ".png");
   png.resize(png.size() / 2);
   EXPECT_EQ(message(png).rfind("cam0/1.png: cannot decode PNG: ", 0), 0u) << message(png);

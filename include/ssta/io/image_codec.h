@@ -18,9 +18,10 @@ namespace ssta {
 bool IsPng(const void* data, std::size_t size);
 bool IsJpeg(const void* data, std::size_t size);
 
-/// A PNG or JPEG as 8-bit grey: 16-bit samples keep their high byte, a palette is expanded,
-/// alpha dropped, and colour weighted 0.299 R + 0.587 G + 0.114 B (as OpenCV's
-/// IMREAD_GRAYSCALE). Anything else, or a file libpng or libjpeg cannot decode, is an error.
+/// A PNG, JPEG or 8-bit binary PGM (the map's grid export) as 8-bit grey: 16-bit samples keep
+/// their high byte, a palette is expanded, alpha dropped, and colour weighted 0.299 R + 0.587 G
+/// + 0.114 B (as OpenCV's IMREAD_GRAYSCALE). Anything else, or data that cannot be decoded, is
+/// an error.
 ImageU8 DecodeGrey(const void* data, std::size_t size, const std::string& where);
 
 /// A PNG with its samples as stored: `channels` is 1 (grey), 2 (grey and alpha), 3 (colour or
