@@ -59,23 +59,14 @@ for run in "${runs[@]}"; do
 done
 
 python3 - "$out" "$seqs" "$frames" "${runs[@]}" <<'PY'
-import json, os, sys
+import os, sys
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, "scripts")
+from accuracy_compare import load, within  # the same reading of the JSON the intervals use
 out, seqs, frames, runs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
-WITHIN_M = 10.0
-
-def load(path):
-    return json.load(open(path)) if os.path.exists(path) else None
 
 def confusion(metrics):
     return metrics["confusion"] if metrics else None
-
-def within(doc):
-    """The confusion matrix of every sample within WITHIN_M of the path."""
-    found = None
-    for band in (doc or {}).get("by_distance_from_path", {}).get("bands", []):
-        if band["to_m"] <= WITHIN_M + 1e-9:
-            found = band.get("metrics_within", {}).get("confusion")
-    return found
 
 def add(a, b):
     return b if a is None else [[x + y for x, y in zip(ra, rb)] for ra, rb in zip(a, b)]
