@@ -1,10 +1,11 @@
 #include "ssta/io/image_io.h"
 
-#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include <zlib.h>
 
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
@@ -12,20 +13,6 @@
 
 namespace ssta {
 namespace {
-
-std::uint32_t Crc32(const unsigned char* data, std::size_t n, std::uint32_t crc = 0xffffffffu) {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xffu] ^ (crc >> 8);
-  return crc;
-}
 
 std::uint32_t BigEndian32(const unsigned char* p) {
   return (std::uint32_t{p[0]} << 24) | (std::uint32_t{p[1]} << 16) | (std::uint32_t{p[2]} << 8) | p[3];
@@ -40,7 +27,7 @@ void CheckPng(const std::string& bytes, const std::string& path) {
     const std::uint32_t length = BigEndian32(p + pos);
     const std::string type(bytes, pos + 4, 4);
     if (length > bytes.size() - pos - 12) break;  // the chunk runs past the end
-    const std::uint32_t crc = Crc32(p + pos + 4, length + 4) ^ 0xffffffffu;  // over type and data
+    const auto crc = static_cast<std::uint32_t>(crc32(0L, p + pos + 4, length + 4));  // over type and data
     if (crc != BigEndian32(p + pos + 8 + length)) {
       throw Error(path + ": corrupt PNG (CRC error in its " + type + " chunk)");
     }
