@@ -21,6 +21,10 @@ namespace {
 // below hold no object with a destructor between setjmp and the calls, keep what they write in
 // the caller's objects, and turn a failure into a message the caller throws.
 
+/// Larger images are refused before their pixels are allocated (a damaged header can claim
+/// billions).
+constexpr double kMaxPixels = 1073741824.0;
+
 struct PngSource {
   const unsigned char* data;
   std::size_t size;
@@ -91,6 +95,9 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
   if (!colour && out->stored_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
+  if (static_cast<double>(png_get_image_width(png, info)) * png_get_image_height(png, info) > kMaxPixels) {
+    png_error(png, "the image is larger than 2^30 pixels");
+  }
   out->width = static_cast<int>(png_get_image_width(png, info));
   out->height = static_cast<int>(png_get_image_height(png, info));
   out->depth = png_get_bit_depth(png, info);
@@ -138,6 +145,11 @@ bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, J
   jpeg_mem_src(&codec, data, static_cast<unsigned long>(size));
   jpeg_read_header(&codec, TRUE);
   codec.out_color_space = JCS_GRAYSCALE;
+  if (static_cast<double>(codec.image_width) * codec.image_height > kMaxPixels) {
+    std::snprintf(failure->message.text, sizeof failure->message.text, "the image is larger than 2^30 pixels");
+    jpeg_destroy_decompress(&codec);
+    return false;
+  }
   jpeg_start_decompress(&codec);
   *out = ImageU8(static_cast<int>(codec.output_width), static_cast<int>(codec.output_height));
   while (codec.output_scanline < codec.output_height) {
@@ -225,7 +237,8 @@ ImageU8 DecodePgm(const unsigned char* data, std::size_t size, const std::string
     return value;
   };
   const long width = number(), height = number(), maxval = number();
-  if (width <= 0 || height <= 0 || width > 100000 || height > 100000 || maxval <= 0 || maxval > 255 || pos >= size ||
+  if (width <= 0 || height <= 0 || static_cast<double>(width) * height > kMaxPixels || maxval <= 0 || maxval > 255 ||
+      pos >= size ||
       !std::isspace(data[pos])) {
     throw Error(where + ": cannot decode PGM: a bad header (8-bit binary P5 is read)");
   }

@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <zlib.h>
 
 #include "ssta/core/error.h"
 
@@ -163,6 +164,22 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
   jpeg.resize(200);  // the headers, not the scan
   EXPECT_EQ(message(jpeg).rfind("cam0/1.png: cannot decode JPEG: ", 0), 0u) << message(jpeg);
   EXPECT_THROW(DecodePngAsStored(jpeg.data(), jpeg.size(), "x"), Error);
+
+  // A header that claims 50000 x 50000 px (valid CRCs, an empty IDAT) is refused before
+  // anything is allocated for its pixels.
+  std::vector<unsigned char> huge = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const auto chunk = [&huge](const std::string& type, const std::vector<unsigned char>& data) {
+    for (const int shift : {24, 16, 8, 0}) huge.push_back(static_cast<unsigned char>(data.size() >> shift));
+    const std::size_t start = huge.size();
+    huge.insert(huge.end(), type.begin(), type.end());
+    huge.insert(huge.end(), data.begin(), data.end());
+    const auto crc = static_cast<std::uint32_t>(crc32(0L, huge.data() + start, static_cast<uInt>(huge.size() - start)));
+    for (const int shift : {24, 16, 8, 0}) huge.push_back(static_cast<unsigned char>(crc >> shift));
+  };
+  chunk("IHDR", {0, 0, 0xc3, 0x50, 0, 0, 0xc3, 0x50, 8, 0, 0, 0, 0});
+  chunk("IDAT", {});
+  chunk("IEND", {});
+  EXPECT_EQ(message(huge), "cam0/1.png: cannot decode PNG: the image is larger than 2^30 pixels");
 }
 
 }  // namespace
