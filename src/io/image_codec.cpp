@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <new>
 
 // clang-format off: jpeglib.h needs <cstdio> first.
 #include <jpeglib.h>
@@ -20,6 +21,14 @@ namespace {
 // libpng and libjpeg report errors by longjmp out of the decoder. The functions that call them
 // below hold no object with a destructor between setjmp and the calls, keep what they write in
 // the caller's objects, and turn a failure into a message the caller throws.
+
+/// PNG stores 16-bit samples big-endian; libpng hands them over as stored unless swapped.
+const bool kLittleEndian = [] {
+  const std::uint16_t one = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}();
 
 /// Larger images are refused before their pixels are allocated (a damaged header can claim
 /// billions).
@@ -71,8 +80,13 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
     return false;
   }
   png_infop info = png_create_info_struct(png);
+  if (info == nullptr) {
+    std::snprintf(message->text, sizeof message->text, "out of memory");
+    png_destroy_read_struct(&png, nullptr, nullptr);
+    return false;
+  }
   PngSource source{data, size, 0};
-  if (info == nullptr || setjmp(png_jmpbuf(png))) {
+  if (setjmp(png_jmpbuf(png))) {
     png_destroy_read_struct(&png, &info, nullptr);
     return false;
   }
@@ -83,13 +97,14 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
   const bool colour = (out->color_type & PNG_COLOR_MASK_COLOR) != 0;
   if (grey8) {
     if (out->stored_depth == 16) png_set_strip_16(png);
-    if (out->color_type & PNG_COLOR_MASK_ALPHA) png_set_strip_alpha(png);
+    // Also the alpha a palette's transparency (tRNS) expands to.
+    png_set_strip_alpha(png);
     if (out->color_type == PNG_COLOR_TYPE_PALETTE) png_set_palette_to_rgb(png);
     if (colour) png_set_rgb_to_gray(png, 1, 0.299, 0.587);
   } else if (colour || (out->color_type & PNG_COLOR_MASK_ALPHA)) {
     png_destroy_read_struct(&png, &info, nullptr);
     return true;  // layout only
-  } else if (out->stored_depth == 16) {
+  } else if (out->stored_depth == 16 && kLittleEndian) {
     png_set_swap(png);  // host byte order (the file's is big-endian)
   }
   if (!colour && out->stored_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
@@ -105,8 +120,14 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
   if (png_get_channels(png, info) != 1 || row_bytes != static_cast<std::size_t>(out->width) * (out->depth / 8)) {
     png_error(png, "unexpected layout after conversion to one channel");
   }
-  out->bytes.resize(row_bytes * static_cast<std::size_t>(out->height));
-  out->rows.resize(static_cast<std::size_t>(out->height));
+  bool allocated = true;
+  try {
+    out->bytes.resize(row_bytes * static_cast<std::size_t>(out->height));
+    out->rows.resize(static_cast<std::size_t>(out->height));
+  } catch (const std::bad_alloc&) {
+    allocated = false;
+  }
+  if (!allocated) png_error(png, "out of memory");
   for (int v = 0; v < out->height; ++v) out->rows[static_cast<std::size_t>(v)] = out->bytes.data() + row_bytes * v;
   png_read_image(png, out->rows.data());
   png_read_end(png, nullptr);
@@ -151,7 +172,17 @@ bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, J
     return false;
   }
   jpeg_start_decompress(&codec);
-  *out = ImageU8(static_cast<int>(codec.output_width), static_cast<int>(codec.output_height));
+  bool allocated = true;
+  try {
+    *out = ImageU8(static_cast<int>(codec.output_width), static_cast<int>(codec.output_height));
+  } catch (const std::bad_alloc&) {
+    allocated = false;
+  }
+  if (!allocated) {
+    std::snprintf(failure->message.text, sizeof failure->message.text, "out of memory");
+    jpeg_destroy_decompress(&codec);
+    return false;
+  }
   while (codec.output_scanline < codec.output_height) {
     JSAMPROW row = out->row(static_cast<int>(codec.output_scanline));
     jpeg_read_scanlines(&codec, &row, 1);
@@ -170,7 +201,13 @@ Image<T> ToImage(const PngPixels& pixels) {
 
 void PngWrite(png_structp png, png_bytep data, png_size_t n) {
   auto* sink = static_cast<std::vector<unsigned char>*>(png_get_io_ptr(png));
-  sink->insert(sink->end(), data, data + n);
+  bool stored = true;
+  try {  // no exception may pass through libpng's C frames
+    sink->insert(sink->end(), data, data + n);
+  } catch (const std::bad_alloc&) {
+    stored = false;
+  }
+  if (!stored) png_error(png, "out of memory");
 }
 
 void PngFlush(png_structp) {}
@@ -186,7 +223,12 @@ bool EncodePngPixels(const unsigned char* pixels, int width, int height, int bit
     return false;
   }
   png_infop info = png_create_info_struct(png);
-  if (info == nullptr || setjmp(png_jmpbuf(png))) {
+  if (info == nullptr) {
+    std::snprintf(message->text, sizeof message->text, "out of memory");
+    png_destroy_write_struct(&png, nullptr);
+    return false;
+  }
+  if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
     return false;
   }
@@ -194,10 +236,10 @@ bool EncodePngPixels(const unsigned char* pixels, int width, int height, int bit
   png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), bit_depth, color_type,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, level);
-  png_set_compression_strategy(png, Z_RLE);
+  png_set_compression_strategy(png, level == 1 ? Z_RLE : Z_DEFAULT_STRATEGY);
   if (level == 1) png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_write_info(png, info);
-  if (bit_depth == 16) png_set_swap(png);  // the rows are in host byte order
+  if (bit_depth == 16 && kLittleEndian) png_set_swap(png);  // the rows are in host byte order
   const int channels = color_type == PNG_COLOR_TYPE_RGB ? 3 : 1;
   const std::size_t row_bytes = static_cast<std::size_t>(width) * channels * (bit_depth / 8);
   for (int v = 0; v < height; ++v) png_write_row(png, pixels + row_bytes * v);
@@ -234,7 +276,7 @@ ImageU8 DecodePgm(const unsigned char* data, std::size_t size, const std::string
     }
     long value = -1;
     while (pos < size && std::isdigit(data[pos]) && value < 1000000) value = (value < 0 ? 0 : 10 * value) + (data[pos++] - '0');
-    return value;
+    return pos < size && std::isdigit(data[pos]) ? -1L : value;  // more digits: far too large
   };
   const long width = number(), height = number(), maxval = number();
   if (width <= 0 || height <= 0 || static_cast<double>(width) * height > kMaxPixels || maxval <= 0 || maxval > 255 ||

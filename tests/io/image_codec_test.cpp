@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <png.h>
 #include <zlib.h>
 
 #include "ssta/core/error.h"
@@ -75,6 +76,42 @@ TEST(ImageCodec, GreyDecodingMatchesOpenCvForEveryLayout) {
     const std::vector<unsigned char> bytes = Encoded(c.image, c.ext);
     EXPECT_EQ(GreyDifferences(DecodeGrey(bytes.data(), bytes.size(), c.name), bytes), 0) << c.name;
   }
+}
+
+/// A PNG written by libpng's simplified API from 8-bit `pixels` in `format` (with `colormap`
+/// for the colour-mapped formats).
+std::vector<unsigned char> LibpngEncoded(const std::vector<unsigned char>& pixels, int width, int height,
+                                         png_uint_32 format, const std::vector<unsigned char>& colormap = {}) {
+  png_image image{};
+  image.version = PNG_IMAGE_VERSION;
+  image.width = static_cast<png_uint_32>(width);
+  image.height = static_cast<png_uint_32>(height);
+  image.format = format;
+  image.colormap_entries = static_cast<png_uint_32>(colormap.size() / 4);
+  png_alloc_size_t size = 0;
+  const void* map = colormap.empty() ? nullptr : colormap.data();
+  EXPECT_TRUE(png_image_write_to_memory(&image, nullptr, &size, 0, pixels.data(), 0, map)) << image.message;
+  std::vector<unsigned char> bytes(size);
+  EXPECT_TRUE(png_image_write_to_memory(&image, bytes.data(), &size, 0, pixels.data(), 0, map)) << image.message;
+  bytes.resize(size);
+  return bytes;
+}
+
+TEST(ImageCodec, PalettesWithTransparencyAndGreyWithAlphaDecodeAsOpenCv) {
+  // Four colours, two of them partly transparent: libpng writes a palette and a tRNS chunk.
+  const std::vector<unsigned char> colormap = {255, 0, 0, 255, 0, 200, 0, 128, 20, 40, 250, 0, 90, 90, 90, 255};
+  std::vector<unsigned char> indices(31 * 17);
+  for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = static_cast<unsigned char>((i * 7 + i / 31) % 4);
+  std::vector<unsigned char> bytes = LibpngEncoded(indices, 31, 17, PNG_FORMAT_RGBA_COLORMAP, colormap);
+  EXPECT_EQ(GreyDifferences(DecodeGrey(bytes.data(), bytes.size(), "palette.png"), bytes), 0);
+  // Grey and alpha.
+  std::vector<unsigned char> grey_alpha(31 * 17 * 2);
+  for (std::size_t i = 0; i < grey_alpha.size(); ++i) grey_alpha[i] = static_cast<unsigned char>(i * 37);
+  bytes = LibpngEncoded(grey_alpha, 31, 17, PNG_FORMAT_GA);
+  EXPECT_EQ(GreyDifferences(DecodeGrey(bytes.data(), bytes.size(), "ga.png"), bytes), 0);
+  const StoredPng stored = DecodePngAsStored(bytes.data(), bytes.size(), "ga.png");
+  EXPECT_EQ(stored.channels, 2);
+  EXPECT_TRUE(stored.u8.empty());
 }
 
 TEST(ImageCodec, BinaryPgmsDecodeAsOpenCvReadsThem) {
@@ -157,6 +194,10 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
   const std::string short_pgm = "P5 4 2 255\n1234567";
   EXPECT_EQ(message({short_pgm.begin(), short_pgm.end()}),
             "cam0/1.png: cannot decode PGM: the data ends early (truncated)");
+  // A width of eight digits is not read as a seven-digit width and a height.
+  const std::string long_pgm = "P5 12345678 1 255\n" + std::string(64, 'x');
+  EXPECT_EQ(message({long_pgm.begin(), long_pgm.end()}),
+            "cam0/1.png: cannot decode PGM: a bad header (8-bit binary P5 is read)");
   std::vector<unsigned char> png = Encoded(Textured(CV_8UC1, 11), ".png");
   png.resize(png.size() / 2);
   EXPECT_EQ(message(png).rfind("cam0/1.png: cannot decode PNG: ", 0), 0u) << message(png);

@@ -21,7 +21,8 @@ bool IsJpeg(const void* data, std::size_t size);
 /// A PNG, JPEG or 8-bit binary PGM (the map's grid export) as 8-bit grey: 16-bit samples keep
 /// their high byte, a palette is expanded, alpha dropped, and colour weighted 0.299 R + 0.587 G
 /// + 0.114 B (as OpenCV's IMREAD_GRAYSCALE). Anything else, or data that cannot be decoded, is
-/// an error.
+/// an error. Unlike OpenCV, an EXIF orientation tag is not applied (the pixels come as stored)
+/// and CMYK or YCCK JPEGs are not read.
 ImageU8 DecodeGrey(const void* data, std::size_t size, const std::string& where);
 
 /// A PNG with its samples as stored: `channels` is 1 (grey), 2 (grey and alpha), 3 (colour or
