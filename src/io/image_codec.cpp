@@ -59,6 +59,12 @@ void PngFail(png_structp png, png_const_charp message) {
 
 void PngWarn(png_structp, png_const_charp) {}  // libpng's warnings would go to stderr
 
+/// Sets `message` to `text` and says that the coding failed.
+bool Failed(CodecMessage* message, const char* text) {
+  std::snprintf(message->text, sizeof message->text, "%s", text);
+  return false;
+}
+
 /// What DecodePngPixels read: the layout before any transform, then the pixels after.
 struct PngPixels {
   int color_type = 0;
@@ -75,15 +81,11 @@ struct PngPixels {
 /// only (others leave `decoded` false, their layout filled in).
 bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, PngPixels* out, CodecMessage* message) {
   png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, message, PngFail, PngWarn);
-  if (png == nullptr) {
-    std::snprintf(message->text, sizeof message->text, "libpng cannot start");
-    return false;
-  }
+  if (png == nullptr) return Failed(message, "libpng cannot start");
   png_infop info = png_create_info_struct(png);
   if (info == nullptr) {
-    std::snprintf(message->text, sizeof message->text, "out of memory");
     png_destroy_read_struct(&png, nullptr, nullptr);
-    return false;
+    return Failed(message, "out of memory");
   }
   PngSource source{data, size, 0};
   if (setjmp(png_jmpbuf(png))) {
@@ -167,9 +169,8 @@ bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, J
   jpeg_read_header(&codec, TRUE);
   codec.out_color_space = JCS_GRAYSCALE;
   if (static_cast<double>(codec.image_width) * codec.image_height > kMaxPixels) {
-    std::snprintf(failure->message.text, sizeof failure->message.text, "the image is larger than 2^30 pixels");
     jpeg_destroy_decompress(&codec);
-    return false;
+    return Failed(&failure->message, "the image is larger than 2^30 pixels");
   }
   jpeg_start_decompress(&codec);
   bool allocated = true;
@@ -179,9 +180,8 @@ bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, J
     allocated = false;
   }
   if (!allocated) {
-    std::snprintf(failure->message.text, sizeof failure->message.text, "out of memory");
     jpeg_destroy_decompress(&codec);
-    return false;
+    return Failed(&failure->message, "out of memory");
   }
   while (codec.output_scanline < codec.output_height) {
     JSAMPROW row = out->row(static_cast<int>(codec.output_scanline));
@@ -218,15 +218,11 @@ void PngFlush(png_structp) {}
 bool EncodePngPixels(const unsigned char* pixels, int width, int height, int bit_depth, int color_type, int level,
                      std::vector<unsigned char>* sink, CodecMessage* message) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, message, PngFail, PngWarn);
-  if (png == nullptr) {
-    std::snprintf(message->text, sizeof message->text, "libpng cannot start");
-    return false;
-  }
+  if (png == nullptr) return Failed(message, "libpng cannot start");
   png_infop info = png_create_info_struct(png);
   if (info == nullptr) {
-    std::snprintf(message->text, sizeof message->text, "out of memory");
     png_destroy_write_struct(&png, nullptr);
-    return false;
+    return Failed(message, "out of memory");
   }
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
