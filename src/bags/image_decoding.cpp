@@ -64,7 +64,11 @@ ImageU8 ToImage(const cv::Mat& grey) {
   return image;
 }
 
-cv::Mat GreyFromCompressed(const RosCompressedImage& m, const std::string& where) {
+}  // namespace
+
+ImageU8 GreyImage(const RosImage& image, const std::string& where) { return ToImage(GreyFromImage(image, where)); }
+
+ImageU8 GreyImage(const RosCompressedImage& m, const std::string& where) {
   if (m.format.find("compressedDepth") != std::string::npos) throw Error(where + ": a compressed depth image, not a camera image");
   // image_transport writes "bayer_rggb8; png compressed ...": the PNG holds the mosaic, which
   // decoding as grey would pass on undemosaiced.
@@ -72,16 +76,7 @@ cv::Mat GreyFromCompressed(const RosCompressedImage& m, const std::string& where
     throw Error(where + ": a compressed Bayer mosaic (" + m.format + ") is not read; record the raw Image or a debayered topic");
   }
   if (m.data.empty()) throw Error(where + ": the compressed image (" + m.format + ") is empty");
-  const ImageU8 grey = DecodeGrey(m.data.data(), m.data.size(), where + " (" + m.format + ")");
-  return cv::Mat(grey.height(), grey.width(), CV_8UC1, const_cast<std::uint8_t*>(grey.data())).clone();
-}
-
-}  // namespace
-
-ImageU8 GreyImage(const RosImage& image, const std::string& where) { return ToImage(GreyFromImage(image, where)); }
-
-ImageU8 GreyImage(const RosCompressedImage& image, const std::string& where) {
-  return ToImage(GreyFromCompressed(image, where));
+  return DecodeGrey(m.data.data(), m.data.size(), where + " (" + m.format + ")");
 }
 
 BagImageSource::BagImageSource(std::shared_ptr<const BagReader> bag, std::array<RosEncoding, 2> encodings,
@@ -106,9 +101,12 @@ StereoImages BagImageSource::Read(const StereoFrame& frame) const {
 ImageU8 BagImageSource::ReadOne(const BagMessageRef& ref, int side, const std::string& where) const {
   const auto s = static_cast<std::size_t>(side);
   const std::vector<std::uint8_t> bytes = bag_->Read(ref);
+  // A compressed image is decoded into `decoded` and seen through `grey` without a copy.
+  ImageU8 decoded;
   cv::Mat grey;
   if (compressed_[s]) {
-    grey = GreyFromCompressed(DecodeCompressedImage(bytes, encodings_[s], where), where);
+    decoded = GreyImage(DecodeCompressedImage(bytes, encodings_[s], where), where);
+    grey = cv::Mat(decoded.height(), decoded.width(), CV_8UC1, decoded.data());
   } else {
     grey = GreyFromImage(DecodeImage(bytes, encodings_[s], where), where);
   }
@@ -121,9 +119,9 @@ ImageU8 BagImageSource::ReadOne(const BagMessageRef& ref, int side, const std::s
   if (camera.remap) {
     cv::Mat rectified;
     cv::remap(grey, rectified, camera.map1, camera.map2, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar(0));
-    grey = rectified;
+    return ToImage(rectified);
   }
-  return ToImage(grey);
+  return decoded.empty() ? ToImage(grey) : decoded;
 }
 
 }  // namespace ssta::internal

@@ -62,10 +62,11 @@ StoredPng ReadOneChannelPng(const std::string& path, int bit_depth, const char* 
   return png;
 }
 
-void WriteBytesOf(const std::vector<unsigned char>& bytes, const std::string& path) {
+/// Image files are written as PNG: a name that promises another format is refused before any
+/// work.
+void RequirePngName(const std::string& path) {
   const std::string ext = std::filesystem::path(path).extension().string();
   if (ext != ".png" && ext != ".PNG") throw Error(path + ": images are written as PNG (name the file .png)");
-  WriteFileBytes(bytes, path);
 }
 
 }  // namespace
@@ -83,15 +84,24 @@ ImageU16 ReadImageU16(const std::string& path) {
   return ReadOneChannelPng(path, 16, "a 16-bit single-channel image").u16;
 }
 
-// Level 1 is fast (the per-frame outputs); the compact form takes zlib's strongest.
-void WriteImage(const ImageU8& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
+void WriteImage(const ImageU8& image, const std::string& path) {
+  RequirePngName(path);
+  WritePng(image, path);
+}
 
-void WriteImage(const ImageU16& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
+void WriteImage(const ImageU16& image, const std::string& path) {
+  RequirePngName(path);
+  WriteFileBytes(EncodePng(image, 1, path), path);
+}
 
-void WriteImage(const ImageRgb& image, const std::string& path) { WriteBytesOf(EncodePng(image, 1, path), path); }
+void WriteImage(const ImageRgb& image, const std::string& path) {
+  RequirePngName(path);
+  WritePng(image, path);
+}
 
 void WriteImageCompact(const ImageRgb& image, const std::string& path) {
-  WriteBytesOf(EncodePng(image, 9, path), path);
+  RequirePngName(path);
+  WriteFileBytes(EncodePng(image, 9, path), path);  // zlib's strongest: pictures for people
 }
 
 }  // namespace ssta
