@@ -13,7 +13,7 @@ seconds=${1:-30}
 bash scripts/install-deps.sh
 build_dir=${BUILD_DIR:-build-fuzz}
 jobs=${JOBS:-2}
-targets=${FUZZ_TARGETS:-asl_csv kitti_text sensor_yaml config map_file mcap ros_messages}
+targets=${FUZZ_TARGETS:-asl_csv kitti_text sensor_yaml config map_file mcap ros_messages image_codec}
 
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DSSTA_BUILD_FUZZERS=ON -DSSTA_BUILD_APPS=OFF -DSSTA_BUILD_TESTS=OFF >/dev/null

@@ -1,5 +1,6 @@
 #include "ssta/files/png_file.h"
 
+#include <cmath>
 #include <csetjmp>
 #include <cstdint>
 #include <cstdio>
@@ -29,6 +30,9 @@ const bool kLittleEndian = [] {
   std::memcpy(&first, &one, 1);
   return first == 1;
 }();
+
+/// The most bytes deflate can expand one byte to: a 258-byte match in two bits.
+constexpr double kDeflateMaxRatio = 1032.0;
 
 struct PngSource {
   const unsigned char* data;
@@ -91,6 +95,16 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
   png_read_info(png, info);
   out->color_type = png_get_color_type(png, info);
   out->stored_depth = png_get_bit_depth(png, info);
+  {
+    // Deflate packs at most 1032 bytes into one, so the rows a header claims cannot come from
+    // fewer bytes than this: a damaged header is refused before its pixels are allocated.
+    const double width = png_get_image_width(png, info), height = png_get_image_height(png, info);
+    if (width * height > kMaxDecodedPixels) png_error(png, "the image is larger than 2^30 pixels");
+    const double row_bytes = std::ceil(width * png_get_channels(png, info) * out->stored_depth / 8.0);
+    if (height * (row_bytes + 1.0) > kDeflateMaxRatio * static_cast<double>(size)) {
+      png_error(png, "the data is far too short for the size its header claims (damaged or truncated)");
+    }
+  }
   const bool colour = (out->color_type & PNG_COLOR_MASK_COLOR) != 0;
   if (grey8) {
     if (out->stored_depth == 16) png_set_strip_16(png);
@@ -108,7 +122,6 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
   const png_uint_32 width = png_get_image_width(png, info), height = png_get_image_height(png, info);
-  if (static_cast<double>(width) * height > kMaxDecodedPixels) png_error(png, "the image is larger than 2^30 pixels");
   const int depth = png_get_bit_depth(png, info);
   const std::size_t row_bytes = png_get_rowbytes(png, info);
   if (png_get_channels(png, info) != 1 || row_bytes != static_cast<std::size_t>(width) * (depth / 8)) {

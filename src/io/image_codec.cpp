@@ -6,8 +6,9 @@
 #include <cstring>
 #include <new>
 
-// clang-format off: jpeglib.h needs <cstdio> first.
+// clang-format off: jpeglib.h needs <cstdio> first, jerror.h jpeglib.h.
 #include <jpeglib.h>
+#include <jerror.h>
 // clang-format on
 
 #include "ssta/core/error.h"
@@ -39,12 +40,25 @@ void JpegFail(j_common_ptr codec) {
 
 void JpegQuiet(j_common_ptr) {}
 
+/// libjpeg's warnings, which it would print and go on from. Data that ends early is an error
+/// here: libjpeg would fill the missing rows with grey, and a camera frame cut short by a full
+/// disk would reach the matcher as flat ground. Other warnings (extraneous bytes between
+/// markers, which some cameras write) are let through, as OpenCV does.
+void JpegWarn(j_common_ptr codec, int level) {
+  if (level < 0 && codec->err->msg_code == JWRN_JPEG_EOF) {
+    auto* failure = reinterpret_cast<JpegFailure*>(codec->err);
+    std::snprintf(failure->message, sizeof failure->message, "the data ends early (truncated)");
+    std::longjmp(failure->jump, 1);
+  }
+}
+
 /// To 8-bit grey through libjpeg's own colour conversion, as OpenCV's IMREAD_GRAYSCALE.
 bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, JpegFailure* failure) {
   jpeg_decompress_struct codec;
   codec.err = jpeg_std_error(&failure->manager);
   failure->manager.error_exit = JpegFail;
   failure->manager.output_message = JpegQuiet;
+  failure->manager.emit_message = JpegWarn;
   if (setjmp(failure->jump)) {
     jpeg_destroy_decompress(&codec);
     return false;

@@ -205,6 +205,11 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
   jpeg.resize(200);  // the headers, not the scan
   EXPECT_EQ(message(jpeg).rfind("cam0/1.png: cannot decode JPEG: ", 0), 0u) << message(jpeg);
   EXPECT_THROW(DecodePngAsStored(jpeg.data(), jpeg.size(), "x"), Error);
+  // Cut inside the scan: libjpeg alone would fill the rest with grey.
+  std::vector<unsigned char> cut_scan = Encoded(Textured(CV_8UC1, 13), ".jpg");
+  ASSERT_GT(cut_scan.size(), 1200u);
+  cut_scan.resize(cut_scan.size() - 400);
+  EXPECT_EQ(message(cut_scan), "cam0/1.png: cannot decode JPEG: the data ends early (truncated)");
 
   // A header that claims 50000 x 50000 px (valid CRCs, an empty IDAT) is refused before
   // anything is allocated for its pixels.
@@ -221,6 +226,13 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
   chunk("IDAT", {});
   chunk("IEND", {});
   EXPECT_EQ(message(huge), "cam0/1.png: cannot decode PNG: the image is larger than 2^30 pixels");
+  // 20000 x 20000 px is allowed, but not from a file of 57 bytes: deflate cannot expand that far.
+  huge.resize(8);
+  chunk("IHDR", {0, 0, 0x4e, 0x20, 0, 0, 0x4e, 0x20, 8, 0, 0, 0, 0});
+  chunk("IDAT", {});
+  chunk("IEND", {});
+  EXPECT_EQ(message(huge),
+            "cam0/1.png: cannot decode PNG: the data is far too short for the size its header claims (damaged or truncated)");
 }
 
 }  // namespace
