@@ -14,6 +14,9 @@
 namespace ssta {
 namespace {
 
+constexpr auto kNonTraversable = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+constexpr auto kUndecidedStep = static_cast<std::uint8_t>(TravClass::kUndecided);
+
 /// A point in the levelled frame: east, north and up of the camera.
 struct LevelledPoint {
   std::uint32_t pixel;
@@ -176,8 +179,13 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     // A point whose depth error smears it sideways over the step radius cannot tell which side
     // of a jump it lies on.
     const int c = grid.CellOfPoint(k);
-    if (c < 0 || points[k].smear_squared > radius * radius) continue;
-    (*step_classes)[points[k].pixel] = cell_class[static_cast<std::size_t>(c)];
+    if (c < 0) continue;
+    const std::uint8_t cls = cell_class[static_cast<std::size_t>(c)];
+    if (points[k].smear_squared > radius * radius) {
+      if (cls == kNonTraversable) (*step_classes)[points[k].pixel] = kUndecidedStep;
+      continue;
+    }
+    (*step_classes)[points[k].pixel] = cls;
   }
 }
 
@@ -190,7 +198,9 @@ void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels) {
     std::uint8_t& label = (*labels)[i];
     const std::uint8_t step = step_classes[i];
     if (step == 0 || label == 0 || label > kUndecided) continue;
-    if (label == kUndecided) {
+    if (step == kUndecidedStep) {
+      if (label != kNon) label = kUndecided;
+    } else if (label == kUndecided) {
       if (step == kNon) label = kNon;
     } else {
       label = static_cast<std::uint8_t>(Worse(static_cast<TravClass>(label), static_cast<TravClass>(step)));

@@ -726,5 +726,29 @@ TEST(RefineByLocalSteps, TheBandAroundAJumpTakesItsStepClassOnBothSides) {
     EXPECT_EQ(LabelAt(w, 0.0, 2.6), 1);          // the terrace's level top
   }
 }
+
+TEST(RefineByLocalSteps, PointsSmearedOverTheRadiusBesideAJumpAreUndecidedNotTraversable) {
+  // Depth noise of 0.06 Z^2: beyond Z = 1.8 m a point's error along its ray exceeds the step
+  // radius (0.2 m), so it cannot tell which side of the jump at Z = 2 m it lies on.
+  const DepthNoise noise{0.06};
+  for (const auto& [jump, band] : {std::pair{0.8, 4}, {0.05, 1}}) {
+    SCOPED_TRACE(jump);
+    StepWorld w(200, 200);
+    w.Level(-1, 1, 1, 2, 1.0);
+    w.Level(-1, 1, 2, 3, 1.0 - jump);
+    RefineByLocalSteps(w.cloud, w.normals, {0, -1, 0}, VehicleOptions{}, noise, &w.labels);
+    EXPECT_EQ(LabelAt(w, 0.0, 1.95), band);  // at the foot: a jump far beyond the noise is near
+    EXPECT_EQ(LabelAt(w, 0.0, 2.05), band);  // on the edge
+    EXPECT_EQ(LabelAt(w, 0.0, 1.5), 1);      // 0.5 m before it, placed well enough to be judged
+    EXPECT_EQ(LabelAt(w, 0.0, 2.9), 1);      // smeared over twice the radius: no step class at all
+  }
+  // A point already non-traversable stays so.
+  StepWorld red(200, 200);
+  red.Level(-1, 1, 1, 2, 1.0);
+  red.Level(-1, 1, 2, 3, 0.2);
+  red.labels.Fill(3);
+  RefineByLocalSteps(red.cloud, red.normals, {0, -1, 0}, VehicleOptions{}, noise, &red.labels);
+  EXPECT_EQ(LabelAt(red, 0.0, 1.95), 3);
+}
 }  // namespace
 }  // namespace ssta

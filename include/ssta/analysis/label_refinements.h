@@ -228,14 +228,17 @@ void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, co
 /// within vehicle.step_radius_m of it. Each pixel labelled 1-3 takes the worse of its label and
 /// its cell's step class; an undecided pixel within the radius of a jump above max_step_m
 /// becomes non-traversable. A point whose depth error along its ray (k Z |p|) exceeds the step
-/// radius cannot tell which side of a jump it lies on: its label stays as it was. All images
-/// share the cloud's size.
+/// radius cannot tell which side of a jump it lies on: beside a jump above max_step_m (its cell's
+/// step) a traversable or semi-traversable label becomes undecided, for missing an obstacle costs
+/// more than a false alarm and the noise allows either; elsewhere its label stays as it was. Points
+/// smeared over twice the radius stay out of the grid. All images share the cloud's size.
 void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
                         const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* labels);
 
 /// RefineByLocalSteps in two steps, so that the costly one can run beside the refinements before
 /// it: LocalStepClasses reads the cloud and normals only and writes, per pixel, the step class of
-/// its point (0: none, its point is missing or too smeared); ApplyLocalStepClasses then changes
+/// its point (0: none, its point is missing or smeared over twice the radius; 4, undecided: smeared
+/// over the radius beside a jump above max_step_m); ApplyLocalStepClasses then changes
 /// the labels. The two in turn give exactly RefineByLocalSteps' labels.
 /// `supported` (optional, the cloud's size): points where it is 0 stay out of the grid and get
 /// no step class.
