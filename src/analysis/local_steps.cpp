@@ -177,7 +177,8 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
   for (std::size_t c = 0; c < steps.size(); ++c) cell_class[c] = static_cast<std::uint8_t>(vehicle.ClassifyStep(steps[c]));
   for (std::size_t k = 0; k < points.size(); ++k) {
     // A point whose depth error smears it sideways over the step radius cannot tell which side
-    // of a jump it lies on.
+    // of a jump it lies on: beside one (its cell's step is non-traversable) it is undecided,
+    // elsewhere it gets no step class.
     const int c = grid.CellOfPoint(k);
     if (c < 0) continue;
     const std::uint8_t cls = cell_class[static_cast<std::size_t>(c)];
