@@ -24,6 +24,7 @@
 # runs' out/accuracy/<set> folders).
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
+caller_dir=$PWD  # where relative paths among the args are read from
 cd "$(dirname "$0")/.."
 # SSTA (the binary that classifies and maps) and SSTA_SYNTH (the one that renders) let two
 # builds be compared on the same rendered scenes.

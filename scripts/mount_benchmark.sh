@@ -12,6 +12,7 @@
 # (default out/mount/sequences) where the drives are rendered once, OUT (default out/mount) where
 # the reports go. Needs a built tree: scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
+caller_dir=$PWD  # where relative paths among the args are read from
 cd "$(dirname "$0")/.."
 ssta=${SSTA:-build/apps/ssta}
 . scripts/scene_sets.sh

@@ -3,7 +3,8 @@
 # scripts/mount_benchmark.sh.
 
 # parse_set_args DEFAULT_FRAMES [SET [FRAMES]] [-- ARGS...]: sets set_name (default tuning),
-# frames (DEFAULT_FRAMES unless given), the array args (what follows --) and the array runs,
+# frames (DEFAULT_FRAMES unless given), the array args (what follows --; a relative path that
+# names a file in $caller_dir, where the user stood, made absolute) and the array runs,
 # the set's scene:seed pairs, the named scenes first. A set that is neither tuning nor report
 # prints the calling script's usage and exits with 2.
 parse_set_args() {
@@ -17,7 +18,16 @@ parse_set_args() {
     shift
   fi
   [ "${1:-}" = "--" ] && shift
-  args=("$@")
+  # The script runs from the repository's root: a relative path among the args that names a
+  # file where the user stands (a --config beside them) is made absolute.
+  args=()
+  local arg
+  for arg in "$@"; do
+    if [ -n "${caller_dir:-}" ] && [ "${arg#/}" = "$arg" ] && [ "${arg#-}" = "$arg" ] && [ -e "$caller_dir/$arg" ]; then
+      arg=$caller_dir/$arg
+    fi
+    args+=("$arg")
+  done
   case "$set_name" in
     tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
     report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
