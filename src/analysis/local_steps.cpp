@@ -14,8 +14,8 @@
 namespace ssta {
 namespace {
 
-constexpr auto kNonTraversable = static_cast<std::uint8_t>(TravClass::kNonTraversable);
-constexpr auto kUndecidedStep = static_cast<std::uint8_t>(TravClass::kUndecided);
+constexpr auto kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
+constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
 
 /// A point in the levelled frame: east, north and up of the camera.
 struct LevelledPoint {
@@ -183,7 +183,7 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     if (c < 0) continue;
     const std::uint8_t cls = cell_class[static_cast<std::size_t>(c)];
     if (points[k].smear_squared > radius * radius) {
-      if (cls == kNonTraversable) (*step_classes)[points[k].pixel] = kUndecidedStep;
+      if (cls == kNon) (*step_classes)[points[k].pixel] = kUndecided;
       continue;
     }
     (*step_classes)[points[k].pixel] = cls;
@@ -193,13 +193,11 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
 void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels) {
   SSTA_CHECK(labels != nullptr && labels->width() == step_classes.width() && labels->height() == step_classes.height(),
              "ApplyLocalStepClasses: step classes and labels differ in size");
-  constexpr auto kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
-  constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
   for (std::size_t i = 0; i < labels->size(); ++i) {
     std::uint8_t& label = (*labels)[i];
     const std::uint8_t step = step_classes[i];
     if (step == 0 || label == 0 || label > kUndecided) continue;
-    if (step == kUndecidedStep) {
+    if (step == kUndecided) {
       if (label != kNon) label = kUndecided;
     } else if (label == kUndecided) {
       if (step == kNon) label = kNon;

@@ -99,7 +99,7 @@ bool DecodePngPixels(const unsigned char* data, std::size_t size, bool grey8, Pn
     // Deflate packs at most 1032 bytes into one, so the rows a header claims cannot come from
     // fewer bytes than this: a damaged header is refused before its pixels are allocated.
     const double width = png_get_image_width(png, info), height = png_get_image_height(png, info);
-    if (width * height > kMaxDecodedPixels) png_error(png, "the image is larger than 2^30 pixels");
+    if (TooLargeToDecode(width, height)) png_error(png, "the image is larger than 2^30 pixels");
     const double row_bytes = std::ceil(width * png_get_channels(png, info) * out->stored_depth / 8.0);
     if (height * (row_bytes + 1.0) > kDeflateMaxRatio * static_cast<double>(size)) {
       png_error(png, "the data is far too short for the size its header claims (damaged or truncated)");

@@ -67,7 +67,7 @@ bool DecodeJpegGrey(const unsigned char* data, std::size_t size, ImageU8* out, J
   jpeg_mem_src(&codec, data, static_cast<unsigned long>(size));
   jpeg_read_header(&codec, TRUE);
   codec.out_color_space = JCS_GRAYSCALE;
-  if (static_cast<double>(codec.image_width) * codec.image_height > kMaxDecodedPixels) {
+  if (TooLargeToDecode(codec.image_width, codec.image_height)) {
     jpeg_destroy_decompress(&codec);
     return Failed(failure, "the image is larger than 2^30 pixels");
   }
@@ -109,8 +109,7 @@ ImageU8 DecodePgm(const unsigned char* data, std::size_t size, const std::string
     return pos < size && std::isdigit(data[pos]) ? -1L : value;  // more digits: far too large
   };
   const long width = number(), height = number(), maxval = number();
-  if (width <= 0 || height <= 0 || static_cast<double>(width) * height > kMaxDecodedPixels || maxval <= 0 || maxval > 255 ||
-      pos >= size ||
+  if (width <= 0 || height <= 0 || TooLargeToDecode(width, height) || maxval <= 0 || maxval > 255 || pos >= size ||
       !std::isspace(data[pos])) {
     throw Error(where + ": cannot decode PGM: a bad header (8-bit binary P5 is read)");
   }

@@ -12,9 +12,10 @@ namespace ssta {
 /// (ssta/io/image_codec.h adds JPEG and PGM). Errors are ssta::Error naming `where` (a file or
 /// a bag message).
 
-/// Images larger than this are refused before their pixels are allocated: a damaged header
-/// can claim billions.
-inline constexpr double kMaxDecodedPixels = 1073741824.0;  // 2^30
+/// Whether an image of `width` x `height` pixels is larger than the decoders accept (2^30
+/// pixels): such a header is refused before its pixels are allocated, for a damaged one can
+/// claim billions.
+inline bool TooLargeToDecode(double width, double height) { return width * height > 1073741824.0; }
 
 /// Whether `data` starts with the PNG signature.
 bool IsPng(const void* data, std::size_t size);
