@@ -40,14 +40,19 @@ void JpegFail(j_common_ptr codec) {
 
 void JpegQuiet(j_common_ptr) {}
 
-/// libjpeg's warnings, which it would print and go on from. Data that ends early is an error
-/// here: libjpeg would fill the missing rows with grey, and a camera frame cut short by a full
-/// disk would reach the matcher as flat ground. Other warnings (extraneous bytes between
-/// markers, which some cameras write) are let through, as OpenCV does.
+/// libjpeg's warnings, which it would print and go on from. A scan that ends early is an error
+/// here, whether the data stops (a file cut short by a full disk) or a marker comes before the
+/// scan's data is complete (a cut file whose end marker a writer appended): libjpeg would fill
+/// the missing rows with grey, which would reach the matcher as flat ground. Other warnings
+/// (extraneous bytes between markers, which some cameras write) are let through, as OpenCV does.
 void JpegWarn(j_common_ptr codec, int level) {
-  if (level < 0 && codec->err->msg_code == JWRN_JPEG_EOF) {
+  if (level >= 0) return;
+  const int code = codec->err->msg_code;
+  if (code == JWRN_JPEG_EOF || code == JWRN_HIT_MARKER) {
     auto* failure = reinterpret_cast<JpegFailure*>(codec->err);
-    std::snprintf(failure->message, sizeof failure->message, "the data ends early (truncated)");
+    std::snprintf(failure->message, sizeof failure->message, "%s",
+                  code == JWRN_JPEG_EOF ? "the data ends early (truncated)"
+                                        : "the scan ends early at a marker (damaged or truncated)");
     std::longjmp(failure->jump, 1);
   }
 }

@@ -210,6 +210,11 @@ TEST(ImageCodec, DamagedDataIsAnErrorNamingWhere) {
   ASSERT_GT(cut_scan.size(), 1200u);
   cut_scan.resize(cut_scan.size() - 400);
   EXPECT_EQ(message(cut_scan), "cam0/1.png: cannot decode JPEG: the data ends early (truncated)");
+  // Cut inside the scan and closed with an end-of-image marker: libjpeg meets the marker
+  // before the scan's data is complete and would fill the rest with grey.
+  cut_scan.push_back(0xff);
+  cut_scan.push_back(0xd9);
+  EXPECT_EQ(message(cut_scan), "cam0/1.png: cannot decode JPEG: the scan ends early at a marker (damaged or truncated)");
 
   // A header that claims 50000 x 50000 px (valid CRCs, an empty IDAT) is refused before
   // anything is allocated for its pixels.
