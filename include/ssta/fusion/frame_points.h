@@ -46,7 +46,7 @@ inline constexpr int kMapSubpixelSteps = 1;
 /// matcher's images (FrameResult::left_matched, right_matched), the points sit at the disparity refined to
 /// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's. With
 /// options.hidden_drops, the lips of drop-offs whose foot the frame cannot see are
-/// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/mapping/hidden_drops.h).
+/// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/fusion/hidden_drops.h).
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const MappingOptions& options, const RectifiedGeometry& geometry,
                                               const VehicleOptions& vehicle);
