@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
 #include "core/run_both.h"
 #include "fusion/hidden_drops.h"
 #include "ssta/analysis/frame_analysis.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/core/error.h"
 #include "ssta/stereo/stereo_matcher.h"
 
@@ -44,6 +46,40 @@ float Gradient(float slope_deg) {
 }
 
 }  // namespace
+
+void AppendNoReturnRays(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                        const RectifiedGeometry& geometry, int stride, std::vector<ClassifiedPoint>* points) {
+  SSTA_CHECK(stride >= 1, "stride must be at least 1");
+  SSTA_CHECK(points != nullptr, "points must not be null");
+  // The lattice's phase, one of stride^2, from the frame's timestamp (mixed, as consecutive
+  // timestamps share their low bits): over frames the rays cover every pixel.
+  std::uint64_t mixed = static_cast<std::uint64_t>(frame.timestamp_ns) + 0x9E3779B97F4A7C15ull;
+  mixed = (mixed ^ (mixed >> 30)) * 0xBF58476D1CE4E5B9ull;
+  mixed = (mixed ^ (mixed >> 27)) * 0x94D049BB133111EBull;
+  mixed ^= mixed >> 31;
+  const auto phases = static_cast<std::uint64_t>(stride);
+  const int u0 = static_cast<int>(mixed % phases), v0 = static_cast<int>((mixed / phases) % phases);
+  const ImageU8& rules = frame.analysis.rules;
+  const auto texture = static_cast<std::uint8_t>(LabelRule::kTexture);
+  const Eigen::Isometry3f transform = world_T_rectified.cast<float>();
+  const Eigen::Vector3f up = frame.up_rectified.cast<float>();
+  const auto f = static_cast<float>(geometry.f);
+  for (int v = v0; v < rules.height(); v += stride) {
+    const std::uint8_t* row = rules.row(v);
+    const auto y = static_cast<float>((v - geometry.cv) / geometry.f);
+    for (int u = u0; u < rules.width(); u += stride) {
+      if (row[u] != texture) continue;
+      // Below the horizon a blank patch is ground the frame could not range, not a view into
+      // the open.
+      const Eigen::Vector3f ray(static_cast<float>(u - geometry.cu) / f, y, 1.0f);
+      if (ray.dot(up) <= 0.0f) continue;
+      ClassifiedPoint p;
+      p.world_p = transform * ray;  // 1 m deep along the ray: only its direction counts
+      p.no_return = true;
+      points->push_back(p);
+    }
+  }
+}
 
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
@@ -164,6 +200,9 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
       });
   ClassifiedPointsInWorld(frame, world_T_rectified, options.pixel_stride, mask ? &keep : nullptr, points,
                           refine ? &refined : nullptr, options.hidden_drops ? &lip : nullptr);
+  if (options.no_return_stride_px > 0) {
+    AppendNoReturnRays(frame, world_T_rectified, geometry, options.no_return_stride_px, points);
+  }
 }
 
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,

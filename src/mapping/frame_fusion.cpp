@@ -155,9 +155,12 @@ struct InsertScratch {
   std::vector<std::uint64_t> hit_codes;      ///< their Morton codes
   std::vector<octomap::OcTreeKey> hit_keys;  ///< and keys
   std::vector<FarAccumulator> far;           ///< voxels of points beyond range
+  std::vector<Eigen::Vector3d> no_return;    ///< directions of rays that ranged nothing (unit)
   // 2. The rays and the voxels they pass.
   std::vector<octomap::point3d> ray_ends;  ///< where each ray stops
   std::vector<octomap::OcTreeKey> ray_end_keys;
+  std::vector<octomap::point3d> open_ends;  ///< where each ray that ranged nothing stops at the latest
+  std::vector<octomap::OcTreeKey> open_end_keys;
   VoxelIndex ray_cells;  ///< free_space_ray_cell > 1: cell -> group
   std::vector<std::pair<Eigen::Vector3d, std::uint32_t>> ray_groups;  ///< sum of ends, count
   FreeSpaceWalk free_space;  ///< the voxels the rays pass
@@ -233,11 +236,23 @@ void FrameFusion::GroupPointsByVoxel(const std::vector<ClassifiedPoint>& points)
   scratch_.hit_codes.clear();
   scratch_.hit_keys.clear();
   far.clear();
+  scratch_.no_return.clear();
   const RangeTest range(options_.max_range_m);
   std::uint64_t last_code = ~std::uint64_t{0};
   VoxelIndex::Entry* entry = nullptr;  // of last_code (image neighbours share voxels)
   for (const ClassifiedPoint& point : points) {
     const Eigen::Vector3d p = point.world_p.cast<double>();
+    if (point.no_return) {
+      const Eigen::Vector3d d = p - origin_world_;
+      const double length = d.norm();
+      if (std::isfinite(length) && length > 0.0) {
+        scratch_.no_return.push_back(d / length);
+        ++stats_.rays_without_return;
+      } else {
+        ++stats_.points_rejected;
+      }
+      continue;
+    }
     octomap::OcTreeKey key;
     if (!p.allFinite() || !tree_.CoordToKeyChecked(p.x(), p.y(), p.z(), &key)) {
       ++stats_.points_rejected;
@@ -301,6 +316,16 @@ void FrameFusion::PlaceRayEnds() {
     const Eigen::Vector3d direction = (acc.sum_p / acc.points - origin_world_).normalized();
     AddRay(origin_world_ + direction * opt.max_range_m);
   }
+  scratch_.open_ends.clear();
+  scratch_.open_end_keys.clear();
+  for (const Eigen::Vector3d& direction : scratch_.no_return) {
+    const Eigen::Vector3d end = origin_world_ + direction * opt.max_range_m;
+    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()), static_cast<float>(end.z()));
+    octomap::OcTreeKey key_end;
+    if (!tree_.coordToKeyChecked(e, key_end)) continue;
+    scratch_.open_ends.push_back(e);
+    scratch_.open_end_keys.push_back(key_end);
+  }
 }
 
 void FrameFusion::MergeRayEndsPerCell() {
@@ -334,7 +359,9 @@ void FrameFusion::WalkRays() {
   const octomap::point3d origin(static_cast<float>(origin_world_.x()),
                                 static_cast<float>(origin_world_.y()),
                                 static_cast<float>(origin_world_.z()));
-  scratch_.free_space.Walk(tree_, origin, scratch_.ray_ends, scratch_.ray_end_keys);
+  const double p = options_.free_space_no_return_stop_prob;
+  scratch_.free_space.Walk(tree_, origin, scratch_.ray_ends, scratch_.ray_end_keys, scratch_.open_ends,
+                           scratch_.open_end_keys, static_cast<float>(std::log(p / (1.0 - p))));
 }
 
 void FrameFusion::CollectVoxels() {

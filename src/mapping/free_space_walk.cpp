@@ -17,14 +17,15 @@ namespace {
 /// Calls visit(key) with the key (int[3]) of exactly the voxels OcTreeBaseImpl::computeRayKeys
 /// (origin, end) puts in its KeyRay, in the same order: the same Amanatides-Woo walk written
 /// out with the same types and arithmetic (keys wrap around at 16 bits like OcTreeKey's).
-/// `key_origin`, `key_end`: the checked keys of origin and end.
+/// `key_origin`, `key_end`: the checked keys of origin and end. The walk stops early where
+/// visit returns false.
 template <typename Visit>
 void WalkRay(const TravOcTree& tree, const octomap::point3d& origin, const octomap::point3d& end,
              const octomap::OcTreeKey& key_origin, const octomap::OcTreeKey& key_end, Visit&& visit) {
   if (key_origin == key_end) return;
   int key[3] = {key_origin[0], key_origin[1], key_origin[2]};
   const int last[3] = {key_end[0], key_end[1], key_end[2]};
-  visit(key);
+  if (!visit(key)) return;
 
   octomap::point3d direction = (end - origin);
   const float length = static_cast<float>(direction.norm());
@@ -68,7 +69,7 @@ void WalkRay(const TravOcTree& tree, const octomap::point3d& origin, const octom
     if (key[0] == last[0] && key[1] == last[1] && key[2] == last[2]) return;
     // computeRayKeys: min(t_max) > length; the t are never NaN, so: all of them are.
     if ((t0 > length) & (t1 > length) & (t2 > length)) return;
-    visit(key);
+    if (!visit(key)) return;
   }
 }
 
@@ -96,10 +97,73 @@ std::uint64_t CodeOf(const int* k) {
                                                    static_cast<octomap::key_type>(k[2])));
 }
 
+/// What a tree holds at voxels asked one after the other along a ray: nothing (never
+/// observed), a voxel, or a surface it is sure of (occupancy log-odds at least a threshold).
+/// Consecutive voxels of a ray share most of their path from the root: each lookup starts from
+/// the deepest node the previous one shares with it, and a voxel in the block that decided the
+/// previous answer (an unobserved block, or a pruned one) gets that answer without a lookup.
+/// Read-only: two probes may read one tree side by side.
+class VoxelProbe {
+ public:
+  enum Held { kNothing, kVoxel, kSureSurface };
+
+  VoxelProbe(const TravOcTree& tree, float threshold)
+      : tree_(tree), threshold_(threshold), depth_(tree.getTreeDepth()) {
+    path_[0] = tree.getRoot();
+  }
+
+  /// What the tree holds at the voxel of Morton code `code`.
+  Held At(std::uint64_t code) {
+    unsigned start = 0;  // the depth to descend from: digits 0..start-1 are the last code's
+    if (decided_by_ > 0) {
+      const std::uint64_t diff = code ^ last_code_;
+      const unsigned shared =
+          diff == 0 ? depth_ : depth_ - 1 - (63 - static_cast<unsigned>(__builtin_clzll(diff))) / 3;
+      if (shared >= decided_by_) return answer_;
+      start = shared;
+    }
+    last_code_ = code;
+    const TravNode* node = path_[start];
+    unsigned d = start;
+    for (;;) {
+      if (node == nullptr) {  // an empty tree
+        answer_ = kNothing;
+        decided_by_ = d;
+        break;
+      }
+      if (!tree_.nodeHasChildren(node)) {  // a voxel, or a pruned block of equal voxels
+        answer_ = node->getLogOdds() >= threshold_ ? kSureSurface : kVoxel;
+        decided_by_ = d;
+        break;
+      }
+      const auto pos = static_cast<unsigned>((code >> (3 * (depth_ - 1 - d))) & 7u);
+      if (!tree_.nodeChildExists(node, pos)) {
+        answer_ = kNothing;
+        decided_by_ = d + 1;
+        break;
+      }
+      node = tree_.getNodeChild(node, pos);
+      path_[++d] = node;
+    }
+    return answer_;
+  }
+
+ private:
+  const TravOcTree& tree_;
+  float threshold_;
+  unsigned depth_;
+  std::array<const TravNode*, 17> path_{};  ///< path_[d]: the last lookup's node at depth d
+  std::uint64_t last_code_ = 0;
+  unsigned decided_by_ = 0;  ///< the last answer holds for every code sharing this many digits
+  Held answer_ = kNothing;
+};
+
 }  // namespace
 
 void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
-                         const std::vector<octomap::point3d>& ends, const std::vector<octomap::OcTreeKey>& end_keys) {
+                         const std::vector<octomap::point3d>& ends, const std::vector<octomap::OcTreeKey>& end_keys,
+                         const std::vector<octomap::point3d>& open_ends,
+                         const std::vector<octomap::OcTreeKey>& open_end_keys, float stop_log_odds) {
   octomap::OcTreeKey key_origin;
   const bool origin_ok = tree.coordToKeyChecked(origin, key_origin);  // the float origin's key
   overflow_.Clear();
@@ -112,6 +176,8 @@ void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
   use_bitmap_ = false;
   if (!origin_ok) return;
   std::array<int, 3> lo{}, hi{};
+  // The box of the rays to points only: the open rays mark few voxels (those the tree holds),
+  // and those outside it go to the sets.
   RayBox(key_origin, end_keys, &lo, &hi);
   use_bitmap_ = bitmap_.Reset(lo, hi);
   if (use_bitmap_) bitmap_2_.Reset(lo, hi);
@@ -122,18 +188,38 @@ void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
       if (use_bitmap_) {
         WalkRay(tree, origin, ends[r], key_origin, end_keys[r], [&](const int* k) {
           if (!marks->Set(k)) outside->Insert(CodeOf(k));
+          return true;
         });
       } else {
-        WalkRay(tree, origin, ends[r], key_origin, end_keys[r], [&](const int* k) { outside->Insert(CodeOf(k)); });
+        WalkRay(tree, origin, ends[r], key_origin, end_keys[r], [&](const int* k) {
+          outside->Insert(CodeOf(k));
+          return true;
+        });
       }
     }
   };
-  const std::size_t half = ends.size() / 2;
+  // The open rays up to the first sure surface, marking only the voxels the tree holds: each
+  // voxel is looked up first.
+  auto walk_open = [&](std::size_t first, std::size_t last, FreeBitmap* marks, CodeSet* outside) {
+    VoxelProbe probe(tree, stop_log_odds);
+    for (std::size_t r = first; r < last; ++r) {
+      WalkRay(tree, origin, open_ends[r], key_origin, open_end_keys[r], [&](const int* k) {
+        const std::uint64_t code = CodeOf(k);
+        const VoxelProbe::Held held = probe.At(code);
+        if (held == VoxelProbe::kSureSurface) return false;
+        if (held == VoxelProbe::kVoxel && (!use_bitmap_ || !marks->Set(k))) outside->Insert(code);
+        return true;
+      });
+    }
+  };
+  const std::size_t half = ends.size() / 2, open_half = open_ends.size() / 2;
   RunPair([&](int part) {
     if (part == 0) {
       walk(0, half, &bitmap_, &overflow_);
+      walk_open(0, open_half, &bitmap_, &overflow_);
     } else {
       walk(half, ends.size(), &bitmap_2_, &overflow_2_);
+      walk_open(open_half, open_ends.size(), &bitmap_2_, &overflow_2_);
     }
   });
   if (use_bitmap_) bitmap_.TakeBitsOf(&bitmap_2_);

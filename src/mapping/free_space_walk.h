@@ -11,8 +11,9 @@
 namespace ssta::internal {
 
 /// The set of voxels that one frame's rays pass, each once: one bit per voxel of the box the
-/// rays span (FreeBitmap), and a CodeSet of Morton codes for the voxels outside it (rare), or
-/// for all of them when the box is too large for a bitmap.
+/// rays to points span (FreeBitmap), and a CodeSet of Morton codes for the voxels outside it
+/// (rare: the few voxels the open rays mark beyond it), or for all of them when the box is too
+/// large for a bitmap.
 /// The rays are walked in two halves side by side, each into its own bitmap and set, then
 /// merged: a set of voxels, so the same for any split. Kept from frame to frame, so that a
 /// frame allocates nothing once its buffers have grown.
@@ -21,8 +22,13 @@ class FreeSpaceWalk {
   /// Collects the voxels that the rays from `origin` to each of `ends` (keys `end_keys`,
   /// checked) pass: exactly those OcTreeBaseImpl::computeRayKeys gives (the end voxel
   /// excluded). None when `origin` lies outside the map. Once per frame, then TakeFreeVoxels.
+  /// `open_ends` (keys `open_end_keys`): rays that ranged nothing (ClassifiedPoint::no_return).
+  /// Each collects only the voxels `tree` holds, and stops before the first one whose occupancy
+  /// log-odds is at least `stop_log_odds` (a surface the map is sure of).
   void Walk(const TravOcTree& tree, const octomap::point3d& origin,
-            const std::vector<octomap::point3d>& ends, const std::vector<octomap::OcTreeKey>& end_keys);
+            const std::vector<octomap::point3d>& ends, const std::vector<octomap::OcTreeKey>& end_keys,
+            const std::vector<octomap::point3d>& open_ends = {},
+            const std::vector<octomap::OcTreeKey>& open_end_keys = {}, float stop_log_odds = 0.0f);
 
   /// Calls emit(Morton code) once for every collected voxel that the frame's points did not
   /// hit, and empties the set. `hit_keys`: the keys of the hit voxels; `hits`: the frame's

@@ -99,6 +99,14 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                         "rays leave voxels the map holds as traversable as they are (grazing rays beyond a "
                         "crest would erode seen ground); obstacles and undecided voxels still clear")
                     .AbsentMeans(false));
+    f.push_back(Real<O>("free_space_no_return_stop_prob", &O::free_space_no_return_stop_prob, Open(0, 1), "",
+                        "rays that ranged nothing (blank sky) stop clearing at the first voxel this likely "
+                        "occupied: a surface the map is sure of, and what lies behind it, keep their evidence")
+                    .Require([](const O& o) {
+                      return o.free_space_no_return_stop_prob > o.occupancy_clamp_min_prob &&
+                             o.free_space_no_return_stop_prob < o.occupancy_clamp_max_prob;
+                    }, "must lie strictly between occupancy_clamp_min_prob and occupancy_clamp_max_prob")
+                    .AbsentMeans(0.9));
     return f;
   }();
   return fields;
@@ -124,6 +132,11 @@ const OptionFields<MappingOptions>& MappingOptions::Fields() {
                         "the lip of a drop-off whose foot a frame cannot see (a view over an edge that lands "
                         "lower by more than vehicle.max_step_m beyond noise, or on the far wall of a pit "
                         "that hides its floor) is non-traversable"));
+    f.push_back(Integer<O>("no_return_stride_px", &O::no_return_stride_px, Closed(0, 64), "px",
+                           "every n-th pixel above the horizon that the texture test left without a point "
+                           "casts a ray that ranged nothing: the voxels the map holds along it are free space up "
+                           "to the first one it is sure of (free_space_no_return_stop_prob) or the range, which "
+                           "clears the matcher's noise carried into the sky; 0: off"));
     f.push_back(Flag<O>("auto_range", &O::auto_range,
                         "the range follows the rig: the depth at which its stereo depth noise reaches "
                         "range_depth_sigma_m replaces max_range_m"));

@@ -6,8 +6,11 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <set>
+#include <utility>
 
 #include "ssta/analysis/frame_analysis.h"
+#include "ssta/analysis/label_rule.h"
 #include "ssta/core/error.h"
 #include "ssta/fusion/frame_points.h"
 
@@ -39,6 +42,52 @@ TEST(ClassifiedPointsInWorld, TransformsEveryStrideThPointWithItsSegmentVerdict)
   EXPECT_FLOAT_EQ(points[0].slope_deg, 12.0f);
   EXPECT_EQ(points[1].cls, TravClass::kUndecided);
   EXPECT_TRUE(std::isnan(points[1].slope_deg));
+}
+
+TEST(AppendNoReturnRays, CastsBlankPixelsAboveTheHorizonOnALatticeWhosePhaseFollowsTheFrame) {
+  // A 40 x 30 common area, f 20 px, principal point (20, 15), camera level (up is -y): rows
+  // 0-14 look up, rows 15-29 down. Every pixel is untextured (the texture rule) but for column 7.
+  RectifiedGeometry g;
+  g.f = 20.0;
+  g.cu = 20.0;
+  g.cv = 15.0;
+  FrameResult f;
+  f.up_rectified = Eigen::Vector3d(0, -1, 0);
+  f.analysis.rules = ImageU8(40, 30, static_cast<std::uint8_t>(LabelRule::kTexture));
+  for (int v = 0; v < 30; ++v) f.analysis.rules(v, 7) = static_cast<std::uint8_t>(LabelRule::kSegment);
+  Eigen::Isometry3d world_T_rect = Eigen::Isometry3d::Identity();
+  world_T_rect.translate(Eigen::Vector3d(1, 2, 3));
+  std::set<std::pair<int, int>> phases;
+  for (std::int64_t t = 0; t < 200; ++t) {
+    f.timestamp_ns = 1600000000000000000 + t * 100000000;
+    std::vector<ClassifiedPoint> points(1);  // appended to, not replaced
+    AppendNoReturnRays(f, world_T_rect, g, 4, &points);
+    ASSERT_GE(points.size(), 2u);
+    // Every ray: a point 1 m deep in the camera, so its pixel is recovered from it.
+    int u0 = -1, v0 = -1;
+    for (std::size_t i = 1; i < points.size(); ++i) {
+      ASSERT_TRUE(points[i].no_return);
+      const Eigen::Vector3f q = points[i].world_p - Eigen::Vector3f(1, 2, 3);
+      ASSERT_NEAR(q.z(), 1.0f, 1e-6f);
+      const int u = static_cast<int>(std::lround(q.x() * 20.0f + 20.0f));
+      const int v = static_cast<int>(std::lround(q.y() * 20.0f + 15.0f));
+      ASSERT_LT(v, 15) << "below the horizon";
+      ASSERT_NE(u, 7) << "a textured pixel";
+      if (i == 1) {
+        u0 = u;
+        v0 = v;
+      }
+      ASSERT_EQ((u - u0) % 4, 0);
+      ASSERT_EQ((v - v0) % 4, 0);
+    }
+    ASSERT_LT(u0, 4);
+    ASSERT_LT(v0, 4);
+    // All of the lattice: 10 columns (less column 7's if on it) times its rows above row 15.
+    const int rows = (14 - v0) / 4 + 1, columns = 10 - (u0 == 3 ? 1 : 0);
+    EXPECT_EQ(points.size(), static_cast<std::size_t>(1 + rows * columns));
+    phases.insert({u0, v0});
+  }
+  EXPECT_EQ(phases.size(), 16u);  // over 200 frames, every one of the 16 phases
 }
 
 TEST(ClassifiedPointsInWorld, LeavesOutPixelsTheKeepMaskDrops) {

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <unordered_map>
 #include <unordered_set>
 #include <vector>
 
@@ -340,6 +341,10 @@ TEST(Fusion, OptionsAreValidatedNamingTheKey) {
   options.free_space_ray_cell = 3;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_EQ(error.rfind("free_space_ray_cell:", 0), 0u) << error;
+  options = OctoMapCarving();
+  options.free_space_no_return_stop_prob = options.occupancy_clamp_max_prob;  // no voxel would stop a ray
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_EQ(error.rfind("free_space_no_return_stop_prob:", 0), 0u) << error;
 }
 
 
@@ -423,6 +428,121 @@ TEST(Fusion, FreeSpaceIsExactlyOctoMapsRayWalkWhenTheRayBoxIsTooLargeForABitmap)
   options.max_range_m = 1000.0;
   // +-600 voxels in x and y: over 2^26 voxels in the rays' box, so the free voxels go to a set.
   ExpectFreeSpaceIsComputeRayKeys(options, {-3.3, 7.9, 0.4}, 600.0, 300, 12);
+}
+
+/// A ray that ranged nothing, from `origin` towards `towards`.
+ClassifiedPoint NoReturn(const Eigen::Vector3d& towards) {
+  ClassifiedPoint p = Pt(towards.x(), towards.y(), towards.z(), TravClass::kUnknown);
+  p.no_return = true;
+  return p;
+}
+
+TEST(Fusion, NoReturnRaysClearWeakVoxelsAndStopBeforeASurfaceTheMapIsSureOf) {
+  MapOptions options = OctoMapCarving();  // hit 0.847, miss -0.405; stop at P 0.9 = 2.197
+  TraversabilityMap map(options);
+  const float hit = octomap::logodds(options.occupancy_hit_prob);
+  const float miss = octomap::logodds(options.occupancy_miss_prob);
+  // Seen from the side, so that no ray of theirs runs along the x axis: a phantom at kA hit
+  // once, a wall at kB hit four times, and a weak voxel behind the wall, hit once.
+  const Eigen::Vector3d side(4.05, 3.05, 0.05), behind(6.05, 0.05, 0.05);
+  map.InsertFrame(At(kA, TravClass::kNonTraversable), {2.05, 3.05, 0.05}, 1);
+  for (int i = 0; i < 4; ++i) map.InsertFrame(At(kB, TravClass::kNonTraversable), side, 2 + i);
+  map.InsertFrame(At(behind, TravClass::kNonTraversable), {6.05, 3.05, 0.05}, 6);
+  ASSERT_FLOAT_EQ(NodeAt(map, kA)->getLogOdds(), hit);
+  ASSERT_FLOAT_EQ(NodeAt(map, kB)->getLogOdds(), 4 * hit);
+
+  const InsertStats stats = map.InsertFrame({NoReturn({1.05, 0.05, 0.05})}, kOrigin, 7);
+  EXPECT_EQ(stats.rays_without_return, 1u);
+  EXPECT_EQ(stats.voxels_hit, 0u);
+  // Of the 40 voxels up to the wall the map holds one, the phantom: it takes a miss, and the
+  // space it never observed stays unobserved.
+  EXPECT_EQ(stats.voxels_freed, 1u);
+  EXPECT_FLOAT_EQ(NodeAt(map, kA)->getLogOdds(), hit + miss);
+  EXPECT_FALSE(map.CellAt({1.05, 0.05, 0.05}).observed);
+  EXPECT_FALSE(map.CellAt({3.95, 0.05, 0.05}).observed);
+  // The wall and what lies behind it keep their evidence.
+  EXPECT_FLOAT_EQ(NodeAt(map, kB)->getLogOdds(), 4 * hit);
+  EXPECT_FLOAT_EQ(NodeAt(map, behind)->getLogOdds(), hit);
+  EXPECT_EQ(map.CellAt(kB).cls, TravClass::kNonTraversable);
+
+  // Two more such frames and the phantom is free space.
+  map.InsertFrame({NoReturn({1.05, 0.05, 0.05})}, kOrigin, 8);
+  map.InsertFrame({NoReturn({1.05, 0.05, 0.05})}, kOrigin, 9);
+  EXPECT_FALSE(map.CellAt(kA).occupied);
+  EXPECT_TRUE(map.CellAt(kA).observed);
+
+  // Without a wall the ray runs to the range and no farther: of two phantoms on it, at 14.1 m
+  // and at 15.6 m, it clears the first only.
+  TraversabilityMap open(options);
+  const Eigen::Vector3d near(10.05, 10.05, 0.05), far(11.05, 11.05, 0.05);
+  open.InsertFrame(At(near, TravClass::kNonTraversable), {10.05, 10.05, 3.05}, 1);  // seen from above
+  open.InsertFrame(At(far, TravClass::kNonTraversable), {11.05, 11.05, 3.05}, 2);
+  const InsertStats open_stats = open.InsertFrame({NoReturn({1.05, 1.05, 0.05})}, kOrigin, 3);
+  EXPECT_EQ(open_stats.voxels_freed, 1u);
+  EXPECT_FLOAT_EQ(NodeAt(open, near)->getLogOdds(), hit + miss);
+  EXPECT_FLOAT_EQ(NodeAt(open, far)->getLogOdds(), hit);
+}
+
+TEST(Fusion, NoReturnRaysStopExactlyWhereALookupOfEachVoxelWould) {
+  // A tree of sure and weak voxels (1 to 4 hits each, seen from above all around), then one
+  // frame of open rays in every direction: each must free exactly the voxels the tree held on
+  // OctoMap's walk up to (not including) the first one that held P >= 0.9 before the frame, as
+  // a search of the tree voxel by voxel finds them.
+  MapOptions options = OctoMapCarving();
+  options.max_range_m = 8.0;
+  TraversabilityMap map(options);
+  const internal::TravOcTree& tree = testing::Tree(map);
+  const Eigen::Vector3d origin(0.37, -0.21, 0.53);
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> coord(-2.5, 2.5);
+  std::uniform_int_distribution<int> hits(1, 4);
+  for (int i = 0; i < 3000; ++i) {
+    const Eigen::Vector3d p(origin.x() + coord(rng), origin.y() + coord(rng), origin.z() + coord(rng) / 3.0);
+    const Eigen::Vector3d from(origin.x() + 7.0 * std::cos(i * 0.7), origin.y() + 7.0 * std::sin(i * 0.7), 6.0);
+    const int n = hits(rng);
+    for (int k = 0; k < n; ++k) map.InsertFrame(At(p, TravClass::kNonTraversable), from, i);
+  }
+  const float stop = octomap::logodds(0.9);
+  const float miss = octomap::logodds(options.occupancy_miss_prob);
+  const float clamp_min = tree.getClampingThresMinLog();
+  auto before = [&](const octomap::OcTreeKey& k) {
+    const internal::TravNode* node = tree.search(k);
+    return node == nullptr ? std::numeric_limits<float>::quiet_NaN() : node->getLogOdds();
+  };
+  std::vector<ClassifiedPoint> rays;
+  std::unordered_map<octomap::OcTreeKey, float, KeyHash> expected;  // freed voxel -> log-odds after
+  std::unordered_set<octomap::OcTreeKey, KeyHash> stops;
+  const octomap::point3d o(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                           static_cast<float>(origin.z()));
+  std::normal_distribution<double> gauss;
+  octomap::KeyRay ray;
+  for (int r = 0; r < 400; ++r) {
+    const Eigen::Vector3d d = Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng)).normalized();
+    rays.push_back(NoReturn(origin + d));
+    const Eigen::Vector3d end = origin + d * options.max_range_m;
+    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()), static_cast<float>(end.z()));
+    ASSERT_TRUE(tree.computeRayKeys(o, e, ray));
+    for (const octomap::OcTreeKey& k : ray) {
+      const float l = before(k);
+      if (l >= stop) {
+        stops.insert(k);
+        break;
+      }
+      if (!std::isnan(l)) expected[k] = std::max(clamp_min, l + miss);
+    }
+  }
+  ASSERT_GT(stops.size(), 20u);  // the rays met sure voxels as well as weak ones
+  std::unordered_map<octomap::OcTreeKey, float, KeyHash> stop_before;
+  for (const auto& k : stops) stop_before[k] = before(k);
+  const InsertStats stats = map.InsertFrame(rays, origin, 9999);
+  EXPECT_EQ(stats.voxels_freed, expected.size());
+  for (const auto& [k, l] : expected) {
+    const internal::TravNode* node = tree.search(k);
+    ASSERT_NE(node, nullptr);
+    ASSERT_FLOAT_EQ(node->getLogOdds(), l);
+  }
+  for (const auto& [k, l] : stop_before) EXPECT_FLOAT_EQ(tree.search(k)->getLogOdds(), l);
+  EXPECT_GT(stats.voxels_freed, 1000u);
 }
 
 

@@ -33,6 +33,14 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
                              const ImageF* point_disparity = nullptr, const ImageU8* lip = nullptr);
 
+/// Appends to `*points` a ray that ranged nothing (ClassifiedPoint::no_return) for every
+/// `stride`-th pixel (in u and v) of the common area that the texture test left without a label
+/// (LabelRule::kTexture) and that looks above the horizon (frame.up_rectified): blank sky, or a
+/// blank wall, in whose direction the map clears free space up to the first surface it is sure
+/// of (MapOptions::free_space_no_return_stop_prob).
+void AppendNoReturnRays(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
+                        const RectifiedGeometry& geometry, int stride, std::vector<ClassifiedPoint>* points);
+
 /// Gauss-Newton steps of the map's sub-pixel refinement (map.subpixel_window_px): one moved the
 /// yard, drop-off and forest maps as two did (0.866 / 0.971 / 0.895 against 0.865 / 0.971 /
 /// 0.896, refined across outlines) at half the cost.
@@ -47,6 +55,7 @@ inline constexpr int kMapSubpixelSteps = 1;
 /// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's. With
 /// options.hidden_drops, the lips of drop-offs whose foot the frame cannot see are
 /// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/fusion/hidden_drops.h).
+/// With options.no_return_stride_px, the rays of the blank sky follow (AppendNoReturnRays).
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const MappingOptions& options, const RectifiedGeometry& geometry,
                                               const VehicleOptions& vehicle);

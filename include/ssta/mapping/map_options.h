@@ -132,6 +132,15 @@ struct MapOptions {
   /// and free space are still cleared; a traversable surface that goes away (a flat top moved)
   /// stays until frames vote it otherwise. false: every voxel a ray passes takes the miss.
   bool free_space_keeps_traversable = true;
+  /// Rays that ranged nothing (ClassifiedPoint::no_return: blank sky) stop clearing at the first
+  /// voxel whose P(occupied) is at least this, a surface the map is sure of; that voxel and what
+  /// lies behind it keep their evidence. Such a pixel may be a blank wall as well as the sky:
+  /// the stop keeps the wall, once other views have mapped it, and what they saw behind it.
+  /// Matching noise that SGBM carried into the sky from a nearer edge lands at a different place
+  /// in every frame, so it holds fewer hits and is cleared. 0.9 is about three hits more than
+  /// misses at the default occupancy_hit_prob. Strictly between occupancy_clamp_min_prob and
+  /// occupancy_clamp_max_prob.
+  double free_space_no_return_stop_prob = 0.9;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
   static const OptionFields<MapOptions>& Fields();
@@ -158,6 +167,13 @@ struct MappingOptions {
   /// vehicle.max_step_m beyond the noise of both heights marks the ground within
   /// vehicle.step_radius_m of the edge (src/fusion/hidden_drops.h).
   bool hidden_drops = true;
+  /// [px] every n-th pixel (in u and v) above the horizon that the texture test left without a
+  /// point (LabelRule::kTexture: blank sky, or a blank wall) casts a ray that ranged nothing
+  /// (ClassifiedPoint::no_return), on a lattice whose phase changes from frame to frame. It
+  /// clears the noise matches SGBM carries from a trunk or a skyline into the sky around it,
+  /// which other frames inserted where the map's texture test kept them as a wall. Only voxels
+  /// the map holds take the pass: the open sky is not filled with free voxels. 0: off.
+  int no_return_stride_px = 4;
   int checkpoint_every_frames = 200;  ///< save the map every n frames while building (0: never)
   /// The map's range follows the rig: fusion.max_range_m becomes the depth at which the stereo
   /// depth noise reaches range_depth_sigma_m (FusionFor). false: fusion.max_range_m as given.

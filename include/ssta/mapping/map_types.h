@@ -21,6 +21,12 @@ namespace ssta {
 struct ClassifiedPoint {
   Eigen::Vector3f world_p = Eigen::Vector3f::Zero();  ///< position in W [m]
   TravClass cls = TravClass::kUnknown;  ///< verdict; only 1..3 add class evidence
+  /// A ray that ranged nothing (a pixel that saw blank sky): `world_p` is any point on it beyond
+  /// the sensor. The voxels the map holds along it, up to max_range_m, take a pass as free
+  /// space, up to the first one that is a surface the map is sure of
+  /// (MapOptions::free_space_no_return_stop_prob); space the map has not observed stays
+  /// unobserved, and the ray hits nothing. The other fields are not read.
+  bool no_return = false;
   float slope_deg = 0.0f;  ///< surface slope at the point [deg]; non-finite: not averaged
   float step_m = 0.0f;     ///< step to the dominant ground plane [m]; non-finite: not averaged
   /// Signed height above the frame's dominant ground plane [m] (negative below); NaN when the
@@ -43,6 +49,7 @@ struct InsertStats {
   std::size_t points_in = 0;           ///< points given
   std::size_t points_hit = 0;          ///< points within range that marked their voxel occupied
   std::size_t points_beyond_range = 0; ///< points beyond max_range_m (free space only)
+  std::size_t rays_without_return = 0; ///< no_return points (free space up to a sure surface)
   std::size_t points_rejected = 0;     ///< non-finite or outside the map's addressable cube
   std::size_t voxels_hit = 0;          ///< distinct voxels updated as occupied
   std::size_t voxels_with_class = 0;   ///< of those, voxels that got a class verdict

@@ -74,6 +74,9 @@ class TraversabilityMap {
   ///  2. One ray per hit voxel runs from the origin to the mean of its points; every voxel it
   ///     crosses (endpoint excluded) is free, once per frame, unless hit in this frame.
   ///     Voxels of points beyond max_range_m are not hit; their rays clear only up to the range.
+  ///     A ray that ranged nothing (ClassifiedPoint::no_return) frees only the voxels the map
+  ///     holds, up to the range or the first voxel at least free_space_no_return_stop_prob
+  ///     occupied, whichever comes first.
   ///  3. Free voxels: occupancy miss, class log-odds decay towards 0. Hit voxels: occupancy hit;
   ///     with a verdict c: Lc += class_hit, the others += class_miss, all clamped; the means and
   ///     the observation count take the frame; last_seen_ns = timestamp_ns for every hit.
