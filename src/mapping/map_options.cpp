@@ -106,7 +106,7 @@ const OptionFields<MapOptions>& MapOptions::Fields() {
                       return o.free_space_no_return_stop_prob > o.occupancy_clamp_min_prob &&
                              o.free_space_no_return_stop_prob < o.occupancy_clamp_max_prob;
                     }, "must lie strictly between occupancy_clamp_min_prob and occupancy_clamp_max_prob")
-                    .AbsentMeans(0.9));
+                    .AbsentMeans(0.95));
     return f;
   }();
   return fields;

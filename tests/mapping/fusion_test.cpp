@@ -438,7 +438,7 @@ ClassifiedPoint NoReturn(const Eigen::Vector3d& towards) {
 }
 
 TEST(Fusion, NoReturnRaysClearWeakVoxelsAndStopBeforeASurfaceTheMapIsSureOf) {
-  MapOptions options = OctoMapCarving();  // hit 0.847, miss -0.405; stop at P 0.9 = 2.197
+  MapOptions options = OctoMapCarving();  // hit 0.847, miss -0.405; stop at P 0.95 = 2.944
   TraversabilityMap map(options);
   const float hit = octomap::logodds(options.occupancy_hit_prob);
   const float miss = octomap::logodds(options.occupancy_miss_prob);
@@ -484,9 +484,9 @@ TEST(Fusion, NoReturnRaysClearWeakVoxelsAndStopBeforeASurfaceTheMapIsSureOf) {
 }
 
 TEST(Fusion, NoReturnRaysStopExactlyWhereALookupOfEachVoxelWould) {
-  // A tree of sure and weak voxels (1 to 4 hits each, seen from above all around), then one
+  // A tree of sure and weak voxels (1 to 6 hits each, seen from above all around), then one
   // frame of open rays in every direction: each must free exactly the voxels the tree held on
-  // OctoMap's walk up to (not including) the first one that held P >= 0.9 before the frame, as
+  // OctoMap's walk up to (not including) the first one that held P >= 0.95 before the frame, as
   // a search of the tree voxel by voxel finds them.
   MapOptions options = OctoMapCarving();
   options.max_range_m = 8.0;
@@ -495,14 +495,14 @@ TEST(Fusion, NoReturnRaysStopExactlyWhereALookupOfEachVoxelWould) {
   const Eigen::Vector3d origin(0.37, -0.21, 0.53);
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> coord(-2.5, 2.5);
-  std::uniform_int_distribution<int> hits(1, 4);
+  std::uniform_int_distribution<int> hits(1, 6);
   for (int i = 0; i < 3000; ++i) {
     const Eigen::Vector3d p(origin.x() + coord(rng), origin.y() + coord(rng), origin.z() + coord(rng) / 3.0);
     const Eigen::Vector3d from(origin.x() + 7.0 * std::cos(i * 0.7), origin.y() + 7.0 * std::sin(i * 0.7), 6.0);
     const int n = hits(rng);
     for (int k = 0; k < n; ++k) map.InsertFrame(At(p, TravClass::kNonTraversable), from, i);
   }
-  const float stop = octomap::logodds(0.9);
+  const float stop = octomap::logodds(options.free_space_no_return_stop_prob);
   const float miss = octomap::logodds(options.occupancy_miss_prob);
   const float clamp_min = tree.getClampingThresMinLog();
   auto before = [&](const octomap::OcTreeKey& k) {
