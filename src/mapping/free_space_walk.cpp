@@ -112,15 +112,22 @@ class VoxelProbe {
     path_[0] = tree.getRoot();
   }
 
-  /// What the tree holds at the voxel of Morton code `code`.
-  Held At(std::uint64_t code) {
+  /// What the tree holds at the voxel of key `k` (x, y, z).
+  Held At(const int* k) {
+    // In the block that decided the last answer (its keys agree above the block's size): the
+    // same answer, without the Morton code. Most of an open ray runs through unobserved blocks.
+    const unsigned shift = depth_ - decided_by_;
+    if (decided_by_ > 0 && ((k[0] ^ last_key_[0]) >> shift) == 0 && ((k[1] ^ last_key_[1]) >> shift) == 0 &&
+        ((k[2] ^ last_key_[2]) >> shift) == 0) {
+      return answer_;
+    }
+    last_key_ = {k[0], k[1], k[2]};
+    const std::uint64_t code = CodeOf(k);
     unsigned start = 0;  // the depth to descend from: digits 0..start-1 are the last code's
     if (decided_by_ > 0) {
+      // Fewer than decided_by_ digits are shared (the test above), so the codes differ.
       const std::uint64_t diff = code ^ last_code_;
-      const unsigned shared =
-          diff == 0 ? depth_ : depth_ - 1 - (63 - static_cast<unsigned>(__builtin_clzll(diff))) / 3;
-      if (shared >= decided_by_) return answer_;
-      start = shared;
+      start = depth_ - 1 - (63 - static_cast<unsigned>(__builtin_clzll(diff))) / 3;
     }
     last_code_ = code;
     const TravNode* node = path_[start];
@@ -154,6 +161,7 @@ class VoxelProbe {
   unsigned depth_;
   std::array<const TravNode*, 17> path_{};  ///< path_[d]: the last lookup's node at depth d
   std::uint64_t last_code_ = 0;
+  std::array<int, 3> last_key_{};  ///< the key of last_code_
   unsigned decided_by_ = 0;  ///< the last answer holds for every code sharing this many digits
   Held answer_ = kNothing;
 };
@@ -204,10 +212,9 @@ void FreeSpaceWalk::Walk(const TravOcTree& tree, const octomap::point3d& origin,
     VoxelProbe probe(tree, stop_log_odds);
     for (std::size_t r = first; r < last; ++r) {
       WalkRay(tree, origin, open_ends[r], key_origin, open_end_keys[r], [&](const int* k) {
-        const std::uint64_t code = CodeOf(k);
-        const VoxelProbe::Held held = probe.At(code);
+        const VoxelProbe::Held held = probe.At(k);
         if (held == VoxelProbe::kSureSurface) return false;
-        if (held == VoxelProbe::kVoxel && (!use_bitmap_ || !marks->Set(k))) outside->Insert(code);
+        if (held == VoxelProbe::kVoxel && (!use_bitmap_ || !marks->Set(k))) outside->Insert(CodeOf(k));
         return true;
       });
     }
