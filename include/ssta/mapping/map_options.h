@@ -138,9 +138,9 @@ struct MapOptions {
   /// the stop keeps the wall, once other views have mapped it, and what they saw behind it.
   /// Matching noise that SGBM carried into the sky from a nearer edge lands at a different place
   /// in every frame, so it holds fewer hits and is cleared. 0.95 is four hits more than misses
-  /// at the default occupancy_hit_prob (three are 0.93); on the tuning scenes 0.9 blocks 0.3 %
-  /// more of the free footprints for no fewer unsafe ones, and 0.8 trades 0.4 % more of them
-  /// for 0.5 % fewer unsafe ones, which phantoms beside missed obstacles had blocked. Strictly between occupancy_clamp_min_prob and
+  /// at the default occupancy_hit_prob (three are 0.93); on the tuning scenes it falsely blocks
+  /// 8.4 % of the free footprints, 0.9 8.6 % and 0.8 9.0 %, for 10.9, 10.9 and 10.5 % unsafe
+  /// (docs/accuracy.md). Strictly between occupancy_clamp_min_prob and
   /// occupancy_clamp_max_prob.
   double free_space_no_return_stop_prob = 0.95;
 
