@@ -205,8 +205,10 @@ class FrameFusion {
 
  private:
   // Called per ray and per voxel: defined inline, so that they compile into the loops.
-  /// Adds a ray to `end`, unless `end` lies outside the map (as computeRayKeys: no ray).
-  void AddRay(const Eigen::Vector3d& end);
+  /// Adds a ray to `end` to `ends` and `end_keys` (the rays to points by default), unless `end`
+  /// lies outside the map (as computeRayKeys: no ray).
+  void AddRay(const Eigen::Vector3d& end, std::vector<octomap::point3d>* ends = nullptr,
+              std::vector<octomap::OcTreeKey>* end_keys = nullptr);
   /// A ray passed the voxel `node`: occupancy miss and class log-odds decay towards 0, unless
   /// free_space_keeps_traversable spares it as a voxel held as traversable.
   void UpdateFree(TravNode* node) const;
@@ -283,13 +285,14 @@ void FrameFusion::GroupPointsByVoxel(const std::vector<ClassifiedPoint>& points)
   }
 }
 
-inline void FrameFusion::AddRay(const Eigen::Vector3d& end) {
+inline void FrameFusion::AddRay(const Eigen::Vector3d& end, std::vector<octomap::point3d>* ends,
+                                std::vector<octomap::OcTreeKey>* end_keys) {
   const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
                            static_cast<float>(end.z()));
   octomap::OcTreeKey key_end;
   if (!tree_.coordToKeyChecked(e, key_end)) return;  // as computeRayKeys: no ray
-  scratch_.ray_ends.push_back(e);
-  scratch_.ray_end_keys.push_back(key_end);
+  (ends != nullptr ? *ends : scratch_.ray_ends).push_back(e);
+  (end_keys != nullptr ? *end_keys : scratch_.ray_end_keys).push_back(key_end);
 }
 
 void FrameFusion::PlaceRayEnds() {
@@ -319,12 +322,7 @@ void FrameFusion::PlaceRayEnds() {
   scratch_.open_ends.clear();
   scratch_.open_end_keys.clear();
   for (const Eigen::Vector3d& direction : scratch_.no_return) {
-    const Eigen::Vector3d end = origin_world_ + direction * opt.max_range_m;
-    const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()), static_cast<float>(end.z()));
-    octomap::OcTreeKey key_end;
-    if (!tree_.coordToKeyChecked(e, key_end)) continue;
-    scratch_.open_ends.push_back(e);
-    scratch_.open_end_keys.push_back(key_end);
+    AddRay(origin_world_ + direction * opt.max_range_m, &scratch_.open_ends, &scratch_.open_end_keys);
   }
 }
 
@@ -359,9 +357,8 @@ void FrameFusion::WalkRays() {
   const octomap::point3d origin(static_cast<float>(origin_world_.x()),
                                 static_cast<float>(origin_world_.y()),
                                 static_cast<float>(origin_world_.z()));
-  const double p = options_.free_space_no_return_stop_prob;
   scratch_.free_space.Walk(tree_, origin, scratch_.ray_ends, scratch_.ray_end_keys, scratch_.open_ends,
-                           scratch_.open_end_keys, static_cast<float>(std::log(p / (1.0 - p))));
+                           scratch_.open_end_keys, octomap::logodds(options_.free_space_no_return_stop_prob));
 }
 
 void FrameFusion::CollectVoxels() {
