@@ -49,7 +49,8 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
                            "the fragment's)"));
     f.push_back(Integer<O>("undecided_fill_radius_px", &O::undecided_fill_radius_px, Closed(0, 64), "px",
                            "an undecided pixel takes the class that undecided_fill_share of the decided pixels "
-                           "within this radius hold; 0: off"));
+                           "within this radius hold (one the local steps left undecided beside a jump, only "
+                           "non-traversable); 0: off"));
     f.push_back(Real<O>("undecided_fill_share", &O::undecided_fill_share, OpenClosed(0.5, 1), "",
                         "share of the window's decided pixels that must agree"));
     f.push_back(Flag<O>("undecided_height_fill", &O::undecided_height_fill,

@@ -81,10 +81,11 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
       ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);
       track.Mark(a.labels, LabelRule::kDisparityFace, &a.rules);
     }
-    FillUndecidedByConsensus(options, &a.labels);
+    const bool local_steps = options.step_reference == StepReference::kLocal;
+    FillUndecidedByConsensus(options, &a.labels, local_steps ? &step_classes_ : nullptr);
     track.Mark(a.labels, LabelRule::kConsensusFill, &a.rules);
     // Heights above the dominant plane are eq. 5's steps: the local rule has its own.
-    if (options.step_reference != StepReference::kLocal) {
+    if (!local_steps) {
       FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
       track.Mark(a.labels, LabelRule::kHeightFill, &a.rules);
     }

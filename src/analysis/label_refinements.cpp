@@ -219,9 +219,13 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
   AdoptHostVerdicts(hosts, segment_ids, result);
 }
 
-void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels) {
+void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels,
+                              const ImageU8* step_classes) {
   const int r = options.undecided_fill_radius_px;
   if (r <= 0) return;
+  SSTA_CHECK(step_classes == nullptr ||
+                 (step_classes->width() == labels->width() && step_classes->height() == labels->height()),
+             "FillUndecidedByConsensus: step classes and labels differ in size");
   constexpr std::uint8_t kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
   const int w = labels->width(), h = labels->height();
   bool any = false;
@@ -265,9 +269,14 @@ void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* la
       }
       // Labels change only after the window sums are taken from the integral images, so the
       // pass reads the labels as they were.
-      if (decided > 0 && counts[best] >= options.undecided_fill_share * decided) {
-        row[u] = static_cast<std::uint8_t>(best + 1);
+      if (decided == 0 || counts[best] < options.undecided_fill_share * decided) continue;
+      const std::uint8_t fill = static_cast<std::uint8_t>(best + 1);
+      // Beside a jump the noise could not place: only the obstacle's class may fill it.
+      if (step_classes != nullptr && (*step_classes)(v, u) == kUndecided &&
+          fill != static_cast<std::uint8_t>(TravClass::kNonTraversable)) {
+        continue;
       }
+      row[u] = fill;
     }
   }
 }

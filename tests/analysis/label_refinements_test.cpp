@@ -597,6 +597,37 @@ TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
   EXPECT_EQ(off(2, 2), 4);
 }
 
+TEST(FillUndecidedByConsensus, FillsAPointHeldBesideAJumpOnlyWithTheObstacle) {
+  AnalysisOptions options = PlanesOnly();
+  options.undecided_fill_radius_px = 1;
+  options.undecided_fill_share = 0.9;
+  // Left half traversable, right half non-traversable; in each, one undecided pixel that the
+  // local steps held undecided beside a jump (step class 4) and one they did not (0).
+  ImageU8 labels(12, 5, 1);
+  for (int v = 0; v < 5; ++v) {
+    for (int u = 6; u < 12; ++u) labels(v, u) = 3;
+  }
+  labels(1, 2) = labels(3, 2) = labels(1, 9) = labels(3, 9) = 4;
+  ImageU8 step_classes(12, 5, 0);
+  step_classes(1, 2) = step_classes(1, 9) = 4;
+  step_classes(2, 2) = 4;  // a decided pixel the rule also flagged: untouched, still votes
+  const ImageU8 before = labels;
+  FillUndecidedByConsensus(options, &labels, &step_classes);
+  EXPECT_EQ(labels(1, 2), 4);  // amid open ground the doubt stays
+  EXPECT_EQ(labels(3, 2), 1);  // no jump beside it: filled as before
+  EXPECT_EQ(labels(1, 9), 3);  // amid the obstacle it takes the obstacle's class
+  EXPECT_EQ(labels(3, 9), 3);
+  EXPECT_EQ(labels(2, 2), 1);
+  // Without the step classes every one of them is filled.
+  ImageU8 unheld = before;
+  FillUndecidedByConsensus(options, &unheld);
+  EXPECT_EQ(unheld(1, 2), 1);
+  EXPECT_EQ(unheld(1, 9), 3);
+  // Step classes of another size are refused.
+  ImageU8 wrong(5, 5, 0);
+  EXPECT_THROW(FillUndecidedByConsensus(options, &unheld, &wrong), InternalError);
+}
+
 TEST(FillUndecidedByConsensus, LeavesSplitWindowsAndWideGapsUndecided) {
   AnalysisOptions options = PlanesOnly();
   options.undecided_fill_radius_px = 4;

@@ -199,7 +199,12 @@ void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, c
 /// in far ground get no verdict of their own (too few points for a plane); where everything
 /// around them agrees, that verdict is theirs too; where the window is split (an obstacle's
 /// edge against the ground), they stay undecided. One pass on the labels as they were.
-void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels);
+/// `step_classes` (optional, LocalStepClasses' output, the labels' size): a pixel it holds
+/// undecided (4), a point smeared over the step radius beside a jump above max_step_m, takes
+/// only non-traversable. The local step rule left it undecided because the noise allows the
+/// obstacle's band as well as open ground; ground around it agreeing is no evidence either way.
+void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* labels,
+                              const ImageU8* step_classes = nullptr);
 
 /// Undecided pixels by their own height (LabelRefinementOptions::undecided_height_fill; needs a frame
 /// that passed the quality check, else does nothing). Pixels without a normal (the smoothing
