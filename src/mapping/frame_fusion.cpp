@@ -205,10 +205,12 @@ class FrameFusion {
 
  private:
   // Called per ray and per voxel: defined inline, so that they compile into the loops.
-  /// Adds a ray to `end` to `ends` and `end_keys` (the rays to points by default), unless `end`
-  /// lies outside the map (as computeRayKeys: no ray).
-  void AddRay(const Eigen::Vector3d& end, std::vector<octomap::point3d>* ends = nullptr,
-              std::vector<octomap::OcTreeKey>* end_keys = nullptr);
+  /// Appends a ray to `end` to `ends` and `end_keys`, unless `end` lies outside the map (as
+  /// computeRayKeys: no ray).
+  void AddRay(const Eigen::Vector3d& end, std::vector<octomap::point3d>* ends,
+              std::vector<octomap::OcTreeKey>* end_keys) const;
+  /// A ray to a point's end: AddRay into the rays to points.
+  void AddRay(const Eigen::Vector3d& end) { AddRay(end, &scratch_.ray_ends, &scratch_.ray_end_keys); }
   /// A ray passed the voxel `node`: occupancy miss and class log-odds decay towards 0, unless
   /// free_space_keeps_traversable spares it as a voxel held as traversable.
   void UpdateFree(TravNode* node) const;
@@ -286,13 +288,13 @@ void FrameFusion::GroupPointsByVoxel(const std::vector<ClassifiedPoint>& points)
 }
 
 inline void FrameFusion::AddRay(const Eigen::Vector3d& end, std::vector<octomap::point3d>* ends,
-                                std::vector<octomap::OcTreeKey>* end_keys) {
+                                std::vector<octomap::OcTreeKey>* end_keys) const {
   const octomap::point3d e(static_cast<float>(end.x()), static_cast<float>(end.y()),
                            static_cast<float>(end.z()));
   octomap::OcTreeKey key_end;
   if (!tree_.coordToKeyChecked(e, key_end)) return;  // as computeRayKeys: no ray
-  (ends != nullptr ? *ends : scratch_.ray_ends).push_back(e);
-  (end_keys != nullptr ? *end_keys : scratch_.ray_end_keys).push_back(key_end);
+  ends->push_back(e);
+  end_keys->push_back(key_end);
 }
 
 void FrameFusion::PlaceRayEnds() {
