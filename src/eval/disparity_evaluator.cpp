@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <limits>
 #include <map>
+#include <utility>
+#include <vector>
 
 #include "ssta/core/json_writer.h"
 #include "ssta/core/error.h"
@@ -32,6 +34,45 @@ std::string Percent(double share) {
   char text[32];
   std::snprintf(text, sizeof text, "%.2f %%", 100.0 * share);
   return text;
+}
+
+constexpr int kNoiseBins =
+    static_cast<int>(2.0 * DisparityEvalSummary::kNoiseHalfRangePx / DisparityEvalSummary::kNoiseBinPx);
+
+void Count(double error_px, std::vector<std::int64_t>* histogram) {
+  if (histogram->empty()) histogram->assign(kNoiseBins, 0);
+  const double bin = std::floor((error_px + DisparityEvalSummary::kNoiseHalfRangePx) / DisparityEvalSummary::kNoiseBinPx);
+  ++(*histogram)[static_cast<std::size_t>(std::clamp(bin, 0.0, kNoiseBins - 1.0))];
+}
+
+/// The value below which `share` of the histogram's counts lie, at the centre of its bin [px].
+double BinCentreAtShare(const std::vector<std::int64_t>& histogram, std::int64_t total, double share,
+                        double bin_px, double origin_px) {
+  const double wanted = share * static_cast<double>(total);
+  std::int64_t below = 0;
+  for (std::size_t i = 0; i < histogram.size(); ++i) {
+    below += histogram[i];
+    if (static_cast<double>(below) >= wanted) return origin_px + (static_cast<double>(i) + 0.5) * bin_px;
+  }
+  return origin_px + (static_cast<double>(histogram.size()) - 0.5) * bin_px;
+}
+
+/// 1.4826 x the median absolute deviation of the values a histogram of Count holds.
+double RobustSigma(const std::vector<std::int64_t>& histogram) {
+  std::int64_t total = 0;
+  for (const std::int64_t n : histogram) total += n;
+  if (total == 0) return kNaN;
+  constexpr double bin = DisparityEvalSummary::kNoiseBinPx, half = DisparityEvalSummary::kNoiseHalfRangePx;
+  const double median = BinCentreAtShare(histogram, total, 0.5, bin, -half);
+  // The absolute deviations of the bin centres from the median, binned alike from 0.
+  std::vector<std::int64_t> deviations(histogram.size(), 0);
+  for (std::size_t i = 0; i < histogram.size(); ++i) {
+    const double deviation = std::abs(-half + (static_cast<double>(i) + 0.5) * bin - median);
+    deviations[std::min(histogram.size() - 1, static_cast<std::size_t>(std::lround(deviation / bin)))] += histogram[i];
+  }
+  // Deviations are whole bins apart from the median's centre: bin k holds k bin widths.
+  const double mad = BinCentreAtShare(deviations, total, 0.5, bin, 0.0) - 0.5 * bin;
+  return 1.4826 * mad;
 }
 
 // The PNGs of a folder by file name (its disparity/ subfolder when it has one).
@@ -76,12 +117,29 @@ double DisparityEvalSummary::EndPointErrorPx() const {
 
 double DisparityEvalSummary::Density() const { return Share(matched_pixels, truth_pixels); }
 
+double DisparityEvalSummary::GoodErrorSigmaPx() const { return RobustSigma(good_error_histogram); }
+
+double DisparityEvalSummary::NeighbourDifferenceSigmaPx() const {
+  return RobustSigma(neighbour_difference_histogram);
+}
+
+double DisparityEvalSummary::NeighbourDifferenceRatio() const {
+  const double sigma = GoodErrorSigmaPx();
+  return sigma > 0.0 ? NeighbourDifferenceSigmaPx() / (std::sqrt(2.0) * sigma) : kNaN;
+}
+
 void DisparityEvalSummary::Add(const DisparityEvalSummary& other) {
   pairs += other.pairs;
   truth_pixels += other.truth_pixels;
   matched_pixels += other.matched_pixels;
   bad_matched_pixels += other.bad_matched_pixels;
   sum_abs_error_px += other.sum_abs_error_px;
+  for (auto [mine, theirs] : {std::pair{&good_error_histogram, &other.good_error_histogram},
+                              std::pair{&neighbour_difference_histogram, &other.neighbour_difference_histogram}}) {
+    if (theirs->empty()) continue;
+    if (mine->empty()) mine->assign(theirs->size(), 0);
+    for (std::size_t i = 0; i < mine->size(); ++i) (*mine)[i] += (*theirs)[i];
+  }
 }
 
 std::string DisparityEvalSummary::BriefReport() const {
@@ -97,6 +155,12 @@ std::string DisparityEvalSummary::BriefReport() const {
          Percent(D1Matched()) + " of matched pixels\n";
   out += "end-point error (matched): " + std::string(std::isnan(EndPointErrorPx()) ? "n/a" : epe) +
          ", density: " + Percent(Density()) + "\n";
+  char noise[160];
+  std::snprintf(noise, sizeof noise,
+                "noise of the good matches: sigma %.3f px; difference of vertical neighbours %.3f px (%.2f of "
+                "independent errors')\n",
+                GoodErrorSigmaPx(), NeighbourDifferenceSigmaPx(), NeighbourDifferenceRatio());
+  out += noise;
   return out;
 }
 
@@ -123,6 +187,8 @@ DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
   DisparityEvalSummary s;
   s.rule = options;
   s.pairs = 1;
+  // The signed error of each good match, NaN elsewhere, for the neighbour differences.
+  ImageF good_error(truth.width(), truth.height(), std::numeric_limits<float>::quiet_NaN());
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const double t = truth[i];
     if (!(t > 0.0) || !std::isfinite(t)) continue;
@@ -132,7 +198,18 @@ DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
     ++s.matched_pixels;
     const double error = std::abs(e - t);
     s.sum_abs_error_px += error;
-    if (error > options.max_error_px && error > options.max_error_ratio * t) ++s.bad_matched_pixels;
+    if (error > options.max_error_px && error > options.max_error_ratio * t) {
+      ++s.bad_matched_pixels;
+      continue;
+    }
+    Count(e - t, &s.good_error_histogram);
+    good_error[i] = static_cast<float>(e - t);
+  }
+  for (int v = 0; v + 1 < good_error.height(); ++v) {
+    for (int u = 0; u < good_error.width(); ++u) {
+      const double difference = static_cast<double>(good_error(v, u)) - good_error(v + 1, u);
+      if (!std::isnan(difference)) Count(difference, &s.neighbour_difference_histogram);
+    }
   }
   return s;
 }
@@ -202,6 +279,12 @@ void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* 
   json->Number(summary.EndPointErrorPx());
   json->Key("density");
   json->Number(summary.Density());
+  json->Key("good_error_sigma_px");
+  json->Number(summary.GoodErrorSigmaPx());
+  json->Key("neighbour_difference_sigma_px");
+  json->Number(summary.NeighbourDifferenceSigmaPx());
+  json->Key("neighbour_difference_ratio");
+  json->Number(summary.NeighbourDifferenceRatio());
 }
 
 }  // namespace internal

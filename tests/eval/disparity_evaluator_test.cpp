@@ -1,4 +1,4 @@
-// The disparity scorer (D1, end-point error, density) on a constructed truth and estimate whose
+// The disparity scorer (D1, end-point error, density, the noise of good matches) on a constructed truth and estimate whose
 // scores are known exactly, through the library and the `ssta eval disparity` / `eval stereo`
 // commands.
 
@@ -90,6 +90,42 @@ TEST(eval_Disparity, RuleIsConfigurable) {
   std::string error;
   EXPECT_FALSE(bad.IsValid(&error));
   EXPECT_EQ(error.rfind("max_error_ratio:", 0), 0u) << error;
+}
+
+// The good matches' noise, and how alike the errors of vertical neighbours are, on a 40x40
+// truth of 20 px. Errors of (u - 19.5) 0.02 px along each row (-0.39 to 0.39, median 0, median
+// absolute deviation 0.2 px) are the same down every column: their neighbours do not differ.
+// With the sign flipped on every other row, neighbours differ by twice the error, which is
+// sqrt(2) times what independent errors would.
+TEST(eval_Disparity, MeasuresTheNoiseOfGoodMatchesAndOfNeighbourDifferences) {
+  const ImageF truth(40, 40, 20.0f);
+  ImageF alike(40, 40), flipped(40, 40);
+  for (int v = 0; v < 40; ++v) {
+    for (int u = 0; u < 40; ++u) {
+      const double error = (u - 19.5) * 0.02;
+      alike(v, u) = static_cast<float>(20.0 + error);
+      flipped(v, u) = static_cast<float>(20.0 + (v % 2 == 0 ? error : -error));
+    }
+  }
+  constexpr double kBin = 1.0 / 256.0;  // the histogram's resolution
+  const DisparityEvalSummary same = ScoreDisparity(truth, alike);
+  EXPECT_NEAR(same.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
+  EXPECT_NEAR(same.NeighbourDifferenceSigmaPx(), 0.0, 2.0 * kBin);
+  EXPECT_NEAR(same.NeighbourDifferenceRatio(), 0.0, 0.02);
+  const DisparityEvalSummary opposite = ScoreDisparity(truth, flipped);
+  EXPECT_NEAR(opposite.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
+  EXPECT_NEAR(opposite.NeighbourDifferenceSigmaPx(), 1.4826 * 0.4, 2.0 * kBin);
+  EXPECT_NEAR(opposite.NeighbourDifferenceRatio(), std::sqrt(2.0), 0.02);
+  // Pooled, the two pairs' good errors are the same set twice: the same sigma.
+  DisparityEvalSummary both = same;
+  both.Add(opposite);
+  EXPECT_NEAR(both.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
+  // Bad matches and missing pixels are left out: the constructed pair's good errors are 0, 3
+  // and 4 px (median 3, absolute deviations 3, 0 and 1: median 1), and none lies above another.
+  const DisparityEvalSummary constructed = ScoreDisparity(Truth(), Estimate());
+  EXPECT_NEAR(constructed.GoodErrorSigmaPx(), 1.4826, 2.0 * kBin);
+  EXPECT_TRUE(std::isnan(constructed.NeighbourDifferenceSigmaPx()));
+  EXPECT_TRUE(std::isnan(ScoreDisparity(ImageF(3, 3, 0.0f), ImageF(3, 3, 5.0f)).GoodErrorSigmaPx()));
 }
 
 TEST(eval_Disparity, NoTruthGivesNoScoreAndSizesMustAgree) {

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "ssta/core/image.h"
 
@@ -33,6 +34,17 @@ struct DisparityEvalSummary {
   std::int64_t matched_pixels = 0;       ///< of those, with an estimate
   std::int64_t bad_matched_pixels = 0;   ///< of the matched ones, bad by the rule
   double sum_abs_error_px = 0.0;         ///< sum of |estimate - truth| over matched pixels [px]
+  /// The noise of the good matches (matched and not bad): a histogram of their signed errors
+  /// (estimate - truth) in bins of kNoiseBinPx over +-kNoiseHalfRangePx, the outermost bins
+  /// taking what lies beyond; empty until a pixel is counted.
+  std::vector<std::int64_t> good_error_histogram;
+  /// The same for the difference of the errors of two good matches one above the other (rows v
+  /// and v + 1 of one column): what a step between neighbouring pixels is measured with.
+  /// Independent errors differ with sqrt(2) times their sigma; errors the matcher makes alike at
+  /// neighbouring pixels (smoothness, overlapping windows) differ with less.
+  std::vector<std::int64_t> neighbour_difference_histogram;
+  static constexpr double kNoiseBinPx = 1.0 / 256.0;  ///< a step of KITTI's 16-bit disparity
+  static constexpr double kNoiseHalfRangePx = 16.0;
   DisparityEvalOptions rule;             ///< the bad-pixel rule used
 
   /// Share of truth pixels that are bad, the ones without an estimate included (NaN when
@@ -44,6 +56,15 @@ struct DisparityEvalSummary {
   double EndPointErrorPx() const;
   /// Share of truth pixels with an estimate (NaN when there are no truth pixels).
   double Density() const;
+  /// Robust sigma of the good matches' errors, 1.4826 times their median absolute deviation
+  /// [px]: the matcher's disparity noise (stereo.disparity_sigma_px); NaN without good matches.
+  double GoodErrorSigmaPx() const;
+  /// The same of the error differences of vertically neighbouring good matches [px]; NaN
+  /// without such pairs.
+  double NeighbourDifferenceSigmaPx() const;
+  /// NeighbourDifferenceSigmaPx / (sqrt(2) GoodErrorSigmaPx): 1 when neighbouring errors are
+  /// independent, 0 when they are equal (sqrt(1 - rho) for Gaussian errors of correlation rho).
+  double NeighbourDifferenceRatio() const;
 
   /// Adds the counts of `other` (the same rule) to these.
   void Add(const DisparityEvalSummary& other);
@@ -51,7 +72,8 @@ struct DisparityEvalSummary {
   std::string BriefReport() const;
   /// {"kind": "disparity", "prediction", "truth", "pairs", "truth_pixels", "matched_pixels",
   ///  "bad_matched_pixels", "max_error_px", "max_error_ratio", "d1_all", "d1_matched",
-  ///  "epe_px", "density"}.
+  ///  "epe_px", "density", "good_error_sigma_px", "neighbour_difference_sigma_px",
+  ///  "neighbour_difference_ratio"}.
   std::string ToJson() const;
 };
 
