@@ -14,7 +14,8 @@
 # grid's accuracy within 10 m of the path and its unsafe / falsely blocked cells there; what a
 # planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
 # over all seen ground and within 10 m. The last row pools the samples of every scene. A second
-# table pools the footprints per 2 m band of distance from the path, with each class's recall.
+# table pools the footprints per 2 m band of distance from the path, with each class's recall;
+# a third the per-frame labels' pixels per 5 m band of true depth from the camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
@@ -154,6 +155,23 @@ if m:
 if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
+    # The same pixels by their true depth from the camera (eval labels' depth bands).
+    depth = {}
+    for run in runs:
+        labels = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "labels.json"))
+        for band in (labels or {}).get("by_depth", {}).get("bands", []):
+            key = (band["from_m"], band["to_m"])
+            depth[key] = add(depth.get(key), band["metrics"]["confusion"])
+    if depth:
+        print()
+        print("| per-frame labels, pooled | scored | truly non-traversable | unsafe | falsely blocked | "
+              "recall trav. / semi / non |")
+        print("|---|---|---|---|---|---|")
+        for key in sorted(depth):
+            m = depth[key]
+            _, _, u, fb = rates(m)
+            print("| %g-%g m from the camera | %d | %d | %s | %s | %s |" % (
+                key[0], key[1], scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
 PY
 
 echo

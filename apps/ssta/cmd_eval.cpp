@@ -39,6 +39,7 @@ struct EvalArguments {
   std::string picture_path;
   std::vector<std::string> config;
   bool skip_missing = false;
+  double depth_band_m = 5.0;
 };
 
 void AddCommon(CLI::App* command, EvalArguments* args, const std::string& pred_help) {
@@ -200,11 +201,17 @@ void AddLabelsEval(CLI::App* eval) {
   labels->add_flag("--skip-missing", labels_args->skip_missing,
                    "leave truth frames without a prediction out of the scores (default: score "
                    "them as all unknown); they are reported either way");
+  labels->add_option("--depth-band", labels_args->depth_band_m,
+                     "also score the pixels in bands of this many metres of true depth (f b / the true "
+                     "disparity of gt/disparity/, with gt/rig.yaml); 0: no bands")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   labels->callback([labels_args] {
     RequireTruthVehicle(*labels_args, ClassifyConfigOf(labels_args->prediction));
     LabelEvalOptions options;
     options.pictures_dir = labels_args->pictures_dir;
     options.progress = ShowProgress;
+    options.depth_band_m = labels_args->depth_band_m;
     options.missing_prediction = labels_args->skip_missing ? MissingPrediction::kSkip
                                                            : MissingPrediction::kScoreAsUnknown;
     Report(EvaluateLabelFolders(labels_args->prediction, labels_args->sequence, options),

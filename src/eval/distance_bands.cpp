@@ -65,14 +65,31 @@ BandAccumulator::BandAccumulator(std::vector<Eigen::Vector2d> path, double band_
   }
 }
 
+BandAccumulator::BandAccumulator(double band_m) : band_m_(band_m) {
+  if (!(band_m_ > 0.0) || !std::isfinite(band_m_)) throw Error("distance bands: band_m must be positive");
+}
+
 void BandAccumulator::Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted) {
   constexpr int kMaxBands = 10000;
+  if (path_.empty()) throw Error("distance bands: no path to measure the distance from");
   const double distance = DistanceToPath(at, path_);
   if (distance / band_m_ >= kMaxBands) {
     char message[200];
     std::snprintf(message, sizeof message,
                   "a scored sample lies %.0f m from the path (over %d bands of %g m): is the path this grid's?",
                   distance, kMaxBands, band_m_);
+    throw Error(std::string("distance bands: ") + message);
+  }
+  AddAtDistance(distance, truth, predicted);
+}
+
+void BandAccumulator::AddAtDistance(double distance, std::uint8_t truth, std::uint8_t predicted,
+                                    std::int64_t count) {
+  constexpr int kMaxBands = 10000;
+  if (!(distance >= 0.0) || distance / band_m_ >= kMaxBands) {
+    char message[160];
+    std::snprintf(message, sizeof message, "a sample at %g m is outside [0, %d bands of %g m)", distance, kMaxBands,
+                  band_m_);
     throw Error(std::string("distance bands: ") + message);
   }
   const auto band = static_cast<std::size_t>(std::floor(distance / band_m_));
@@ -82,7 +99,7 @@ void BandAccumulator::Add(const Eigen::Vector2d& at, std::uint8_t truth, std::ui
     b.to_m = b.from_m + band_m_;
     bands_.push_back(b);
   }
-  bands_[band].matrix.Add(truth, predicted);
+  bands_[band].matrix.Add(truth, predicted, count);
 }
 
 std::vector<DistanceBand> BandAccumulator::Finish() const {
@@ -97,9 +114,13 @@ std::vector<DistanceBand> BandAccumulator::Finish() const {
 }
 
 std::string BandsReport(const std::vector<DistanceBand>& bands, const std::string& path_source) {
+  return BandsTable(bands, "by distance from the path (" + path_source + ")");
+}
+
+std::string BandsTable(const std::vector<DistanceBand>& bands, const std::string& heading) {
   if (bands.empty()) return "";
   std::string out =
-      "by distance from the path (" + path_source + "):\n"
+      heading + ":\n"
       "distance [m]   scored accuracy coverage  recall: trav   semi    non   unsafe  f.blocked  accuracy within\n";
   for (const DistanceBand& b : bands) {
     const ConfusionMatrix& m = b.matrix;

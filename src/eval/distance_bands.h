@@ -32,9 +32,13 @@ class BandAccumulator {
  public:
   /// Throws ssta::Error for band_m <= 0, an empty path or a non-finite point of it.
   BandAccumulator(std::vector<Eigen::Vector2d> path, double band_m);
+  /// Bands of a distance the caller measures (AddAtDistance only). Throws for band_m <= 0.
+  explicit BandAccumulator(double band_m);
   /// Adds one sample at `at` (x, y in the world [m]). Throws ssta::Error when it lies more
-  /// than 10000 bands from the path (the path is not this grid's).
+  /// than 10000 bands from the path (the path is not this grid's), or without a path.
   void Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted);
+  /// Adds `count` samples at `distance` [m], >= 0. Throws ssta::Error beyond 10000 bands.
+  void AddAtDistance(double distance, std::uint8_t truth, std::uint8_t predicted, std::int64_t count = 1);
   /// The bands, each with its accuracy and matrix within (this band and every nearer one).
   std::vector<DistanceBand> Finish() const;
 
@@ -48,6 +52,8 @@ class BandAccumulator {
 /// the scored samples, accuracy, coverage, recall of each class, the unsafe and falsely blocked
 /// rates, and the accuracy within. "" without bands.
 std::string BandsReport(const std::vector<DistanceBand>& bands, const std::string& path_source);
+/// The same table under the line "HEADING:".
+std::string BandsTable(const std::vector<DistanceBand>& bands, const std::string& heading);
 
 /// {"path", "band_m", "bands": [{"from_m", "to_m", "scored", "accuracy", "coverage",
 ///  "mean_iou", "accuracy_within", "metrics": {...}, "metrics_within": {...}}, ...]}.

@@ -1,9 +1,11 @@
 #include "ssta/eval/label_evaluator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
 
 #include "eval/class_ids.h"
 #include "ssta/core/json_writer.h"
@@ -11,7 +13,10 @@
 #include "ssta/core/classes.h"
 #include "ssta/core/error.h"
 #include "eval/png_folder.h"
+#include "eval/distance_bands.h"
 #include "ssta/eval/class_grid.h"
+#include "ssta/eval/disparity_evaluator.h"
+#include "ssta/files/yaml_reader.h"
 #include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
 
@@ -35,6 +40,33 @@ fs::path PredictionFolder(const std::string& prediction) {
   if (!fs::is_directory(prediction)) throw Error(prediction + ": prediction folder not found");
   const fs::path labels = fs::path(prediction) / "labels";
   return fs::is_directory(labels) ? labels : fs::path(prediction);
+}
+
+/// f b [px m] of the rig a synthetic sequence was rendered with (gt/rig.yaml), 0 when the truth
+/// has no rig file. Throws ssta::Error naming the file and key when it is there but unusable.
+double RenderedFocalTimesBaseline(const fs::path& gt_dir) {
+  const fs::path path = gt_dir / "rig.yaml";
+  if (!fs::is_regular_file(path)) return 0.0;
+  internal::YamlSection rig(internal::ParseYaml(ReadTextFile(path.string()), path.string()), path.string(), "");
+  const auto focal = rig.Require<double>("focal_px");
+  const auto baseline = rig.Require<double>("baseline_m");
+  if (!(std::isfinite(focal) && focal > 0.0)) throw Error(rig.Name("focal_px") + ": must be positive");
+  if (!(std::isfinite(baseline) && baseline > 0.0)) throw Error(rig.Name("baseline_m") + ": must be positive");
+  return focal * baseline;
+}
+
+/// Adds each scored pixel to the band of its depth f b / d (d the true disparity, > 0).
+void AddByDepth(const ImageU8& truth, const ImageU8& predicted, const ImageF& disparity, double focal_times_baseline,
+                internal::BandAccumulator* bands, const std::string& disparity_name) {
+  if (disparity.width() != truth.width() || disparity.height() != truth.height()) {
+    throw Error(disparity_name + ": size " + std::to_string(disparity.width()) + "x" +
+                std::to_string(disparity.height()) + " differs from the truth labels (" + SizeText(truth) + ")");
+  }
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    const std::uint8_t t = truth[i];
+    if (t < 1 || t > 3 || !(disparity[i] > 0.0f)) continue;
+    bands->AddAtDistance(focal_times_baseline / disparity[i], t, predicted[i]);
+  }
 }
 
 const char* PolicyName(MissingPrediction policy) {
@@ -66,6 +98,7 @@ bool LabelEvalOptions::IsValid(std::string* error) const {
     return Fail(error, "pictures_dir: " + pictures_dir + " exists and is not a folder");
   }
   if (worst_frames_listed < 0) return Fail(error, "worst_frames_listed: must be >= 0");
+  if (!(std::isfinite(depth_band_m) && depth_band_m >= 0.0)) return Fail(error, "depth_band_m: must be >= 0");
   return true;
 }
 
@@ -78,7 +111,8 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
   summary.missing_prediction_policy = options.missing_prediction;
   summary.worst_frames_listed = options.worst_frames_listed;
   const fs::path pred_dir = PredictionFolder(prediction);
-  const fs::path truth_dir = fs::path(FindGroundTruthDir(sequence)) / "labels";
+  const fs::path gt_dir = FindGroundTruthDir(sequence);
+  const fs::path truth_dir = gt_dir / "labels";
   if (!fs::is_directory(truth_dir)) throw Error(truth_dir.string() + ": truth label folder not found");
   summary.prediction_dir = pred_dir.string();
   summary.truth_dir = truth_dir.string();
@@ -94,6 +128,18 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
     if (truth_files.count(name) == 0) summary.missing_truth.push_back(name);
   }
   if (!options.pictures_dir.empty()) MakeDirectories(options.pictures_dir);
+  // Depth bands, when the truth has the disparity and the rig to turn it into depth.
+  const fs::path disparity_dir = gt_dir / "disparity";
+  const double focal_times_baseline =
+      options.depth_band_m > 0.0 && fs::is_directory(disparity_dir) ? RenderedFocalTimesBaseline(gt_dir) : 0.0;
+  std::unique_ptr<internal::BandAccumulator> depth_bands;
+  if (focal_times_baseline > 0.0) {
+    depth_bands = std::make_unique<internal::BandAccumulator>(options.depth_band_m);
+    summary.depth_band_m = options.depth_band_m;
+    char source[160];
+    std::snprintf(source, sizeof source, "true disparity, f b = %.4g px m", focal_times_baseline);
+    summary.depth_source = source;
+  }
 
   for (const auto& [name, truth_path] : truth_files) {
     FrameScore frame;
@@ -104,12 +150,22 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
       frame.prediction_missing = true;
       summary.missing_prediction.push_back(name);
       if (options.missing_prediction == MissingPrediction::kScoreAsUnknown) {
-        frame.matrix = ScoreLabels(truth, ImageU8(truth.width(), truth.height(), 0),
-                                   truth_path.string(), "(no prediction)");
+        const ImageU8 unknown(truth.width(), truth.height(), 0);
+        frame.matrix = ScoreLabels(truth, unknown, truth_path.string(), "(no prediction)");
+        const fs::path disparity_path = disparity_dir / name;
+        if (depth_bands && fs::is_regular_file(disparity_path)) {
+          AddByDepth(truth, unknown, ReadDisparityPng(disparity_path.string()), focal_times_baseline,
+                     depth_bands.get(), disparity_path.string());
+        }
       }
     } else {
       const ImageU8 predicted = ReadLabelImage(found->second.string());
       frame.matrix = ScoreLabels(truth, predicted, truth_path.string(), found->second.string());
+      const fs::path disparity_path = disparity_dir / name;
+      if (depth_bands && fs::is_regular_file(disparity_path)) {
+        AddByDepth(truth, predicted, ReadDisparityPng(disparity_path.string()), focal_times_baseline,
+                   depth_bands.get(), disparity_path.string());
+      }
       if (!options.pictures_dir.empty()) {
         WriteImage(MakeComparisonPicture(truth, predicted),
                    (fs::path(options.pictures_dir) / name).string());
@@ -121,6 +177,7 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
       options.progress(static_cast<int>(summary.frames.size()), static_cast<int>(truth_files.size()));
     }
   }
+  if (depth_bands) summary.by_depth = depth_bands->Finish();
   return summary;
 }
 
@@ -162,6 +219,7 @@ std::string LabelEvalSummary::BriefReport() const {
     out += "\n";
   }
   out += total.BriefReport("pixels");
+  out += internal::BandsTable(by_depth, "by depth from the camera (" + depth_source + ")");
   return out;
 }
 
@@ -191,6 +249,10 @@ std::string LabelEvalSummary::ToJson() const {
   json.EndArray();
   json.Key("metrics");
   internal::WriteMetricsJson(total, &json);
+  if (!by_depth.empty()) {
+    json.Key("by_depth");
+    internal::WriteBandsJson(by_depth, depth_source, depth_band_m, &json);
+  }
   json.Key("frames");
   json.BeginArray();
   for (const auto& frame : frames) {

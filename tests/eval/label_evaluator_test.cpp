@@ -7,6 +7,7 @@
 #include "eval_test_helpers.h"
 #include "ssta/core/error.h"
 #include "ssta/eval/label_evaluator.h"
+#include "ssta/io/image_io.h"
 
 namespace ssta {
 namespace {
@@ -196,6 +197,53 @@ TEST(eval_LabelFoldersEdges, AcceptsTheGtFolderItselfAndReportsProgressAndWorstF
       << report;
 }
 
+// Depth bands from the true disparity and the rendered rig: f b = 100 px x 0.1 m = 10 px m, so a
+// true disparity of 4 px is 2.5 m away, 1.25 px 8 m and 0.5 px 20 m; a pixel without one is left
+// out of the bands (not of the totals).
+TEST(eval_LabelFoldersEdges, ScoresPixelsInBandsOfTheirTrueDepth) {
+  TempDir dir;
+  //              2.5 m  2.5 m  8 m  8 m  20 m  none
+  // truth           1      3    3    1     3     3
+  // predicted       1      3    1    3     1     1
+  WriteLabels(dir / "seq/gt/labels/a.png", MakeLabels({{1, 3, 3, 1, 3, 3}}));
+  WriteLabels(dir / "out/labels/a.png", MakeLabels({{1, 3, 1, 3, 1, 1}}));
+  ImageU16 disparity(6, 1, 0);
+  const double d[] = {4.0, 4.0, 1.25, 1.25, 0.5, 0.0};
+  for (int u = 0; u < 6; ++u) disparity(0, u) = static_cast<std::uint16_t>(std::lround(d[u] * 256.0));
+  std::filesystem::create_directories(dir / "seq/gt/disparity");
+  WriteImage(disparity, dir / "seq/gt/disparity/a.png");
+  // Without the rig there are no depths.
+  EXPECT_TRUE(EvaluateLabelFolders(dir / "out", dir / "seq").by_depth.empty());
+  test::WriteText(dir / "seq/gt/rig.yaml", "scene: yard\nfocal_px: 100\nbaseline_m: 0.1\n");
+  const LabelEvalSummary s = EvaluateLabelFolders(dir / "out", dir / "seq");
+  EXPECT_EQ(s.total.Scored(), 6);
+  ASSERT_EQ(s.by_depth.size(), 5u);  // 0-5, 5-10, 10-15, 15-20, 20-25 m
+  EXPECT_EQ(s.by_depth[0].matrix.Scored(), 2);
+  EXPECT_NEAR(s.by_depth[0].matrix.Accuracy(), 1.0, kTol);
+  EXPECT_EQ(s.by_depth[1].matrix.Scored(), 2);
+  EXPECT_NEAR(s.by_depth[1].matrix.Recall(TravClass::kNonTraversable), 0.0, kTol);
+  EXPECT_NEAR(s.by_depth[1].matrix.UnsafeRate(), 1.0, kTol);
+  EXPECT_NEAR(s.by_depth[1].matrix.FalselyBlockedRate(), 1.0, kTol);
+  EXPECT_EQ(s.by_depth[2].matrix.Scored() + s.by_depth[3].matrix.Scored(), 0);
+  EXPECT_EQ(s.by_depth[4].matrix.Scored(), 1);
+  EXPECT_NEAR(s.by_depth[4].accuracy_within, 2.0 / 5.0, kTol);
+  EXPECT_NE(s.BriefReport().find("by depth from the camera (true disparity, f b = 10 px m)"), std::string::npos)
+      << s.BriefReport();
+  EXPECT_NE(s.ToJson().find("\"by_depth\""), std::string::npos);
+  // No bands when asked for none; a rig without a baseline is named.
+  LabelEvalOptions none;
+  none.depth_band_m = 0.0;
+  EXPECT_TRUE(EvaluateLabelFolders(dir / "out", dir / "seq", none).by_depth.empty());
+  test::WriteText(dir / "seq/gt/rig.yaml", "focal_px: 100\n");
+  try {
+    EvaluateLabelFolders(dir / "out", dir / "seq");
+    FAIL() << "a rig without baseline_m was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("rig.yaml"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("baseline_m"), std::string::npos) << e.what();
+  }
+}
+
 TEST(eval_LabelFoldersEdges, OptionsValidation) {
   TempDir dir;
   test::WriteText(dir / "file", "x");
@@ -209,6 +257,10 @@ TEST(eval_LabelFoldersEdges, OptionsValidation) {
   options.worst_frames_listed = -1;
   EXPECT_FALSE(options.IsValid(&error));
   EXPECT_NE(error.find("worst_frames_listed"), std::string::npos) << error;
+  options.worst_frames_listed = 5;
+  options.depth_band_m = -1.0;
+  EXPECT_FALSE(options.IsValid(&error));
+  EXPECT_NE(error.find("depth_band_m"), std::string::npos) << error;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "ssta/core/image.h"
 #include "ssta/core/progress.h"
 #include "ssta/eval/confusion_matrix.h"
+#include "ssta/eval/distance_band.h"
 
 namespace ssta {
 
@@ -46,9 +47,14 @@ struct LabelEvalOptions {
   Progress progress;
   /// How many of the worst frames (lowest accuracy) BriefReport lists; >= 0.
   int worst_frames_listed = 5;
+  /// [m] Width of the bands of depth from the camera the pixels are also scored in, when the
+  /// truth has the true disparity and the rig (gt/disparity/, gt/rig.yaml): a pixel's depth is
+  /// f b / its true disparity. Stereo's depth error grows with the square of the depth, so what
+  /// the rig resolves and what it cannot are told apart. 0: no bands.
+  double depth_band_m = 5.0;
 
-  /// False, with a message naming the field, when pictures_dir names an existing non-folder or
-  /// worst_frames_listed is negative.
+  /// False, with a message naming the field, when pictures_dir names an existing non-folder,
+  /// worst_frames_listed is negative or depth_band_m is negative or not finite.
   bool IsValid(std::string* error) const;
 };
 
@@ -69,6 +75,11 @@ struct LabelEvalSummary {
   std::vector<std::string> missing_truth;       ///< predictions without a truth frame (unscored)
   MissingPrediction missing_prediction_policy = MissingPrediction::kScoreAsUnknown;
   int worst_frames_listed = 5;  ///< copied from the options, for BriefReport
+  /// The scored pixels by depth from the camera (LabelEvalOptions::depth_band_m), pixels
+  /// without a true disparity left out; empty when the truth has no disparity or rig.
+  std::vector<DistanceBand> by_depth;
+  double depth_band_m = 0.0;  ///< the bands' width [m]
+  std::string depth_source;   ///< what the depths come from, for the report; "" without bands
 
   /// Frame counts, missing frames, the worst frames by accuracy and the aggregate
   /// ConfusionMatrix::BriefReport.
@@ -76,15 +87,17 @@ struct LabelEvalSummary {
   /// JSON document; "metrics" objects as described at ConfusionMatrix:
   /// {"kind": "labels", "unit": "pixels", "prediction", "truth", "frames_truth",
   ///  "frames_predicted", "frames_scored", "missing_prediction_policy", "missing_prediction": [...],
-  ///  "missing_truth": [...], "metrics": {...}, "frames": [{"name", "prediction_missing",
-  ///  "scored_in_total", "metrics"}]}.
+  ///  "missing_truth": [...], "metrics": {...}, "by_depth": {"path", "band_m", "bands": [...]}
+  ///  (with depth bands, as eval grid's "by_distance"), "frames": [{"name",
+  ///  "prediction_missing", "scored_in_total", "metrics"}]}.
   std::string ToJson() const;
 };
 
 /// Scores a folder of predicted label images against a synthetic sequence's truth.
 /// `prediction` is the output folder of `ssta classify` (PNGs under prediction/labels/) or a
 /// folder holding the PNGs directly. Truth is SEQ/gt/labels/ (or SEQ/mav0/gt/labels/). Frames
-/// are matched by file name (*.png). Throws ssta::Error naming the file or folder: a missing
+/// are matched by file name (*.png); a frame's true disparity, for the depth bands, is
+/// gt/disparity/ under the same name (frames without one are left out of the bands). Throws ssta::Error naming the file or folder: a missing
 /// folder, a folder without any PNG (nothing to score is a wrong path, not a score), an
 /// unreadable image, a size mismatch or an invalid class value.
 LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::string& sequence,
