@@ -133,20 +133,27 @@ print("| **pooled** | | **%s** | **%s** | **%s** | **%s** | **%s / %s** | **%s /
 def recalls(m):
     return " / ".join(f(m[c][c] / sum(m[c]) if m and sum(m[c]) else None) for c in (1, 2, 3))
 
-bands = {}
-for run in runs:
-    feet = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "footprints.json"))
-    for band in (feet or {}).get("by_distance_from_path", {}).get("bands", []):
-        key = (band["from_m"], band["to_m"])
-        bands[key] = add(bands.get(key), band["metrics"]["confusion"])
-print()
-print("| footprints, pooled | scored | truly blocked | unsafe | falsely blocked | recall trav. / semi / non |")
-print("|---|---|---|---|---|---|")
-for key in sorted(bands):
-    m = bands[key]
-    _, _, u, fb = rates(m)
-    print("| %g-%g m from the path | %d | %d | %s | %s | %s |" % (
-        key[0], key[1], scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+def pooled_bands(file_name, section):
+    """The scenes' confusion matrices per band of a JSON's `section`, summed: {(from, to): m}."""
+    bands = {}
+    for run in runs:
+        doc = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), file_name))
+        for band in (doc or {}).get(section, {}).get("bands", []):
+            key = (band["from_m"], band["to_m"])
+            bands[key] = add(bands.get(key), band["metrics"]["confusion"])
+    return bands
+
+def band_table(title, blocked, where, bands):
+    print()
+    print("| %s | scored | %s | unsafe | falsely blocked | recall trav. / semi / non |" % (title, blocked))
+    print("|---|---|---|---|---|---|")
+    for key in sorted(bands):
+        m = bands[key]
+        _, _, u, fb = rates(m)
+        print("| %g-%g m from the %s | %d | %d | %s | %s | %s |" % (
+            key[0], key[1], where, scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+
+band_table("footprints, pooled", "truly blocked", "path", pooled_bands("footprints.json", "by_distance_from_path"))
 m = totals.get("feet")
 if m:
     _, _, u, fb = rates(m)
@@ -156,22 +163,9 @@ if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
     # The same pixels by their true depth from the camera (eval labels' depth bands).
-    depth = {}
-    for run in runs:
-        labels = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "labels.json"))
-        for band in (labels or {}).get("by_depth", {}).get("bands", []):
-            key = (band["from_m"], band["to_m"])
-            depth[key] = add(depth.get(key), band["metrics"]["confusion"])
+    depth = pooled_bands("labels.json", "by_depth")
     if depth:
-        print()
-        print("| per-frame labels, pooled | scored | truly non-traversable | unsafe | falsely blocked | "
-              "recall trav. / semi / non |")
-        print("|---|---|---|---|---|---|")
-        for key in sorted(depth):
-            m = depth[key]
-            _, _, u, fb = rates(m)
-            print("| %g-%g m from the camera | %d | %d | %s | %s | %s |" % (
-                key[0], key[1], scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+        band_table("per-frame labels, pooled", "truly non-traversable", "camera", depth)
 PY
 
 echo
