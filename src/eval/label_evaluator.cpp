@@ -141,6 +141,14 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
     summary.depth_source = source;
   }
 
+  // Adds a frame's scored pixels to the depth bands, when the truth has its disparity.
+  const auto add_by_depth = [&](const std::string& name, const ImageU8& truth, const ImageU8& predicted) {
+    const fs::path disparity_path = disparity_dir / name;
+    if (!depth_bands || !fs::is_regular_file(disparity_path)) return;
+    AddByDepth(truth, predicted, ReadDisparityPng(disparity_path.string()), focal_times_baseline, depth_bands.get(),
+               disparity_path.string());
+  };
+
   for (const auto& [name, truth_path] : truth_files) {
     FrameScore frame;
     frame.name = name;
@@ -152,20 +160,12 @@ LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::
       if (options.missing_prediction == MissingPrediction::kScoreAsUnknown) {
         const ImageU8 unknown(truth.width(), truth.height(), 0);
         frame.matrix = ScoreLabels(truth, unknown, truth_path.string(), "(no prediction)");
-        const fs::path disparity_path = disparity_dir / name;
-        if (depth_bands && fs::is_regular_file(disparity_path)) {
-          AddByDepth(truth, unknown, ReadDisparityPng(disparity_path.string()), focal_times_baseline,
-                     depth_bands.get(), disparity_path.string());
-        }
+        add_by_depth(name, truth, unknown);
       }
     } else {
       const ImageU8 predicted = ReadLabelImage(found->second.string());
       frame.matrix = ScoreLabels(truth, predicted, truth_path.string(), found->second.string());
-      const fs::path disparity_path = disparity_dir / name;
-      if (depth_bands && fs::is_regular_file(disparity_path)) {
-        AddByDepth(truth, predicted, ReadDisparityPng(disparity_path.string()), focal_times_baseline,
-                   depth_bands.get(), disparity_path.string());
-      }
+      add_by_depth(name, truth, predicted);
       if (!options.pictures_dir.empty()) {
         WriteImage(MakeComparisonPicture(truth, predicted),
                    (fs::path(options.pictures_dir) / name).string());
