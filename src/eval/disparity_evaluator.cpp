@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <limits>
 #include <map>
-#include <utility>
 #include <vector>
 
 #include "ssta/core/json_writer.h"
@@ -36,13 +35,10 @@ std::string Percent(double share) {
   return text;
 }
 
-constexpr int kNoiseBins =
-    static_cast<int>(2.0 * DisparityEvalSummary::kNoiseHalfRangePx / DisparityEvalSummary::kNoiseBinPx);
-
 void Count(double error_px, std::vector<std::int64_t>* histogram) {
-  if (histogram->empty()) histogram->assign(kNoiseBins, 0);
-  const double bin = std::floor((error_px + DisparityEvalSummary::kNoiseHalfRangePx) / DisparityEvalSummary::kNoiseBinPx);
-  ++(*histogram)[static_cast<std::size_t>(std::clamp(bin, 0.0, kNoiseBins - 1.0))];
+  using S = DisparityEvalSummary;
+  const double bin = std::floor((error_px + S::kNoiseHalfRangePx) / S::kNoiseBinPx);
+  ++(*histogram)[static_cast<std::size_t>(std::clamp(bin, 0.0, S::kNoiseBins - 1.0))];
 }
 
 /// The value below which `share` of the histogram's counts lie, at the centre of its bin [px].
@@ -134,11 +130,9 @@ void DisparityEvalSummary::Add(const DisparityEvalSummary& other) {
   matched_pixels += other.matched_pixels;
   bad_matched_pixels += other.bad_matched_pixels;
   sum_abs_error_px += other.sum_abs_error_px;
-  for (auto [mine, theirs] : {std::pair{&good_error_histogram, &other.good_error_histogram},
-                              std::pair{&neighbour_difference_histogram, &other.neighbour_difference_histogram}}) {
-    if (theirs->empty()) continue;
-    if (mine->empty()) mine->assign(theirs->size(), 0);
-    for (std::size_t i = 0; i < mine->size(); ++i) (*mine)[i] += (*theirs)[i];
+  for (std::size_t i = 0; i < good_error_histogram.size(); ++i) {
+    good_error_histogram[i] += other.good_error_histogram[i];
+    neighbour_difference_histogram[i] += other.neighbour_difference_histogram[i];
   }
 }
 

@@ -70,7 +70,6 @@ BandAccumulator::BandAccumulator(double band_m) : band_m_(band_m) {
 }
 
 void BandAccumulator::Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted) {
-  constexpr int kMaxBands = 10000;
   if (path_.empty()) throw Error("distance bands: no path to measure the distance from");
   const double distance = DistanceToPath(at, path_);
   if (distance / band_m_ >= kMaxBands) {
@@ -85,7 +84,6 @@ void BandAccumulator::Add(const Eigen::Vector2d& at, std::uint8_t truth, std::ui
 
 void BandAccumulator::AddAtDistance(double distance, std::uint8_t truth, std::uint8_t predicted,
                                     std::int64_t count) {
-  constexpr int kMaxBands = 10000;
   if (!(distance >= 0.0) || distance / band_m_ >= kMaxBands) {
     char message[160];
     std::snprintf(message, sizeof message, "a sample at %g m is outside [0, %d bands of %g m)", distance, kMaxBands,

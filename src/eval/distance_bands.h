@@ -37,8 +37,10 @@ class BandAccumulator {
   /// Adds one sample at `at` (x, y in the world [m]). Throws ssta::Error when it lies more
   /// than 10000 bands from the path (the path is not this grid's), or without a path.
   void Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted);
-  /// Adds `count` samples at `distance` [m], >= 0. Throws ssta::Error beyond 10000 bands.
+  /// Adds `count` samples at `distance` [m], >= 0. Throws ssta::Error beyond kMaxBands bands.
   void AddAtDistance(double distance, std::uint8_t truth, std::uint8_t predicted, std::int64_t count = 1);
+  double band_m() const { return band_m_; }
+  static constexpr int kMaxBands = 10000;
   /// The bands, each with its accuracy and matrix within (this band and every nearer one).
   std::vector<DistanceBand> Finish() const;
 

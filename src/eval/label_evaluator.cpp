@@ -1,11 +1,13 @@
 #include "ssta/eval/label_evaluator.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <vector>
 
 #include "eval/class_ids.h"
 #include "ssta/core/json_writer.h"
@@ -55,17 +57,37 @@ double RenderedFocalTimesBaseline(const fs::path& gt_dir) {
   return focal * baseline;
 }
 
-/// Adds each scored pixel to the band of its depth f b / d (d the true disparity, > 0).
+/// Adds each scored pixel to the band of its depth f b / d (d the true disparity, > 0). Counts
+/// into a histogram per band first, as ScoreLabels does: one increment per pixel.
 void AddByDepth(const ImageU8& truth, const ImageU8& predicted, const ImageF& disparity, double focal_times_baseline,
                 internal::BandAccumulator* bands, const std::string& disparity_name) {
   if (disparity.width() != truth.width() || disparity.height() != truth.height()) {
     throw Error(disparity_name + ": size " + std::to_string(disparity.width()) + "x" +
                 std::to_string(disparity.height()) + " differs from the truth labels (" + SizeText(truth) + ")");
   }
+  // Per band, counts by truth 1..3 and prediction 0..4.
+  constexpr int kCells = 3 * kNumClasses;
+  std::vector<std::array<std::int64_t, kCells>> histogram;
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const std::uint8_t t = truth[i];
     if (t < 1 || t > 3 || !(disparity[i] > 0.0f)) continue;
-    bands->AddAtDistance(focal_times_baseline / disparity[i], t, predicted[i]);
+    const double depth = focal_times_baseline / disparity[i];
+    const double band = std::floor(depth / bands->band_m());
+    if (band >= internal::BandAccumulator::kMaxBands) {
+      bands->AddAtDistance(depth, t, predicted[i]);  // beyond the bands: the accumulator says so
+      continue;
+    }
+    const auto b = static_cast<std::size_t>(band);
+    if (histogram.size() <= b) histogram.resize(b + 1, std::array<std::int64_t, kCells>{});
+    ++histogram[b][(t - 1) * kNumClasses + predicted[i]];
+  }
+  for (std::size_t b = 0; b < histogram.size(); ++b) {
+    const double centre = (static_cast<double>(b) + 0.5) * bands->band_m();
+    for (int cell = 0; cell < kCells; ++cell) {
+      if (histogram[b][cell] == 0) continue;
+      bands->AddAtDistance(centre, static_cast<std::uint8_t>(cell / kNumClasses + 1),
+                           static_cast<std::uint8_t>(cell % kNumClasses), histogram[b][cell]);
+    }
   }
 }
 

@@ -34,17 +34,18 @@ struct DisparityEvalSummary {
   std::int64_t matched_pixels = 0;       ///< of those, with an estimate
   std::int64_t bad_matched_pixels = 0;   ///< of the matched ones, bad by the rule
   double sum_abs_error_px = 0.0;         ///< sum of |estimate - truth| over matched pixels [px]
+  static constexpr double kNoiseBinPx = 1.0 / 256.0;  ///< a step of KITTI's 16-bit disparity
+  static constexpr double kNoiseHalfRangePx = 16.0;
+  static constexpr int kNoiseBins = static_cast<int>(2.0 * kNoiseHalfRangePx / kNoiseBinPx);
   /// The noise of the good matches (matched and not bad): a histogram of their signed errors
-  /// (estimate - truth) in bins of kNoiseBinPx over +-kNoiseHalfRangePx, the outermost bins
-  /// taking what lies beyond; empty until a pixel is counted.
-  std::vector<std::int64_t> good_error_histogram;
+  /// (estimate - truth) in kNoiseBins bins of kNoiseBinPx over +-kNoiseHalfRangePx, the
+  /// outermost bins taking what lies beyond.
+  std::vector<std::int64_t> good_error_histogram = std::vector<std::int64_t>(kNoiseBins, 0);
   /// The same for the difference of the errors of two good matches one above the other (rows v
   /// and v + 1 of one column): what a step between neighbouring pixels is measured with.
   /// Independent errors differ with sqrt(2) times their sigma; errors the matcher makes alike at
   /// neighbouring pixels (smoothness, overlapping windows) differ with less.
-  std::vector<std::int64_t> neighbour_difference_histogram;
-  static constexpr double kNoiseBinPx = 1.0 / 256.0;  ///< a step of KITTI's 16-bit disparity
-  static constexpr double kNoiseHalfRangePx = 16.0;
+  std::vector<std::int64_t> neighbour_difference_histogram = std::vector<std::int64_t>(kNoiseBins, 0);
   DisparityEvalOptions rule;             ///< the bad-pixel rule used
 
   /// Share of truth pixels that are bad, the ones without an estimate included (NaN when

@@ -88,8 +88,8 @@ struct LabelEvalSummary {
   /// {"kind": "labels", "unit": "pixels", "prediction", "truth", "frames_truth",
   ///  "frames_predicted", "frames_scored", "missing_prediction_policy", "missing_prediction": [...],
   ///  "missing_truth": [...], "metrics": {...}, "by_depth": {"path", "band_m", "bands": [...]}
-  ///  (with depth bands, as eval grid's "by_distance"), "frames": [{"name",
-  ///  "prediction_missing", "scored_in_total", "metrics"}]}.
+  ///  (only with depth bands; shaped as eval grid's "by_distance_from_path"), "frames":
+  ///  [{"name", "prediction_missing", "scored_in_total", "metrics"}]}.
   std::string ToJson() const;
 };
 
@@ -97,9 +97,10 @@ struct LabelEvalSummary {
 /// `prediction` is the output folder of `ssta classify` (PNGs under prediction/labels/) or a
 /// folder holding the PNGs directly. Truth is SEQ/gt/labels/ (or SEQ/mav0/gt/labels/). Frames
 /// are matched by file name (*.png); a frame's true disparity, for the depth bands, is
-/// gt/disparity/ under the same name (frames without one are left out of the bands). Throws ssta::Error naming the file or folder: a missing
-/// folder, a folder without any PNG (nothing to score is a wrong path, not a score), an
-/// unreadable image, a size mismatch or an invalid class value.
+/// gt/disparity/ under the same name (frames without one are left out of the bands). Throws
+/// ssta::Error naming the file or folder: a missing folder, a folder without any PNG (nothing to
+/// score is a wrong path, not a score), an unreadable image, a size mismatch, an invalid class
+/// value, or a gt/rig.yaml without a positive focal_px and baseline_m.
 LabelEvalSummary EvaluateLabelFolders(const std::string& prediction, const std::string& sequence,
                                       const LabelEvalOptions& options = {});
 
