@@ -53,13 +53,26 @@ double BinCentreAtShare(const std::vector<std::int64_t>& histogram, std::int64_t
   return origin_px + (static_cast<double>(histogram.size()) - 0.5) * bin_px;
 }
 
-/// 1.4826 x the median absolute deviation of the values a histogram of Count holds.
-double RobustSigma(const std::vector<std::int64_t>& histogram) {
+std::int64_t Total(const std::vector<std::int64_t>& histogram) {
   std::int64_t total = 0;
   for (const std::int64_t n : histogram) total += n;
+  return total;
+}
+
+/// The median of the values a histogram of Count holds, at the centre of its bin [px].
+double Median(const std::vector<std::int64_t>& histogram) {
+  const std::int64_t total = Total(histogram);
   if (total == 0) return kNaN;
   constexpr double bin = DisparityEvalSummary::kNoiseBinPx, half = DisparityEvalSummary::kNoiseHalfRangePx;
-  const double median = BinCentreAtShare(histogram, total, 0.5, bin, -half);
+  return BinCentreAtShare(histogram, total, 0.5, bin, -half);
+}
+
+/// 1.4826 x the median absolute deviation of the values a histogram of Count holds.
+double RobustSigma(const std::vector<std::int64_t>& histogram) {
+  const std::int64_t total = Total(histogram);
+  if (total == 0) return kNaN;
+  constexpr double bin = DisparityEvalSummary::kNoiseBinPx, half = DisparityEvalSummary::kNoiseHalfRangePx;
+  const double median = Median(histogram);
   // The absolute deviations of the bin centres from the median, binned alike from 0.
   std::vector<std::int64_t> deviations(histogram.size(), 0);
   for (std::size_t i = 0; i < histogram.size(); ++i) {
@@ -113,6 +126,8 @@ double DisparityEvalSummary::EndPointErrorPx() const {
 
 double DisparityEvalSummary::Density() const { return Share(matched_pixels, truth_pixels); }
 
+double DisparityEvalSummary::GoodErrorMedianPx() const { return Median(good_error_histogram); }
+
 double DisparityEvalSummary::GoodErrorSigmaPx() const { return RobustSigma(good_error_histogram); }
 
 double DisparityEvalSummary::NeighbourDifferenceSigmaPx() const {
@@ -149,11 +164,11 @@ std::string DisparityEvalSummary::BriefReport() const {
          Percent(D1Matched()) + " of matched pixels\n";
   out += "end-point error (matched): " + std::string(std::isnan(EndPointErrorPx()) ? "n/a" : epe) +
          ", density: " + Percent(Density()) + "\n";
-  char noise[160];
+  char noise[192];
   std::snprintf(noise, sizeof noise,
-                "noise of the good matches: sigma %.3f px; difference of vertical neighbours %.3f px (%.2f of "
-                "independent errors')\n",
-                GoodErrorSigmaPx(), NeighbourDifferenceSigmaPx(), NeighbourDifferenceRatio());
+                "noise of the good matches: median error %+.3f px, sigma %.3f px; difference of vertical "
+                "neighbours %.3f px (%.2f of independent errors')\n",
+                GoodErrorMedianPx(), GoodErrorSigmaPx(), NeighbourDifferenceSigmaPx(), NeighbourDifferenceRatio());
   out += noise;
   return out;
 }
@@ -273,6 +288,8 @@ void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* 
   json->Number(summary.EndPointErrorPx());
   json->Key("density");
   json->Number(summary.Density());
+  json->Key("good_error_median_px");
+  json->Number(summary.GoodErrorMedianPx());
   json->Key("good_error_sigma_px");
   json->Number(summary.GoodErrorSigmaPx());
   json->Key("neighbour_difference_sigma_px");

@@ -109,6 +109,7 @@ TEST(eval_Disparity, MeasuresTheNoiseOfGoodMatchesAndOfNeighbourDifferences) {
   }
   constexpr double kBin = 1.0 / 256.0;  // the histogram's resolution
   const DisparityEvalSummary same = ScoreDisparity(truth, alike);
+  EXPECT_NEAR(same.GoodErrorMedianPx(), 0.0, 0.01 + kBin);  // the middle two errors: -0.01, +0.01
   EXPECT_NEAR(same.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
   EXPECT_NEAR(same.NeighbourDifferenceSigmaPx(), 0.0, 2.0 * kBin);
   EXPECT_NEAR(same.NeighbourDifferenceRatio(), 0.0, 0.02);
@@ -116,6 +117,14 @@ TEST(eval_Disparity, MeasuresTheNoiseOfGoodMatchesAndOfNeighbourDifferences) {
   EXPECT_NEAR(opposite.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
   EXPECT_NEAR(opposite.NeighbourDifferenceSigmaPx(), 1.4826 * 0.4, 2.0 * kBin);
   EXPECT_NEAR(opposite.NeighbourDifferenceRatio(), std::sqrt(2.0), 0.02);
+  // A bias moves the median and leaves the sigma and the neighbours' differences.
+  ImageF biased = alike;
+  for (std::size_t i = 0; i < biased.size(); ++i) biased.data()[i] += 0.125f;
+  const DisparityEvalSummary shifted = ScoreDisparity(truth, biased);
+  EXPECT_NEAR(shifted.GoodErrorMedianPx(), 0.125, 0.01 + kBin);
+  EXPECT_NEAR(shifted.GoodErrorSigmaPx(), 1.4826 * 0.2, 2.0 * kBin);
+  EXPECT_NEAR(shifted.NeighbourDifferenceSigmaPx(), 0.0, 2.0 * kBin);
+  EXPECT_NE(shifted.ToJson().find("\"good_error_median_px\": 0.1"), std::string::npos) << shifted.ToJson();
   // Pooled, the two pairs' good errors are the same set twice: the same sigma.
   DisparityEvalSummary both = same;
   both.Add(opposite);

@@ -57,6 +57,10 @@ struct DisparityEvalSummary {
   double EndPointErrorPx() const;
   /// Share of truth pixels with an estimate (NaN when there are no truth pixels).
   double Density() const;
+  /// Median of the good matches' errors (estimate - truth) [px]: the matcher's bias, which no
+  /// noise model averages away (a constant offset e tilts a ground plane like a camera pitched
+  /// by about e h / (f b)); NaN without good matches.
+  double GoodErrorMedianPx() const;
   /// Robust sigma of the good matches' errors, 1.4826 times their median absolute deviation
   /// [px]: the matcher's disparity noise (stereo.disparity_sigma_px); NaN without good matches.
   double GoodErrorSigmaPx() const;
@@ -73,8 +77,8 @@ struct DisparityEvalSummary {
   std::string BriefReport() const;
   /// {"kind": "disparity", "prediction", "truth", "pairs", "truth_pixels", "matched_pixels",
   ///  "bad_matched_pixels", "max_error_px", "max_error_ratio", "d1_all", "d1_matched",
-  ///  "epe_px", "density", "good_error_sigma_px", "neighbour_difference_sigma_px",
-  ///  "neighbour_difference_ratio"}.
+  ///  "epe_px", "density", "good_error_median_px", "good_error_sigma_px",
+  ///  "neighbour_difference_sigma_px", "neighbour_difference_ratio"}.
   std::string ToJson() const;
 };
 
