@@ -2,8 +2,9 @@
 # Mount refinement on rendered drives with a known mount error: renders each drive of a scene
 # set with its cam0 sensor.yaml rotated by an injected pitch / roll, runs `ssta calibrate-mount`
 # on it and prints, per drive, how far the refined mount is from the true one (the angle of
-# R_true^T R_refined, gt/extrinsics.yaml against the report's T_BS), the reported sigmas and
-# the frames' ground tilt. docs/mount_calibration.md gives the table.
+# R_true^T R_refined, gt/extrinsics.yaml against the report's T_BS) and its parts about body x
+# and y (roll and pitch; what is left is the yaw, which the ground does not show), the reported
+# sigmas and the frames' ground tilt. docs/mount_calibration.md gives the table.
 #
 #   scripts/mount_benchmark.sh tuning|report [FRAMES] [-- extra args for calibrate-mount]
 #
@@ -64,8 +65,15 @@ def angle_deg(a, b):
     trace = sum(a[k][i] * b[k][i] for i in range(3) for k in range(3))
     return math.degrees(math.acos(max(-1.0, min(1.0, (trace - 1.0) / 2.0))))
 
-print("| drive | injected pitch / roll [deg] | error [deg] | sigma pitch / roll [deg] | error / sigma of the angle | frames' ground tilt RMS [deg] | status |")
-print("|---|---|---|---|---|---|---|")
+def body_error_deg(truth, refined):
+    # rotation vector of refined truth^T (the error in the body frame), about body x and y [deg]
+    e = [[sum(refined[i][k] * truth[j][k] for k in range(3)) for j in range(3)] for i in range(3)]
+    angle = math.acos(max(-1.0, min(1.0, (e[0][0] + e[1][1] + e[2][2] - 1.0) / 2.0)))
+    scale = angle / (2.0 * math.sin(angle)) if angle > 1e-12 else 0.5
+    return [math.degrees(scale * (e[2][1] - e[1][2])), math.degrees(scale * (e[0][2] - e[2][0]))]
+
+print("| drive | injected pitch / roll [deg] | error [deg] | about body x / y [deg] | sigma pitch / roll [deg] | error / sigma of the angle | frames' ground tilt RMS [deg] | status |")
+print("|---|---|---|---|---|---|---|---|")
 errors = []
 for scene, seed, p, r, seq in drives:
     report = json.load(open(f"{out}/{scene}-{seed}/report.json"))["refinement"]
@@ -75,7 +83,8 @@ for scene, seed, p, r, seq in drives:
     error = angle_deg(truth, rotation)
     errors.append(error)
     sp, sr = report["pitch_sigma_deg"], report["roll_sigma_deg"]
-    print(f"| {scene} {seed} | {p} / {r} | {error:.3f} | {sp:.3f} / {sr:.3f} | {error / math.hypot(sp, sr):.2f} | "
+    ex, ey = body_error_deg(truth, rotation)
+    print(f"| {scene} {seed} | {p} / {r} | {error:.3f} | {ex:+.3f} / {ey:+.3f} | {sp:.3f} / {sr:.3f} | {error / math.hypot(sp, sr):.2f} | "
           f"{report['ground_tilt_rms_deg']:.3f} | {report['status']} |")
 errors.sort()
 print(f"\nmedian error {errors[len(errors) // 2]:.3f} deg, largest {errors[-1]:.3f} deg, "
