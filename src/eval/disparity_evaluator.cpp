@@ -53,6 +53,7 @@ double BinCentreAtShare(const std::vector<std::int64_t>& histogram, std::int64_t
   return origin_px + (static_cast<double>(histogram.size()) - 0.5) * bin_px;
 }
 
+/// The number of values a histogram holds.
 std::int64_t Total(const std::vector<std::int64_t>& histogram) {
   std::int64_t total = 0;
   for (const std::int64_t n : histogram) total += n;
