@@ -78,6 +78,10 @@ const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
     f.push_back(Real<O>("height_prior_sigma_m", &O::height_prior_sigma_m, Above(0), "m",
                         "prior on the height correction"));
     f.push_back(Integer<O>("max_iterations", &O::max_iterations, AtLeast(1), "", "solver iterations"));
+    f.push_back(Flag<O>("unbiased_matching", &O::unbiased_matching,
+                        "calibrate-mount matches with sgbm_mode hh4 where stereo.sgbm_mode is 3way or sgbm, and "
+                        "refines the disparity over 7 px where stereo.subpixel_window_px is 0: the ground's "
+                        "disparity unbiased, as a bias tilts it like a pitch error"));
     f.push_back(Flag<O>("online", &O::online,
                         "build-map refines the mount while it fuses (--refine sets it): a determined solve "
                         "replaces cam0's mount for the later frames"));

@@ -17,6 +17,31 @@ namespace {
 /// part of the ground segment.
 constexpr int kPathPointsFactor = 8;
 
+/// The sub-pixel refinement window calibrate-mount uses when the config has none [px].
+constexpr int kUnbiasedSubpixelWindowPx = 7;
+
+/// The config calibrate-mount matches with (RefinementOptions::unbiased_matching); `note` says
+/// what changed, or stays empty.
+Config MatchingConfig(const Config& config, const MountCalibrationOptions& options, std::string* note) {
+  Config out = config;
+  StereoMatcherOptions& stereo = out.stereo;
+  if (!options.refinement.unbiased_matching || options.oracle_disparity) return out;
+  std::vector<std::string> changes;
+  const bool one_pass = stereo.sgbm_mode == SgbmMode::kThreeWay || stereo.sgbm_mode == SgbmMode::kFive;
+  if (stereo.algorithm == MatcherType::kSemiGlobal && one_pass) {
+    changes.push_back("stereo.sgbm_mode hh4 instead of " + SgbmModeName(stereo.sgbm_mode));
+    stereo.sgbm_mode = SgbmMode::kHh4;
+  }
+  if (stereo.subpixel_window_px == 0) {
+    changes.push_back("stereo.subpixel_window_px " + std::to_string(kUnbiasedSubpixelWindowPx));
+    stereo.subpixel_window_px = kUnbiasedSubpixelWindowPx;
+  }
+  if (changes.empty()) return out;
+  *note = "matched with " + changes.front() + (changes.size() > 1 ? " and " + changes.back() : std::string()) +
+          " (refinement.unbiased_matching): the ground's disparity unbiased";
+  return out;
+}
+
 /// What the per-frame pipeline gave over a run's frames.
 struct GroundCollection {
   std::vector<GroundEvidence> body;  ///< each usable frame's evidence, in frame order
@@ -132,11 +157,14 @@ MountCalibration CalibrateMount(const Sequence& sequence, const Config& config, 
                                 const Progress& progress) {
   std::string error;
   if (!options.IsValid(&error)) throw Error(error);
-  SequenceRun run(sequence, config, options.frames, Oracles{options.oracle_disparity, false});
+  std::string matching_note;
+  const Config matching = MatchingConfig(config, options, &matching_note);
+  SequenceRun run(sequence, matching, options.frames, Oracles{options.oracle_disparity, false});
   const StereoCalibration& rig = sequence.calibration();
   const std::vector<std::optional<Eigen::Isometry3d>> poses = PathPoses(sequence, run, options.refinement);
 
   MountCalibration out;
+  out.matching_note = std::move(matching_note);
   out.frames_listed = run.frames_listed();
   out.skipped = run.sequence_skips();
   GroundCollection ground = CollectGroundEvidence(&run, rig, options.refinement, progress);
@@ -163,6 +191,7 @@ std::string MountCalibration::BriefReport() const {
   std::ostringstream r;
   r << refinement.BriefReport();
   if (!reference_note.empty()) r << reference_note << "\n";
+  if (!matching_note.empty()) r << matching_note << "\n";
   r << "frames: " << frames_processed << " processed of " << frames_listed << " listed, " << refinement.frames_used
     << " used, " << skipped.size() << " skipped; pipeline " << pipeline_s << " s\n";
   for (const SkippedFrame& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
@@ -180,6 +209,8 @@ std::string MountCalibration::Json() const {
   json.MatrixRows(refined.right.body_T_camera.matrix());
   json.Key("reference_note");
   json.String(reference_note);
+  json.Key("matching_note");
+  json.String(matching_note);
   json.Key("frames_listed");
   json.Integer(frames_listed);
   json.Key("frames_processed");

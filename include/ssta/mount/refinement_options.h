@@ -109,6 +109,13 @@ struct RefinementOptions {
   double height_prior_sigma_m = 0.10;
   /// Gauss-Newton / Levenberg-Marquardt iteration limit.
   int max_iterations = 50;
+  /// `ssta calibrate-mount` matches for the ground's level, not for speed: an SGBM of a one-pass
+  /// mode (3way, sgbm) runs as hh4, and without a sub-pixel refinement the disparity is refined
+  /// over 7 px (stereo.subpixel_window_px). The one-pass modes aggregate along paths from above
+  /// only, which makes the ground's disparity about 0.1 px low; both modes err high on far
+  /// ground, which the refinement takes out. A constant disparity error e tilts the ground like
+  /// a camera pitched by e h / (f b). Online refinement (build-map) uses the map's disparity.
+  bool unbiased_matching = true;
 
   /// `ssta build-map` refines the mount online while it fuses (`--refine` sets it): each solve
   /// that is determined replaces cam0's mount for the gravity and the poses of later frames.

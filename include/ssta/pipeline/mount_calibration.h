@@ -40,6 +40,8 @@ struct MountCalibration {
   std::string reference_note;
   /// Path reference: frames with enough ground that a later frame's body stands on.
   int frames_on_path = 0;
+  /// Empty, or how the matching differed from the config's (refinement.unbiased_matching).
+  std::string matching_note;
 
   /// The refinement's report, then the frames skipped with their reasons.
   std::string BriefReport() const;
@@ -51,6 +53,7 @@ struct MountCalibration {
 /// frames of `sequence` with `config`, collects each frame's ground evidence (up in the body
 /// from GravityProvider; with the path reference, only the ground a later frame's body stands
 /// on, through the sequence's poses) and solves for cam0's mount correction over all of them.
+/// With refinement.unbiased_matching the matcher runs as that option says.
 /// Throws ssta::Error on invalid options or config, and when no frame has a usable ground
 /// plane (the message says why the first frames were skipped). Too few frames or a result not
 /// better determined than its prior are statuses in the result, not exceptions.
