@@ -60,12 +60,12 @@ std::int64_t Total(const std::vector<std::int64_t>& histogram) {
   return total;
 }
 
-/// The median of the values a histogram of Count holds, at the centre of its bin [px].
-double Median(const std::vector<std::int64_t>& histogram) {
-  const std::int64_t total = Total(histogram);
+/// The median of the values a histogram of Count holds, at the centre of its bin [px]; NaN when
+/// `total`, the number of values it holds, is 0.
+double Median(const std::vector<std::int64_t>& histogram, std::int64_t total) {
   if (total == 0) return kNaN;
-  constexpr double bin = DisparityEvalSummary::kNoiseBinPx, half = DisparityEvalSummary::kNoiseHalfRangePx;
-  return BinCentreAtShare(histogram, total, 0.5, bin, -half);
+  return BinCentreAtShare(histogram, total, 0.5, DisparityEvalSummary::kNoiseBinPx,
+                          -DisparityEvalSummary::kNoiseHalfRangePx);
 }
 
 /// 1.4826 x the median absolute deviation of the values a histogram of Count holds.
@@ -73,7 +73,7 @@ double RobustSigma(const std::vector<std::int64_t>& histogram) {
   const std::int64_t total = Total(histogram);
   if (total == 0) return kNaN;
   constexpr double bin = DisparityEvalSummary::kNoiseBinPx, half = DisparityEvalSummary::kNoiseHalfRangePx;
-  const double median = Median(histogram);
+  const double median = Median(histogram, total);
   // The absolute deviations of the bin centres from the median, binned alike from 0.
   std::vector<std::int64_t> deviations(histogram.size(), 0);
   for (std::size_t i = 0; i < histogram.size(); ++i) {
@@ -127,7 +127,9 @@ double DisparityEvalSummary::EndPointErrorPx() const {
 
 double DisparityEvalSummary::Density() const { return Share(matched_pixels, truth_pixels); }
 
-double DisparityEvalSummary::GoodErrorMedianPx() const { return Median(good_error_histogram); }
+double DisparityEvalSummary::GoodErrorMedianPx() const {
+  return Median(good_error_histogram, Total(good_error_histogram));
+}
 
 double DisparityEvalSummary::GoodErrorSigmaPx() const { return RobustSigma(good_error_histogram); }
 

@@ -34,8 +34,8 @@ class BandAccumulator {
   BandAccumulator(std::vector<Eigen::Vector2d> path, double band_m);
   /// Bands of a distance the caller measures (AddAtDistance only). Throws for band_m <= 0.
   explicit BandAccumulator(double band_m);
-  /// Adds one sample at `at` (x, y in the world [m]). Throws ssta::Error when it lies more
-  /// than 10000 bands from the path (the path is not this grid's), or without a path.
+  /// Adds one sample at `at` (x, y in the world [m]). Throws ssta::Error when it lies
+  /// kMaxBands bands or more from the path (the path is not this grid's), or without a path.
   void Add(const Eigen::Vector2d& at, std::uint8_t truth, std::uint8_t predicted);
   /// Adds `count` samples at `distance` [m], >= 0. Throws ssta::Error beyond kMaxBands bands.
   void AddAtDistance(double distance, std::uint8_t truth, std::uint8_t predicted, std::int64_t count = 1);
