@@ -40,6 +40,25 @@ bool OnAPitsWall(const std::vector<ColumnPoint>& column, std::size_t b, float ra
   return false;
 }
 
+/// How high the wall that column point `b` stands on (OnAPitsWall) rises into view above B [m]:
+/// the highest of the points beyond B that stay within the steep face, each no farther from
+/// the camera than its rise allows at tan_max_slope, give or take three sigmas of B's range.
+/// The first point beyond that ends the wall.
+float VisibleWallRise(const std::vector<ColumnPoint>& column, std::size_t b, float range_b,
+                      const Eigen::Vector2f& origin, float tan_max_slope, float per_m2) {
+  const ColumnPoint& base = column[b];
+  const float range_slack = 3.0f * per_m2 * range_b * range_b;
+  float highest = 0.0f;
+  for (std::size_t j = b + 1; j < column.size(); ++j) {
+    const ColumnPoint& w = column[j];
+    const float rise = w.p.z() - base.p.z();
+    const float run = (w.p.head<2>() - origin).norm() - range_b;
+    if (run > std::max(rise, 0.0f) / tan_max_slope + range_slack) break;
+    highest = std::max(highest, rise);
+  }
+  return highest;
+}
+
 }  // namespace
 
 ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_rectified, double depth_noise_per_m2,
@@ -56,8 +75,31 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
   const auto tan_max_slope = static_cast<float>(std::tan(vehicle.max_slope_deg * 3.14159265358979 / 180.0));
   const float camera_z = world_T.translation().z();
   const auto max_range = static_cast<float>(range_m);
+  // The edges marked along the columns, with the point each mark is measured from (its seed);
+  // then spread along the rows, so the lip reaches a step radius from its seed in every
+  // direction, as the vehicle's rule measures it, also beside an edge the columns cross
+  // obliquely (the sides of a pit).
+  Image<Eigen::Vector2f> seed_of(cloud.width(), cloud.height(), Eigen::Vector2f::Zero());
   std::vector<ColumnPoint> column;
   column.reserve(static_cast<std::size_t>(cloud.height()));
+  // Marks the points of `column` within the step radius of column[seed] (horizontally), walking
+  // each way from it up to the first point beyond.
+  const auto mark_around = [&](std::size_t seed, int u, std::uint8_t weight) {
+    const Eigen::Vector2f centre = column[seed].p.head<2>();
+    const auto mark = [&](std::size_t j) {
+      if ((column[j].p.head<2>() - centre).norm() > radius) return false;
+      std::uint8_t& w = lip(column[j].v, u);
+      if (weight > w) {
+        w = weight;
+        seed_of(column[j].v, u) = centre;
+      }
+      return true;
+    };
+    for (std::size_t j = seed + 1; j-- > 0 && mark(j);) {
+    }
+    for (std::size_t j = seed + 1; j < column.size() && mark(j); ++j) {
+    }
+  };
   for (int u = 0; u < cloud.width(); u += stride) {
     column.clear();
     for (int v = cloud.height() - 1; v >= 0; --v) {
@@ -76,6 +118,9 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
       const float range_a = (a.p.head<2>() - origin).norm();
       const float tan_ray = (camera_z - a.p.z()) / std::max(range_a, 1e-3f);
       if (tan_ray <= 0.0f) continue;  // a ray over A that rises lands on nothing below it
+      // The view lands on the far wall of a pit that rises back to the near rim's height, give
+      // or take the noise: that wall drops to the same hidden floor, so its rim is a lip too.
+      bool far_rim = false;
       if (i + 1 < column.size()) {
         // The next view up the column lands beyond A and lower by more than the vehicle may
         // step, beyond the noise of both heights; or lower by less, on the wall of a pit.
@@ -85,7 +130,10 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
         if (drop <= semi_step + noise) continue;
         const float range_b = (b.p.head<2>() - origin).norm();
         if (range_b <= range_a) continue;
-        if (drop <= max_step + noise && !OnAPitsWall(column, i + 1, range_b, origin, tan_max_slope, per_m2)) continue;
+        if (drop <= max_step + noise) {
+          if (!OnAPitsWall(column, i + 1, range_b, origin, tan_max_slope, per_m2)) continue;
+          far_rim = VisibleWallRise(column, i + 1, range_b, origin, tan_max_slope, per_m2) >= drop - noise;
+        }
       } else {
         // Nothing beyond A in this column: had a floor lain within max_step below A, the ray
         // over A would have met it within range (before range_a + max_step / tan_ray).
@@ -97,14 +145,37 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
       // view shows: the suspicion weighs tan(ray) / tan(max_slope).
       const auto weight =
           static_cast<std::uint8_t>(std::lround(255.0f * std::clamp(tan_ray / tan_max_slope, 0.02f, 1.0f)));
-      for (std::size_t j = i + 1; j-- > 0;) {
-        if ((column[j].p.head<2>() - a.p.head<2>()).norm() > radius) break;
-        std::uint8_t& w = lip(column[j].v, u);
-        w = std::max(w, weight);
+      mark_around(i, u, weight);
+      // The wall's foot B stands where the far rim does, give or take the wall's slope.
+      if (far_rim) mark_around(i + 1, u, weight);
+    }
+  }
+  // Along the rows: each mark of the columns reaches the points of its row within the step
+  // radius of its seed, up to the first point beyond; a gap of no depth wider than
+  // kMaxGapPx ends it too.
+  constexpr int kMaxGapPx = 16;
+  ImageU8 spread = lip;
+  for (int v = 0; v < cloud.height(); ++v) {
+    for (int u = 0; u < cloud.width(); u += stride) {
+      const std::uint8_t weight = lip(v, u);
+      if (weight == 0) continue;
+      const Eigen::Vector2f& centre = seed_of(v, u);
+      for (const int step : {-stride, stride}) {
+        int gap = 0;
+        for (int w = u + step; w >= 0 && w < cloud.width() && gap <= kMaxGapPx; w += step) {
+          const Eigen::Vector3f& q = cloud(v, w);
+          if (!q.allFinite() || q.z() <= 0.0f) {
+            gap += stride;
+            continue;
+          }
+          gap = 0;
+          if (((world_T * q).head<2>() - centre).norm() > radius) break;
+          spread(v, w) = std::max(spread(v, w), weight);
+        }
       }
     }
   }
-  return lip;
+  return spread;
 }
 
 }  // namespace ssta::internal

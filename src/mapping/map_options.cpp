@@ -131,7 +131,8 @@ const OptionFields<MappingOptions>& MappingOptions::Fields() {
     f.push_back(Flag<O>("hidden_drops", &O::hidden_drops,
                         "the lip of a drop-off whose foot a frame cannot see (a view over an edge that lands "
                         "lower by more than vehicle.max_step_m beyond noise, or on the far wall of a pit "
-                        "that hides its floor) is non-traversable"));
+                        "that hides its floor) is non-traversable within vehicle.step_radius_m of the edge, "
+                        "and so is the far rim of such a pit"));
     f.push_back(Integer<O>("no_return_stride_px", &O::no_return_stride_px, Closed(0, 64), "px",
                            "every n-th pixel above the horizon that the texture test left without a point "
                            "casts a ray that ranged nothing: the voxels the map holds along it are free space up "

@@ -3,6 +3,7 @@
 // answers are known by construction.
 
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -281,13 +282,14 @@ TEST(SafeFusion, AnEvidenceFloorLeavesTheFusedSurfaceItsSay) {
   EXPECT_EQ(why.cell.cls, TravClass::kTraversable);
 }
 
-/// An organized cloud rendered by ray casting a world of height `ground(x)` (x forward, level
-/// across) from a pinhole camera at height `camera_z` pitched `pitch_deg` down (f 400 px,
-/// 32 x 240, principal point at the centre), in the rectified camera frame (x right, y down,
-/// z forward); pixels that meet no ground within 60 m have no point. `world_T_rectified`: the
-/// camera's pose in the world (x forward, z up).
+/// An organized cloud rendered by ray casting a world of height `ground(x)` or `ground(x, y)`
+/// (x forward, y left) from a pinhole camera at height `camera_z` pitched `pitch_deg` down
+/// (f 400 px, `width` x 240, principal point at the centre), in the rectified camera frame
+/// (x right, y down, z forward); pixels that meet no ground within 60 m have no point.
+/// `world_T_rectified`: the camera's pose in the world (x forward, z up).
 template <typename Ground>
-Image3f Render(double camera_z, double pitch_deg, const Ground& ground, Eigen::Isometry3d* world_T_rectified) {
+Image3f Render(double camera_z, double pitch_deg, const Ground& ground, Eigen::Isometry3d* world_T_rectified,
+               int width = 32) {
   const double pitch = DegToRad(pitch_deg);
   Eigen::Matrix3d world_R_level;  // camera axes x right, y down, z forward in a world x fwd, z up
   world_R_level << 0, 0, 1, -1, 0, 0, 0, -1, 0;
@@ -295,15 +297,19 @@ Image3f Render(double camera_z, double pitch_deg, const Ground& ground, Eigen::I
   *world_T_rectified = Eigen::Isometry3d::Identity();
   world_T_rectified->linear() = world_R;
   world_T_rectified->translation() = Eigen::Vector3d(0, 0, camera_z);
-  Image3f cloud(32, 240, Eigen::Vector3f::Constant(std::nanf("")));
+  Image3f cloud(width, 240, Eigen::Vector3f::Constant(std::nanf("")));
   const Eigen::Vector3d origin = world_T_rectified->translation();
   const auto below = [&](double t, const Eigen::Vector3d& ray_w) {
     const Eigen::Vector3d p = origin + t * ray_w;
-    return p.z() <= ground(p.x());
+    if constexpr (std::is_invocable_v<Ground, double, double>) {
+      return p.z() <= ground(p.x(), p.y());
+    } else {
+      return p.z() <= ground(p.x());
+    }
   };
   for (int v = 0; v < 240; ++v) {
-    for (int u = 0; u < 32; ++u) {
-      const Eigen::Vector3d ray_c((u - 16) / 400.0, (v - 120) / 400.0, 1.0);
+    for (int u = 0; u < width; ++u) {
+      const Eigen::Vector3d ray_c((u - 0.5 * width) / 400.0, (v - 120) / 400.0, 1.0);
       const Eigen::Vector3d ray_w = world_R * ray_c;
       // March along the ray until it passes below the ground, then bisect to 0.1 mm.
       for (double t = 0.02; t < 60.0; t += 0.02) {
@@ -318,8 +324,8 @@ Image3f Render(double camera_z, double pitch_deg, const Ground& ground, Eigen::I
   return cloud;
 }
 
-/// The largest lip weight in each 0.1 m of x along the image's centre column (world x of the
-/// marked points), and whether any point beyond `x_from` is marked.
+/// The extent (world x) of the lip's points along the image's centre column, and their largest
+/// weight.
 struct LipProfile {
   double first_x = NAN, last_x = NAN;  ///< extent of the marked points [m]
   int max_weight = 0;
@@ -327,8 +333,8 @@ struct LipProfile {
 
 LipProfile Profile(const Image3f& cloud, const ImageU8& lip, const Eigen::Isometry3d& world_T) {
   LipProfile p;
+  const int u = cloud.width() / 2;
   for (int v = 0; v < cloud.height(); ++v) {
-    const int u = 16;
     if (lip(v, u) == 0) continue;
     const double x = (world_T * cloud(v, u).cast<double>()).x();
     p.first_x = std::isnan(p.first_x) ? x : std::min(p.first_x, x);
@@ -363,33 +369,83 @@ TEST(HiddenDrops, ACliffsLipIsMarkedWhetherItsFloorIsSeenOrNot) {
   EXPECT_NEAR(p.max_weight, 255.0 * (0.8 / 6.0) / std::tan(DegToRad(25.0)), 4.0);
 }
 
-TEST(HiddenDrops, APitsNearEdgeIsMarkedWhereItsFarWallHidesTheFloor) {
+TEST(HiddenDrops, APitsRimIsMarkedWhereItsFarWallHidesTheFloor) {
   VehicleOptions vehicle;  // semi step 0.1 m, max step 0.2 m, max slope 25 deg
   Eigen::Isometry3d world_T;
   // A pit 0.3 m deep over x in [3.0, 3.5), seen from 1.1 m up: the ray over its near edge
   // descends at tan 1.1 / 3 and meets the far wall 0.18 m down, less than the vehicle may step,
   // with the floor hidden below it. The pit is at least 0.18 m deep and no view from here says
-  // how much more: the edge is a lip, suspected by tan(ray) / tan(25 deg).
+  // how much more: its rim is a lip, suspected by tan(ray) / tan(25 deg), a step radius deep
+  // on both sides: the far wall rises back to the near side's height, down from which it
+  // stands on the same hidden floor.
   const auto pit = [](double depth) {
     return [depth](double x) { return x >= 3.0 && x < 3.5 ? -depth : 0.0; };
   };
   const Image3f hidden = Render(1.1, 20.0, pit(0.3), &world_T);
-  const LipProfile p = Profile(hidden, FindHiddenDrops(hidden, world_T, kNoise, vehicle, 20.0, 1), world_T);
-  EXPECT_NEAR(p.last_x, 3.0, 0.03);
-  EXPECT_NEAR(p.first_x, 2.8, 0.04);
+  const ImageU8 lip = FindHiddenDrops(hidden, world_T, kNoise, vehicle, 20.0, 1);
+  const LipProfile p = Profile(hidden, lip, world_T);
+  EXPECT_NEAR(p.first_x, 2.8, 0.04);  // a step radius before the near edge
+  EXPECT_NEAR(p.last_x, 3.7, 0.04);   // a step radius beyond the far edge
   EXPECT_NEAR(p.max_weight, 255.0 * (1.1 / 3.0) / std::tan(DegToRad(25.0)), 4.0);
+  // Between the two bands nothing is marked: no ground beyond the near band up to the wall,
+  // and on the far side only the rim's 0.2 m.
+  int marked_between = 0;
+  for (int v = 0; v < hidden.height(); ++v) {
+    const Eigen::Vector3d q = world_T * hidden(v, 16).cast<double>();
+    if (std::isfinite(q.x()) && ((q.x() > 2.0 && q.x() < 2.77) || q.x() > 3.75)) marked_between += lip(v, 16) != 0;
+  }
+  EXPECT_EQ(marked_between, 0);
+  // The same pit whose far side rises only to 0.12 m below the near side: the ray over the near
+  // edge lands on the far wall 0.18 m down, and that wall rises 0.06 m into view. Its rim stands
+  // lower than the near one by more than the noise, so the floor's depth below it is not known
+  // to match the near side's (0.18 m there: a step the vehicle may take): only the near edge is
+  // a lip.
+  const Image3f lower = Render(
+      1.1, 20.0, [](double x) { return x < 3.0 ? 0.0 : (x < 3.5 ? -0.3 : -0.12); }, &world_T);
+  const LipProfile near_only = Profile(lower, FindHiddenDrops(lower, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(near_only.first_x, 2.8, 0.04);
+  EXPECT_NEAR(near_only.last_x, 3.0, 0.03);
   // 0.15 m deep, the same pit shows its floor before the far wall: the view lands on a floor
   // 0.15 m down, a step the vehicle may take, and nothing is marked.
   const Image3f shallow = Render(1.1, 20.0, pit(0.15), &world_T);
   EXPECT_TRUE(std::isnan(Profile(shallow, FindHiddenDrops(shallow, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
 }
 
+TEST(HiddenDrops, ALipReachesAStepRadiusFromAnEdgeTheColumnsCrossObliquely) {
+  VehicleOptions vehicle;  // step radius 0.2 m
+  Eigen::Isometry3d world_T;
+  // A 1 m cliff whose edge x + 2 y = 2 runs at 63 deg to the view: along a column (world x)
+  // a step radius from the edge is 0.2 sqrt(5) = 0.45 m, not 0.2 m. Every point within the
+  // step radius of the edge is lip, as the vehicle's rule measures it; none farther.
+  const auto cliff = [](double x, double y) { return x + 2.0 * y < 2.0 ? 0.0 : -1.0; };
+  const Image3f cloud = Render(0.8, 30.0, cliff, &world_T, 160);
+  const ImageU8 lip = FindHiddenDrops(cloud, world_T, kNoise, vehicle, 20.0, 1);
+  int inside = 0, inside_marked = 0, outside_marked = 0;
+  for (int v = 0; v < cloud.height(); ++v) {
+    for (int u = 20; u < 140; ++u) {  // away from the image's sides, where the edge runs out
+      if (!cloud(v, u).allFinite()) continue;
+      const Eigen::Vector3d q = world_T * cloud(v, u).cast<double>();
+      if (q.z() < -0.5) continue;  // the floor below
+      const double distance = (2.0 - q.x() - 2.0 * q.y()) / std::sqrt(5.0);
+      if (distance < 0.19) {
+        ++inside;
+        inside_marked += lip(v, u) != 0;
+      } else if (distance > 0.22) {
+        outside_marked += lip(v, u) != 0;
+      }
+    }
+  }
+  ASSERT_GT(inside, 500);
+  EXPECT_GT(inside_marked, 0.95 * inside);
+  EXPECT_EQ(outside_marked, 0);
+}
+
 TEST(HiddenDrops, ARampsCrestWhoseFarSideIsSeenAndADitchsFarEdgeAreNot) {
   VehicleOptions vehicle;
   Eigen::Isometry3d world_T;
-  // A plateau at 0.5 m whose far side descends at 15 deg from x = 2 m: from 0.8 m above the
-  // plateau... the camera stands on it, 1.3 m up, and its rays over the crest descend at 33
-  // deg, so they see the slope: no lip.
+  // A plateau at 0.5 m whose far side descends at 15 deg from x = 2 m, seen from 0.8 m above
+  // the plateau: the rays over the crest descend at 22 deg, more steeply than the slope, so
+  // they see it: no lip.
   const auto ramp = [](double x) { return x < 2.0 ? 0.5 : std::max(-1.0, 0.5 - (x - 2.0) * std::tan(DegToRad(15.0))); };
   const Image3f crest = Render(1.3, 30.0, ramp, &world_T);
   EXPECT_TRUE(std::isnan(Profile(crest, FindHiddenDrops(crest, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
