@@ -18,11 +18,12 @@ namespace ssta::internal {
 /// over A. So is a point A whose next point B lies lower by less, but by more than
 /// `vehicle.semi_step_m` beyond the noise, on a face that rises towards B's neighbours more
 /// steeply than `vehicle.max_slope_deg`: the far wall of a pit, whose floor lies below the ray,
-/// deeper than the wall shows; that wall drops to the same floor, so B is an edge too (the pit's
-/// far rim). So is a point A with nothing beyond it in its column whose ray, had a floor lain
-/// within max_step_m below A, would have met it before `range_m` (the map's range). A ray that
-/// descends more steeply than `vehicle.max_slope_deg` hides a drop no wheel may take; a flatter
-/// one may hide a drivable slope (the far side of a ramp's crest), which nearer views show.
+/// deeper than the wall shows. Where that wall rises back to A's height, give or take the noise,
+/// it drops to the same floor, so B is an edge too (the pit's far rim). So is a point A with
+/// nothing beyond it in its column whose ray, had a floor lain within max_step_m below A, would
+/// have met it before `range_m` (the map's range). A ray that descends more steeply than
+/// `vehicle.max_slope_deg` hides a drop no wheel may take; a flatter one may hide a drivable
+/// slope (the far side of a ramp's crest), which nearer views show.
 /// The points of the edge's column within the step radius of it, and from each of them the
 /// points of its row within the step radius of the same edge point (so the band keeps its width
 /// beside an edge the columns cross obliquely, as along the sides of a pit), get
