@@ -59,12 +59,70 @@ float VisibleWallRise(const std::vector<ColumnPoint>& column, std::size_t b, flo
   return highest;
 }
 
+/// The lip's marks with the edge point each is measured from (its seed), so that the marks of a
+/// column can reach along the rows a step radius from the same edge point.
+struct LipMarks {
+  LipMarks(int width, int height) : weight(width, height, 0), seed(width, height, Eigen::Vector2f::Zero()) {}
+
+  /// Marks the points of image column `u` (`column`, as FindHiddenDrops gathers it) within
+  /// `radius` of column[edge] (horizontally) with `w`, walking each way from it up to the first
+  /// point beyond. A point keeps the larger weight, and that mark's seed.
+  void AroundEdge(const std::vector<ColumnPoint>& column, std::size_t edge, int u, std::uint8_t w, float radius) {
+    const Eigen::Vector2f centre = column[edge].p.head<2>();
+    const auto mark = [&](std::size_t j) {
+      if ((column[j].p.head<2>() - centre).norm() > radius) return false;
+      std::uint8_t& current = weight(column[j].v, u);
+      if (w > current) {
+        current = w;
+        seed(column[j].v, u) = centre;
+      }
+      return true;
+    };
+    for (std::size_t j = edge + 1; j-- > 0 && mark(j);) {
+    }
+    for (std::size_t j = edge + 1; j < column.size() && mark(j); ++j) {
+    }
+  }
+
+  ImageU8 weight;
+  Image<Eigen::Vector2f> seed;
+};
+
+/// The marks spread along the rows: each mark reaches the points of its row within `radius` of
+/// its seed, up to the first point beyond; a gap of no depth wider than kMaxGapPx ends it too.
+/// `stride`: the columns that were marked.
+ImageU8 SpreadAlongRows(const Image3f& cloud, const Eigen::Isometry3f& world_T, const LipMarks& marks, float radius,
+                        int stride) {
+  constexpr int kMaxGapPx = 16;
+  ImageU8 spread = marks.weight;
+  for (int v = 0; v < cloud.height(); ++v) {
+    for (int u = 0; u < cloud.width(); u += stride) {
+      const std::uint8_t weight = marks.weight(v, u);
+      if (weight == 0) continue;
+      const Eigen::Vector2f& centre = marks.seed(v, u);
+      for (const int step : {-stride, stride}) {
+        int gap = 0;
+        for (int w = u + step; w >= 0 && w < cloud.width() && gap <= kMaxGapPx; w += step) {
+          const Eigen::Vector3f& q = cloud(v, w);
+          if (!q.allFinite() || q.z() <= 0.0f) {
+            gap += stride;
+            continue;
+          }
+          gap = 0;
+          if (((world_T * q).head<2>() - centre).norm() > radius) break;
+          spread(v, w) = std::max(spread(v, w), weight);
+        }
+      }
+    }
+  }
+  return spread;
+}
+
 }  // namespace
 
 ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_rectified, double depth_noise_per_m2,
                         const VehicleOptions& vehicle, double range_m, int stride) {
   SSTA_CHECK(stride >= 1, "FindHiddenDrops: stride must be at least 1");
-  ImageU8 lip(cloud.width(), cloud.height(), 0);
   const Eigen::Isometry3f world_T = world_T_rectified.cast<float>();
   const Eigen::Vector2f origin = world_T.translation().head<2>();
   const Eigen::RowVector3f up = world_T.linear().row(2);
@@ -75,31 +133,12 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
   const auto tan_max_slope = static_cast<float>(std::tan(vehicle.max_slope_deg * 3.14159265358979 / 180.0));
   const float camera_z = world_T.translation().z();
   const auto max_range = static_cast<float>(range_m);
-  // The edges marked along the columns, with the point each mark is measured from (its seed);
-  // then spread along the rows, so the lip reaches a step radius from its seed in every
-  // direction, as the vehicle's rule measures it, also beside an edge the columns cross
-  // obliquely (the sides of a pit).
-  Image<Eigen::Vector2f> seed_of(cloud.width(), cloud.height(), Eigen::Vector2f::Zero());
+  // The edges are marked along the columns, then spread along the rows, so the lip reaches a
+  // step radius from its edge in every direction, as the vehicle's rule measures it, also
+  // beside an edge the columns cross obliquely (the sides of a pit).
+  LipMarks marks(cloud.width(), cloud.height());
   std::vector<ColumnPoint> column;
   column.reserve(static_cast<std::size_t>(cloud.height()));
-  // Marks the points of `column` within the step radius of column[seed] (horizontally), walking
-  // each way from it up to the first point beyond.
-  const auto mark_around = [&](std::size_t seed, int u, std::uint8_t weight) {
-    const Eigen::Vector2f centre = column[seed].p.head<2>();
-    const auto mark = [&](std::size_t j) {
-      if ((column[j].p.head<2>() - centre).norm() > radius) return false;
-      std::uint8_t& w = lip(column[j].v, u);
-      if (weight > w) {
-        w = weight;
-        seed_of(column[j].v, u) = centre;
-      }
-      return true;
-    };
-    for (std::size_t j = seed + 1; j-- > 0 && mark(j);) {
-    }
-    for (std::size_t j = seed + 1; j < column.size() && mark(j); ++j) {
-    }
-  };
   for (int u = 0; u < cloud.width(); u += stride) {
     column.clear();
     for (int v = cloud.height() - 1; v >= 0; --v) {
@@ -145,37 +184,12 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
       // view shows: the suspicion weighs tan(ray) / tan(max_slope).
       const auto weight =
           static_cast<std::uint8_t>(std::lround(255.0f * std::clamp(tan_ray / tan_max_slope, 0.02f, 1.0f)));
-      mark_around(i, u, weight);
+      marks.AroundEdge(column, i, u, weight, radius);
       // The wall's foot B stands where the far rim does, give or take the wall's slope.
-      if (far_rim) mark_around(i + 1, u, weight);
+      if (far_rim) marks.AroundEdge(column, i + 1, u, weight, radius);
     }
   }
-  // Along the rows: each mark of the columns reaches the points of its row within the step
-  // radius of its seed, up to the first point beyond; a gap of no depth wider than
-  // kMaxGapPx ends it too.
-  constexpr int kMaxGapPx = 16;
-  ImageU8 spread = lip;
-  for (int v = 0; v < cloud.height(); ++v) {
-    for (int u = 0; u < cloud.width(); u += stride) {
-      const std::uint8_t weight = lip(v, u);
-      if (weight == 0) continue;
-      const Eigen::Vector2f& centre = seed_of(v, u);
-      for (const int step : {-stride, stride}) {
-        int gap = 0;
-        for (int w = u + step; w >= 0 && w < cloud.width() && gap <= kMaxGapPx; w += step) {
-          const Eigen::Vector3f& q = cloud(v, w);
-          if (!q.allFinite() || q.z() <= 0.0f) {
-            gap += stride;
-            continue;
-          }
-          gap = 0;
-          if (((world_T * q).head<2>() - centre).norm() > radius) break;
-          spread(v, w) = std::max(spread(v, w), weight);
-        }
-      }
-    }
-  }
-  return spread;
+  return SpreadAlongRows(cloud, world_T, marks, radius, stride);
 }
 
 }  // namespace ssta::internal
