@@ -62,7 +62,13 @@ float VisibleWallRise(const std::vector<ColumnPoint>& column, std::size_t b, flo
 /// The lip's marks with the edge point each is measured from (its seed), so that the marks of a
 /// column can reach along the rows a step radius from the same edge point.
 struct LipMarks {
-  LipMarks(int width, int height) : weight(width, height, 0), seed(width, height, Eigen::Vector2f::Zero()) {}
+  /// `seed_buffer` is reused from frame to frame (resized when the size differs): a seed is
+  /// written with its mark and read only where a mark is, so it needs no clearing.
+  LipMarks(int width, int height, Image<Eigen::Vector2f>* seed_buffer) : weight(width, height, 0), seed(*seed_buffer) {
+    if (seed.width() != width || seed.height() != height) {
+      seed = Image<Eigen::Vector2f>(width, height, Eigen::Vector2f::Zero());
+    }
+  }
 
   /// Marks the points of image column `u` (`column`, as FindHiddenDrops gathers it) within
   /// `radius` of column[edge] (horizontally) with `w`, walking each way from it up to the first
@@ -85,7 +91,7 @@ struct LipMarks {
   }
 
   ImageU8 weight;
-  Image<Eigen::Vector2f> seed;
+  Image<Eigen::Vector2f>& seed;
 };
 
 /// The marks spread along the rows: each mark reaches the points of its row within `radius` of
@@ -136,7 +142,8 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
   // The edges are marked along the columns, then spread along the rows, so the lip reaches a
   // step radius from its edge in every direction, as the vehicle's rule measures it, also
   // beside an edge the columns cross obliquely (the sides of a pit).
-  LipMarks marks(cloud.width(), cloud.height());
+  thread_local Image<Eigen::Vector2f> seed_of_thread;
+  LipMarks marks(cloud.width(), cloud.height(), &seed_of_thread);
   std::vector<ColumnPoint> column;
   column.reserve(static_cast<std::size_t>(cloud.height()));
   for (int u = 0; u < cloud.width(); u += stride) {
