@@ -225,8 +225,7 @@ TEST(EndToEnd, RealtimeOverlayKeepsTheDropOffMap) {
 TEST(EndToEnd, ARandomTuningSceneHoldsItsLabelAndMapAccuracy) {
   // A `random` scene (terrain, rig and light drawn from the seed) of the tuning set
   // (scripts/accuracy.sh tuning), 15 frames. Measured: labels 0.949 / 0.594, map within 10 m of
-  // the path 0.921 (the lips of hidden drops, a step radius wide in every direction, cost it
-  // 0.007).
+  // the path 0.921.
   testing::TempDir dir;
   synth::SynthOptions o;
   o.scene = "random";
