@@ -24,6 +24,7 @@
 #include "ssta/eval/query_evaluator.h"
 #include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
 #include "ssta/pipeline/config.h"
@@ -164,7 +165,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   const auto oracle = [&](const FootprintPose& pose) {
     const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, query_length_m, query_width_m};
     const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
-    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed};
+    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed, r.worst_x_m, r.worst_y_m};
   };
   FootprintEvalSummary summary;
   try {
@@ -176,6 +177,19 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   }
   summary.path_source = path.source;
   summary.prediction = args.eval.prediction + (args.as_exported ? " (as exported)" : " (as observed)");
+  // What the map says about each miss's cell, and which of its rules decided it (`ssta explain`).
+  for (FootprintMiss& miss : summary.misses) {
+    if (!std::isfinite(miss.cell_x_m) || !std::isfinite(miss.cell_y_m)) continue;
+    const ColumnExplanation why = map.ExplainColumn(miss.cell_x_m, miss.cell_y_m);
+    const CellInfo cell = exported ? (*exported)(miss.cell_x_m, miss.cell_y_m) : why.cell;
+    miss.cell_class = std::to_string(static_cast<int>(cell.cls));
+    if (why.cell.observed) {
+      miss.cell_rule = JudgeRuleName(why.rule);
+    } else {
+      const int c = static_cast<int>(cell.cls);
+      miss.cell_rule = c >= 1 && c <= 3 ? "filled by the export" : "unobserved";
+    }
+  }
   return summary;
 }
 

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
+#include <utility>
 
 #include "ssta/core/json_writer.h"
 #include "eval/class_ids.h"
@@ -20,8 +22,10 @@ namespace {
 
 bool IsVerdict(std::uint8_t c) { return c >= 1 && c <= 3; }
 
-/// The worst truth class under the footprint, or 0 when a cell under it is not 1..3.
-std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, double half_l, double half_w) {
+/// The worst truth class under the footprint, or 0 when a cell under it is not 1..3; the
+/// centre of the cell of that class nearest the footprint's centre into `*worst_at`.
+std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, double half_l, double half_w,
+                        Eigen::Vector2d* worst_at) {
   const double c = std::cos(pose.yaw_rad), s = std::sin(pose.yaw_rad);
   const double extent_x = std::abs(c) * half_l + std::abs(s) * half_w;
   const double extent_y = std::abs(s) * half_l + std::abs(c) * half_w;
@@ -32,6 +36,7 @@ std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, doubl
   const long bot_lo = static_cast<long>(std::ceil((pose.y_m - extent_y - truth.origin_m.y()) / res - 0.5 - 1e-9));
   const long bot_hi = static_cast<long>(std::floor((pose.y_m + extent_y - truth.origin_m.y()) / res - 0.5 + 1e-9));
   std::uint8_t worst = 0;
+  double nearest = std::numeric_limits<double>::infinity();
   bool any = false;
   for (long col = col_lo; col <= col_hi; ++col) {
     for (long bot = bot_lo; bot <= bot_hi; ++bot) {
@@ -44,11 +49,18 @@ std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, doubl
       if (col < 0 || col >= truth.classes.width() || bot < 0 || bot >= truth.classes.height()) return 0;
       const std::uint8_t t = truth.classes(truth.classes.height() - 1 - static_cast<int>(bot), static_cast<int>(col));
       if (!IsVerdict(t)) return 0;
-      worst = std::max(worst, t);
+      const double distance = std::hypot(dx, dy);
+      if (t > worst || (t == worst && distance < nearest)) {
+        worst = t;
+        nearest = distance;
+        *worst_at = Eigen::Vector2d(cx, cy);
+      }
     }
   }
   if (!any) {
     const std::uint8_t t = truth.ClassAt({pose.x_m, pose.y_m});
+    const std::optional<GridCell> under = truth.CellAt({pose.x_m, pose.y_m});
+    if (under) *worst_at = truth.CellCentre(*under);
     return IsVerdict(t) ? t : 0;
   }
   return worst;
@@ -101,7 +113,8 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
       for (const double yaw_deg : options.yaws_deg) {
         const FootprintPose pose{centre.x(), centre.y(), DegToRad(yaw_deg)};
         ++summary.poses;
-        const std::uint8_t t = TruthUnder(truth, pose, half_l, half_w);
+        Eigen::Vector2d truth_cell = Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+        const std::uint8_t t = TruthUnder(truth, pose, half_l, half_w, &truth_cell);
         if (t == 0) {
           ++summary.partly_unseen;
           continue;
@@ -116,7 +129,24 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
         if (unsafe || ConfusionMatrix::IsFalselyBlocked(t, answer.worst)) {
           const double distance = path.empty() ? std::numeric_limits<double>::quiet_NaN()
                                                : internal::DistanceToPath(centre, path);
-          summary.misses.push_back({unsafe, pose, t, answer.worst, answer.fraction_known, distance});
+          FootprintMiss miss;
+          miss.unsafe = unsafe;
+          miss.pose = pose;
+          miss.truth = t;
+          miss.answer = answer.worst;
+          miss.fraction_known = answer.fraction_known;
+          miss.distance_from_path_m = distance;
+          if (unsafe) {
+            miss.cell_x_m = truth_cell.x();
+            miss.cell_y_m = truth_cell.y();
+          } else {
+            miss.cell_x_m = answer.worst_x_m;
+            miss.cell_y_m = answer.worst_y_m;
+          }
+          if (std::isfinite(miss.cell_x_m) && std::isfinite(miss.cell_y_m)) {
+            miss.cell_truth = truth.ClassAt({miss.cell_x_m, miss.cell_y_m});
+          }
+          summary.misses.push_back(std::move(miss));
         }
         if (answer.fraction_known < 1.0) ++summary.partly_known;
         known_sum += answer.fraction_known;
@@ -138,14 +168,31 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
 }
 
 std::string FootprintEvalSummary::MissesCsv() const {
-  std::string out = "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m\n";
+  std::string out =
+      "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m,cell_x_m,cell_y_m,cell_truth,cell_class,cell_rule\n";
   for (const FootprintMiss& m : misses) {
     out += std::string(m.unsafe ? "unsafe" : "falsely_blocked") + "," + Fixed(m.pose.x_m, 3) + "," +
            Fixed(m.pose.y_m, 3) + "," + Fixed(RadToDeg(m.pose.yaw_rad), 1) + "," + std::to_string(m.truth) + "," +
            std::to_string(m.answer) + "," + Fixed(m.fraction_known, 3) + "," + Fixed(m.distance_from_path_m, 2) +
-           "\n";
+           "," + Fixed(m.cell_x_m, 3) + "," + Fixed(m.cell_y_m, 3) + "," + std::to_string(m.cell_truth) + "," +
+           m.cell_class + "," + m.cell_rule + "\n";
   }
   return out;
+}
+
+std::vector<FootprintEvalSummary::RuleCount> FootprintEvalSummary::MissesByRule() const {
+  std::vector<RuleCount> rows;
+  for (const FootprintMiss& m : misses) {
+    const std::string rule = m.cell_rule.empty() ? "unknown" : m.cell_rule;
+    auto row = std::find_if(rows.begin(), rows.end(), [&](const RuleCount& r) { return r.rule == rule; });
+    if (row == rows.end()) row = rows.insert(rows.end(), RuleCount{rule});
+    ++(m.unsafe ? row->unsafe : row->falsely_blocked);
+    if (!m.unsafe && m.cell_truth == 3) ++row->falsely_blocked_by_a_true_obstacle;
+  }
+  std::stable_sort(rows.begin(), rows.end(), [](const RuleCount& a, const RuleCount& b) {
+    return a.unsafe + a.falsely_blocked > b.unsafe + b.falsely_blocked;
+  });
+  return rows;
 }
 
 std::string FootprintEvalSummary::BriefReport() const {
@@ -164,6 +211,14 @@ std::string FootprintEvalSummary::BriefReport() const {
          "), mean known share " + Fixed(mean_fraction_known, 3) + "\n";
   out += matrix.BriefReport("footprints");
   out += internal::BandsReport(by_distance, path_source);
+  const std::vector<RuleCount> rules = MissesByRule();
+  if (!rules.empty() && !(rules.size() == 1 && rules.front().rule == "unknown")) {
+    out += "misses by what decided their cell (unsafe / falsely blocked):";
+    for (const RuleCount& r : rules) {
+      out += " " + r.rule + " " + std::to_string(r.unsafe) + " / " + std::to_string(r.falsely_blocked) + ";";
+    }
+    out.back() = '\n';
+  }
   return out;
 }
 
@@ -203,6 +258,21 @@ std::string FootprintEvalSummary::ToJson() const {
     json.Key("by_distance_from_path");
     internal::WriteBandsJson(by_distance, path_source, kDistanceBandM, &json);
   }
+  json.Key("misses_by_rule");
+  json.BeginArray();
+  for (const RuleCount& r : MissesByRule()) {
+    json.BeginObject();
+    json.Key("rule");
+    json.String(r.rule);
+    json.Key("unsafe");
+    json.Integer(r.unsafe);
+    json.Key("falsely_blocked");
+    json.Integer(r.falsely_blocked);
+    json.Key("falsely_blocked_by_a_true_obstacle");
+    json.Integer(r.falsely_blocked_by_a_true_obstacle);
+    json.EndObject();
+  }
+  json.EndArray();
   json.EndObject();
   return json.Take();
 }

@@ -442,6 +442,18 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   const std::string misses = ReadTextFile(dir / "m.csv");
   EXPECT_EQ(std::count(misses.begin(), misses.end(), '\n'), 1 + 25 + 25) << misses;
   EXPECT_EQ(misses.find("unsafe,"), misses.find('\n') + 1) << misses;  // the unsafe ones first
+  // Each names the cell that misleads, the truth and the map there, and the map's rule: the
+  // unsafe ones a cell of the block the map calls floor, the falsely blocked ones the patch.
+  std::istringstream lines(misses);
+  std::string line;
+  std::getline(lines, line);
+  EXPECT_EQ(line, "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m,cell_x_m,cell_y_m,cell_truth,"
+                  "cell_class,cell_rule");
+  while (std::getline(lines, line)) {
+    const bool unsafe = line.rfind("unsafe,", 0) == 0;
+    EXPECT_NE(line.find(unsafe ? ",3,1,frames alone" : ",1,3,"), std::string::npos) << line;
+    EXPECT_NE(line.back(), ',') << line;  // a rule is named
+  }
   EXPECT_NE(r.output.find("poses: 900, partly unseen in the truth (unscored): 116"), std::string::npos) << r.output;
   // Shares of the truly blocked and of the truly free footprints.
   EXPECT_NE(r.output.find("answered traversable or semi): 25 of 25 (1.0000)"), std::string::npos) << r.output;

@@ -126,9 +126,17 @@ TEST(eval_Footprints, ListsEachUnsafeAndFalselyBlockedPoseNearestThePathFirst) {
   // traversable) falsely blocked.
   const FootprintEvalOptions options = SquaresOnEveryCell();
   const std::vector<Eigen::Vector2d>& path = kPathBelow;
-  const FootprintEvalSummary s = ScoreFootprints(
+  // A blocked answer names the cell to the pose's right as its non-traversable one.
+  FootprintEvalSummary s = ScoreFootprints(
       Truth(), options,
-      [](const FootprintPose& pose) { return Always(std::abs(pose.x_m - 1.05) < 1e-9 ? 3 : 1, 1.0); }, path);
+      [](const FootprintPose& pose) {
+        if (std::abs(pose.x_m - 1.05) > 1e-9) return Always(1, 1.0);
+        FootprintAnswer blocked = Always(3, 1.0);
+        blocked.worst_x_m = pose.x_m + 0.1;
+        blocked.worst_y_m = pose.y_m;
+        return blocked;
+      },
+      path);
   EXPECT_EQ(s.unsafe, 16);
   EXPECT_EQ(s.falsely_blocked, 38);
   ASSERT_EQ(s.misses.size(), 16u + 38u);
@@ -148,10 +156,58 @@ TEST(eval_Footprints, ListsEachUnsafeAndFalselyBlockedPoseNearestThePathFirst) {
   EXPECT_NEAR(s.misses[16].pose.x_m, 1.05, 1e-9);
   EXPECT_NEAR(s.misses[16].pose.y_m, 0.15, 1e-9);  // bottom row 1: row 0 reaches outside
 
+  // Each miss's cell: an unsafe pose's nearest truly blocked cell, a falsely blocked pose's
+  // the one the answer named, with the truth there. Pose (1.95, 1.95) covers the block's cell
+  // (2.05, 2.05) alone; pose (2.05, 1.95) covers (2.05, 2.05) and (2.15, 2.05), 0.1 and 0.14 m off.
+  EXPECT_NEAR(s.misses[0].pose.x_m, 1.95, 1e-9);
+  EXPECT_NEAR(s.misses[1].pose.x_m, 2.05, 1e-9);
+  for (const int i : {0, 1}) {
+    EXPECT_NEAR(s.misses[i].cell_x_m, 2.05, 1e-9) << i;
+    EXPECT_NEAR(s.misses[i].cell_y_m, 2.05, 1e-9) << i;
+    EXPECT_EQ(s.misses[i].cell_truth, 3) << i;
+  }
+  EXPECT_NEAR(s.misses[16].cell_x_m, 1.15, 1e-9);
+  EXPECT_NEAR(s.misses[16].cell_y_m, 0.15, 1e-9);
+  EXPECT_EQ(s.misses[16].cell_truth, 1);
+
   const std::string csv = s.MissesCsv();
-  EXPECT_EQ(csv.rfind("kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m\n", 0), 0u) << csv;
-  EXPECT_NE(csv.find("\nfalsely_blocked,1.050,0.150,0.0,1,3,1.000,1.15\n"), std::string::npos) << csv;
+  EXPECT_EQ(csv.rfind("kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,distance_from_path_m,cell_x_m,cell_y_m,"
+                      "cell_truth,cell_class,cell_rule\n",
+                      0),
+            0u)
+      << csv;
+  EXPECT_NE(csv.find("\nfalsely_blocked,1.050,0.150,0.0,1,3,1.000,1.15,1.150,0.150,1,,\n"), std::string::npos) << csv;
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 16 + 38);
+
+  // Counted by the rule the caller names for each cell, most misses first; none named: unknown.
+  for (std::size_t i = 0; i < s.misses.size(); ++i) {
+    FootprintMiss& m = s.misses[i];
+    m.cell_class = m.unsafe ? "1" : "3";
+    m.cell_rule = m.unsafe ? "ring" : (i % 2 == 1 ? "noise" : "");
+  }
+  const std::vector<FootprintEvalSummary::RuleCount> rules = s.MissesByRule();
+  ASSERT_EQ(rules.size(), 3u);
+  EXPECT_EQ(rules[0].rule, "unknown");  // 19 falsely blocked, met before "noise" and as many
+  EXPECT_EQ(rules[0].falsely_blocked, 19);
+  EXPECT_EQ(rules[1].rule, "noise");
+  EXPECT_EQ(rules[1].unsafe, 0);
+  EXPECT_EQ(rules[1].falsely_blocked, 19);
+  EXPECT_EQ(rules[2].rule, "ring");
+  EXPECT_EQ(rules[2].unsafe, 16);
+  EXPECT_EQ(rules[2].falsely_blocked, 0);
+  // Every falsely blocked pose's cell is truly traversable here: none blocked by a true obstacle.
+  for (const auto& r : rules) EXPECT_EQ(r.falsely_blocked_by_a_true_obstacle, 0) << r.rule;
+  EXPECT_NE(s.MissesCsv().find("\nfalsely_blocked,1.050,0.150,0.0,1,3,1.000,1.15,1.150,0.150,1,3,\n"),
+            std::string::npos);
+  EXPECT_NE(s.BriefReport().find("misses by what decided their cell (unsafe / falsely blocked): unknown 0 / 19; "
+                                 "noise 0 / 19; ring 16 / 0\n"),
+            std::string::npos)
+      << s.BriefReport();
+  const std::string json = s.ToJson();
+  const std::size_t ring = json.find("\"rule\": \"ring\"");
+  ASSERT_NE(ring, std::string::npos) << json;
+  EXPECT_GT(ring, json.find("\"misses_by_rule\""));
+  EXPECT_EQ(json.find("\"unsafe\": 16", ring), json.find("\"unsafe\"", ring)) << json;
 }
 
 TEST(eval_Footprints, DiagonalFootprintsCoverTheirDiagonalCells) {

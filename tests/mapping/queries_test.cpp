@@ -358,8 +358,19 @@ TEST(FootprintQuery, AColumnWithoutAVerdictMakesTheAnswerUndecidedUnlessAnObstac
   EXPECT_DOUBLE_EQ(undecided.fraction_observed, 1.0);
   EXPECT_EQ(map.QueryFootprint({1.1, 1.05, 0.0, 0.2, 0.1}).worst, TravClass::kUndecided);
   EXPECT_EQ(map.QueryFootprint({1.15, 1.05, 0.0, 0.1, 0.1}).worst, TravClass::kSemiTraversable);
-  // An obstacle under the footprint blocks it whatever else lies there.
-  EXPECT_EQ(map.QueryFootprint({1.3, 1.05, 0.0, 0.6, 0.1}).worst, TravClass::kNonTraversable);
+  // The answer names the column of its worst class nearest the centre: the undecided one.
+  EXPECT_NEAR(undecided.worst_x_m, 1.05, 1e-9);
+  EXPECT_NEAR(undecided.worst_y_m, 1.05, 1e-9);
+  // An obstacle under the footprint blocks it whatever else lies there, and is the one named.
+  const FootprintResult blocked = map.QueryFootprint({1.3, 1.05, 0.0, 0.6, 0.1});
+  EXPECT_EQ(blocked.worst, TravClass::kNonTraversable);
+  EXPECT_NEAR(blocked.worst_x_m, 1.55, 1e-9);
+  EXPECT_NEAR(blocked.worst_y_m, 1.05, 1e-9);
+  // Over open floor the nearest traversable column is the one under the centre.
+  const FootprintResult open = map.QueryFootprint({0.55, 0.55, 0.0, 0.4, 0.4});
+  EXPECT_NEAR(open.worst_x_m, 0.55, 1e-9);
+  EXPECT_NEAR(open.worst_y_m, 0.55, 1e-9);
+  EXPECT_TRUE(std::isnan(map.QueryFootprint({-5.0, -5.0, 0.0, 0.4, 0.4}).worst_x_m));  // nothing observed
   // A path over the same row: the undecided sample is reported as such, the obstacle blocks.
   const PathResult path = map.QueryPath({{0.55, 1.05}, {1.45, 1.05}}, 0.0);
   EXPECT_FALSE(path.blocked);

@@ -46,6 +46,10 @@ struct FootprintPose {
 struct FootprintAnswer {
   std::uint8_t worst = 0;
   double fraction_known = 0.0;
+  /// Centre (x, y) [m] of a cell under the footprint that has the `worst` class, the one
+  /// nearest its centre; NaN when the method does not say (or knows no cell).
+  double worst_x_m = std::numeric_limits<double>::quiet_NaN();
+  double worst_y_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 using FootprintOracle = std::function<FootprintAnswer(const FootprintPose&)>;
@@ -61,6 +65,22 @@ struct FootprintMiss {
   double fraction_known = 0.0;
   /// Its centre's distance from the path [m]; NaN without a path.
   double distance_from_path_m = std::numeric_limits<double>::quiet_NaN();
+  /// The cell that makes it a miss, centre (x, y) [m]: for an unsafe footprint a truly
+  /// non-traversable cell under it, for a falsely blocked one the cell the method answered
+  /// non-traversable (FootprintAnswer::worst_x_m); the one nearest the footprint's centre, NaN
+  /// when the method did not say.
+  double cell_x_m = std::numeric_limits<double>::quiet_NaN();
+  double cell_y_m = std::numeric_limits<double>::quiet_NaN();
+  /// The truth's class at that cell (0 when unknown): for a falsely blocked footprint, 3 says
+  /// the method's obstacle is real and only touches the footprint's edge (the method counts
+  /// every cell the rectangle touches, the truth the cells whose centres lie inside it), 1 or
+  /// 2 that the obstacle is false.
+  std::uint8_t cell_truth = 0;
+  /// What the method says about that cell, filled in by the caller that can ask it (`ssta eval
+  /// footprints` asks the map: its class there and the rule that decided it, as `ssta explain`
+  /// names them); empty when unknown.
+  std::string cell_class;
+  std::string cell_rule;
 };
 
 /// Result of ScoreFootprints.
@@ -102,9 +122,21 @@ struct FootprintEvalSummary {
   /// "metrics" as described at ConfusionMatrix.
   std::string ToJson() const;
   /// `misses` as CSV: a header line "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,
-  /// distance_from_path_m", then one line per miss (kind "unsafe" or "falsely_blocked";
-  /// distance "nan" without a path).
+  /// distance_from_path_m,cell_x_m,cell_y_m,cell_truth,cell_class,cell_rule", then one line
+  /// per miss (kind "unsafe" or "falsely_blocked"; "nan" for a distance or a cell not known, an
+  /// empty field for a class or rule not filled in).
   std::string MissesCsv() const;
+  /// The misses of each kind counted by their cell_rule ("" counts as "unknown"), most misses
+  /// first: which of the method's rules the misleading answers come from.
+  struct RuleCount {
+    std::string rule;
+    std::int64_t unsafe = 0;
+    std::int64_t falsely_blocked = 0;
+    /// Of the falsely blocked, those whose cell is truly non-traversable (cell_truth 3): a
+    /// real obstacle that touches the footprint's edge, not a false one.
+    std::int64_t falsely_blocked_by_a_true_obstacle = 0;
+  };
+  std::vector<RuleCount> MissesByRule() const;
 };
 
 /// Asks `oracle` about every footprint of the lattice (FootprintEvalOptions) whose centre cell

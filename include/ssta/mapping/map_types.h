@@ -148,6 +148,10 @@ struct FootprintResult {
   /// Of those, columns with an observed surface (or, read from a surface source such as
   /// ExportedSurface, with a class: a filled hole counts).
   int observed_cells = 0;
+  /// Centre (x, y) [m] of the observed column of the `worst` class nearest the footprint's
+  /// centre (where to ask `ExplainColumn` why); NaN when no column was observed.
+  double worst_x_m = std::numeric_limits<double>::quiet_NaN();
+  double worst_y_m = std::numeric_limits<double>::quiet_NaN();
   /// The vehicle's attitude on the plane fitted (least squares) to the fused surface heights
   /// (CellInfo::surface_z_m) of those columns, heading `yaw` (AttitudeOnGround,
   /// ssta/mapping/vehicle_attitude.h): pitch [deg], positive nose up; NaN when fewer than 3
