@@ -15,14 +15,15 @@
 # planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
 # over all seen ground and within 10 m. The last row pools the samples of every scene. A second
 # table pools the footprints per 2 m band of distance from the path, with each class's recall;
-# a third the per-frame labels' pixels per 5 m band of true depth from the camera.
+# a third counts the missed footprints by the map's rule at the cell that makes each a miss;
+# a fourth the per-frame labels' pixels per 5 m band of true depth from the camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
 # footprints are listed in out/accuracy/<set>/<scene>/footprint_misses.csv, nearest the path
-# first. A last table gives each pooled figure's 90 % interval over the set's scenes
-# (scripts/accuracy_compare.py, which also says whether one run beats another: pass it both
-# runs' out/accuracy/<set> folders).
+# first, each with that cell and what the map says there. A last table gives each pooled
+# figure's 90 % interval over the set's scenes (scripts/accuracy_compare.py, which also says
+# whether one run beats another: pass it both runs' out/accuracy/<set> folders).
 # Needs a built tree (build/apps/ssta): scripts/test.sh or scripts/demo.sh builds it.
 set -euo pipefail
 caller_dir=$PWD  # where relative paths among the args are read from
@@ -159,6 +160,24 @@ if m:
     _, _, u, fb = rates(m)
     print("| **all** | **%d** | **%d** | **%s** | **%s** | **%s** |" % (
         scored(m), sum(m[3]), f(u, True), f(fb, True), recalls(m)))
+# Which of the map's rules decided the cell that makes each missed footprint a miss (eval
+# footprints' misses_by_rule: an unsafe one's truly blocked cell, a falsely blocked one's red
+# cell; `ssta explain` names the rules), pooled over the scenes.
+by_rule = {}
+for run in runs:
+    doc = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "footprints.json"))
+    for row in (doc or {}).get("misses_by_rule", []):
+        counts = by_rule.setdefault(row["rule"], [0, 0, 0])
+        counts[0] += row["unsafe"]
+        counts[1] += row["falsely_blocked"]
+        counts[2] += row["falsely_blocked_by_a_true_obstacle"]
+if by_rule:
+    print()
+    print("| the map's rule at a missed footprint's cell | unsafe footprints | falsely blocked footprints "
+          "| of which by a true obstacle at the edge |")
+    print("|---|---|---|---|")
+    for rule, (u, fb, edge) in sorted(by_rule.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
+        print("| %s | %d | %d | %d |" % (rule, u, fb, edge))
 if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
