@@ -36,7 +36,7 @@ std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, doubl
   const long bot_lo = static_cast<long>(std::ceil((pose.y_m - extent_y - truth.origin_m.y()) / res - 0.5 - 1e-9));
   const long bot_hi = static_cast<long>(std::floor((pose.y_m + extent_y - truth.origin_m.y()) / res - 0.5 + 1e-9));
   std::uint8_t worst = 0;
-  double nearest = std::numeric_limits<double>::infinity();
+  double nearest2 = std::numeric_limits<double>::infinity();  // squared distance of *worst_at
   bool any = false;
   for (long col = col_lo; col <= col_hi; ++col) {
     for (long bot = bot_lo; bot <= bot_hi; ++bot) {
@@ -49,18 +49,19 @@ std::uint8_t TruthUnder(const ClassGrid& truth, const FootprintPose& pose, doubl
       if (col < 0 || col >= truth.classes.width() || bot < 0 || bot >= truth.classes.height()) return 0;
       const std::uint8_t t = truth.classes(truth.classes.height() - 1 - static_cast<int>(bot), static_cast<int>(col));
       if (!IsVerdict(t)) return 0;
-      const double distance = std::hypot(dx, dy);
-      if (t > worst || (t == worst && distance < nearest)) {
+      const double distance2 = dx * dx + dy * dy;
+      if (t > worst || (t == worst && distance2 < nearest2)) {
         worst = t;
-        nearest = distance;
+        nearest2 = distance2;
         *worst_at = Eigen::Vector2d(cx, cy);
       }
     }
   }
   if (!any) {
-    const std::uint8_t t = truth.ClassAt({pose.x_m, pose.y_m});
     const std::optional<GridCell> under = truth.CellAt({pose.x_m, pose.y_m});
-    if (under) *worst_at = truth.CellCentre(*under);
+    if (!under) return 0;
+    *worst_at = truth.CellCentre(*under);
+    const std::uint8_t t = truth.classes(under->row, under->col);
     return IsVerdict(t) ? t : 0;
   }
   return worst;

@@ -450,20 +450,22 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
   int cost_count = 0;
   std::vector<Eigen::Vector3d> ground;  // the fused heights under the footprint
   const Eigen::Vector2d centre(q.x, q.y);
-  double worst_distance = std::numeric_limits<double>::infinity();
+  double worst_distance2 = std::numeric_limits<double>::infinity();  // squared, to the centre
   for (const Eigen::Vector2d& col : columns) {
     const CellInfo cell = surface ? surface(col.x(), col.y()) : TopSurfaceAt(col.x(), col.y());
     if (cell.observed && std::isfinite(cell.surface_z_m)) ground.emplace_back(col.x(), col.y(), cell.surface_z_m);
     ++result.cells;
     if (!Known(cell)) continue;
     ++result.observed_cells;
-    const double distance = (col - centre).norm();
-    if (Severity(cell.cls) > Severity(result.worst) ||
-        (Severity(cell.cls) == Severity(result.worst) && distance < worst_distance)) {
-      result.worst = cell.cls;
-      result.worst_x_m = col.x();
-      result.worst_y_m = col.y();
-      worst_distance = distance;
+    const int severity = Severity(cell.cls), worst = Severity(result.worst);
+    if (severity >= worst) {
+      const double distance2 = (col - centre).squaredNorm();
+      if (severity > worst || distance2 < worst_distance2) {
+        result.worst = cell.cls;
+        result.worst_x_m = col.x();
+        result.worst_y_m = col.y();
+        worst_distance2 = distance2;
+      }
     }
     if (std::isfinite(cell.cost)) {
       cost_sum += cell.cost;
