@@ -10,8 +10,10 @@
 # Every setting is config/sensors/kitti.yaml (search range 96 px, block 7) plus the keys in its
 # row. Columns: D1 over all truth pixels (bad: off by more than 3 px and 5 %, or no disparity),
 # D1 over matched pixels, end-point error over matched pixels, density (share of truth pixels
-# with a disparity), and the median wall and CPU (both cores) time of the matcher per pair
-# (images read untimed).
+# with a disparity), the depth edges (of the truth pixels within 4 px of a nearer truth by a bad
+# error, the share given a nearer disparity, bad: fattened; of those within 4 px of a farther
+# truth, the share given a farther one: eroded), and the median wall and CPU (both cores) time
+# of the matcher per pair (images read untimed).
 # Pixels of all pairs are pooled. JSON per setting in out/stereo_benchmark/ (OUT= changes it).
 # SETTINGS="shipped realtime" runs those rows only. Needs a built tree (build/apps/ssta; SSTA=
 # names another binary). docs/performance.md shows a run.
@@ -41,6 +43,9 @@ settings=(
   "pcl_acso|stereo.algorithm: pcl_acso"
   "pcl_acso_no_ratio|stereo.algorithm: pcl_acso; stereo.pcl_ratio_filter: 0"
   "sgbm_hh4|stereo.sgbm_mode: hh4"
+  "block5|stereo.block_size: 5"
+  "block9|stereo.block_size: 9"
+  "sgbm_p8_16|stereo.sgbm_p2: 16"
   "sgbm_p16_64|stereo.sgbm_p1: 16; stereo.sgbm_p2: 64"
   "realtime|stereo.downscale: 2; stereo.subpixel_window_px: 7"
   "half_no_subpixel|stereo.downscale: 2"
@@ -76,8 +81,8 @@ write_overlay() {
 
 field() { sed -n "s/^ *\"$1\": \([^,]*\),\{0,1\}$/\1/p" "$2"; }
 
-echo "| setting | keys over config/sensors/kitti.yaml | D1 all | D1 matched | EPE [px] | density | ms / pair | CPU ms / pair |"
-echo "|---|---|---:|---:|---:|---:|---:|---:|"
+echo "| setting | keys over config/sensors/kitti.yaml | D1 all | D1 matched | EPE [px] | density | edges: fattened | edges: eroded | ms / pair | CPU ms / pair |"
+echo "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|"
 for s in "${settings[@]}"; do
   name=${s%%|*}
   keys=${s#*|}
@@ -92,7 +97,8 @@ for s in "${settings[@]}"; do
   awk -v name="$name" -v keys="${keys:-(shipped defaults)}" \
       -v d1="$(field d1_all "$json")" -v d1m="$(field d1_matched "$json")" \
       -v epe="$(field epe_px "$json")" -v dens="$(field density "$json")" \
+      -v fat="$(field fattened_share "$json")" -v ero="$(field eroded_share "$json")" \
       -v ms="$(field median_match_ms "$json")" -v cpu="$(field median_match_cpu_ms "$json")" \
-      'BEGIN { printf "| %s | %s | %.1f %% | %.1f %% | %.2f | %.1f %% | %.0f | %.0f |\n",
-               name, keys, 100 * d1, 100 * d1m, epe, 100 * dens, ms, cpu }'
+      'BEGIN { printf "| %s | %s | %.1f %% | %.1f %% | %.2f | %.1f %% | %.1f %% | %.1f %% | %.0f | %.0f |\n",
+               name, keys, 100 * d1, 100 * d1m, epe, 100 * dens, 100 * fat, 100 * ero, ms, cpu }'
 done

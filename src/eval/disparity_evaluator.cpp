@@ -85,6 +85,34 @@ double RobustSigma(const std::vector<std::int64_t>& histogram) {
   return 1.4826 * mad;
 }
 
+/// The largest (`largest`) or smallest truth disparity within `radius` of each pixel (a square
+/// window), over pixels with a truth (> 0); 0 where the window holds none. Separable: along the
+/// rows, then along the columns.
+ImageF WindowExtreme(const ImageF& truth, int radius, bool largest) {
+  const float none = largest ? 0.0f : std::numeric_limits<float>::infinity();
+  const auto better = [largest](float a, float b) { return largest ? std::max(a, b) : std::min(a, b); };
+  const int w = truth.width(), h = truth.height();
+  ImageF rows(w, h, none), out(w, h, 0.0f);
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      float best = none;
+      for (int x = std::max(0, u - radius); x <= std::min(w - 1, u + radius); ++x) {
+        const float t = truth(v, x);
+        if (t > 0.0f && std::isfinite(t)) best = better(best, t);
+      }
+      rows(v, u) = best;
+    }
+  }
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      float best = none;
+      for (int y = std::max(0, v - radius); y <= std::min(h - 1, v + radius); ++y) best = better(best, rows(y, u));
+      out(v, u) = std::isfinite(best) ? best : 0.0f;
+    }
+  }
+  return out;
+}
+
 // The PNGs of a folder by file name (its disparity/ subfolder when it has one).
 std::map<std::string, fs::path> DisparityPngs(const std::string& folder) {
   fs::path dir(folder);
@@ -127,6 +155,10 @@ double DisparityEvalSummary::EndPointErrorPx() const {
 
 double DisparityEvalSummary::Density() const { return Share(matched_pixels, truth_pixels); }
 
+double DisparityEvalSummary::FattenedShare() const { return Share(fattened_pixels, behind_edge_pixels); }
+
+double DisparityEvalSummary::ErodedShare() const { return Share(eroded_pixels, front_edge_pixels); }
+
 double DisparityEvalSummary::GoodErrorMedianPx() const {
   return Median(good_error_histogram, Total(good_error_histogram));
 }
@@ -148,6 +180,10 @@ void DisparityEvalSummary::Add(const DisparityEvalSummary& other) {
   matched_pixels += other.matched_pixels;
   bad_matched_pixels += other.bad_matched_pixels;
   sum_abs_error_px += other.sum_abs_error_px;
+  behind_edge_pixels += other.behind_edge_pixels;
+  fattened_pixels += other.fattened_pixels;
+  front_edge_pixels += other.front_edge_pixels;
+  eroded_pixels += other.eroded_pixels;
   for (std::size_t i = 0; i < good_error_histogram.size(); ++i) {
     good_error_histogram[i] += other.good_error_histogram[i];
     neighbour_difference_histogram[i] += other.neighbour_difference_histogram[i];
@@ -173,6 +209,10 @@ std::string DisparityEvalSummary::BriefReport() const {
                 "neighbours %.3f px (%.2f of independent errors')\n",
                 GoodErrorMedianPx(), GoodErrorSigmaPx(), NeighbourDifferenceSigmaPx(), NeighbourDifferenceRatio());
   out += noise;
+  out += "depth edges (truth pixels within " + std::to_string(kEdgeRadiusPx) +
+         " px of one nearer or farther by a bad error): behind one " + std::to_string(behind_edge_pixels) + ", " +
+         Percent(FattenedShare()) + " fattened (given a nearer disparity, bad); in front of one " +
+         std::to_string(front_edge_pixels) + ", " + Percent(ErodedShare()) + " eroded (given a farther one, bad)\n";
   return out;
 }
 
@@ -201,16 +241,27 @@ DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
   s.pairs = 1;
   // The signed error of each good match, NaN elsewhere, for the neighbour differences.
   ImageF good_error(truth.width(), truth.height(), std::numeric_limits<float>::quiet_NaN());
+  const ImageF nearest = WindowExtreme(truth, DisparityEvalSummary::kEdgeRadiusPx, true);
+  const ImageF farthest = WindowExtreme(truth, DisparityEvalSummary::kEdgeRadiusPx, false);
+  // Whether a disparity difference of `d` (> 0) at truth `t` is a bad error under the rule.
+  const auto bad = [&options](double d, double t) {
+    return d > options.max_error_px && d > options.max_error_ratio * t;
+  };
   for (std::size_t i = 0; i < truth.size(); ++i) {
     const double t = truth[i];
     if (!(t > 0.0) || !std::isfinite(t)) continue;
     ++s.truth_pixels;
+    const bool behind = bad(nearest[i] - t, t), in_front = bad(t - farthest[i], t);
+    s.behind_edge_pixels += behind;
+    s.front_edge_pixels += in_front;
     const double e = estimate[i];
     if (!(e > 0.0) || !std::isfinite(e)) continue;
     ++s.matched_pixels;
+    s.fattened_pixels += behind && bad(e - t, t);
+    s.eroded_pixels += in_front && bad(t - e, t);
     const double error = std::abs(e - t);
     s.sum_abs_error_px += error;
-    if (error > options.max_error_px && error > options.max_error_ratio * t) {
+    if (bad(error, t)) {
       ++s.bad_matched_pixels;
       continue;
     }
@@ -299,6 +350,20 @@ void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* 
   json->Number(summary.NeighbourDifferenceSigmaPx());
   json->Key("neighbour_difference_ratio");
   json->Number(summary.NeighbourDifferenceRatio());
+  json->Key("edge_radius_px");
+  json->Integer(DisparityEvalSummary::kEdgeRadiusPx);
+  json->Key("behind_edge_pixels");
+  json->Integer(summary.behind_edge_pixels);
+  json->Key("fattened_pixels");
+  json->Integer(summary.fattened_pixels);
+  json->Key("fattened_share");
+  json->Number(summary.FattenedShare());
+  json->Key("front_edge_pixels");
+  json->Integer(summary.front_edge_pixels);
+  json->Key("eroded_pixels");
+  json->Integer(summary.eroded_pixels);
+  json->Key("eroded_share");
+  json->Number(summary.ErodedShare());
 }
 
 }  // namespace internal

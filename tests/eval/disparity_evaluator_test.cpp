@@ -1,6 +1,6 @@
-// The disparity scorer (D1, end-point error, density, the noise of good matches) on a constructed truth and estimate whose
-// scores are known exactly, through the library and the `ssta eval disparity` / `eval stereo`
-// commands.
+// The disparity scorer (D1, end-point error, density, the noise of good matches, depth edges)
+// on a constructed truth and estimate whose scores are known exactly, through the library and
+// the `ssta eval disparity` / `eval stereo` commands.
 
 #include <cmath>
 #include <cstdint>
@@ -71,6 +71,13 @@ void ExpectConstructedScores(const DisparityEvalSummary& s, int pairs) {
   EXPECT_NEAR(s.D1Matched(), 2.0 / 5.0, 1e-12);
   EXPECT_NEAR(s.EndPointErrorPx(), 3.3, 1e-9);
   EXPECT_NEAR(s.Density(), 5.0 / 7.0, 1e-12);
+  // Every pixel lies within the edge radius of every other: the three 10s, the 40 and the 20
+  // have a nearer truth (100) by a bad error, the two 100s, the 40 and the 20 a farther one
+  // (10). Fattened: the 10 given 13.5; eroded: none (the 100s' errors are nearer).
+  EXPECT_EQ(s.behind_edge_pixels, 5 * pairs);
+  EXPECT_EQ(s.fattened_pixels, 1 * pairs);
+  EXPECT_EQ(s.front_edge_pixels, 4 * pairs);
+  EXPECT_EQ(s.eroded_pixels, 0);
 }
 
 TEST(eval_Disparity, ScoresTheRuleOfThreePixelsAndFivePercentAndMissingPixels) {
@@ -135,6 +142,51 @@ TEST(eval_Disparity, MeasuresTheNoiseOfGoodMatchesAndOfNeighbourDifferences) {
   EXPECT_NEAR(constructed.GoodErrorSigmaPx(), 1.4826, 2.0 * kBin);
   EXPECT_TRUE(std::isnan(constructed.NeighbourDifferenceSigmaPx()));
   EXPECT_TRUE(std::isnan(ScoreDisparity(ImageF(3, 3, 0.0f), ImageF(3, 3, 5.0f)).GoodErrorSigmaPx()));
+}
+
+// A depth edge across the image, in either direction (a post's side along the rows, a pit's
+// rim along the columns): disparity 10 on one side, 30 on the other, 20 px apart. The 4 px
+// on the far side of the edge lie behind it, the 4 px on the near side in front of it. The
+// estimate carries the near side 2 px over the edge (2 of the 4 far-side pixels fattened) and
+// the far side 1 px back over it (1 of the 4 near-side pixels eroded); a bridge of 20 px in
+// between is as bad for the far side as a whole jump.
+TEST(eval_Disparity, CountsFattenedAndErodedPixelsBesideDepthEdges) {
+  constexpr int kLength = 12, kAcross = 20, kEdge = 10;  // the near side starts at index kEdge
+  for (const bool along_rows : {true, false}) {
+    SCOPED_TRACE(along_rows ? "edge between columns" : "edge between rows");
+    const int w = along_rows ? kAcross : kLength, h = along_rows ? kLength : kAcross;
+    ImageF truth(w, h), fattened(w, h), bridged(w, h);
+    for (int v = 0; v < h; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const int across = along_rows ? u : v;
+        truth(v, u) = across < kEdge ? 10.0f : 30.0f;
+        fattened(v, u) = across < kEdge - 2 || across == kEdge ? 10.0f : 30.0f;
+        bridged(v, u) = across == kEdge - 1 ? 20.0f : truth(v, u);
+      }
+    }
+    const DisparityEvalSummary s = ScoreDisparity(truth, fattened);
+    EXPECT_EQ(s.behind_edge_pixels, DisparityEvalSummary::kEdgeRadiusPx * kLength);
+    EXPECT_EQ(s.front_edge_pixels, DisparityEvalSummary::kEdgeRadiusPx * kLength);
+    EXPECT_EQ(s.fattened_pixels, 2 * kLength);
+    EXPECT_EQ(s.eroded_pixels, kLength);
+    EXPECT_NEAR(s.FattenedShare(), 0.5, 1e-12);
+    EXPECT_NEAR(s.ErodedShare(), 0.25, 1e-12);
+    const DisparityEvalSummary b = ScoreDisparity(truth, bridged);
+    EXPECT_EQ(b.fattened_pixels, kLength);
+    EXPECT_EQ(b.eroded_pixels, 0);
+    const DisparityEvalSummary exact = ScoreDisparity(truth, truth);
+    EXPECT_EQ(exact.fattened_pixels + exact.eroded_pixels, 0);
+    // A jump within the rule (3 px and 5 %) is no depth edge.
+    ImageF gentle = truth;
+    for (std::size_t i = 0; i < gentle.size(); ++i) gentle.data()[i] = gentle.data()[i] > 20.0f ? 12.5f : 10.0f;
+    EXPECT_EQ(ScoreDisparity(gentle, gentle).behind_edge_pixels, 0);
+  }
+  // Without a depth edge the shares are undefined, and pooling adds the counts.
+  EXPECT_TRUE(std::isnan(ScoreDisparity(ImageF(5, 5, 20.0f), ImageF(5, 5, 20.0f)).FattenedShare()));
+  DisparityEvalSummary pooled = ScoreDisparity(Truth(), Estimate());
+  pooled.Add(ScoreDisparity(Truth(), Estimate()));
+  EXPECT_NEAR(pooled.FattenedShare(), 0.2, 1e-12);
+  EXPECT_NEAR(pooled.ErodedShare(), 0.0, 1e-12);
 }
 
 TEST(eval_Disparity, NoTruthGivesNoScoreAndSizesMustAgree) {
@@ -203,6 +255,10 @@ TEST(eval_Disparity, CommandPrintsTheScoresAndWritesJson) {
   const std::string json = ReadTextFile(dir / "d.json");
   EXPECT_NE(json.find("\"d1_matched\": 0.4"), std::string::npos) << json;
   EXPECT_NE(json.find("\"epe_px\": 3.3"), std::string::npos) << json;
+  EXPECT_NE(r.output.find("behind one 5, 20.00 % fattened"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("in front of one 4, 0.00 % eroded"), std::string::npos) << r.output;
+  EXPECT_NE(json.find("\"fattened_share\": 0.2"), std::string::npos) << json;
+  EXPECT_NE(json.find("\"front_edge_pixels\": 4"), std::string::npos) << json;
 }
 
 TEST(eval_Disparity, CommandBadInputIsOneLineNamingTheFileAndExitTwo) {

@@ -46,6 +46,20 @@ struct DisparityEvalSummary {
   /// Independent errors differ with sqrt(2) times their sigma; errors the matcher makes alike at
   /// neighbouring pixels (smoothness, overlapping windows) differ with less.
   std::vector<std::int64_t> neighbour_difference_histogram = std::vector<std::int64_t>(kNoiseBins, 0);
+  /// Depth edges, where a matcher's window and smoothness spread one surface's disparity over
+  /// its neighbour (foreground fattening: a pit's near rim carried onto its far wall, a post
+  /// widened). A truth pixel lies behind an edge when a truth pixel within kEdgeRadiusPx of it
+  /// (a square window) is nearer by a bad error under the rule, in front of one when such a
+  /// pixel is farther; a pixel may be both.
+  static constexpr int kEdgeRadiusPx = 4;
+  std::int64_t behind_edge_pixels = 0;  ///< truth pixels behind a depth edge
+  /// Of those, matched with an estimate nearer than the truth by a bad error: the nearer
+  /// side's disparity spread over them.
+  std::int64_t fattened_pixels = 0;
+  std::int64_t front_edge_pixels = 0;  ///< truth pixels in front of a depth edge
+  /// Of those, matched with an estimate farther than the truth by a bad error: the farther
+  /// side's disparity spread over them.
+  std::int64_t eroded_pixels = 0;
   DisparityEvalOptions rule;             ///< the bad-pixel rule used
 
   /// Share of truth pixels that are bad, the ones without an estimate included (NaN when
@@ -71,14 +85,22 @@ struct DisparityEvalSummary {
   /// independent, 0 when they are equal (sqrt(1 - rho) for Gaussian errors of correlation rho).
   double NeighbourDifferenceRatio() const;
 
+  /// Share of the truth pixels behind a depth edge that are fattened (NaN when there are none).
+  double FattenedShare() const;
+  /// Share of the truth pixels in front of a depth edge that are eroded (NaN when there are none).
+  double ErodedShare() const;
+
   /// Adds the counts of `other` (the same rule) to these.
   void Add(const DisparityEvalSummary& other);
-  /// A few lines: what was scored, D1 over all and over matched pixels, EPE, density.
+  /// A few lines: what was scored, D1 over all and over matched pixels, EPE, density, the
+  /// noise of the good matches and the depth edges.
   std::string BriefReport() const;
   /// {"kind": "disparity", "prediction", "truth", "pairs", "truth_pixels", "matched_pixels",
   ///  "bad_matched_pixels", "max_error_px", "max_error_ratio", "d1_all", "d1_matched",
   ///  "epe_px", "density", "good_error_median_px", "good_error_sigma_px",
-  ///  "neighbour_difference_sigma_px", "neighbour_difference_ratio"}.
+  ///  "neighbour_difference_sigma_px", "neighbour_difference_ratio", "edge_radius_px",
+  ///  "behind_edge_pixels", "fattened_pixels", "fattened_share", "front_edge_pixels",
+  ///  "eroded_pixels", "eroded_share"}.
   std::string ToJson() const;
 };
 
@@ -105,7 +127,8 @@ namespace internal {
 
 /// Writes the score of `summary` as fields of the JSON object being built: "pairs",
 /// "truth_pixels", "matched_pixels", "bad_matched_pixels", "max_error_px", "max_error_ratio",
-/// "d1_all", "d1_matched", "epe_px", "density" (DisparityEvalSummary::ToJson, the stereo bench).
+/// "d1_all", "d1_matched", "epe_px", "density", the noise and the depth edges
+/// (DisparityEvalSummary::ToJson, the stereo bench).
 void WriteDisparityScoreFields(const DisparityEvalSummary& summary, JsonWriter* json);
 
 }  // namespace internal
