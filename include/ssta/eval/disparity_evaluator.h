@@ -47,10 +47,10 @@ struct DisparityEvalSummary {
   /// neighbouring pixels (smoothness, overlapping windows) differ with less.
   std::vector<std::int64_t> neighbour_difference_histogram = std::vector<std::int64_t>(kNoiseBins, 0);
   /// Depth edges, where a matcher's window and smoothness spread one surface's disparity over
-  /// its neighbour (foreground fattening: a pit's near rim carried onto its far wall, a post
-  /// widened). A truth pixel lies behind an edge when a truth pixel within kEdgeRadiusPx of it
-  /// (a square window) is nearer by a bad error under the rule, in front of one when such a
-  /// pixel is farther; a pixel may be both.
+  /// its neighbour (a post widened: fattening; a drop-off's lip given the disparity of the
+  /// ground beyond: erosion). A truth pixel lies behind an edge when a truth pixel within
+  /// kEdgeRadiusPx of it (a square window) is nearer by a bad error under the rule, in front of
+  /// one when such a pixel is farther; a pixel may be both.
   static constexpr int kEdgeRadiusPx = 4;
   std::int64_t behind_edge_pixels = 0;  ///< truth pixels behind a depth edge
   /// Of those, matched with an estimate nearer than the truth by a bad error: the nearer
