@@ -186,8 +186,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
     if (why.cell.observed) {
       miss.cell_rule = JudgeRuleName(why.rule);
     } else {
-      const int c = static_cast<int>(cell.cls);
-      miss.cell_rule = c >= 1 && c <= 3 ? "filled by the export" : "unobserved";
+      miss.cell_rule = cell.decided_by == ClassJudge::kExport ? "filled by the export" : "unobserved";
     }
   }
   return summary;

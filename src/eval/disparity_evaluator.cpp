@@ -85,29 +85,40 @@ double RobustSigma(const std::vector<std::int64_t>& histogram) {
   return 1.4826 * mad;
 }
 
-/// The largest (`largest`) or smallest truth disparity within `radius` of each pixel (a square
-/// window), over pixels with a truth (> 0); 0 where the window holds none. Separable: along the
-/// rows, then along the columns.
-ImageF WindowExtreme(const ImageF& truth, int radius, bool largest) {
-  const float none = largest ? 0.0f : std::numeric_limits<float>::infinity();
-  const auto better = [largest](float a, float b) { return largest ? std::max(a, b) : std::min(a, b); };
+/// The largest and the smallest truth disparity within `radius` of each pixel (a square
+/// window), over pixels with a truth (> 0); 0 where the window holds none.
+struct WindowExtremes {
+  ImageF nearest, farthest;
+};
+
+/// WindowExtremes of `truth`, separably: along the rows, then along the columns.
+WindowExtremes TruthWindowExtremes(const ImageF& truth, int radius) {
+  constexpr float kNone = std::numeric_limits<float>::infinity();  // the smallest of none
   const int w = truth.width(), h = truth.height();
-  ImageF rows(w, h, none), out(w, h, 0.0f);
+  ImageF row_max(w, h, 0.0f), row_min(w, h, kNone);
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
-      float best = none;
+      float largest = 0.0f, smallest = kNone;
       for (int x = std::max(0, u - radius); x <= std::min(w - 1, u + radius); ++x) {
         const float t = truth(v, x);
-        if (t > 0.0f && std::isfinite(t)) best = better(best, t);
+        if (!(t > 0.0f) || !std::isfinite(t)) continue;
+        largest = std::max(largest, t);
+        smallest = std::min(smallest, t);
       }
-      rows(v, u) = best;
+      row_max(v, u) = largest;
+      row_min(v, u) = smallest;
     }
   }
+  WindowExtremes out{ImageF(w, h, 0.0f), ImageF(w, h, 0.0f)};
   for (int v = 0; v < h; ++v) {
     for (int u = 0; u < w; ++u) {
-      float best = none;
-      for (int y = std::max(0, v - radius); y <= std::min(h - 1, v + radius); ++y) best = better(best, rows(y, u));
-      out(v, u) = std::isfinite(best) ? best : 0.0f;
+      float largest = 0.0f, smallest = kNone;
+      for (int y = std::max(0, v - radius); y <= std::min(h - 1, v + radius); ++y) {
+        largest = std::max(largest, row_max(y, u));
+        smallest = std::min(smallest, row_min(y, u));
+      }
+      out.nearest(v, u) = largest;
+      out.farthest(v, u) = std::isfinite(smallest) ? smallest : 0.0f;
     }
   }
   return out;
@@ -241,8 +252,7 @@ DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
   s.pairs = 1;
   // The signed error of each good match, NaN elsewhere, for the neighbour differences.
   ImageF good_error(truth.width(), truth.height(), std::numeric_limits<float>::quiet_NaN());
-  const ImageF nearest = WindowExtreme(truth, DisparityEvalSummary::kEdgeRadiusPx, true);
-  const ImageF farthest = WindowExtreme(truth, DisparityEvalSummary::kEdgeRadiusPx, false);
+  const WindowExtremes window = TruthWindowExtremes(truth, DisparityEvalSummary::kEdgeRadiusPx);
   // Whether a disparity difference of `d` (> 0) at truth `t` is a bad error under the rule.
   const auto bad = [&options](double d, double t) {
     return d > options.max_error_px && d > options.max_error_ratio * t;
@@ -251,7 +261,7 @@ DisparityEvalSummary ScoreDisparity(const ImageF& truth, const ImageF& estimate,
     const double t = truth[i];
     if (!(t > 0.0) || !std::isfinite(t)) continue;
     ++s.truth_pixels;
-    const bool behind = bad(nearest[i] - t, t), in_front = bad(t - farthest[i], t);
+    const bool behind = bad(window.nearest[i] - t, t), in_front = bad(t - window.farthest[i], t);
     s.behind_edge_pixels += behind;
     s.front_edge_pixels += in_front;
     const double e = estimate[i];

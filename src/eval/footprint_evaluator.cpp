@@ -137,15 +137,16 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
           miss.answer = answer.worst;
           miss.fraction_known = answer.fraction_known;
           miss.distance_from_path_m = distance;
-          if (unsafe) {
+          if (unsafe) {  // TruthUnder's cell, whose class is t
             miss.cell_x_m = truth_cell.x();
             miss.cell_y_m = truth_cell.y();
+            miss.cell_truth = t;
           } else {
             miss.cell_x_m = answer.worst_x_m;
             miss.cell_y_m = answer.worst_y_m;
-          }
-          if (std::isfinite(miss.cell_x_m) && std::isfinite(miss.cell_y_m)) {
-            miss.cell_truth = truth.ClassAt({miss.cell_x_m, miss.cell_y_m});
+            if (std::isfinite(miss.cell_x_m) && std::isfinite(miss.cell_y_m)) {
+              miss.cell_truth = truth.ClassAt({miss.cell_x_m, miss.cell_y_m});
+            }
           }
           summary.misses.push_back(std::move(miss));
         }
