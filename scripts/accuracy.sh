@@ -4,12 +4,14 @@
 # per scene, as a Markdown table. JSON per run in out/accuracy/<set>/.
 #
 #   scripts/accuracy.sh tuning [FRAMES] [-- extra args for classify and build-map]
+#   scripts/accuracy.sh wide [FRAMES] [-- ...]
 #   scripts/accuracy.sh report [FRAMES] [-- ...]
 #
-# Two fixed sets of scenes. Settings are chosen on the tuning set; the report set is read only
-# to report the result, so a figure on it says how the method does on terrain it was not tuned
-# on. Each set has the four named scenes and eight `random` ones (terrain, rig and light drawn
-# from the seed: docs/accuracy.md). FRAMES defaults to 60. Columns: per-frame label accuracy,
+# Fixed sets of scenes. Settings are chosen on the tuning set, and checked on the wide set (the
+# named scenes' seed 2 and twelve more `random` ones) that it does not only fit those twelve;
+# the report set is read only to report the result, so a figure on it says how the method does
+# on terrain it was not tuned on. Each set has the four named scenes and `random` ones (terrain,
+# rig and light drawn from the seed: docs/accuracy.md). FRAMES defaults to 60. Columns: per-frame label accuracy,
 # non-traversable recall and the share of traversable pixels called non-traversable; the map
 # grid's accuracy within 10 m of the path and its unsafe / falsely blocked cells there; what a
 # planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),

@@ -6,7 +6,7 @@
 # and y (roll and pitch; what is left is the yaw, which the ground does not show), the reported
 # sigmas and the frames' ground tilt. docs/mount_calibration.md gives the table.
 #
-#   scripts/mount_benchmark.sh tuning|report [FRAMES] [-- extra args for calibrate-mount]
+#   scripts/mount_benchmark.sh tuning|wide|report [FRAMES] [-- extra args for calibrate-mount]
 #
 # The injected errors cycle through +3 / +1.5, -2 / -2.5, +1 / -3 and -3 / +2 deg (pitch /
 # roll), drive by drive. SSTA (default build/apps/ssta) is the binary, SEQS
