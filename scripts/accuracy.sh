@@ -7,18 +7,19 @@
 #   scripts/accuracy.sh wide [FRAMES] [-- ...]
 #   scripts/accuracy.sh report [FRAMES] [-- ...]
 #
-# Fixed sets of scenes. Settings are chosen on the tuning set, and checked on the wide set (the
-# named scenes' seed 2 and twelve more `random` ones) that it does not only fit those twelve;
-# the report set is read only to report the result, so a figure on it says how the method does
-# on terrain it was not tuned on. Each set has the four named scenes and `random` ones (terrain,
-# rig and light drawn from the seed: docs/accuracy.md). FRAMES defaults to 60. Columns: per-frame label accuracy,
-# non-traversable recall and the share of traversable pixels called non-traversable; the map
-# grid's accuracy within 10 m of the path and its unsafe / falsely blocked cells there; what a
-# planner is told: unsafe / falsely blocked robot footprints (eval footprints --as-exported),
-# over all seen ground and within 10 m. The last row pools the samples of every scene. A second
-# table pools the footprints per 2 m band of distance from the path, with each class's recall;
-# a third counts the missed footprints by the map's rule at the cell that makes each a miss;
-# a fourth the per-frame labels' pixels per 5 m band of true depth from the camera.
+# Fixed sets of scenes. Settings are chosen on the tuning set, and checked on the wide set
+# (the named scenes' seed 2 and twelve more `random` ones) that they do not only fit those
+# twelve; the report set is read only to report the result, so a figure on it says how the
+# method does on terrain it was not tuned on. Each set has the four named scenes and `random`
+# ones (terrain, rig and light drawn from the seed: docs/accuracy.md). FRAMES defaults to 60.
+# Columns: per-frame label accuracy, non-traversable recall and the share of traversable
+# pixels called non-traversable; the map grid's accuracy within 10 m of the path and its
+# unsafe / falsely blocked cells there; what a planner is told: unsafe / falsely blocked robot
+# footprints (eval footprints --as-exported), over all seen ground and within 10 m. The last
+# row pools the samples of every scene. A second table pools the footprints per 2 m band of
+# distance from the path, with each class's recall; a third counts the missed footprints by
+# the map's rule at the cell that makes each a miss; a fourth the per-frame labels' pixels per
+# 5 m band of true depth from the camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
