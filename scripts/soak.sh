@@ -184,8 +184,8 @@ final_nodes=$(sed -n 's/.*"map_nodes":\([0-9]*\).*/\1/p' <<< "$summary")
 free_only=$(grep -o '"reason":' <<< "${summary#*\"quality_failed\":}" | wc -l || true)
 skipped=$(grep -o '"reason":' <<< "$summary" | wc -l || true)
 skipped=$((skipped - free_only))
-echo "soak: build-map fused $used of $frames frames ($free_only failed the quality check: free space only;" \
-  "$skipped skipped) in $((SECONDS - t0)) s; final map $final_nodes nodes"
+echo "soak: build-map fused $used of $frames frames ($free_only without verdicts by the quality" \
+  "check: free space only; $skipped skipped) in $((SECONDS - t0)) s; final map $final_nodes nodes"
 echo
 verdict=0
 analyse "$samples" || verdict=$?

@@ -198,6 +198,7 @@ py::dict FrameDict(const FrameResult& r) {
   ground["share"] = g.share;
   py::dict quality;
   quality["passed"] = analysis.quality.passed;
+  quality["judged"] = analysis.quality.judged;
   quality["reason"] = analysis.quality.reason;
   const StageTimings& t = r.timings;
   py::dict timings;
@@ -275,7 +276,8 @@ Returns a dict:
         refinements);
     segment_reasons: why each segment got its class (list of str);
     ground_plane: {found, segment_id, plane, camera_height_m, surface_class, rms_m, share};
-    quality: {passed, reason} of the point cloud quality check;
+    quality: {passed, judged, reason} of the point cloud quality check (judged: the frame got
+        verdicts, as it does under the local rule when only the plane's share failed);
     up_rectified: up in the rectified cam0 frame; timings_ms: per stage.
 
 Raises ValueError naming `left`, `right` or `up`, and ssta.Error for images of another size

@@ -62,7 +62,8 @@ def test_labels_and_segments_equal_cli(pair, calibration, cli_frame):
         assert row["slope_deg"] == pytest.approx(s["slope_deg"], abs=1e-3)
         np.testing.assert_allclose(row["centroid"], s["centroid"], rtol=1e-5, atol=1e-6)  # JSON: 6 digits
         assert result["segment_reasons"][s["id"]] == s["reason"]
-    assert result["quality"] == {"passed": report["quality"]["passed"], "reason": report["quality"].get("reason", "")}
+    assert result["quality"] == {"passed": report["quality"]["passed"], "judged": report["quality"]["judged"],
+                                 "reason": report["quality"].get("reason", "")}
     assert result["ground_plane"]["found"]
     assert result["disparity"].dtype == np.float32 and result["segment_ids"].dtype == np.int32
 

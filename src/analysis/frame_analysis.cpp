@@ -36,8 +36,8 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   //   AnalyzeSurfaces                              | pixel slope classes
   //   apply slopes, ground consistency, fragments  | face search, local step classes
   //   apply local steps, apply faces, consensus fill, height fill
-  // The slope classes are computed before the quality check is known: on a frame that fails it
-  // (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
+  // The slope classes are computed before the quality check is known: on a frame it leaves
+  // unjudged (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
   AnalysisResult a;
   const DepthNoise noise{disparity_sigma_px_ / focal_times_baseline};
   RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options, noise); },
@@ -49,10 +49,13 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
           });
   // Each step's changes go to a.rules; only the first lambda and the steps after both touch it.
   LabelRuleTracker& track = rule_tracker_;
+  // A frame the local rule judges although its plane holds too little of the view
+  // (QualityCheck::judged) gets every refinement but those that read the plane.
+  const bool judged = a.quality.judged;
   RunBoth(
       [&] {
         track.Begin(a.labels);
-        if (options.pixel_slopes && a.quality.passed) {
+        if (options.pixel_slopes && judged) {
           // Under the local rule a segment's verdict is its slope's alone, so a gentler pixel may relax it.
           ApplyPixelSlopeClasses(slope_classes_, &a.labels, options.step_reference == StepReference::kLocal);
           track.Mark(a.labels, LabelRule::kPixelSlope, &a.rules);
@@ -63,20 +66,20 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
         track.Mark(a.labels, LabelRule::kFragmentPlane, &a.rules);
       },
       [&] {
-        // Only for a frame that passed the quality check (known from here on): on the others
-        // the faces are not applied, and the search would keep the chain waiting.
-        if (options.face_window_px > 0 && a.quality.passed) {
+        // Only for a judged frame (known from here on): on the others the faces are not
+        // applied, and the search would keep the chain waiting.
+        if (options.face_window_px > 0 && judged) {
           FindDisparityFaces(*in.disparity, g.f, g.cu, g.cv, up, options, &faces_);
         }
-        if (options.step_reference == StepReference::kLocal && a.quality.passed) {
+        if (options.step_reference == StepReference::kLocal && judged) {
           LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_, in.supported);
         }
       });
-  if (options.step_reference == StepReference::kLocal && a.quality.passed) {
+  if (options.step_reference == StepReference::kLocal && judged) {
     ApplyLocalStepClasses(step_classes_, &a.labels);
     track.Mark(a.labels, LabelRule::kLocalStep, &a.rules);
   }
-  if (a.quality.passed) {
+  if (judged) {
     if (options.face_window_px > 0) {
       ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);
       track.Mark(a.labels, LabelRule::kDisparityFace, &a.rules);

@@ -220,7 +220,8 @@ double QuadraticRms(const Image3f& cloud, const ImageI32& segment_ids, const Gro
 
 /// The point-cloud quality check on the dominant ground plane: a plausible camera height above
 /// it, a small roughness beyond the stereo noise expected at its range (the RMS with the noise's
-/// share taken out in quadrature), and a large enough share of the depth pixels.
+/// share taken out in quadrature), and a large enough share of the depth pixels. Whether the
+/// frame is judged all the same: QualityCheck::judged.
 QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehicle, const SurfaceAnalysisOptions& options) {
   QualityCheck quality;
   if (!ground.found) {
@@ -239,8 +240,11 @@ QualityCheck CheckQuality(const GroundPlane& ground, const VehicleOptions& vehic
   } else if (ground.share < options.min_ground_share) {
     quality.reason = FormatNumber("ground plane too small: share", ground.share, 3, "") +
                      FormatNumber(" < min_ground_share", options.min_ground_share, 3, "");
+    // Only the plane's share failed: the local rule does not measure against it.
+    quality.judged = options.step_reference == StepReference::kLocal;
   } else {
     quality.passed = true;
+    quality.judged = true;
   }
   return quality;
 }
@@ -301,14 +305,14 @@ void DecideVerdict(int inliers_min, const SurfaceAnalysisOptions& options, Segme
 /// Class per pixel: unknown without a point, undecided without a segment, else its segment's
 /// verdict; and the rule behind each (LabelRule).
 void PixelLabels(const Image3f& cloud, const ImageI32& segment_ids, const std::vector<SegmentResult>& segments,
-                 bool quality_passed, AnalysisResult* result) {
+                 bool judged, AnalysisResult* result) {
   ImageU8& labels = result->labels;
   ImageU8& rules = result->rules;
   labels = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(TravClass::kUnknown));
   rules = ImageU8(cloud.width(), cloud.height(), static_cast<std::uint8_t>(LabelRule::kNoDepth));
-  const auto segment_rule = static_cast<std::uint8_t>(quality_passed ? LabelRule::kSegment : LabelRule::kQualityCheck);
+  const auto segment_rule = static_cast<std::uint8_t>(judged ? LabelRule::kSegment : LabelRule::kQualityCheck);
   const auto small_rule =
-      static_cast<std::uint8_t>(quality_passed ? LabelRule::kSmallSegment : LabelRule::kQualityCheck);
+      static_cast<std::uint8_t>(judged ? LabelRule::kSmallSegment : LabelRule::kQualityCheck);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (!IsFinite(cloud[i])) continue;
     const int id = segment_ids[i];
@@ -360,7 +364,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
   }
   for (SegmentResult& s : result.segments) {
     if (s.inliers == 0) continue;
-    if (!result.quality.passed) {
+    if (!result.quality.judged) {
       s.verdict = TravClass::kUndecided;
       s.reason = "frame failed the quality check";
       continue;
@@ -369,7 +373,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
     DecideVerdict(result.inliers_min, options, &s);
   }
 
-  PixelLabels(cloud, segment_ids, result.segments, result.quality.passed, &result);
+  PixelLabels(cloud, segment_ids, result.segments, result.quality.judged, &result);
   return result;
 }
 

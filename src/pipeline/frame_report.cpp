@@ -112,7 +112,8 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
   j << "  \"up_camera\": " << Array(f.up_rectified) << ",\n";
   j << "  \"depth_pixels\": " << a.depth_pixels << ",\n  \"inliers_min\": " << a.inliers_min << ",\n";
   j << "  \"labels_min_texture\": " << Num(f.labels_min_texture) << ",\n";
-  j << "  \"quality\": {\"passed\": " << (a.quality.passed ? "true" : "false") << ", \"reason\": \""
+  j << "  \"quality\": {\"passed\": " << (a.quality.passed ? "true" : "false")
+    << ", \"judged\": " << (a.quality.judged ? "true" : "false") << ", \"reason\": \""
     << internal::JsonEscape(a.quality.reason) << "\"},\n";
   j << "  \"ground_plane\": ";
   if (a.ground.found) {

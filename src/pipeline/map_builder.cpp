@@ -310,7 +310,7 @@ class MapBuilder {
       ++summary_.frames_used;
       recording_.Add(t, image_hash);
       summary_.points_inserted += stats.points_hit;
-      if (!result->analysis.quality.passed) summary_.quality_failed.push_back({t, result->analysis.quality.reason});
+      if (!result->analysis.quality.judged) summary_.quality_failed.push_back({t, result->analysis.quality.reason});
     });
   }
 
@@ -449,7 +449,7 @@ std::string BuildMapSummary::BriefReport() const {
   r << "frames: " << frames_used << " fused, ";
   if (frames_already_in_map > 0) r << frames_already_in_map << " already in the resumed map, ";
   r << skipped.size() << " skipped, " << quality_failed.size()
-    << " failed the quality check (free space only) (of " << frames_listed << " listed)"
+    << " without verdicts by the quality check (free space only) (of " << frames_listed << " listed)"
     << (interrupted ? "; interrupted, the map holds what was fused" : "") << "\n";
   for (const auto& w : warnings) r << "warning: " << w << "\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";

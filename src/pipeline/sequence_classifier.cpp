@@ -81,14 +81,14 @@ void ClassifySummary::Add(const FrameResult& frame) {
   for (std::size_t i = 0; i < frame.labels.size(); ++i) {
     if (frame.labels[i] < 5) ++class_pixels[frame.labels[i]];
   }
-  if (!frame.analysis.quality.passed) quality_failed.push_back({frame.timestamp_ns, frame.analysis.quality.reason});
+  if (!frame.analysis.quality.judged) quality_failed.push_back({frame.timestamp_ns, frame.analysis.quality.reason});
 }
 
 std::string ClassifySummary::BriefReport() const {
   std::ostringstream r;
   r << std::fixed << std::setprecision(1);
   r << "frames: " << frames_classified << " classified, " << skipped.size() << " skipped, "
-    << quality_failed.size() << " failed the quality check (of " << frames_total << " listed)\n";
+    << quality_failed.size() << " left undecided by the quality check (of " << frames_total << " listed)\n";
   for (const auto& s : skipped) r << "  skipped " << s.timestamp_ns << ": " << s.reason << "\n";
   for (const auto& s : quality_failed) r << "  undecided " << s.timestamp_ns << ": " << s.reason << "\n";
   if (stale_files_removed > 0) r << "removed " << stale_files_removed << " frame files of an earlier run first\n";

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <map>
 #include <set>
@@ -94,6 +95,71 @@ TEST(LabelRules, LocalStepsMarkTheRingAroundACrateOnFlatGround) {
   // the 0.6 m one, at most the 1.4 m square less the 0.2 m one [1 px = 1 cm^2].
   EXPECT_GT(ring, 6400);
   EXPECT_LT(ring, 19200);
+}
+
+// The same crate on the floor, with a quality check the floor's plane fails only on its share
+// of the view (84 % of the pixels against a minimum of 90 %), as on rolling ground where no one
+// plane holds much. The local rule measures against gravity, not against that plane: the frame
+// keeps every verdict the passing frame has. The paper's rule (steps against the plane) leaves
+// it undecided, and so does the local rule when the plane puts the camera at a height the
+// vehicle rules out (a scale error, or no ground in view).
+TEST(LabelRules, UnderTheLocalRuleAPlaneThatHoldsLittleOfTheViewLeavesTheFrameJudged) {
+  const int n = 200;
+  Image3f cloud(n, n, NanVector3f()), normals(n, n, Eigen::Vector3f(0, -1, 0));
+  ImageI32 ids(n, n, 0);
+  for (int v = 0; v < n; ++v) {
+    for (int u = 0; u < n; ++u) {
+      const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
+      const bool crate = x >= -0.4 && x < 0.4 && z >= 1.6 && z < 2.4;
+      cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), crate ? 0.7f : 1.0f, static_cast<float>(z));
+      ids(v, u) = crate ? 1 : 0;
+    }
+  }
+  RectifiedGeometry g;
+  g.full_width = g.crop_width = n;
+  g.full_height = g.crop_height = n;
+  g.f = 400.0;
+  g.cu = g.cv = n / 2.0;
+  g.baseline_m = 0.12;
+  const ImageF disparity(n, n, 0.0f);
+  const auto analyze = [&](const VehicleOptions& vehicle, const AnalysisOptions& options) {
+    return FrameAnalyzer(vehicle, options).Analyze({&g, &disparity, &cloud, &normals, &ids, 2, {0, -1, 0}});
+  };
+  const auto count = [](const ImageU8& image, std::uint8_t value) {
+    return std::count(image.data(), image.data() + image.size(), value);
+  };
+  const auto same = [](const ImageU8& a, const ImageU8& b) {
+    return a.size() == b.size() && std::equal(a.data(), a.data() + a.size(), b.data());
+  };
+  const AnalysisOptions shipped;
+  const AnalysisResult passing = analyze({}, shipped);
+  ASSERT_TRUE(passing.quality.passed) << passing.quality.reason;
+  ASSERT_TRUE(passing.quality.judged);
+
+  AnalysisOptions strict = shipped;
+  strict.min_ground_share = 0.9;
+  const AnalysisResult judged = analyze({}, strict);
+  EXPECT_FALSE(judged.quality.passed);
+  EXPECT_TRUE(judged.quality.judged);
+  EXPECT_NE(judged.quality.reason.find("too small: share 0.840"), std::string::npos) << judged.quality.reason;
+  EXPECT_TRUE(same(judged.labels, passing.labels));
+  EXPECT_TRUE(same(judged.rules, passing.rules));
+  EXPECT_GT(count(judged.labels, kNon), 6400);  // the crate's ring, as above
+
+  AnalysisOptions paper = strict;
+  paper.step_reference = StepReference::kDominantPlane;
+  const AnalysisResult unjudged = analyze({}, paper);
+  EXPECT_FALSE(unjudged.quality.judged);
+  EXPECT_EQ(count(unjudged.labels, static_cast<std::uint8_t>(TravClass::kUndecided)), n * n);
+
+  VehicleOptions low;
+  low.max_camera_height_m = 0.5;  // the floor 1 m below: implausible for this vehicle
+  const AnalysisResult implausible = analyze(low, shipped);
+  EXPECT_FALSE(implausible.quality.passed);
+  EXPECT_FALSE(implausible.quality.judged);
+  EXPECT_NE(implausible.quality.reason.find("implausible camera height"), std::string::npos);
+  EXPECT_EQ(count(implausible.labels, static_cast<std::uint8_t>(TravClass::kUndecided)), n * n);
+  EXPECT_EQ(count(implausible.rules, static_cast<std::uint8_t>(LabelRule::kQualityCheck)), n * n);
 }
 
 // A rendered yard frame, through the whole pipeline: the rules' pixels add up to the labels'

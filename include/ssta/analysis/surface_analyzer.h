@@ -149,6 +149,13 @@ struct DepthNoise {
 struct QualityCheck {
   bool passed = false;
   std::string reason;  ///< empty when passed
+  /// Whether the frame's segments and pixels get verdicts: the check passed, or, under the
+  /// local step rule (StepReference::kLocal), it failed only on the plane's share of the depth
+  /// pixels (min_ground_share). Such a plane is plausible and smooth but holds little of the
+  /// view, as on rolling ground where no one plane fits much of it; the local rule measures
+  /// slopes and steps against gravity, not against the plane. Otherwise every pixel with depth
+  /// is undecided (LabelRule::kQualityCheck).
+  bool judged = false;
 };
 
 struct AnalysisResult {

@@ -55,7 +55,9 @@ struct BuildMapSummary {
   /// Frames a resumed run found already fused (an interrupted run of the same sequence).
   int frames_already_in_map = 0;
   std::vector<SkippedFrame> skipped;         ///< not fused, and why
-  std::vector<SkippedFrame> quality_failed;  ///< fused for free space only: no class verdicts
+  /// Failed the quality check and not judged (QualityCheck::judged): fused for free space only,
+  /// with no class verdicts.
+  std::vector<SkippedFrame> quality_failed;
   /// What of the recording was missing (Sequence::warnings: a truncated bag read anyway); the
   /// map's metadata notes record them too.
   std::vector<std::string> warnings;

@@ -35,7 +35,9 @@ struct ClassifySummary {
   int frames_total = 0;
   int frames_classified = 0;
   std::vector<SkippedFrame> skipped;        ///< unusable frames and why
-  std::vector<SkippedFrame> quality_failed; ///< classified, but their depth pixels are undecided
+  /// Classified, but failed the quality check and not judged (QualityCheck::judged): their depth
+  /// pixels are undecided.
+  std::vector<SkippedFrame> quality_failed;
   std::array<std::int64_t, 5> class_pixels{};  ///< pixels per class id over all frames
   StageTimings mean_timings;
   double wall_s = 0.0;
