@@ -38,33 +38,44 @@ TEST(LabelRules, TheTableIsInValueOrderWithOneNameEach) {
 }
 
 // A level floor 1 m below a camera looking down (organized top-down: pixel (v, u) at x = -1 +
-// 0.01 u, z = 1 + 0.01 v) with a 0.8 x 0.8 m crate top 0.3 m above it, each its own level
-// segment: the segments are traversable by slope, and the only rule that can make a pixel
-// non-traversable is the local step, within step_radius_m (0.2 m) of the crate's edge on both
-// sides.
-TEST(LabelRules, LocalStepsMarkTheRingAroundACrateOnFlatGround) {
-  const int n = 200;
-  Image3f cloud(n, n, NanVector3f()), normals(n, n, Eigen::Vector3f(0, -1, 0));
-  ImageI32 ids(n, n, 0);
-  auto in_crate = [](double x, double z) { return x >= -0.4 && x < 0.4 && z >= 1.6 && z < 2.4; };
-  for (int v = 0; v < n; ++v) {
-    for (int u = 0; u < n; ++u) {
-      const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
-      const bool crate = in_crate(x, z);
-      cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), crate ? 0.7f : 1.0f, static_cast<float>(z));
-      ids(v, u) = crate ? 1 : 0;
-    }
-  }
+// 0.01 u, z = 1 + 0.01 v, 200 x 200 px) with a 0.8 x 0.8 m crate top 0.3 m above it, each its
+// own level segment (0 the floor, 1 the crate).
+struct CrateOnFloor {
+  static constexpr int n = 200;
+  Image3f cloud{n, n, NanVector3f()};
+  Image3f normals{n, n, Eigen::Vector3f(0, -1, 0)};
+  ImageI32 ids{n, n, 0};
+  ImageF disparity{n, n, 0.0f};
   RectifiedGeometry g;
-  g.full_width = g.crop_width = n;
-  g.full_height = g.crop_height = n;
-  g.f = 400.0;
-  g.cu = g.cv = n / 2.0;
-  g.baseline_m = 0.12;
-  const ImageF disparity(n, n, 0.0f);
-  AnalysisOptions options;  // shipped: local steps, every refinement on
-  FrameAnalyzer analyzer(VehicleOptions{}, options);
-  const AnalysisResult a = analyzer.Analyze({&g, &disparity, &cloud, &normals, &ids, 2, {0, -1, 0}});
+
+  CrateOnFloor() {
+    for (int v = 0; v < n; ++v) {
+      for (int u = 0; u < n; ++u) {
+        const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
+        const bool crate = x >= -0.4 && x < 0.4 && z >= 1.6 && z < 2.4;
+        cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), crate ? 0.7f : 1.0f, static_cast<float>(z));
+        ids(v, u) = crate ? 1 : 0;
+      }
+    }
+    g.full_width = g.crop_width = n;
+    g.full_height = g.crop_height = n;
+    g.f = 400.0;
+    g.cu = g.cv = n / 2.0;
+    g.baseline_m = 0.12;
+  }
+
+  AnalysisResult Analyze(const VehicleOptions& vehicle, const AnalysisOptions& options) const {
+    return FrameAnalyzer(vehicle, options).Analyze({&g, &disparity, &cloud, &normals, &ids, 2, {0, -1, 0}});
+  }
+};
+
+// The crate on the floor: the segments are traversable by slope, and the only rule that can make
+// a pixel non-traversable is the local step, within step_radius_m (0.2 m) of the crate's edge on
+// both sides.
+TEST(LabelRules, LocalStepsMarkTheRingAroundACrateOnFlatGround) {
+  const CrateOnFloor world;
+  const int n = CrateOnFloor::n;
+  const AnalysisResult a = world.Analyze({}, AnalysisOptions{});  // shipped: local steps, every refinement on
   ASSERT_TRUE(a.quality.passed) << a.quality.reason;
   ASSERT_EQ(a.rules.width(), n);
   const auto rule_at = [&](double x, double z) {
@@ -104,26 +115,10 @@ TEST(LabelRules, LocalStepsMarkTheRingAroundACrateOnFlatGround) {
 // it undecided, and so does the local rule when the plane puts the camera at a height the
 // vehicle rules out (a scale error, or no ground in view).
 TEST(LabelRules, UnderTheLocalRuleAPlaneThatHoldsLittleOfTheViewLeavesTheFrameJudged) {
-  const int n = 200;
-  Image3f cloud(n, n, NanVector3f()), normals(n, n, Eigen::Vector3f(0, -1, 0));
-  ImageI32 ids(n, n, 0);
-  for (int v = 0; v < n; ++v) {
-    for (int u = 0; u < n; ++u) {
-      const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
-      const bool crate = x >= -0.4 && x < 0.4 && z >= 1.6 && z < 2.4;
-      cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), crate ? 0.7f : 1.0f, static_cast<float>(z));
-      ids(v, u) = crate ? 1 : 0;
-    }
-  }
-  RectifiedGeometry g;
-  g.full_width = g.crop_width = n;
-  g.full_height = g.crop_height = n;
-  g.f = 400.0;
-  g.cu = g.cv = n / 2.0;
-  g.baseline_m = 0.12;
-  const ImageF disparity(n, n, 0.0f);
+  const CrateOnFloor world;
+  const int n = CrateOnFloor::n;
   const auto analyze = [&](const VehicleOptions& vehicle, const AnalysisOptions& options) {
-    return FrameAnalyzer(vehicle, options).Analyze({&g, &disparity, &cloud, &normals, &ids, 2, {0, -1, 0}});
+    return world.Analyze(vehicle, options);
   };
   const auto count = [](const ImageU8& image, std::uint8_t value) {
     return std::count(image.data(), image.data() + image.size(), value);
