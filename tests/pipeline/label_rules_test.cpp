@@ -117,9 +117,6 @@ TEST(LabelRules, LocalStepsMarkTheRingAroundACrateOnFlatGround) {
 TEST(LabelRules, UnderTheLocalRuleAPlaneThatHoldsLittleOfTheViewLeavesTheFrameJudged) {
   const CrateOnFloor world;
   const int n = CrateOnFloor::n;
-  const auto analyze = [&](const VehicleOptions& vehicle, const AnalysisOptions& options) {
-    return world.Analyze(vehicle, options);
-  };
   const auto count = [](const ImageU8& image, std::uint8_t value) {
     return std::count(image.data(), image.data() + image.size(), value);
   };
@@ -127,13 +124,13 @@ TEST(LabelRules, UnderTheLocalRuleAPlaneThatHoldsLittleOfTheViewLeavesTheFrameJu
     return a.size() == b.size() && std::equal(a.data(), a.data() + a.size(), b.data());
   };
   const AnalysisOptions shipped;
-  const AnalysisResult passing = analyze({}, shipped);
+  const AnalysisResult passing = world.Analyze({}, shipped);
   ASSERT_TRUE(passing.quality.passed) << passing.quality.reason;
   ASSERT_TRUE(passing.quality.judged);
 
   AnalysisOptions strict = shipped;
   strict.min_ground_share = 0.9;
-  const AnalysisResult judged = analyze({}, strict);
+  const AnalysisResult judged = world.Analyze({}, strict);
   EXPECT_FALSE(judged.quality.passed);
   EXPECT_TRUE(judged.quality.judged);
   EXPECT_NE(judged.quality.reason.find("too small: share 0.840"), std::string::npos) << judged.quality.reason;
@@ -143,13 +140,13 @@ TEST(LabelRules, UnderTheLocalRuleAPlaneThatHoldsLittleOfTheViewLeavesTheFrameJu
 
   AnalysisOptions paper = strict;
   paper.step_reference = StepReference::kDominantPlane;
-  const AnalysisResult unjudged = analyze({}, paper);
+  const AnalysisResult unjudged = world.Analyze({}, paper);
   EXPECT_FALSE(unjudged.quality.judged);
   EXPECT_EQ(count(unjudged.labels, static_cast<std::uint8_t>(TravClass::kUndecided)), n * n);
 
   VehicleOptions low;
   low.max_camera_height_m = 0.5;  // the floor 1 m below: implausible for this vehicle
-  const AnalysisResult implausible = analyze(low, shipped);
+  const AnalysisResult implausible = world.Analyze(low, shipped);
   EXPECT_FALSE(implausible.quality.passed);
   EXPECT_FALSE(implausible.quality.judged);
   EXPECT_NE(implausible.quality.reason.find("implausible camera height"), std::string::npos);
