@@ -7,7 +7,7 @@
 # frames (DEFAULT_FRAMES unless given), the array args (what follows --; a relative path that
 # names a file in $caller_dir, where the user stood, made absolute) and the array runs,
 # the set's scene:seed pairs, the named scenes first. A set that is not tuning, wide or report
-# prints the calling script's usage and exits with 2.
+# is named in one line with the calling script's usage, and exits with 2.
 parse_set_args() {
   local named_seed random_seeds scene seed
   frames=$1
@@ -33,7 +33,11 @@ parse_set_args() {
     tuning) named_seed=1; random_seeds="1 2 3 4 5 6 7 8" ;;
     wide) named_seed=2; random_seeds="9 10 11 12 13 14 15 16 17 18 19 20" ;;
     report) named_seed=7; random_seeds="101 102 103 104 105 106 107 108" ;;
-    *) echo "usage: scripts/$(basename "$0") tuning|wide|report [FRAMES] [-- args]" >&2; exit 2 ;;
+    *)
+      echo "scripts/$(basename "$0"): no scene set '$set_name'" \
+        "(usage: scripts/$(basename "$0") tuning|wide|report [FRAMES] [-- args])" >&2
+      exit 2
+      ;;
   esac
   runs=()
   for scene in yard hills dropoff forest; do runs+=("$scene:$named_seed"); done
