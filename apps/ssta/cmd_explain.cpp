@@ -47,6 +47,9 @@ const char* RuleSentence(JudgeRule rule) {
     case JudgeRule::kPriorWithheld:
       return "the frames' votes lean to an obstacle, too weakly (under class_prior_min_evidence_views) for "
              "the open-ground prior to overrule them: undecided";
+    case JudgeRule::kObstacleWithheld:
+      return "the frames' votes call an obstacle on fewer clear views than class_obstacle_min_evidence_views "
+             "(as much as stereo noise at their range can make): undecided, not blocked";
     default: return "no class: nothing observed here, or no evidence to judge by";
   }
 }

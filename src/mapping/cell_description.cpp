@@ -56,7 +56,7 @@ CellInfo DescribeCell(const TraversabilityMap& map, const TravOcTree& tree, cons
   if (!cell.occupied) return cell;  // free space has no class
 
   const auto& l = node->class_log_odds;
-  if (!HasClassEvidence(l, map.options()) || PriorAloneWouldOpen(l, map.options())) {
+  if (!HasClassEvidence(l, map.options()) || WithheldVerdict(l, map.options()) != JudgeRule::kNone) {
     cell.cls = TravClass::kUndecided;
     return cell;
   }

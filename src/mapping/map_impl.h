@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include "mapping/trav_octree.h"
+#include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"
 
 namespace ssta {
@@ -63,13 +64,19 @@ inline std::array<double, 3> FrameClassProbabilities(const std::array<float, 3>&
   return p;
 }
 
+/// What one clear vote for class index k (0..2) adds to its log-odds: class_hit_log_odds, times
+/// class_obstacle_gain for the non-traversable class.
+inline double ClearViewLogOdds(int k, const MapOptions& options) {
+  return options.class_hit_log_odds * (k == 2 ? options.class_obstacle_gain : 1.0);
+}
+
 /// The evidence in a voxel's class log-odds, in clear views: the largest |L_k| over what one
 /// clear vote for class k adds (class_hit_log_odds, times class_obstacle_gain for an obstacle).
 inline double ClassEvidenceViews(const std::array<float, 3>& log_odds, const MapOptions& options) {
   double views = 0.0;
   for (int k = 0; k < 3; ++k) {
-    const double one_view = options.class_hit_log_odds * (k == 2 ? options.class_obstacle_gain : 1.0);
-    views = std::max(views, std::abs(static_cast<double>(log_odds[static_cast<std::size_t>(k)])) / one_view);
+    views = std::max(views, std::abs(static_cast<double>(log_odds[static_cast<std::size_t>(k)])) /
+                                ClearViewLogOdds(k, options));
   }
   return views;
 }
@@ -93,6 +100,28 @@ inline bool PriorAloneWouldOpen(const std::array<float, 3>& log_odds, const MapO
   // L3 is the largest, so the prior opens the voxel exactly when it lifts L1 above L3.
   if (!(static_cast<double>(log_odds[0]) + options.class_prior_traversable_log_odds > log_odds[2])) return false;
   return ClassEvidenceViews(log_odds, options) < options.class_prior_min_evidence_views;
+}
+
+/// Whether the frames' votes make the voxel an obstacle (non-traversable the most probable class
+/// with the open-ground prior, ties to the worse) on less obstacle evidence than
+/// MapOptions::class_obstacle_min_evidence_views clear views: L3 under that many times what one
+/// clear obstacle vote adds. Each vote already counts by how well its view resolves the step
+/// radius, so such evidence is what stereo noise at the views' range can make. Such a voxel is
+/// undecided.
+inline bool ObstacleTooWeak(const std::array<float, 3>& log_odds, const MapOptions& options) {
+  if (options.class_obstacle_min_evidence_views <= 0.0) return false;
+  const double obstacle = log_odds[2];
+  if (obstacle < log_odds[0] + options.class_prior_traversable_log_odds || obstacle < log_odds[1]) return false;
+  return obstacle < options.class_obstacle_min_evidence_views * ClearViewLogOdds(2, options);
+}
+
+/// The floor that withholds the frames' verdict from a voxel with class evidence, leaving it
+/// undecided: JudgeRule::kPriorWithheld (PriorAloneWouldOpen), kObstacleWithheld
+/// (ObstacleTooWeak), or kNone when neither does.
+inline JudgeRule WithheldVerdict(const std::array<float, 3>& log_odds, const MapOptions& options) {
+  if (PriorAloneWouldOpen(log_odds, options)) return JudgeRule::kPriorWithheld;
+  if (ObstacleTooWeak(log_odds, options)) return JudgeRule::kObstacleWithheld;
+  return JudgeRule::kNone;
 }
 
 /// Whether `node` is occupied: its occupancy at or above the tree's threshold.

@@ -49,6 +49,12 @@ void AddClassEvidenceFields(OptionFields<MapOptions>* f) {
                        "when they hold this many clear views; weaker, it is undecided, not open by the prior's "
                        "word (0: the prior always answers)")
                    .AbsentMeans(0.0));
+  f->push_back(Real<O>("class_obstacle_min_evidence_views", &O::class_obstacle_min_evidence_views, Closed(0, 100),
+                       "views",
+                       "the frames alone call a voxel non-traversable only when its obstacle log-odds hold this "
+                       "many clear views; weaker (what stereo noise at the views' range can make), it is "
+                       "undecided, not blocked (0: any obstacle lead is a verdict)")
+                   .AbsentMeans(0.0));
   f->push_back(Real<O>("class_surface_miss_prob", &O::class_surface_miss_prob, ClosedOpen(0, 1), "",
                        "chance that a fused surface finding open ground misses a hazard the frames saw (a "
                        "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "

@@ -180,12 +180,15 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
       rule = JudgeRule::kProduct;
     }
   }
-  if (judge == ClassJudge::kFrames && internal::PriorAloneWouldOpen(l, map.options())) {
+  const JudgeRule withheld =
+      judge == ClassJudge::kFrames ? internal::WithheldVerdict(l, map.options()) : JudgeRule::kNone;
+  if (withheld != JudgeRule::kNone) {
     // The frames decide (so they have evidence), and their votes lean to an obstacle on too
-    // little of it for the prior to overrule them: the column stays undecided, as DescribeCell
-    // (which `cell` comes from) left it.
+    // little of it for the prior to overrule them, or call one on fewer clear views than
+    // class_obstacle_min_evidence_views (what stereo noise at their range can make): the column
+    // stays undecided, as DescribeCell (which `cell` comes from) left it.
     if (why != nullptr) {
-      why->rule = JudgeRule::kPriorWithheld;
+      why->rule = withheld;
       why->frame_probability = frames;
     }
     return;
@@ -415,6 +418,7 @@ const char* JudgeRuleName(JudgeRule rule) {
     case JudgeRule::kWorseOfTwo: return "worse of two";
     case JudgeRule::kProduct: return "product";
     case JudgeRule::kPriorWithheld: return "prior withheld";
+    case JudgeRule::kObstacleWithheld: return "obstacle withheld";
     default: return "none";
   }
 }

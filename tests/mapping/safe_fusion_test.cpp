@@ -267,6 +267,40 @@ TEST(SafeFusion, WithAnEvidenceFloorGroundNoViewResolvedIsUndecided) {
   EXPECT_EQ(ClassAt(prior, C(5), C(5)), TravClass::kTraversable);
 }
 
+TEST(SafeFusion, ObstacleEvidenceUnderHalfAClearViewIsUndecidedNotBlocked) {
+  // Views whose points have a height sigma of 0.1 m and a horizontal one of 0.7 m: each vote
+  // counts 1 / (1 + (0.1 / 0.1)^2) / (1 + (0.7 / 0.6)^2) = 0.212 of a clear one, as a far frame
+  // beyond resolving the step radius gives. Two of them (the fewest that make a voxel occupied)
+  // call a patch red, a smeared step, say: 0.42 clear views of obstacle evidence, under the
+  // half that map.class_obstacle_min_evidence_views asks, so the patch is undecided, not
+  // blocked; the floor around it, which the same views call open, stays traversable. A third
+  // view that agrees makes 0.64 clear views: then the patch is an obstacle.
+  const auto patch = [](int ix, int iy) { return ix >= 30 && ix < 33 && iy >= 30 && iy < 33; };
+  auto build = [&](const MapOptions& options, int views) {
+    TraversabilityMap map(options);
+    for (int k = 0; k < views; ++k) {
+      std::vector<ClassifiedPoint> far = Floor(0.1f, patch);
+      for (ClassifiedPoint& p : far) p.horizontal_sigma_m = 0.7f;
+      map.InsertFrame(far, kSensor, k);
+    }
+    return map;
+  };
+  const TraversabilityMap two = build(Options(), 2);
+  const ColumnExplanation withheld = two.ExplainColumn(C(31), C(31));
+  EXPECT_EQ(withheld.cell.cls, TravClass::kUndecided);
+  EXPECT_EQ(withheld.rule, JudgeRule::kObstacleWithheld);
+  EXPECT_NEAR(withheld.evidence_views, 2 * 0.212, 0.005);
+  EXPECT_GT(withheld.frame_probability[2], withheld.frame_probability[0]);  // the votes do lean to an obstacle
+  EXPECT_EQ(ClassAt(two, C(5), C(5)), TravClass::kTraversable);
+  const ColumnExplanation three = build(Options(), 3).ExplainColumn(C(31), C(31));
+  EXPECT_EQ(three.cell.cls, TravClass::kNonTraversable);
+  EXPECT_NEAR(three.evidence_views, 3 * 0.212, 0.005);
+  // With the floor off, the two views block the patch.
+  MapOptions any_lead = Options();
+  any_lead.class_obstacle_min_evidence_views = 0.0;
+  EXPECT_EQ(ClassAt(build(any_lead, 2), C(31), C(31)), TravClass::kNonTraversable);
+}
+
 TEST(SafeFusion, AnEvidenceFloorLeavesTheFusedSurfaceItsSay) {
   // Two views of level floor whose labels call a patch red, at a height sigma of 0.3 m (0.1 of
   // a clear vote each: 0.2 clear views) but placed to a centimetre sideways: the frames give no

@@ -30,10 +30,15 @@ enum class JudgeRule : std::uint8_t {
   /// MapOptions::class_prior_min_evidence_views: the open-ground prior does not answer for the
   /// column, which is undecided.
   kPriorWithheld,
+  /// The frames decided an obstacle, on fewer clear views of obstacle evidence than
+  /// MapOptions::class_obstacle_min_evidence_views: stereo noise at the views' range can make
+  /// that much, so the column is undecided rather than blocked.
+  kObstacleWithheld,
 };
 
 /// Lower-case name, as `ssta explain` prints it: "none", "surface alone", "frames alone",
-/// "frames (surface partial)", "worse of two", "product", "prior withheld".
+/// "frames (surface partial)", "worse of two", "product", "prior withheld",
+/// "obstacle withheld".
 const char* JudgeRuleName(JudgeRule rule);
 
 /// The evidence behind TopSurfaceAt(x, y).

@@ -94,6 +94,19 @@ struct MapOptions {
   /// footprints from unsafe to undecided, and with true disparity and true labels 3 %
   /// (docs/accuracy.md). 0: the prior always answers; >= 0.
   double class_prior_min_evidence_views = 0.25;
+  /// The frames alone call a voxel non-traversable only when its obstacle log-odds L3 hold at
+  /// least this many clear views (L3 >= this * class_hit_log_odds * class_obstacle_gain);
+  /// weaker, the voxel is undecided (class 4), not an obstacle. Each vote counts by how well its
+  /// view resolves the step radius (class_vote_noise_steps, class_vote_smear_radii), so 0.5 is
+  /// two views at the edge of resolving it (0.25 each) or one view that resolves it: a single
+  /// view that cannot, a far frame's smeared step say, does not block a voxel on its own word.
+  /// A planner told "blocked" there would route around free ground; told "undecided" it knows
+  /// the map has not seen the voxel well enough. Where the fused surface finds a hazard or
+  /// vouches for open ground it judges with the frames as before. On the tuning scenes 0.5
+  /// takes 268 free and 10 truly blocked footprints off non-traversable, and turns no blocked
+  /// one drivable (docs/accuracy.md); 1 would also blank a rock ring one near view saw under
+  /// eight noisy far views (0.7 clear views left). 0: any obstacle lead is a verdict; >= 0.
+  double class_obstacle_min_evidence_views = 0.5;
   /// The chance that a fused surface which finds open ground misses a hazard the frames saw: a
   /// lip whose floor is hidden (the surface ends at the edge, where stereo smears the upper
   /// level a cell or two beyond it) or an obstacle thinner than a cell. Where the surface

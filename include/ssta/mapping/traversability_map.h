@@ -37,7 +37,9 @@ inline constexpr int kMapFormatVersion = 2;
 ///    class_obstacle_gain for k = 3): weaker votes are ground no view resolved, which the prior
 ///    alone would call open. Also kUndecided where L3 is the largest Lk, the prior makes class 1
 ///    the argmax, and the votes hold fewer than options().class_prior_min_evidence_views clear
-///    views: the prior does not overrule weak votes for an obstacle.
+///    views: the prior does not overrule weak votes for an obstacle. And kUndecided where
+///    class 3 is the argmax but L3 holds fewer than options().class_obstacle_min_evidence_views
+///    clear views: evidence stereo noise at the views' range can make blocks nothing.
 ///  - probability of class c: exp(Lc + P [c = 1]) / sum_k exp(Lk + P [k = 1]).
 ///  - cost: traversable 0.25 min(1, 1.5 (1 - confidence)), so 0 when certain and up to 0.25
 ///    when barely more probable than the others; non-traversable 1; semi-traversable
