@@ -102,7 +102,7 @@ struct MapOptions {
   /// view that cannot, a far frame's smeared step say, does not block a voxel on its own word.
   /// A planner told "blocked" there would route around free ground; told "undecided" it knows
   /// the map has not seen the voxel well enough. Where the fused surface finds a hazard or
-  /// vouches for open ground it judges with the frames as before. On the tuning scenes 0.5
+  /// vouches for open ground it judges with the frames whatever this value. On the tuning scenes 0.5
   /// takes 268 free and 10 truly blocked footprints off non-traversable, and turns no blocked
   /// one drivable (docs/accuracy.md); 1 would also blank a rock ring one near view saw under
   /// eight noisy far views (0.7 clear views left). 0: any obstacle lead is a verdict; >= 0.
