@@ -10,6 +10,7 @@
 #include "map_arguments.h"
 #include "ssta/core/classes.h"
 #include "ssta/mapping/column_explanation.h"
+#include "ssta/mapping/surface_judgement.h"
 #include "ssta/mapping/traversability_map.h"
 
 namespace ssta::cli {
@@ -91,7 +92,7 @@ void Explain(const ExplainArgs& args) {
             << Fixed(why.occupancy, 3) << "; a surface from " << Fixed(why.occupied_threshold, 3)
             << "): hits raise it, rays passing through lower it\n";
   const SurfaceVerdict& s = why.surface;
-  const double radius = map.metadata().vehicle.step_radius_m;
+  const double radius = SurfaceDiscRadius(map.metadata().vehicle.step_radius_m, map.options().resolution_m);
   std::cout << "surface: " << why.surface_columns << " columns within " << Fixed(radius, 2)
             << " m hold a fused height (coverage " << Fixed(s.coverage, 2) << ", whole disc seen: "
             << (why.disc_fully_seen ? "yes" : "no") << ")";

@@ -75,8 +75,8 @@ const TravNode* ColumnTop(const TravOcTree& tree, octomap::OcTreeKey* key) {
   return node;
 }
 
-/// The fused surface of the columns whose centres lie within the step radius of `key`'s column
-/// and that hold a fused height.
+/// The fused surface of the columns whose centres lie within `radius_m` of `key`'s column and
+/// that hold a fused height.
 std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m) {
   const double res = tree.getResolution();
   const int reach = static_cast<int>(std::floor(radius_m / res + 1e-9));
@@ -146,7 +146,8 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const TravNode* node = tree.search(key);
   if (node == nullptr || !NodeOccupied(tree, *node)) return;
   const VehicleOptions& vehicle = map.metadata().vehicle;
-  const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, vehicle.step_radius_m);
+  const std::vector<SurfaceSample> samples =
+      SurfaceAround(tree, key, SurfaceDiscRadius(vehicle.step_radius_m, tree.getResolution()));
   const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
   const auto& l = node->class_log_odds;
   const bool has_evidence = internal::HasClassEvidence(l, map.options());

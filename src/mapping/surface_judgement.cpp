@@ -79,18 +79,21 @@ bool FitPlane(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s
 
 }  // namespace
 
+double SurfaceDiscRadius(double step_radius_m, double spacing_m) { return step_radius_m + 0.5 * spacing_m; }
+
 SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
                             double spacing_m, const VehicleOptions& vehicle) {
   SurfaceVerdict v;
   // Most of the disc must be seen: a few far columns between unobserved ones do not show a
   // surface's slope or steps.
-  const double cells_in_disc = kPi * vehicle.step_radius_m * vehicle.step_radius_m / (spacing_m * spacing_m);
-  // The columns of the disc, counted as SurfaceAround visits them: lattice offsets within r.
-  const int reach = static_cast<int>(std::floor(vehicle.step_radius_m / spacing_m + 1e-9));
+  const double radius = SurfaceDiscRadius(vehicle.step_radius_m, spacing_m);
+  const double cells_in_disc = kPi * radius * radius / (spacing_m * spacing_m);
+  // The columns of the disc, counted as SurfaceAround visits them: lattice offsets within it.
+  const int reach = static_cast<int>(std::floor(radius / spacing_m + 1e-9));
   int columns = 0;
   for (int dj = -reach; dj <= reach; ++dj) {
     for (int di = -reach; di <= reach; ++di) {
-      columns += (di * di + dj * dj) * spacing_m * spacing_m <= vehicle.step_radius_m * vehicle.step_radius_m + 1e-12;
+      columns += (di * di + dj * dj) * spacing_m * spacing_m <= radius * radius + 1e-12;
     }
   }
   v.coverage = std::min(1.0, static_cast<double>(samples.size()) / columns);

@@ -237,7 +237,7 @@ TEST(Cli, ExplainNamesTheRuleAndTheEvidenceOfAColumn) {
   // One clear vote for an obstacle (obstacle gain included) is one clear view.
   EXPECT_NEAR(why.evidence_views, 1.0, 1e-6);
   EXPECT_NE(r.output.find("evidence: 1.00 clear views (a verdict from 0.00)\n"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("surface: 0 columns within 0.20 m"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("surface: 0 columns within 0.25 m"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("; too few to judge"), std::string::npos) << r.output;
   r = RunSsta(explain + " --at 40,40", false);  // outside the floor
   ASSERT_EQ(r.exit_code, 0) << r.output;

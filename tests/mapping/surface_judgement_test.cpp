@@ -13,8 +13,9 @@
 namespace ssta {
 namespace {
 
-/// The columns of a 0.1 m map within the step radius of (0, 0), on the surface `height`, each
-/// with `sigma` of noise drawn from `seed` (0: exact heights).
+/// The columns of a 0.1 m map that judge the cell at (0, 0) (centres within SurfaceDiscRadius:
+/// the step radius and half a cell), on the surface `height`, each with `sigma` of noise drawn
+/// from `seed` (0: exact heights).
 std::vector<SurfaceSample> Disc(const std::function<double(double, double)>& height, double sigma,
                                 unsigned seed = 0) {
   std::mt19937 rng(seed);
@@ -23,7 +24,7 @@ std::vector<SurfaceSample> Disc(const std::function<double(double, double)>& hei
   for (int j = -2; j <= 2; ++j) {
     for (int i = -2; i <= 2; ++i) {
       const Eigen::Vector2d xy(0.1 * i, 0.1 * j);
-      if (xy.norm() > 0.2 + 1e-9) continue;
+      if (xy.norm() > SurfaceDiscRadius(0.2, 0.1) + 1e-9) continue;
       s.push_back({xy, height(xy.x(), xy.y()) + (seed ? noise(rng) : 0.0), sigma});
     }
   }
@@ -61,6 +62,26 @@ TEST(JudgeSurface, AJumpInTheDiscIsAStepOfItsHeightOnEitherSide) {
         EXPECT_LT(v.slope_deg, 1.0);  // the plane keeps to the cell's own side of the jump
       }
       EXPECT_EQ(Verdict(v), expected);
+    }
+  }
+}
+
+TEST(JudgeSurface, AJumpWithinTheStepRadiusOfTheCellsGroundMakesItNonTraversable) {
+  // A 0.4 m jump along a straight edge `distance` from the cell's centre. The cell's ground
+  // reaches half a cell (0.05 m) towards it, so the class rule calls the cell non-traversable
+  // up to 0.25 m. The columns centred up to 0.2 m away see the edges at 0.12 and 0.18 m with
+  // three columns beyond them; a disc of the step radius alone holds one there and takes it
+  // for a stray. Beyond 0.3 m no column of the disc lies across the jump.
+  const VehicleOptions vehicle;
+  for (const auto& [distance, expected] : {std::pair{0.12, 3}, {0.18, 3}, {0.32, 1}}) {
+    for (const double rise : {0.4, -0.4}) {  // the cell below the jump and the cell on top
+      SCOPED_TRACE(std::to_string(distance) + (rise > 0 ? " below" : " on top"));
+      const double edge = distance;
+      const auto wall = [rise, edge](double x, double) { return x >= edge ? rise : 0.0; };
+      const SurfaceVerdict v = JudgeSurface({0, 0}, Disc(wall, 0.005), 0.1, vehicle);
+      ASSERT_TRUE(v.determined);
+      EXPECT_EQ(Verdict(v), expected);
+      if (expected == 3) EXPECT_NEAR(v.step_m, 0.4, 0.02);
     }
   }
 }

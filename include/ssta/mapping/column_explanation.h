@@ -60,7 +60,7 @@ struct ColumnExplanation {
   double occupancy = kNaN;
   double occupied_threshold = kNaN;  ///< the occupancy at and above which a voxel is a surface
   SurfaceVerdict surface;            ///< the fused surface's verdict around the column
-  int surface_columns = 0;           ///< columns within the step radius holding a fused height
+  int surface_columns = 0;           ///< columns within SurfaceDiscRadius holding a fused height
   bool disc_fully_seen = false;      ///< every column meeting the disc holds a fused height
   /// The combined class probabilities (traversable, semi, non-traversable); NaN without a class.
   std::array<double, 3> posterior{kNaN, kNaN, kNaN};

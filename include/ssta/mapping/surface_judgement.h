@@ -48,8 +48,16 @@ struct SurfaceVerdict {
 /// of traversable, semi-traversable, non-traversable): P(class <= k) is the product of the two.
 std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::array<double, 3>& b);
 
+/// The radius [m] about a cell's centre within which the centres of the columns that judge it
+/// lie: `step_radius_m` plus half a cell. A cell's class is the worst class of the ground in it
+/// (docs/interfaces.md, section 3), and its ground reaches half a cell from its centre, so a
+/// jump up to half a cell beyond the step radius of the centre is within the step radius of
+/// some of that ground. A straight edge a step radius from the centre then has two columns or
+/// more beyond it in the disc, as LargestJump needs to see it.
+double SurfaceDiscRadius(double step_radius_m, double spacing_m);
+
 /// Judges the cell at `centre` from the `samples` of the columns (a grid `spacing_m` apart)
-/// whose centres lie within `vehicle.step_radius_m` of it, the cell's own included. A plane is
+/// whose centres lie within SurfaceDiscRadius of it, the cell's own included. A plane is
 /// fitted by iteratively reweighted least squares (weights 1 / sigma^2, Huber on the residuals)
 /// to the columns on the cell's side of any jump: its slope is the slope class's; the range of
 /// the columns' heights about it (LargestJump) the step's. Not determined when fewer than half
