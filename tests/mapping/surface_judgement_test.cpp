@@ -81,7 +81,9 @@ TEST(JudgeSurface, AJumpWithinTheStepRadiusOfTheCellsGroundMakesItNonTraversable
       const SurfaceVerdict v = JudgeSurface({0, 0}, Disc(wall, 0.005), 0.1, vehicle);
       ASSERT_TRUE(v.determined);
       EXPECT_EQ(Verdict(v), expected);
-      if (expected == 3) EXPECT_NEAR(v.step_m, 0.4, 0.02);
+      if (expected == 3) {
+        EXPECT_NEAR(v.step_m, 0.4, 0.02);
+      }
     }
   }
 }
