@@ -102,10 +102,11 @@ struct MapOptions {
   /// view that cannot, a far frame's smeared step say, does not block a voxel on its own word.
   /// A planner told "blocked" there would route around free ground; told "undecided" it knows
   /// the map has not seen the voxel well enough. Where the fused surface finds a hazard or
-  /// vouches for open ground it judges with the frames whatever this value. On the tuning scenes 0.5
-  /// takes 269 free and 10 truly blocked footprints off non-traversable, and turns no blocked
-  /// one drivable (docs/accuracy.md); 1 would also blank a rock ring one near view saw under
-  /// eight noisy far views (0.7 clear views left). 0: any obstacle lead is a verdict; >= 0.
+  /// vouches for open ground it judges with the frames whatever this value. On the tuning
+  /// scenes 0.5 takes 269 free and 10 truly blocked footprints off non-traversable, and turns no
+  /// blocked one drivable (docs/accuracy.md); 1 would also blank a rock ring one near view saw
+  /// under eight noisy far views (0.7 clear views left). 0: any obstacle lead is a verdict;
+  /// >= 0.
   double class_obstacle_min_evidence_views = 0.5;
   /// The chance that a fused surface which finds open ground misses a hazard the frames saw: a
   /// lip whose floor is hidden (the surface ends at the edge, where stereo smears the upper
@@ -153,8 +154,8 @@ struct MapOptions {
   /// in every frame, so it holds fewer hits and is cleared. 0.95 is four hits more than misses
   /// at the default occupancy_hit_prob (three are 0.93); on the tuning scenes, with
   /// class_obstacle_min_evidence_views at 0, it falsely blocks 8.9 % of the free footprints,
-  /// 0.9 9.2 % and 0.8 9.5 %, for 8.0, 8.0 and 7.5 % unsafe (docs/accuracy.md). Strictly between occupancy_clamp_min_prob and
-  /// occupancy_clamp_max_prob.
+  /// 0.9 9.2 % and 0.8 9.5 %, for 8.0, 8.0 and 7.5 % unsafe (docs/accuracy.md). Strictly
+  /// between occupancy_clamp_min_prob and occupancy_clamp_max_prob.
   double free_space_no_return_stop_prob = 0.95;
 
   /// Every field: its key, unit, range and meaning (reading, writing and IsValid come from it).
