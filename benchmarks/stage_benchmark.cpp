@@ -30,6 +30,7 @@
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/fusion/frame_points.h"
 #include "ssta/analysis/surface_analyzer.h"
+#include "ssta/core/units.h"
 #include "ssta/eval/label_evaluator.h"
 #include "ssta/geometry/normal_estimator.h"
 #include "ssta/geometry/segmenter.h"
@@ -297,6 +298,67 @@ void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
   }
   CountFrames(state);
   state.counters["map_nodes"] = static_cast<double>(map.NumNodes());
+}
+
+/// A map of the dataset's frames, each inserted once: what the query cases ask.
+TraversabilityMap MapOfFrames(const Dataset& d) {
+  TraversabilityMap map(d.config.map.fusion);
+  const RectifiedGeometry geometry = Rectifier(d.calibration, d.config.rectification).geometry();
+  for (const BenchFrame& f : d.frames) {
+    map.InsertFrame(MapPointsOfFrame(f.result, f.world_T_rectified, d.config.map, geometry, d.config.vehicle),
+                    f.world_T_rectified.translation(), f.timestamp_ns);
+  }
+  return map;
+}
+
+/// The centres of the map's columns over its surface's bounds, row by row.
+std::vector<Eigen::Vector2d> ColumnCentres(const TraversabilityMap& map) {
+  const Eigen::AlignedBox3d box = map.SurfaceBounds();
+  const double res = map.options().resolution_m;
+  std::vector<Eigen::Vector2d> centres;
+  for (double y = box.min().y() + 0.5 * res; y < box.max().y(); y += res) {
+    for (double x = box.min().x() + 0.5 * res; x < box.max().x(); x += res) centres.emplace_back(x, y);
+  }
+  return centres;
+}
+
+/// TopSurfaceAt of every column over the map's bounds (one iteration: the whole sweep), the
+/// judge behind `export`, `query` and `eval footprints`: the fused surface within the step
+/// radius and the frames' votes of each column.
+void BM_MapJudge(benchmark::State& state, const Dataset* d) {
+  const TraversabilityMap map = MapOfFrames(*d);
+  const std::vector<Eigen::Vector2d> centres = ColumnCentres(map);
+  std::size_t observed = 0;
+  for (auto _ : state) {
+    observed = 0;
+    for (const Eigen::Vector2d& c : centres) observed += map.TopSurfaceAt(c.x(), c.y()).observed ? 1 : 0;
+    benchmark::DoNotOptimize(observed);
+  }
+  state.counters["columns/s"] = benchmark::Counter(static_cast<double>(state.iterations() * centres.size()),
+                                                   benchmark::Counter::kIsRate);
+  state.counters["observed_columns"] = static_cast<double>(observed);
+}
+
+/// QueryFootprint of a 1.0 x 0.6 m robot every 0.5 m over the map's bounds at headings 0, 45,
+/// 90 and 135 deg (one iteration: all of them), as `eval footprints` asks the map.
+void BM_MapFootprints(benchmark::State& state, const Dataset* d) {
+  const TraversabilityMap map = MapOfFrames(*d);
+  const Eigen::AlignedBox3d box = map.SurfaceBounds();
+  std::vector<FootprintQuery> queries;
+  for (double y = box.min().y(); y <= box.max().y(); y += 0.5) {
+    for (double x = box.min().x(); x <= box.max().x(); x += 0.5) {
+      for (const double yaw_deg : {0.0, 45.0, 90.0, 135.0}) queries.push_back({x, y, DegToRad(yaw_deg), 1.0, 0.6});
+    }
+  }
+  for (auto _ : state) {
+    int blocked = 0;
+    for (const FootprintQuery& q : queries) {
+      blocked += map.QueryFootprint(q).worst == TravClass::kNonTraversable ? 1 : 0;
+    }
+    benchmark::DoNotOptimize(blocked);
+  }
+  state.counters["footprints/s"] = benchmark::Counter(static_cast<double>(state.iterations() * queries.size()),
+                                                      benchmark::Counter::kIsRate);
 }
 
 /// The online mount refinement's cost per frame (build-map --refine): ground evidence from the
@@ -700,6 +762,8 @@ void RegisterAll() {
     add("MapSubpixel/" + name, [get = get](benchmark::State& s) { BM_MapSubpixel(s, get()); });
     add("MapPoints/" + name, [get = get](benchmark::State& s) { BM_MapPoints(s, get()); });
     add("MapUpdate/" + name, [get = get](benchmark::State& s) { BM_MapUpdate(s, get()); });
+    add("MapJudge/" + name, [get = get](benchmark::State& s) { BM_MapJudge(s, get()); });
+    add("MapFootprints/" + name, [get = get](benchmark::State& s) { BM_MapFootprints(s, get()); });
     add("OnlineRefinement/" + name, [get = get](benchmark::State& s) { BM_OnlineRefinement(s, get()); });
     add("EndToEnd/" + name, [get = get](benchmark::State& s) { BM_EndToEnd(s, get()); });
     add("EndToEndWithMap/" + name, [get = get](benchmark::State& s) { BM_EndToEndWithMap(s, get()); });
