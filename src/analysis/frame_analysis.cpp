@@ -14,8 +14,10 @@ namespace ssta {
 
 using internal::RunBoth;
 
-FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px)
-    : vehicle_(vehicle), options_(options), disparity_sigma_px_(disparity_sigma_px) {
+FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px,
+                             int match_window_px)
+    : vehicle_(vehicle), options_(options), disparity_sigma_px_(disparity_sigma_px), match_window_px_(match_window_px) {
+  SSTA_CHECK(match_window_px >= 1, "FrameAnalyzer: the match window must be at least 1 px");
   std::string error;
   if (!vehicle_.IsValid(&error)) throw Error("vehicle." + error);
   if (!options_.IsValid(&error)) throw Error("analysis." + error);
@@ -39,7 +41,7 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   // The slope classes are computed before the quality check is known: on a frame it leaves
   // unjudged (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
   AnalysisResult a;
-  const DepthNoise noise{disparity_sigma_px_ / focal_times_baseline};
+  const DepthNoise noise{disparity_sigma_px_ / focal_times_baseline, match_window_px_};
   RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options, noise); },
           [&] {
             if (options.pixel_slopes) {

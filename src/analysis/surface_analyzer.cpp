@@ -60,16 +60,21 @@ Eigen::Vector3d PlaneAccumulator::Mean() const {
   return sum_ / count_;
 }
 
+Eigen::Matrix3d PlaneAccumulator::Covariance() const {
+  SSTA_CHECK(count_ >= 1, "a covariance needs at least 1 point");
+  const Eigen::Vector3d mean = sum_ / count_;
+  Eigen::Matrix3d sum_sq;
+  sum_sq << xx_, xy_, xz_, xy_, yy_, yz_, xz_, yz_, zz_;
+  const Eigen::Matrix3d cov = sum_sq / count_ - mean * mean.transpose();
+  return 0.5 * (cov + cov.transpose());
+}
+
 PlaneFit PlaneAccumulator::Fit() const {
   SSTA_CHECK(count_ >= 3, "a plane fit needs at least 3 points");
   PlaneFit fit;
   fit.count = count_;
   fit.centroid = sum_ / count_;
-  Eigen::Matrix3d sum_sq;
-  sum_sq << xx_, xy_, xz_, xy_, yy_, yz_, xz_, yz_, zz_;
-  Eigen::Matrix3d cov = sum_sq / count_ - fit.centroid * fit.centroid.transpose();
-  cov = 0.5 * (cov + cov.transpose());
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(cov);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(Covariance());
   fit.normal = solver.eigenvectors().col(0).normalized();  // eigenvalues ascending
   fit.rms_m = std::sqrt(std::max(0.0, solver.eigenvalues()(0)));
   return fit;
@@ -111,11 +116,33 @@ FrameMoments SegmentMoments(const Image3f& cloud, const ImageI32& segment_ids, i
   return moments;
 }
 
+/// The slope sigma that the depth noise alone gives a plane fitted to `moments`' points
+/// (SegmentResult::slope_sigma_deg) with unit normal `normal` pointing up's side [deg].
+double SlopeSigmaDeg(const PlaneAccumulator& moments, const PlaneFit& fit, const Eigen::Vector3d& normal,
+                     const Eigen::Vector3d& up_camera, const DepthNoise& noise) {
+  if (noise.per_m2 <= 0.0) return 0.0;
+  // Off the plane: k Z d, Z the points' RMS depth, d the plane's distance from the camera.
+  const double off_plane = noise.per_m2 * std::sqrt(moments.MeanSquaredZ()) * std::abs(normal.dot(fit.centroid));
+  const double windows = std::max(1.0, moments.count() / static_cast<double>(noise.window_px * noise.window_px));
+  // The fall line: up's direction within the plane; on a level plane, the plane's narrower axis.
+  Eigen::Vector3d fall = up_camera - up_camera.dot(normal) * normal;
+  const Eigen::Matrix3d cov = moments.Covariance();
+  double spread = 0.0;  // the points' variance along the fall line [m^2]
+  if (fall.norm() > 1e-3) {
+    fall.normalize();
+    spread = fall.dot(cov * fall);
+  } else {
+    spread = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues()(1);
+  }
+  if (spread <= 0.0) return 90.0;
+  return std::min(90.0, RadToDeg(off_plane / std::sqrt(windows * spread)));
+}
+
 /// Segment `id` from its moments: small below inliers_min (eq. 4); with 3 points or more its
-/// PCA plane, the normal oriented to the up side, and its slope against up with the slope
-/// class (eq. 3). The step is NaN until MeasureStep.
+/// PCA plane, the normal oriented to the up side, its slope against up with the slope class
+/// (eq. 3) and the slope's noise (SlopeSigmaDeg). The step is NaN until MeasureStep.
 SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_min, const Eigen::Vector3d& up_camera,
-                         const VehicleOptions& vehicle) {
+                         const VehicleOptions& vehicle, const DepthNoise& noise) {
   SegmentResult s;
   s.id = id;
   s.inliers = moments.count();
@@ -135,6 +162,14 @@ SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_mi
   s.rms_m = fit.rms_m;
   s.slope_deg = RadToDeg(std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)));
   s.slope_class = vehicle.ClassifySlope(s.slope_deg);
+  s.slope_sigma_deg = SlopeSigmaDeg(moments, fit, s.normal, up_camera, noise);
+  s.rise_m = std::sqrt(12.0 * std::max(0.0, up_camera.dot(moments.Covariance() * up_camera)));
+  // Steeper than max_slope_deg within kSlopeNoiseSigmas of the slope's noise, and rising less
+  // than a step: the noise explains the slope.
+  constexpr double kSlopeNoiseSigmas = 2.0;
+  s.slope_within_noise = s.slope_class == TravClass::kNonTraversable &&
+                         s.slope_deg - kSlopeNoiseSigmas * s.slope_sigma_deg <= vehicle.max_slope_deg &&
+                         s.rise_m <= vehicle.max_step_m;
   return s;
 }
 
@@ -300,6 +335,11 @@ void DecideVerdict(int inliers_min, const SurfaceAnalysisOptions& options, Segme
     s.verdict = TravClass::kUndecided;
     s.reason = "small segment (" + std::to_string(s.inliers) + " < " + std::to_string(inliers_min) + " px)";
   }
+  if (s.small && s.verdict == TravClass::kNonTraversable && s.slope_within_noise &&
+      s.step_class != TravClass::kNonTraversable) {
+    s.reason += FormatNumber("; the stereo noise explains its slope (sigma", s.slope_sigma_deg, 1,
+                             " deg) and it rises no step: the map does not count it");
+  }
 }
 
 /// Class per pixel: unknown without a point, undecided without a segment, else its segment's
@@ -346,7 +386,7 @@ AnalysisResult AnalyzeSurfaces(const Image3f& cloud, const ImageI32& segment_ids
   result.depth_pixels = moments.depth_pixels;
   result.segments.reserve(num_segments);
   for (int id = 0; id < num_segments; ++id) {
-    result.segments.push_back(FitSegment(id, moments.segments[id], result.inliers_min, up_camera, vehicle));
+    result.segments.push_back(FitSegment(id, moments.segments[id], result.inliers_min, up_camera, vehicle, noise));
   }
 
   result.ground = FindGroundPlane(result.segments, moments, noise);

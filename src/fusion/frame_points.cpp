@@ -96,6 +96,9 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
   SSTA_CHECK(lip == nullptr || (lip->width() == cloud.width() && lip->height() == cloud.height()),
              "the lip mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
+  const ImageU8& rules = frame.analysis.rules;  // may be empty: then no label's rule is known
+  const bool has_rules = rules.width() == cloud.width() && rules.height() == cloud.height();
+  constexpr auto small_segment_rule = static_cast<std::uint8_t>(LabelRule::kSmallSegment);
   // Each segment's (slope, step) once, as the points carry them: a small flat table instead
   // of a SegmentResult (with its plane and statistics) read per point.
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -136,11 +139,20 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
                                          &out.horizontal_sigma_m);
       }
       out.cls = static_cast<TravClass>(labels(v, u));
+      const int id = frame.segment_ids(v, u);
+      if (out.cls == TravClass::kNonTraversable && id >= 0 && has_rules && rules(v, u) == small_segment_rule &&
+          segments[static_cast<std::size_t>(id)].slope_within_noise &&
+          segments[static_cast<std::size_t>(id)].step_class != TravClass::kNonTraversable) {
+        // A small segment's obstacle by a slope that the stereo noise explains, on a segment
+        // that rises no step (SegmentResult::slope_within_noise): far ground in a few matching
+        // windows tilts so, and frames that see it alike would pile such votes into a false
+        // obstacle. The vote counts as a surface seen, without a class.
+        out.cls = TravClass::kUndecided;
+      }
       if (lip != nullptr && (*lip)(v, u) != 0 && out.cls != TravClass::kNonTraversable) {
         out.cls = TravClass::kNonTraversable;
         out.vote_weight = static_cast<float>((*lip)(v, u)) / 255.0f;
       }
-      const int id = frame.segment_ids(v, u);
       if (id >= 0) {
         out.slope_deg = segment_values[static_cast<std::size_t>(id)].first;
         out.step_m = segment_values[static_cast<std::size_t>(id)].second;

@@ -54,7 +54,9 @@ struct FramePipeline::Stages {
       : rectifier(calibration, config.rectification),
         matcher(MatcherOptionsFor(config, rectifier.geometry(), calibration.left.body_T_camera)),
         normals(config.normals),
-        segmenter(config.segmentation), analyzer(config.vehicle, config.analysis, config.stereo.disparity_sigma_px) {}
+        segmenter(config.segmentation),
+        analyzer(config.vehicle, config.analysis, config.stereo.disparity_sigma_px,
+                 config.stereo.block_size * config.stereo.downscale) {}
   Rectifier rectifier;
   StereoMatcher matcher;
   NormalEstimator normals;

@@ -165,7 +165,8 @@ std::string FrameReportJson(const FrameResult& f, const std::string& name) {
     if (s.has_plane) {
       j << ", \"centroid\": " << Array(s.centroid) << ", \"normal\": " << Array(s.normal)
         << ", \"plane\": " << Array(s.plane) << ", \"rms_m\": " << Num(s.rms_m)
-        << ", \"slope_deg\": " << Num(s.slope_deg) << ", \"step_m\": " << Num(s.step_m);
+        << ", \"slope_deg\": " << Num(s.slope_deg) << ", \"slope_sigma_deg\": " << Num(s.slope_sigma_deg)
+        << ", \"rise_m\": " << Num(s.rise_m) << ", \"step_m\": " << Num(s.step_m);
     }
     j << ", \"class\": " << static_cast<int>(s.verdict) << ", \"class_name\": \"" << ClassName(s.verdict)
       << "\", \"ground\": " << (s.ground ? "true" : "false") << ", \"reason\": \"" << internal::JsonEscape(s.reason) << "\"}";

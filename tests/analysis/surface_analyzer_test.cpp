@@ -12,6 +12,7 @@
 #include "analytic_world.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/surface_analyzer.h"
+#include "ssta/core/units.h"
 
 namespace ssta {
 namespace {
@@ -117,6 +118,52 @@ TEST(SurfaceAnalyzer, TinySegmentsAreJudgedByHeightButNotBySlope) {
   EXPECT_NEAR(r.segments[2].slope_deg, 90.0, 1e-3);
   EXPECT_LT(r.segments[2].step_m, 0.02);
   EXPECT_EQ(r.segments[2].verdict, TravClass::kUndecided);
+}
+
+TEST(SurfaceAnalyzer, ASmallSegmentKnowsWhenTheStereoNoiseExplainsItsSlope) {
+  // A small patch 12 m ahead, 0.6 m wide and 0.28 m long up a 30 deg incline (30 x 15 points,
+  // 2 cm apart): steeper than max_slope_deg (25), its points spanning 0.15 m in height, less
+  // than max_step_m (0.2).
+  AnalyticWorld w(200, 200);
+  PaintFloor(w, 0, 100, 200, 0, 200);
+  const double incline = DegToRad(30.0);
+  const Eigen::Vector3d along(0.0, -std::sin(incline), std::cos(incline));
+  w.Paint(1, 0, 15, 0, 30, {0.0, 1.0, 12.0}, {1, 0, 0}, along);
+  // The slope's noise in closed form: each point errs off the plane by k Z d (Z the points'
+  // RMS depth, d the plane's distance from the camera), shared over a 9 px window (450 points:
+  // 450 / 81 windows), over a spread along the fall line (the incline) of 0.02^2 (15^2 - 1) / 12.
+  const Eigen::Vector3d normal(0.0, std::cos(incline), std::sin(incline));  // up's side (up is -y)
+  const double d = std::abs(normal.dot(Eigen::Vector3d(0.0, 1.0, 12.0)));
+  double sum_z2 = 0.0;
+  for (int j = 0; j < 15; ++j) sum_z2 += 30 * std::pow(12.0 + 0.02 * j * std::cos(incline), 2);
+  const double z_rms = std::sqrt(sum_z2 / 450.0);
+  const double spread = 0.02 * 0.02 * (15 * 15 - 1) / 12.0;
+  const auto sigma_deg = [&](double k) { return RadToDeg(k * z_rms * d / std::sqrt(450.0 / 81.0 * spread)); };
+  const AnalysisOptions options = PlanesOnly();  // inliers_min 2 % of the image: 800 points
+  for (const auto& [k, within] : std::vector<std::pair<double, bool>>{
+           {0.0, false},     // no noise model: the slope stands
+           {1e-4, false},    // 30 - 2 x 2.3 deg: still beyond 25 deg
+           {5e-4, true}}) {  // 30 - 2 x 11.7 deg: the noise explains it
+    const AnalysisResult r = w.Analyze({}, options, DepthNoise{k, 9});
+    ASSERT_TRUE(r.quality.passed) << r.quality.reason;
+    const SegmentResult& patch = r.segments[1];
+    ASSERT_TRUE(patch.small);
+    EXPECT_NEAR(patch.slope_deg, 30.0, 1e-3);
+    EXPECT_NEAR(patch.slope_sigma_deg, sigma_deg(k), 0.01 * sigma_deg(k) + 1e-9) << k;
+    // sqrt(12) x the standard deviation of 15 heights 0.02 sin(30 deg) apart: 0.15 m.
+    EXPECT_NEAR(patch.rise_m, std::sqrt(12.0) * 0.02 * std::sin(incline) * std::sqrt((15.0 * 15.0 - 1.0) / 12.0), 1e-6);
+    EXPECT_EQ(patch.slope_within_noise, within) << k;
+    EXPECT_EQ(patch.verdict, TravClass::kNonTraversable) << k;  // the frame's own verdict stands
+  }
+  // A face 0.3 m tall at the same range rises more than max_step_m: a step, whatever its slope's
+  // noise (here more than 90 deg).
+  AnalyticWorld face(200, 200);
+  PaintFloor(face, 0, 100, 200, 0, 200);
+  face.Paint(1, 0, 15, 0, 30, {0.0, 1.0, 12.0}, {1, 0, 0}, {0, -1, 0});
+  const SegmentResult wall = face.Analyze({}, options, DepthNoise{5e-3, 9}).segments[1];
+  EXPECT_DOUBLE_EQ(wall.slope_sigma_deg, 90.0);
+  EXPECT_GT(wall.rise_m, 0.2);
+  EXPECT_FALSE(wall.slope_within_noise);
 }
 
 TEST(SurfaceAnalyzer, GroundAboveTheCameraIsRejected) {

@@ -44,6 +44,34 @@ TEST(ClassifiedPointsInWorld, TransformsEveryStrideThPointWithItsSegmentVerdict)
   EXPECT_TRUE(std::isnan(points[1].slope_deg));
 }
 
+TEST(ClassifiedPointsInWorld, DoesNotCountAnObstacleVoteOfASmallSegmentWhoseSlopeTheNoiseExplains) {
+  // Three non-traversable pixels: a small segment whose slope the stereo noise explains
+  // (SegmentResult::slope_within_noise), set by its own verdict (rule small_segment); the same
+  // segment's pixel that the local step rule made non-traversable; and a small segment steep
+  // beyond its noise. Only the first votes undecided: its obstacle is the noise's.
+  FrameResult f;
+  f.cloud = Image3f(3, 1, Eigen::Vector3f(0, 0, 5));
+  f.segment_ids = ImageI32(3, 1, 0);
+  f.segment_ids(0, 2) = 1;
+  f.analysis.labels = ImageU8(3, 1, static_cast<std::uint8_t>(TravClass::kNonTraversable));
+  f.analysis.rules = ImageU8(3, 1, static_cast<std::uint8_t>(LabelRule::kSmallSegment));
+  f.analysis.rules(0, 1) = static_cast<std::uint8_t>(LabelRule::kLocalStep);
+  f.analysis.segments.resize(2);
+  for (SegmentResult& s : f.analysis.segments) {
+    s.has_plane = s.small = true;
+    s.slope_deg = 30.0;
+  }
+  f.analysis.segments[0].slope_within_noise = true;
+  const auto points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_EQ(points[0].cls, TravClass::kUndecided);
+  EXPECT_EQ(points[1].cls, TravClass::kNonTraversable);
+  EXPECT_EQ(points[2].cls, TravClass::kNonTraversable);
+  // Without the rules (a frame built by hand) every label counts as it is.
+  f.analysis.rules = ImageU8();
+  EXPECT_EQ(ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1)[0].cls, TravClass::kNonTraversable);
+}
+
 TEST(AppendNoReturnRays, CastsBlankPixelsAboveTheHorizonOnALatticeWhosePhaseFollowsTheFrame) {
   // A 40 x 30 common area, f 20 px, principal point (20, 15), camera level (up is -y): rows
   // 0-14 look up, rows 15-29 down. Every pixel is untextured (the texture rule) but for column 7.

@@ -62,8 +62,11 @@ class FrameAnalyzer {
  public:
   /// Throws ssta::Error naming the key when `vehicle` or `options` is invalid.
   /// `disparity_sigma_px` (stereo.disparity_sigma_px) is the matcher's noise, from which each
-  /// frame's depth noise follows with its focal length and baseline.
-  FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px = 0.25);
+  /// frame's depth noise follows with its focal length and baseline; `match_window_px` the side
+  /// of its window at full resolution (stereo.block_size x stereo.downscale), over which
+  /// neighbouring pixels share their error (DepthNoise::window_px).
+  FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px = 0.25,
+                int match_window_px = 1);
 
   /// Precondition: every input is set and of the cloud's size.
   AnalysisResult Analyze(const FrameAnalysisInput& input);
@@ -72,6 +75,7 @@ class FrameAnalyzer {
   VehicleOptions vehicle_;
   AnalysisOptions options_;
   double disparity_sigma_px_;
+  int match_window_px_;
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
   ImageU8 step_classes_;    // the local steps' classes, kept between frames

@@ -24,7 +24,8 @@ enum class SmallSegmentPolicy {
   /// "obstacles": a small segment whose centroid stands more than max_step_m off the ground
   /// plane, or that has at least min_plane_points points and is steeper than max_slope_deg, is
   /// non-traversable; the rest stay undecided. A centroid is robust even for a few points, a
-  /// slope is not.
+  /// slope is not: a slope within two of its noise sigmas (SegmentResult::slope_sigma_deg) of
+  /// max_slope_deg counts only where the segment's points rise more than max_step_m.
   kObstacles,
   /// "all": as obstacles, and a small segment with at least min_plane_points points gets its own
   /// slope/step class whatever it is.
@@ -102,6 +103,20 @@ struct SegmentResult {
   Eigen::Vector4d plane = Eigen::Vector4d::Zero();  ///< A, B, C, D with (A,B,C) = normal
   double rms_m = 0.0;       ///< RMS point-to-plane distance [m]
   double slope_deg = 0.0;   ///< angle between the normal and up [deg]
+  /// 1-sigma of slope_deg that the stereo depth noise alone gives (DepthNoise) [deg]: a point
+  /// errs along its ray by k Z^2, which moves it off the plane by k Z d (d: the plane's
+  /// distance from the camera), shared over a matching window; over N points spread with a
+  /// variance L along the plane's fall line that tilts the plane by k Z d / sqrt(N_windows L).
+  /// 0 without a noise model.
+  double slope_sigma_deg = 0.0;
+  /// The height its points span: sqrt(12) x their standard deviation along up (the span of
+  /// points spread evenly over a face) [m].
+  double rise_m = 0.0;
+  /// Steeper than max_slope_deg, but by less than two slope_sigma_deg, and rising less than
+  /// max_step_m: the stereo noise alone could tilt level ground this steep, and the segment
+  /// stands up as no step. Its slope class stands; the map does not count such a small
+  /// segment's obstacle votes (ClassifiedPointsInWorld).
+  bool slope_within_noise = false;
   /// Step [m]: |distance| of the centroid to the ground plane (eq. 5); with step_reference
   /// "reachable" (or "reachable_large", where it applies), the mean height jump of the
   /// crossing that reached it (eq. 5 if unreached).
@@ -142,6 +157,9 @@ struct GroundPlane {
 /// per_m2 * Z^2, per_m2 = disparity sigma / (f b) [1/m]. 0: no noise model.
 struct DepthNoise {
   double per_m2 = 0.0;
+  /// [px] Side of the window over which neighbouring pixels share their error: a matcher
+  /// compares windows of this side, so the pixels of one window err alike.
+  int window_px = 1;
   double SigmaAt(double depth_m) const { return per_m2 * depth_m * depth_m; }
 };
 
@@ -220,6 +238,8 @@ class PlaneAccumulator {
   double MeanSquaredZ() const { return zz_ / count_; }
   /// Mean point. Precondition: count() >= 1.
   Eigen::Vector3d Mean() const;
+  /// The points' covariance (divided by the count) [m^2]. Precondition: count() >= 1.
+  Eigen::Matrix3d Covariance() const;
   /// Precondition: count() >= 3.
   PlaneFit Fit() const;
 
