@@ -21,6 +21,7 @@ const std::array<LabelRuleInfo, kNumLabelRules>& LabelRules() {
       {LabelRule::kHeightFill, "height_fill", {130, 80, 40}},
       {LabelRule::kTexture, "texture", {255, 255, 255}},
       {LabelRule::kOutside, "outside", {30, 30, 60}},
+      {LabelRule::kTruth, "truth", {255, 0, 255}},
   }};
   return kTable;
 }

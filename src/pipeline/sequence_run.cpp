@@ -1,5 +1,6 @@
 #include "ssta/pipeline/sequence_run.h"
 
+#include "ssta/analysis/label_rule.h"
 #include "ssta/io/ground_truth.h"
 #include "ssta/mapping/recording_fingerprint.h"
 #include "ssta/sensors/attitude_filter.h"
@@ -7,22 +8,29 @@
 namespace ssta {
 namespace {
 
-/// The frame's true labels over its own, where the truth has a verdict (1-3): 255 (sky,
-/// occlusions, the band on class boundaries) keeps the frame's.
-void ApplyTrueLabels(const Sequence& sequence, std::int64_t t, const RectifiedGeometry& g, ImageU8* labels) {
+/// The frame's true labels over its own, where the truth has a verdict (1-3), with the rule
+/// `truth`: 255 (sky, occlusions, the band on class boundaries) keeps the frame's.
+void ApplyTrueLabels(const Sequence& sequence, std::int64_t t, const RectifiedGeometry& g, ImageU8* labels,
+                     ImageU8* rules) {
   const ImageU8 truth = ReadTrueLabels(sequence, t);
   if (truth.width() != g.full_width || truth.height() != g.full_height) {
     throw Error(TruthFramePath(sequence, "labels", t) + ": the true labels are " + std::to_string(truth.width()) + "x" +
                 std::to_string(truth.height()) + ", the frames are " + std::to_string(g.full_width) + "x" +
                 std::to_string(g.full_height));
   }
-  SSTA_CHECK(labels->width() == g.crop_width && labels->height() == g.crop_height,
-             "ApplyTrueLabels: the labels are not of the common area's size");
+  SSTA_CHECK(labels->width() == g.crop_width && labels->height() == g.crop_height && rules->width() == g.crop_width &&
+                 rules->height() == g.crop_height,
+             "ApplyTrueLabels: the labels or rules are not of the common area's size");
+  constexpr auto truth_rule = static_cast<std::uint8_t>(LabelRule::kTruth);
   for (int v = 0; v < labels->height(); ++v) {
     const std::uint8_t* from = truth.row(v + g.crop_v0) + g.crop_u0;
     std::uint8_t* out = labels->row(v);
+    std::uint8_t* rule = rules->row(v);
     for (int u = 0; u < labels->width(); ++u) {
-      if (from[u] >= 1 && from[u] <= 3) out[u] = from[u];
+      if (from[u] >= 1 && from[u] <= 3) {
+        out[u] = from[u];
+        rule[u] = truth_rule;
+      }
     }
   }
 }
@@ -88,7 +96,9 @@ FrameResult SequenceRun::Classify(const StereoFrame& frame, const Eigen::Vector3
                                            ReadTrueDisparity(sequence_, frame.timestamp_ns), up_camera)
           : pipeline_.Process(images.left, images.right, up_camera);
   result.timestamp_ns = frame.timestamp_ns;
-  if (oracles_.labels) ApplyTrueLabels(sequence_, frame.timestamp_ns, geometry(), &result.analysis.labels);
+  if (oracles_.labels) {
+    ApplyTrueLabels(sequence_, frame.timestamp_ns, geometry(), &result.analysis.labels, &result.analysis.rules);
+  }
   return result;
 }
 

@@ -7,7 +7,9 @@
 #include <fstream>
 #include <random>
 
+#include "ssta/analysis/label_rule.h"
 #include "ssta/eval/grid_evaluator.h"
+#include "ssta/io/ground_truth.h"
 #include "ssta/io/image_io.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/pipeline/map_builder.h"
@@ -192,6 +194,46 @@ TEST(BuildMap, PipelinedStrictRunStopsAtTheFirstUnusableFrameLikeTheSequentialOn
   }
   EXPECT_GT(maps[0].size(), 1000u);
   EXPECT_TRUE(maps[0] == maps[1]);
+}
+
+// With the true labels (build-map --oracle-labels) each pixel the truth gives a class takes it,
+// with the rule `truth`: the map's rules for the frame's own labels (the discount of a small
+// segment's slope within the noise) leave it be; the rest keep the frame's own label and rule.
+TEST(SequenceRun, TrueLabelsComeWithTheTruthRule) {
+  testing::TempDir dir;
+  synth::SynthOptions o;
+  o.scene = "yard";
+  o.frames = 1;
+  o.rig.width = 160;
+  o.rig.height = 120;
+  o.rig.focal_px = 105.0;
+  const fs::path seq = dir / "seq";
+  synth::WriteSyntheticSequence(o, seq);
+  const Sequence sequence = Sequence::Open(seq.string());
+  Oracles oracles;
+  oracles.labels = true;
+  SequenceRun own(sequence, Config{}, FrameSelection{});
+  SequenceRun run(sequence, Config{}, FrameSelection{}, oracles);
+  const Eigen::Vector3d up(0.0, -1.0, 0.0);
+  const FrameResult mine = own.Classify(run.frames()[0], up);
+  const FrameResult r = run.Classify(run.frames()[0], up);
+  const ImageU8 truth = ReadTrueLabels(sequence, run.frames()[0].timestamp_ns);
+  const RectifiedGeometry& g = run.geometry();
+  int from_truth = 0;
+  for (int v = 0; v < r.analysis.labels.height(); ++v) {
+    for (int u = 0; u < r.analysis.labels.width(); ++u) {
+      const std::uint8_t t = truth(v + g.crop_v0, u + g.crop_u0);
+      if (t >= 1 && t <= 3) {
+        ++from_truth;
+        ASSERT_EQ(r.analysis.labels(v, u), t);
+        ASSERT_EQ(r.analysis.rules(v, u), static_cast<std::uint8_t>(LabelRule::kTruth));
+      } else {
+        ASSERT_EQ(r.analysis.labels(v, u), mine.analysis.labels(v, u));
+        ASSERT_EQ(r.analysis.rules(v, u), mine.analysis.rules(v, u));
+      }
+    }
+  }
+  EXPECT_GT(from_truth, 160 * 120 / 4);
 }
 
 // Read-ahead changes when a frame's images are read, never what Classify returns: the same

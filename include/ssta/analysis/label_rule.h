@@ -30,8 +30,9 @@ enum class LabelRule : std::uint8_t {
   kHeightFill = 11,      ///< refinement 7, an undecided pixel by its height
   kTexture = 12,         ///< the texture mask (analysis.label_min_texture): unknown
   kOutside = 13,         ///< outside the rectified common area: unknown
+  kTruth = 14,           ///< the sequence's true label (build-map --oracle-labels)
 };
-inline constexpr int kNumLabelRules = 14;
+inline constexpr int kNumLabelRules = 15;
 
 /// One row of the rule table: its value and its name in JSON and docs.
 struct LabelRuleInfo {

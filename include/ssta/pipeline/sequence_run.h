@@ -36,8 +36,8 @@ struct FrameSelection {
 struct Oracles {
   /// Each frame's true disparity (gt/disparity/<ts>.png) instead of stereo matching.
   bool disparity = false;
-  /// Each frame's true labels (gt/labels/<ts>.png) where the truth has a verdict, the frame's
-  /// own elsewhere.
+  /// Each frame's true labels (gt/labels/<ts>.png) where the truth has a verdict, with the
+  /// rule LabelRule::kTruth; the frame's own labels and rules elsewhere.
   bool labels = false;
 };
 
