@@ -81,6 +81,24 @@ void AppendNoReturnRays(const FrameResult& frame, const Eigen::Isometry3d& world
   }
 }
 
+namespace {
+
+/// Whether the label at (v, u), of segment `id`, is a small segment's obstacle by a slope that
+/// stereo noise explains, on a segment that rises no step (SegmentResult::slope_within_noise):
+/// far ground in a few matching windows tilts so, and frames that see it alike would pile such
+/// votes into a false obstacle. False where the rules are not known (an empty image).
+bool NoiseSlopeObstacle(const AnalysisResult& analysis, int id, int v, int u) {
+  const ImageU8& rules = analysis.rules;
+  if (id < 0 || rules.width() != analysis.labels.width() || rules.height() != analysis.labels.height() ||
+      rules(v, u) != static_cast<std::uint8_t>(LabelRule::kSmallSegment)) {
+    return false;
+  }
+  const SegmentResult& s = analysis.segments[static_cast<std::size_t>(id)];
+  return s.slope_within_noise && s.step_class != TravClass::kNonTraversable;
+}
+
+}  // namespace
+
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
                              const ImageU8* keep, std::vector<ClassifiedPoint>* points,
                              const ImageF* point_disparity, const ImageU8* lip) {
@@ -96,9 +114,6 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
   SSTA_CHECK(lip == nullptr || (lip->width() == cloud.width() && lip->height() == cloud.height()),
              "the lip mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
-  const ImageU8& rules = frame.analysis.rules;  // may be empty: then no label's rule is known
-  const bool has_rules = rules.width() == cloud.width() && rules.height() == cloud.height();
-  constexpr auto small_segment_rule = static_cast<std::uint8_t>(LabelRule::kSmallSegment);
   // Each segment's (slope, step) once, as the points carry them: a small flat table instead
   // of a SegmentResult (with its plane and statistics) read per point.
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -140,14 +155,8 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
       }
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
-      if (out.cls == TravClass::kNonTraversable && id >= 0 && has_rules && rules(v, u) == small_segment_rule &&
-          segments[static_cast<std::size_t>(id)].slope_within_noise &&
-          segments[static_cast<std::size_t>(id)].step_class != TravClass::kNonTraversable) {
-        // A small segment's obstacle by a slope that the stereo noise explains, on a segment
-        // that rises no step (SegmentResult::slope_within_noise): far ground in a few matching
-        // windows tilts so, and frames that see it alike would pile such votes into a false
-        // obstacle. The vote counts as a surface seen, without a class.
-        out.cls = TravClass::kUndecided;
+      if (out.cls == TravClass::kNonTraversable && NoiseSlopeObstacle(frame.analysis, id, v, u)) {
+        out.cls = TravClass::kUndecided;  // a surface seen, without a class
       }
       if (lip != nullptr && (*lip)(v, u) != 0 && out.cls != TravClass::kNonTraversable) {
         out.cls = TravClass::kNonTraversable;
