@@ -84,7 +84,7 @@ void AppendNoReturnRays(const FrameResult& frame, const Eigen::Isometry3d& world
 namespace {
 
 /// Whether the label at (v, u), of segment `id`, is a small segment's obstacle by a slope that
-/// stereo noise explains, on a segment that rises no step (SegmentResult::slope_within_noise):
+/// the stereo noise explains, on a segment that rises no step (SegmentResult::slope_within_noise):
 /// far ground in a few matching windows tilts so, and frames that see it alike would pile such
 /// votes into a false obstacle. False where the rules are not known (an empty image).
 bool NoiseSlopeObstacle(const AnalysisResult& analysis, int id, int v, int u) {
