@@ -196,19 +196,24 @@ TEST(BuildMap, PipelinedStrictRunStopsAtTheFirstUnusableFrameLikeTheSequentialOn
   EXPECT_TRUE(maps[0] == maps[1]);
 }
 
+/// A rendered yard of `frames` frames at 160 x 120 (f 105 px), written to `seq`.
+fs::path SmallYard(const fs::path& seq, int frames) {
+  synth::SynthOptions o;
+  o.scene = "yard";
+  o.frames = frames;
+  o.rig.width = 160;
+  o.rig.height = 120;
+  o.rig.focal_px = 105.0;
+  synth::WriteSyntheticSequence(o, seq);
+  return seq;
+}
+
 // With the true labels (build-map --oracle-labels) each pixel the truth gives a class takes it,
 // with the rule `truth`: the map's rules for the frame's own labels (the discount of a small
 // segment's slope within the noise) leave it be; the rest keep the frame's own label and rule.
 TEST(SequenceRun, TrueLabelsComeWithTheTruthRule) {
   testing::TempDir dir;
-  synth::SynthOptions o;
-  o.scene = "yard";
-  o.frames = 1;
-  o.rig.width = 160;
-  o.rig.height = 120;
-  o.rig.focal_px = 105.0;
-  const fs::path seq = dir / "seq";
-  synth::WriteSyntheticSequence(o, seq);
+  const fs::path seq = SmallYard(dir / "seq", 1);
   const Sequence sequence = Sequence::Open(seq.string());
   Oracles oracles;
   oracles.labels = true;
@@ -241,14 +246,7 @@ TEST(SequenceRun, TrueLabelsComeWithTheTruthRule) {
 // and an unreadable frame's error at its own turn, the frames after it classified.
 TEST(SequenceRun, ReadAheadClassifiesAsReadingInTurn) {
   testing::TempDir dir;
-  synth::SynthOptions o;
-  o.scene = "yard";
-  o.frames = 4;
-  o.rig.width = 160;
-  o.rig.height = 120;
-  o.rig.focal_px = 105.0;
-  const fs::path seq = dir / "seq";
-  synth::WriteSyntheticSequence(o, seq);
+  const fs::path seq = SmallYard(dir / "seq", 4);
   std::vector<fs::path> right;
   for (const auto& e : fs::directory_iterator(seq / "cam1" / "data")) right.push_back(e.path());
   ASSERT_EQ(right.size(), 4u);
