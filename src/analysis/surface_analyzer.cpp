@@ -118,15 +118,15 @@ FrameMoments SegmentMoments(const Image3f& cloud, const ImageI32& segment_ids, i
 
 /// The slope sigma that the depth noise alone gives a plane fitted to `moments`' points
 /// (SegmentResult::slope_sigma_deg) with unit normal `normal` pointing up's side [deg].
-double SlopeSigmaDeg(const PlaneAccumulator& moments, const PlaneFit& fit, const Eigen::Vector3d& normal,
-                     const Eigen::Vector3d& up_camera, const DepthNoise& noise) {
+/// `cov`: the points' covariance (PlaneAccumulator::Covariance).
+double SlopeSigmaDeg(const PlaneAccumulator& moments, const Eigen::Matrix3d& cov, const PlaneFit& fit,
+                     const Eigen::Vector3d& normal, const Eigen::Vector3d& up_camera, const DepthNoise& noise) {
   if (noise.per_m2 <= 0.0) return 0.0;
   // Off the plane: k Z d, Z the points' RMS depth, d the plane's distance from the camera.
   const double off_plane = noise.per_m2 * std::sqrt(moments.MeanSquaredZ()) * std::abs(normal.dot(fit.centroid));
   const double windows = std::max(1.0, moments.count() / static_cast<double>(noise.window_px * noise.window_px));
   // The fall line: up's direction within the plane; on a level plane, the plane's narrower axis.
   Eigen::Vector3d fall = up_camera - up_camera.dot(normal) * normal;
-  const Eigen::Matrix3d cov = moments.Covariance();
   double spread = 0.0;  // the points' variance along the fall line [m^2]
   if (fall.norm() > 1e-3) {
     fall.normalize();
@@ -162,8 +162,9 @@ SegmentResult FitSegment(int id, const PlaneAccumulator& moments, int inliers_mi
   s.rms_m = fit.rms_m;
   s.slope_deg = RadToDeg(std::acos(std::clamp(s.normal.dot(up_camera), -1.0, 1.0)));
   s.slope_class = vehicle.ClassifySlope(s.slope_deg);
-  s.slope_sigma_deg = SlopeSigmaDeg(moments, fit, s.normal, up_camera, noise);
-  s.rise_m = std::sqrt(12.0 * std::max(0.0, up_camera.dot(moments.Covariance() * up_camera)));
+  const Eigen::Matrix3d cov = moments.Covariance();
+  s.slope_sigma_deg = SlopeSigmaDeg(moments, cov, fit, s.normal, up_camera, noise);
+  s.rise_m = std::sqrt(12.0 * std::max(0.0, up_camera.dot(cov * up_camera)));
   // Steeper than max_slope_deg within kSlopeNoiseSigmas of the slope's noise, and rising less
   // than a step: the noise explains the slope.
   constexpr double kSlopeNoiseSigmas = 2.0;
@@ -335,8 +336,7 @@ void DecideVerdict(int inliers_min, const SurfaceAnalysisOptions& options, Segme
     s.verdict = TravClass::kUndecided;
     s.reason = "small segment (" + std::to_string(s.inliers) + " < " + std::to_string(inliers_min) + " px)";
   }
-  if (s.small && s.verdict == TravClass::kNonTraversable && s.slope_within_noise &&
-      s.step_class != TravClass::kNonTraversable) {
+  if (s.verdict == TravClass::kNonTraversable && ObstacleBySlopeWithinNoise(s)) {
     s.reason += FormatNumber("; the stereo noise explains its slope (sigma", s.slope_sigma_deg, 1,
                              " deg) and it rises no step: the map does not count it");
   }

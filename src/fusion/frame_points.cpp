@@ -83,18 +83,12 @@ void AppendNoReturnRays(const FrameResult& frame, const Eigen::Isometry3d& world
 
 namespace {
 
-/// Whether the label at (v, u), of segment `id`, is a small segment's obstacle by a slope that
-/// the stereo noise explains, on a segment that rises no step (SegmentResult::slope_within_noise):
-/// far ground in a few matching windows tilts so, and frames that see it alike would pile such
-/// votes into a false obstacle. False where the rules are not known (an empty image).
-bool NoiseSlopeObstacle(const AnalysisResult& analysis, int id, int v, int u) {
+/// The rule behind each of `analysis`' labels; null for a result built without them (by hand),
+/// whose labels then all count as they are.
+const ImageU8* LabelRulesOf(const AnalysisResult& analysis) {
   const ImageU8& rules = analysis.rules;
-  if (id < 0 || rules.width() != analysis.labels.width() || rules.height() != analysis.labels.height() ||
-      rules(v, u) != static_cast<std::uint8_t>(LabelRule::kSmallSegment)) {
-    return false;
-  }
-  const SegmentResult& s = analysis.segments[static_cast<std::size_t>(id)];
-  return s.slope_within_noise && s.step_class != TravClass::kNonTraversable;
+  const bool known = rules.width() == analysis.labels.width() && rules.height() == analysis.labels.height();
+  return known ? &rules : nullptr;
 }
 
 }  // namespace
@@ -114,6 +108,8 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
   SSTA_CHECK(lip == nullptr || (lip->width() == cloud.width() && lip->height() == cloud.height()),
              "the lip mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
+  const ImageU8* rules = LabelRulesOf(frame.analysis);
+  constexpr auto small_segment = static_cast<std::uint8_t>(LabelRule::kSmallSegment);
   // Each segment's (slope, step) once, as the points carry them: a small flat table instead
   // of a SegmentResult (with its plane and statistics) read per point.
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -155,8 +151,11 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
       }
       out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
-      if (out.cls == TravClass::kNonTraversable && NoiseSlopeObstacle(frame.analysis, id, v, u)) {
-        out.cls = TravClass::kUndecided;  // a surface seen, without a class
+      if (out.cls == TravClass::kNonTraversable && id >= 0 && rules != nullptr && (*rules)(v, u) == small_segment &&
+          ObstacleBySlopeWithinNoise(segments[static_cast<std::size_t>(id)])) {
+        // Far ground in a few matching windows tilts so, and frames that see it alike would pile
+        // such votes into a false obstacle: a surface seen, without a class.
+        out.cls = TravClass::kUndecided;
       }
       if (lip != nullptr && (*lip)(v, u) != 0 && out.cls != TravClass::kNonTraversable) {
         out.cls = TravClass::kNonTraversable;

@@ -114,8 +114,7 @@ struct SegmentResult {
   double rise_m = 0.0;
   /// Steeper than max_slope_deg, but by less than two slope_sigma_deg, and rising less than
   /// max_step_m: the stereo noise alone could tilt level ground this steep, and the segment
-  /// stands up as no step. Its slope class stands; the map does not count such a small
-  /// segment's obstacle votes (ClassifiedPointsInWorld).
+  /// stands up as no step. Its slope class stands (see ObstacleBySlopeWithinNoise).
   bool slope_within_noise = false;
   /// Step [m]: |distance| of the centroid to the ground plane (eq. 5); with step_reference
   /// "reachable" (or "reachable_large", where it applies), the mean height jump of the
@@ -130,6 +129,13 @@ struct SegmentResult {
   TravClass verdict = TravClass::kUndecided;  ///< the class its pixels get
   std::string reason;       ///< why this verdict, for people
 };
+
+/// Whether `s` is a small segment whose only hazard is a slope that the stereo noise explains
+/// (slope_within_noise, no non-traversable step): its pixels keep its class in the frame's
+/// labels, and the map does not count their obstacle votes (ClassifiedPointsInWorld).
+inline bool ObstacleBySlopeWithinNoise(const SegmentResult& s) {
+  return s.small && s.slope_within_noise && s.step_class != TravClass::kNonTraversable;
+}
 
 /// The dominant ground plane (paper III-E): the largest traversable segment whose normal points
 /// up and which lies below the camera; without one, the largest such semi-traversable segment.
