@@ -24,8 +24,8 @@ enum class SmallSegmentPolicy {
   /// "obstacles": a small segment whose centroid stands more than max_step_m off the ground
   /// plane, or that has at least min_plane_points points and is steeper than max_slope_deg, is
   /// non-traversable; the rest stay undecided. A centroid is robust even for a few points, a
-  /// slope is not: a slope within two of its noise sigmas (SegmentResult::slope_sigma_deg) of
-  /// max_slope_deg counts only where the segment's points rise more than max_step_m.
+  /// slope is not (the map leaves out the obstacles that a slope within the stereo noise alone
+  /// makes: ObstacleBySlopeWithinNoise).
   kObstacles,
   /// "all": as obstacles, and a small segment with at least min_plane_points points gets its own
   /// slope/step class whatever it is.
