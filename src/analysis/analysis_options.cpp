@@ -56,6 +56,11 @@ const OptionFields<AnalysisOptions>& AnalysisOptions::Fields() {
     f.push_back(Flag<O>("undecided_height_fill", &O::undecided_height_fill,
                         "an undecided pixel left then takes the step class of its own height above the "
                         "ground plane where that is drivable"));
+    f.push_back(Flag<O>("hidden_drops", &O::hidden_drops,
+                        "the ground within vehicle.step_radius_m of a drop-off's lip whose foot the frame "
+                        "cannot see: non-traversable where the ray over the edge descends more steeply than "
+                        "vehicle.max_slope_deg, else undecided (the far side of a crest may be drivable; "
+                        "map.hidden_drops weighs it)"));
     f.push_back(Real<O>("label_min_texture", &O::label_min_texture, ClosedOpen(0, 128), "grey levels",
                         "pixels above the horizon whose left-image standard deviation over the stereo block "
                         "is lower are labelled unknown: the sky, where matching finds noise (below the "

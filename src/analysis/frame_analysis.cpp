@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
+#include "analysis/hidden_drops.h"
 #include "core/run_both.h"
 #include "ssta/analysis/label_refinements.h"
 #include "ssta/analysis/label_rule.h"
@@ -12,12 +14,15 @@
 
 namespace ssta {
 
+using internal::FindFramesHiddenDrops;
 using internal::RunBoth;
 
 FrameAnalyzer::FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px,
-                             int match_window_px)
-    : vehicle_(vehicle), options_(options), disparity_sigma_px_(disparity_sigma_px), match_window_px_(match_window_px) {
+                             int match_window_px, double hidden_drop_range_m)
+    : vehicle_(vehicle), options_(options), disparity_sigma_px_(disparity_sigma_px), match_window_px_(match_window_px),
+      hidden_drop_range_m_(hidden_drop_range_m) {
   SSTA_CHECK(match_window_px >= 1, "FrameAnalyzer: the match window must be at least 1 px");
+  SSTA_CHECK(hidden_drop_range_m >= 0, "FrameAnalyzer: the hidden drops' range must not be negative");
   std::string error;
   if (!vehicle_.IsValid(&error)) throw Error("vehicle." + error);
   if (!options_.IsValid(&error)) throw Error("analysis." + error);
@@ -32,14 +37,15 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   const Eigen::Vector3d& up = in.up_rectified;
   const double focal_times_baseline = g.f * g.baseline_m;
   const AnalysisOptions& options = options_;
-  // Three steps do their costly part on inputs the others do not change: the pixel slopes on
-  // the normals, the face test on the disparity, the local steps on the cloud. Each runs beside
-  // the steps before it:
-  //   AnalyzeSurfaces                              | pixel slope classes
+  // Four steps do their costly part on inputs the others do not change: the pixel slopes on
+  // the normals, the face test on the disparity, the local steps and the lips on the cloud. Each
+  // runs beside the steps before it:
+  //   AnalyzeSurfaces                              | pixel slope classes, lips
   //   apply slopes, ground consistency, fragments  | face search, local step classes
-  //   apply local steps, apply faces, consensus fill, height fill
-  // The slope classes are computed before the quality check is known: on a frame it leaves
-  // unjudged (all undecided) they are wasted, at most the time they take beyond AnalyzeSurfaces.
+  //   apply local steps, apply faces, consensus fill, height fill, apply lips
+  // The slope classes and the lips are found before the quality check is known: on a frame it
+  // leaves unjudged (all undecided) they are wasted, at most the time they take beyond
+  // AnalyzeSurfaces.
   AnalysisResult a;
   const DepthNoise noise{disparity_sigma_px_ / focal_times_baseline, match_window_px_};
   RunBoth([&] { a = AnalyzeSurfaces(cloud, segment_ids, in.num_segments, up, vehicle_, options, noise); },
@@ -48,6 +54,8 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
               PixelSlopeClasses(*in.normals, up, vehicle_, &segment_ids, options.pixel_slope_window_px,
                                 &slope_classes_);
             }
+            const double lip_range = hidden_drop_range_m_;
+            if (options.hidden_drops) lips_ = FindFramesHiddenDrops(cloud, up, noise.per_m2, vehicle_, lip_range);
           });
   // Each step's changes go to a.rules; only the first lambda and the steps after both touch it.
   LabelRuleTracker& track = rule_tracker_;
@@ -77,25 +85,37 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
           LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_, in.supported);
         }
       });
-  if (options.step_reference == StepReference::kLocal && judged) {
-    ApplyLocalStepClasses(step_classes_, &a.labels);
-    track.Mark(a.labels, LabelRule::kLocalStep, &a.rules);
-  }
-  if (judged) {
-    if (options.face_window_px > 0) {
-      ApplyDisparityFaces(faces_, *in.disparity, options, &a.labels);
-      track.Mark(a.labels, LabelRule::kDisparityFace, &a.rules);
-    }
-    const bool local_steps = options.step_reference == StepReference::kLocal;
-    FillUndecidedByConsensus(options, &a.labels, local_steps ? &step_classes_ : nullptr);
-    track.Mark(a.labels, LabelRule::kConsensusFill, &a.rules);
-    // Heights above the dominant plane are eq. 5's steps: the local rule has its own.
-    if (!local_steps) {
-      FillUndecidedByHeight(cloud, focal_times_baseline, vehicle_, options, &a);
-      track.Mark(a.labels, LabelRule::kHeightFill, &a.rules);
-    }
-  }
+  if (judged) ApplyAfterBoth(in, &a);
+  // The map takes the lips as they are (empty when off).
+  a.lips = std::move(lips_);
+  a.lips_range_m = hidden_drop_range_m_;
   return a;
+}
+
+void FrameAnalyzer::ApplyAfterBoth(const FrameAnalysisInput& in, AnalysisResult* a) {
+  const AnalysisOptions& options = options_;
+  LabelRuleTracker& track = rule_tracker_;
+  const bool local_steps = options.step_reference == StepReference::kLocal;
+  if (local_steps) {
+    ApplyLocalStepClasses(step_classes_, &a->labels);
+    track.Mark(a->labels, LabelRule::kLocalStep, &a->rules);
+  }
+  if (options.face_window_px > 0) {
+    ApplyDisparityFaces(faces_, *in.disparity, options, &a->labels);
+    track.Mark(a->labels, LabelRule::kDisparityFace, &a->rules);
+  }
+  FillUndecidedByConsensus(options, &a->labels, local_steps ? &step_classes_ : nullptr);
+  track.Mark(a->labels, LabelRule::kConsensusFill, &a->rules);
+  // Heights above the dominant plane are eq. 5's steps: the local rule has its own.
+  if (!local_steps) {
+    FillUndecidedByHeight(*in.cloud, in.geometry->f * in.geometry->baseline_m, vehicle_, options, a);
+    track.Mark(a->labels, LabelRule::kHeightFill, &a->rules);
+  }
+  // Last, so that no fill spreads a lip's doubt.
+  if (options.hidden_drops) {
+    ApplyHiddenDrops(lips_, &a->labels);
+    track.Mark(a->labels, LabelRule::kHiddenDrop, &a->rules);
+  }
 }
 
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {

@@ -281,6 +281,19 @@ void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* la
   }
 }
 
+void ApplyHiddenDrops(const ImageU8& lip, ImageU8* labels) {
+  SSTA_CHECK(labels != nullptr && lip.width() == labels->width() && lip.height() == labels->height(),
+             "ApplyHiddenDrops: the lip mask and the labels differ in size");
+  constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+  constexpr auto kUndecided = static_cast<std::uint8_t>(TravClass::kUndecided);
+  constexpr std::uint8_t kSure = 255;  // the ray over the edge is steeper than max_slope_deg
+  for (std::size_t i = 0; i < lip.size(); ++i) {
+    std::uint8_t& label = (*labels)[i];
+    if (lip[i] == 0 || label == 0 || label == kNon || label > kUndecided) continue;
+    label = lip[i] == kSure ? kNon : kUndecided;
+  }
+}
+
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
                            const LabelRefinementOptions& options, AnalysisResult* result) {
   if (!options.undecided_height_fill || !result->quality.passed || !result->ground.found) return;

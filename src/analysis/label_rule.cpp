@@ -22,6 +22,7 @@ const std::array<LabelRuleInfo, kNumLabelRules>& LabelRules() {
       {LabelRule::kTexture, "texture", {255, 255, 255}},
       {LabelRule::kOutside, "outside", {30, 30, 60}},
       {LabelRule::kTruth, "truth", {255, 0, 255}},
+      {LabelRule::kHiddenDrop, "hidden_drop", {120, 0, 40}},
   }};
   return kTable;
 }

@@ -7,7 +7,7 @@
 #include <utility>
 
 #include "core/run_both.h"
-#include "fusion/hidden_drops.h"
+#include "analysis/hidden_drops.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/label_rule.h"
 #include "ssta/core/error.h"
@@ -194,6 +194,15 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
   const double min_texture = TextureThreshold(options.min_texture, frame.texture_noise_floor);
   const bool mask = min_texture > 0.0 && frame.labels_min_texture < min_texture;
   ImageU8 keep, lip;
+  // The range the map keeps points to (MappingOptions::FusionFor with the frame's rig). The
+  // frame's analysis searched its lips within it (FramePipeline), so they are taken as they are.
+  const double range = options.auto_range && frame.depth_noise_per_m2 > 0
+                           ? std::min(1000.0, std::sqrt(options.range_depth_sigma_m / frame.depth_noise_per_m2))
+                           : options.fusion.max_range_m;
+  const ImageU8& found = frame.analysis.lips;
+  const bool take_found = options.pixel_stride == 1 && found.width() == frame.cloud.width() &&
+                          found.height() == frame.cloud.height() &&
+                          std::abs(frame.analysis.lips_range_m - range) <= 1e-6 * range;
   // The refinement, the texture mask and the lips are independent: they run side by side.
   internal::RunBoth(
       [&] {
@@ -209,17 +218,14 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
           keep = SupportedPixels(frame.left_rectified, geometry, frame.texture_block_px, min_texture,
                                  frame.up_rectified);
         }
-        if (options.hidden_drops) {
-          // The range the map keeps points to (MappingOptions::FusionFor with the frame's rig).
-          const double range = options.auto_range && frame.depth_noise_per_m2 > 0
-                                   ? std::min(1000.0, std::sqrt(options.range_depth_sigma_m / frame.depth_noise_per_m2))
-                                   : options.fusion.max_range_m;
+        if (options.hidden_drops && !take_found) {
           lip = internal::FindHiddenDrops(frame.cloud, world_T_rectified, frame.depth_noise_per_m2, vehicle, range,
                                           options.pixel_stride);
         }
       });
+  const ImageU8* lips = options.hidden_drops ? (take_found ? &found : &lip) : nullptr;
   ClassifiedPointsInWorld(frame, world_T_rectified, options.pixel_stride, mask ? &keep : nullptr, points,
-                          refine ? &refined : nullptr, options.hidden_drops ? &lip : nullptr);
+                          refine ? &refined : nullptr, lips);
   if (options.no_return_stride_px > 0) {
     AppendNoReturnRays(frame, world_T_rectified, geometry, options.no_return_stride_px, points);
   }

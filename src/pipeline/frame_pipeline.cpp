@@ -56,7 +56,11 @@ struct FramePipeline::Stages {
         normals(config.normals),
         segmenter(config.segmentation),
         analyzer(config.vehicle, config.analysis, config.stereo.disparity_sigma_px,
-                 config.stereo.block_size * config.stereo.downscale) {}
+                 config.stereo.block_size * config.stereo.downscale,
+                 // The frame's lips are searched within the map's range, so the map takes them.
+                 config.map.FusionFor(rectifier.geometry().f * rectifier.geometry().baseline_m,
+                                      config.stereo.disparity_sigma_px)
+                     .max_range_m) {}
   Rectifier rectifier;
   StereoMatcher matcher;
   NormalEstimator normals;

@@ -11,6 +11,7 @@
 #include "ssta/analysis/label_refinements.h"
 #include "ssta/analysis/frame_analysis.h"
 #include "ssta/analysis/surface_analyzer.h"
+#include "ssta/core/error.h"
 
 namespace ssta {
 namespace {
@@ -780,6 +781,23 @@ TEST(RefineByLocalSteps, PointsSmearedOverTheRadiusBesideAJumpAreUndecidedNotTra
   red.labels.Fill(3);
   RefineByLocalSteps(red.cloud, red.normals, {0, -1, 0}, VehicleOptions{}, noise, &red.labels);
   EXPECT_EQ(LabelAt(red, 0.0, 1.95), 3);
+}
+
+TEST(ApplyHiddenDrops, ASureLipBlocksASuspectedOneIsUndecidedAndNoLipChangesNothing) {
+  // Labels: traversable, semi, undecided, non-traversable, unknown, then traversable pixels with
+  // no lip, a weak suspicion (the least FindHiddenDrops gives) and one just short of sure.
+  ImageU8 labels(9, 1, 0);
+  const std::uint8_t before[9] = {1, 2, 4, 3, 0, 1, 1, 1, 4};
+  const std::uint8_t lip[9] = {255, 255, 255, 255, 255, 0, 5, 254, 100};
+  const std::uint8_t expected[9] = {3, 3, 3, 3, 0, 1, 4, 4, 4};
+  ImageU8 mask(9, 1, 0);
+  for (int u = 0; u < 9; ++u) {
+    labels(0, u) = before[u];
+    mask(0, u) = lip[u];
+  }
+  ApplyHiddenDrops(mask, &labels);
+  for (int u = 0; u < 9; ++u) EXPECT_EQ(labels(0, u), expected[u]) << "pixel " << u;
+  EXPECT_THROW(ApplyHiddenDrops(ImageU8(8, 1, 0), &labels), InternalError);
 }
 }  // namespace
 }  // namespace ssta

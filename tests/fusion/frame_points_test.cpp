@@ -72,6 +72,39 @@ TEST(ClassifiedPointsInWorld, DoesNotCountAnObstacleVoteOfASmallSegmentWhoseSlop
   EXPECT_EQ(ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1)[0].cls, TravClass::kNonTraversable);
 }
 
+TEST(MapPointsOfFrame, TakesTheFramesOwnLipsWhenTheyWereSearchedWithinItsRange) {
+  // One row of level ground, where the map's own search finds no lip, and lips the frame's
+  // analysis found (AnalysisResult::lips): none, suspected, sure. Searched within the map's
+  // range (sqrt(range_depth_sigma_m / depth noise)), they are the map's; within another, the map
+  // searches for itself.
+  FrameResult f;
+  f.cloud = Image3f(3, 1, Eigen::Vector3f(0, 0.8f, 5));
+  f.segment_ids = ImageI32(3, 1, 0);
+  f.depth_noise_per_m2 = 0.001;
+  f.analysis.labels = ImageU8(3, 1, static_cast<std::uint8_t>(TravClass::kTraversable));
+  f.analysis.segments.resize(1);
+  f.analysis.lips = ImageU8(3, 1, 0);
+  f.analysis.lips(0, 1) = 100;
+  f.analysis.lips(0, 2) = 255;
+  MappingOptions options;
+  options.min_texture = 0.0;
+  options.no_return_stride_px = 0;
+  f.analysis.lips_range_m = std::sqrt(options.range_depth_sigma_m / f.depth_noise_per_m2);
+  const std::vector<ClassifiedPoint> taken =
+      MapPointsOfFrame(f, Eigen::Isometry3d::Identity(), options, RectifiedGeometry{}, VehicleOptions{});
+  ASSERT_EQ(taken.size(), 3u);
+  EXPECT_EQ(taken[0].cls, TravClass::kTraversable);
+  EXPECT_EQ(taken[1].cls, TravClass::kNonTraversable);
+  EXPECT_FLOAT_EQ(taken[1].vote_weight, 100.0f / 255.0f);
+  EXPECT_EQ(taken[2].cls, TravClass::kNonTraversable);
+  EXPECT_FLOAT_EQ(taken[2].vote_weight, 1.0f);
+  f.analysis.lips_range_m = 10.0;
+  for (const ClassifiedPoint& p :
+       MapPointsOfFrame(f, Eigen::Isometry3d::Identity(), options, RectifiedGeometry{}, VehicleOptions{})) {
+    EXPECT_EQ(p.cls, TravClass::kTraversable);
+  }
+}
+
 TEST(AppendNoReturnRays, CastsBlankPixelsAboveTheHorizonOnALatticeWhosePhaseFollowsTheFrame) {
   // A 40 x 30 common area, f 20 px, principal point (20, 15), camera level (up is -y): rows
   // 0-14 look up, rows 15-29 down. Every pixel is untextured (the texture rule) but for column 7.

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "map_test_util.h"
-#include "fusion/hidden_drops.h"
+#include "analysis/hidden_drops.h"
 #include "ssta/core/units.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"
@@ -18,6 +18,7 @@
 namespace ssta {
 namespace {
 
+using internal::FindFramesHiddenDrops;
 using internal::FindHiddenDrops;
 using testing::C;
 
@@ -401,6 +402,33 @@ TEST(HiddenDrops, ACliffsLipIsMarkedWhetherItsFloorIsSeenOrNot) {
   p = Profile(far, FindHiddenDrops(far, world_T, kNoise, vehicle, 20.0, 1), world_T);
   EXPECT_NEAR(p.last_x, 6.0, 0.12);  // an image row spans 0.11 m of ground at 6 m
   EXPECT_NEAR(p.max_weight, 255.0 * (0.8 / 6.0) / std::tan(DegToRad(25.0)), 4.0);
+}
+
+TEST(HiddenDrops, AFramesOwnSearchMarksTheLipsTheMapsDoesWithinTheSameRange) {
+  // The frame's labels search in the frame levelled by its own up vector, from the camera: the
+  // same lips as the map's search in the world (which takes the frame's), whether a floor lies
+  // beyond the edge or nothing does. Without a range, a column with nothing beyond its last
+  // point marks nothing.
+  VehicleOptions vehicle;
+  Eigen::Isometry3d world_T;
+  const auto count = [](const ImageU8& a, const ImageU8& b, int* marked, int* differ) {
+    *marked = *differ = 0;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      *marked += a[i] != 0;
+      *differ += a[i] != b[i];
+    }
+  };
+  int marked = 0, differ = 0;
+  for (const double floor : {-1.0, -30.0}) {
+    const Image3f cloud = Render(0.8, 30.0, [floor](double x) { return x < 1.5 ? 0.0 : floor; }, &world_T);
+    const Eigen::Vector3d up_camera = world_T.linear().transpose() * Eigen::Vector3d::UnitZ();
+    count(FindHiddenDrops(cloud, world_T, kNoise, vehicle, 20.0, 1),
+          FindFramesHiddenDrops(cloud, up_camera, kNoise, vehicle, 20.0), &marked, &differ);
+    EXPECT_GT(marked, 500) << "floor " << floor;  // the band across the image: 800 pixels
+    EXPECT_EQ(differ, 0) << "floor " << floor;
+    const LipProfile none = Profile(cloud, FindFramesHiddenDrops(cloud, up_camera, kNoise, vehicle, 0.0), world_T);
+    EXPECT_EQ(std::isnan(none.last_x), floor < -20.0) << "floor " << floor;
+  }
 }
 
 TEST(HiddenDrops, APitsRimIsMarkedWhereItsFarWallHidesTheFloor) {

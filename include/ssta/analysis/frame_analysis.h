@@ -50,9 +50,10 @@ struct FrameAnalysisInput {
 ///   4. steps within the step radius of each point (RefineByLocalSteps; step_reference local),
 ///   5. thin faces from the disparity (RefineByDisparityFaces),
 ///   6. undecided pixels amid a consensus (FillUndecidedByConsensus),
-///   7. undecided pixels by their own height (FillUndecidedByHeight).
-/// Steps 1 and 4-7 run only on a frame that passed the quality check. The costly parts of
-/// steps 1, 4 and 5 read inputs no other step changes; they run beside the steps before them, and
+///   7. undecided pixels by their own height (FillUndecidedByHeight),
+///   8. the lips of drop-offs whose foot the frame cannot see (ApplyHiddenDrops).
+/// Steps 1 and 4-8 run only on a frame that passed the quality check. The costly parts of
+/// steps 1, 4, 5 and 8 read inputs no other step changes; they run beside the steps before them, and
 /// their results are applied at their places in the chain, so the labels are those of the steps
 /// one after the other (the texture mask of analysis.label_min_texture needs the full image and
 /// is applied by FramePipeline after this). AnalysisResult::rules names the step that set each
@@ -64,21 +65,29 @@ class FrameAnalyzer {
   /// `disparity_sigma_px` (stereo.disparity_sigma_px) is the matcher's noise, from which each
   /// frame's depth noise follows with its focal length and baseline; `match_window_px` the side
   /// of its window at full resolution (stereo.block_size x stereo.downscale), over which
-  /// neighbouring pixels share their error (DepthNoise::window_px).
+  /// neighbouring pixels share their error (DepthNoise::window_px). `hidden_drop_range_m`: the
+  /// range within which a floor below a column's last point would have been seen (the map's,
+  /// MappingOptions::FusionFor), for the lips of step 8; 0: such columns mark no lip.
   FrameAnalyzer(const VehicleOptions& vehicle, const AnalysisOptions& options, double disparity_sigma_px = 0.25,
-                int match_window_px = 1);
+                int match_window_px = 1, double hidden_drop_range_m = 0.0);
 
   /// Precondition: every input is set and of the cloud's size.
   AnalysisResult Analyze(const FrameAnalysisInput& input);
 
  private:
+  /// The steps after the two lanes of a judged frame, in order: local steps, faces, consensus
+  /// fill, height fill, lips.
+  void ApplyAfterBoth(const FrameAnalysisInput& in, AnalysisResult* a);
+
   VehicleOptions vehicle_;
   AnalysisOptions options_;
   double disparity_sigma_px_;
   int match_window_px_;
+  double hidden_drop_range_m_;
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
   ImageU8 step_classes_;    // the local steps' classes, kept between frames
+  ImageU8 lips_;            // step 8's lip mask (FindHiddenDrops), until it joins the result
   LabelRuleTracker rule_tracker_;  // the labels before each step, for AnalysisResult::rules
 };
 

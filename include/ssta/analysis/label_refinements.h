@@ -11,6 +11,7 @@
 //   4. thin faces                RefineByDisparityFaces   src/analysis/disparity_faces.cpp
 //   5. fill by consensus         FillUndecidedByConsensus src/analysis/label_refinements.cpp
 //   6. fill by height            FillUndecidedByHeight    src/analysis/label_refinements.cpp
+//   7. hidden drops              ApplyHiddenDrops         src/analysis/label_refinements.cpp
 // Refinements 1 and 4 also come in two steps each (find, then apply) so that their costly part
 // can run beside the steps before them.
 
@@ -91,6 +92,15 @@ struct LabelRefinementOptions {
   /// point's height above the dominant ground plane where that is drivable (traversable, or
   /// semi-traversable above the plane); other points stay undecided.
   bool undecided_height_fill = true;
+
+  // Refinement 7, the lips of drop-offs whose foot the frame cannot see (ApplyHiddenDrops).
+
+  /// true: where a view passes over an edge and lands lower, or on the far wall of a pit that
+  /// hides its floor (FindHiddenDrops, src/analysis/hidden_drops.h), the ground within
+  /// vehicle.step_radius_m of the edge is non-traversable when the ray over the edge descends
+  /// more steeply than vehicle.max_slope_deg (no wheel may take what it hides), else undecided
+  /// (it may hide the drivable far side of a crest, which a nearer view shows).
+  bool hidden_drops = true;
 
   // After the analysis (FramePipeline).
 
@@ -221,6 +231,13 @@ void FillUndecidedByConsensus(const LabelRefinementOptions& options, ImageU8* la
 /// Updates result->labels. `focal_times_baseline`: f * b of the rectified pair [px * m].
 void FillUndecidedByHeight(const Image3f& cloud, double focal_times_baseline, const VehicleOptions& vehicle,
                            const LabelRefinementOptions& options, AnalysisResult* result);
+
+/// The lips of drop-offs whose foot the frame cannot see (LabelRefinementOptions::hidden_drops):
+/// `lip` is FindHiddenDrops' mask of the frame (0: no lip; else 255 min(1, tan(ray) /
+/// tan(max_slope)), the ray over the edge). A lip pixel labelled traversable, semi-traversable or
+/// undecided becomes non-traversable at 255 and undecided below, where the frame cannot tell a
+/// drop from a crest's far side; unknown and non-traversable pixels keep their labels.
+void ApplyHiddenDrops(const ImageU8& lip, ImageU8* labels);
 
 /// Local steps (SurfaceAnalysisOptions::step_reference "local"): the step of the rule of
 /// docs/interfaces.md, section 3, measured on the frame's own points below the camera (above it

@@ -31,8 +31,9 @@ enum class LabelRule : std::uint8_t {
   kTexture = 12,         ///< the texture mask (analysis.label_min_texture): unknown
   kOutside = 13,         ///< outside the rectified common area: unknown
   kTruth = 14,           ///< the sequence's true label (build-map --oracle-labels)
+  kHiddenDrop = 15,      ///< refinement 8, the lip of a drop-off whose foot the frame cannot see
 };
-inline constexpr int kNumLabelRules = 15;
+inline constexpr int kNumLabelRules = 16;
 
 /// One row of the rule table: its value and its name in JSON and docs.
 struct LabelRuleInfo {

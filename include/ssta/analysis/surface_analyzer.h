@@ -195,6 +195,11 @@ struct AnalysisResult {
   /// AnalyzeSurfaces writes no_depth, quality_check, no_segment, segment or small_segment; each
   /// later step writes its rule where it changes a label.
   ImageU8 rules;
+  /// The lips of drop-offs whose foot the frame cannot see (FrameAnalyzer with
+  /// analysis.hidden_drops: FindHiddenDrops' weights, image size; else empty), and the range
+  /// they were searched within [m]. The map takes them as they are when its own range is that.
+  ImageU8 lips;
+  double lips_range_m = 0.0;
 };
 
 /// Superpixel Surface Traversability Analysis of one frame.

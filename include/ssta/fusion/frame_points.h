@@ -54,7 +54,9 @@ inline constexpr int kMapSubpixelSteps = 1;
 /// matcher's images (FrameResult::left_matched, right_matched), the points sit at the disparity refined to
 /// sub-pixel precision (RefineDisparitySubpixel) instead of the matcher's. With
 /// options.hidden_drops, the lips of drop-offs whose foot the frame cannot see are
-/// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/fusion/hidden_drops.h).
+/// non-traversable (the edges FindHiddenDrops finds for `vehicle`, src/analysis/hidden_drops.h):
+/// the frame's own (AnalysisResult::lips, searched for the frame's vehicle) when it searched
+/// them within this map's range and the stride is 1, else searched here.
 /// With options.no_return_stride_px, the rays of the blank sky follow (AppendNoReturnRays).
 std::vector<ClassifiedPoint> MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified,
                                               const MappingOptions& options, const RectifiedGeometry& geometry,

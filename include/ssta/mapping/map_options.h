@@ -181,7 +181,7 @@ struct MappingOptions {
   /// The lips of drop-offs whose foot a frame cannot see are non-traversable in the map: up
   /// each image column, a view that passes over an edge and lands lower by more than
   /// vehicle.max_step_m beyond the noise of both heights marks the ground within
-  /// vehicle.step_radius_m of the edge (src/fusion/hidden_drops.h).
+  /// vehicle.step_radius_m of the edge (src/analysis/hidden_drops.h).
   bool hidden_drops = true;
   /// [px] every n-th pixel (in u and v) above the horizon that the texture test left without a
   /// point (LabelRule::kTexture: blank sky, or a blank wall) casts a ray that ranged nothing

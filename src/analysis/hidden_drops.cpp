@@ -1,4 +1,4 @@
-#include "fusion/hidden_drops.h"
+#include "analysis/hidden_drops.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +9,9 @@
 namespace ssta::internal {
 
 namespace {
+
+/// sqrt(x^2 + y^2) of two height sigmas (no overflow to guard against, unlike std::hypot).
+inline float Hypot(float x, float y) { return std::sqrt(x * x + y * y); }
 
 /// One column's point, from the bottom row up: image row, world point, height sigma.
 struct ColumnPoint {
@@ -158,22 +161,25 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
     for (std::size_t i = 1; i < column.size(); ++i) {
       const ColumnPoint& a = column[i];
       const ColumnPoint& before = column[i - 1];
+      // The next view up the column lands lower than A by more than semi_step beyond the noise
+      // of both heights (tested first: most points end here), or there is nothing beyond A.
+      const bool last = i + 1 == column.size();
+      const float drop = last ? 0.0f : a.p.z() - column[i + 1].p.z();
+      const float noise = last ? 0.0f : 3.0f * Hypot(a.sigma, column[i + 1].sigma);
+      if (!last && drop <= semi_step + noise) continue;
       // A lies on a surface, not on a stray match: its neighbour towards the camera is near
       // its height.
-      if (std::abs(before.p.z() - a.p.z()) > semi_step + 3.0f * std::hypot(before.sigma, a.sigma)) continue;
+      if (std::abs(before.p.z() - a.p.z()) > semi_step + 3.0f * Hypot(before.sigma, a.sigma)) continue;
       const float range_a = (a.p.head<2>() - origin).norm();
       const float tan_ray = (camera_z - a.p.z()) / std::max(range_a, 1e-3f);
       if (tan_ray <= 0.0f) continue;  // a ray over A that rises lands on nothing below it
       // The view lands on the far wall of a pit that rises back to the near rim's height, give
       // or take the noise: that wall drops to the same hidden floor, so its rim is a lip too.
       bool far_rim = false;
-      if (i + 1 < column.size()) {
-        // The next view up the column lands beyond A and lower by more than the vehicle may
-        // step, beyond the noise of both heights; or lower by less, on the wall of a pit.
+      if (!last) {
+        // The next view lands beyond A and lower by more than the vehicle may step; or lower
+        // by less, on the wall of a pit.
         const ColumnPoint& b = column[i + 1];
-        const float drop = a.p.z() - b.p.z();
-        const float noise = 3.0f * std::hypot(a.sigma, b.sigma);
-        if (drop <= semi_step + noise) continue;
         const float range_b = (b.p.head<2>() - origin).norm();
         if (range_b <= range_a) continue;
         if (drop <= max_step + noise) {
@@ -197,6 +203,13 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
     }
   }
   return SpreadAlongRows(cloud, world_T, marks, radius, stride);
+}
+
+ImageU8 FindFramesHiddenDrops(const Image3f& cloud, const Eigen::Vector3d& up_camera, double depth_noise_per_m2,
+                              const VehicleOptions& vehicle, double range_m) {
+  Eigen::Isometry3d level = Eigen::Isometry3d::Identity();
+  level.linear() = Eigen::Quaterniond::FromTwoVectors(up_camera, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  return FindHiddenDrops(cloud, level, depth_noise_per_m2, vehicle, range_m, 1);
 }
 
 }  // namespace ssta::internal

@@ -21,7 +21,7 @@ namespace ssta::internal {
 /// deeper than the wall shows. Where that wall rises back to A's height, give or take the noise,
 /// it drops to the same floor, so B is an edge too (the pit's far rim). So is a point A with
 /// nothing beyond it in its column whose ray, had a floor lain within max_step_m below A, would
-/// have met it before `range_m` (the map's range). A ray that descends more steeply than
+/// have met it before `range_m` (the map's range; 0: never). A ray that descends more steeply than
 /// `vehicle.max_slope_deg` hides a drop no wheel may take; a flatter one may hide a drivable
 /// slope (the far side of a ramp's crest), which nearer views show.
 /// The points of the edge's column within the step radius of it, and from each of them the
@@ -33,5 +33,12 @@ namespace ssta::internal {
 /// square metre of depth (FrameResult::depth_noise_per_m2); columns every `stride` pixels.
 ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_rectified, double depth_noise_per_m2,
                         const VehicleOptions& vehicle, double range_m, int stride);
+
+/// FindHiddenDrops for the frame's own labels, every column: heights and ranges in the frame
+/// levelled by `up_camera` (unit, the rectified camera frame), from the camera. The same marks
+/// as the map's search in the world at the same `range_m` (0: a column with nothing beyond its
+/// last point marks nothing).
+ImageU8 FindFramesHiddenDrops(const Image3f& cloud, const Eigen::Vector3d& up_camera, double depth_noise_per_m2,
+                              const VehicleOptions& vehicle, double range_m);
 
 }  // namespace ssta::internal
