@@ -54,8 +54,9 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
               PixelSlopeClasses(*in.normals, up, vehicle_, &segment_ids, options.pixel_slope_window_px,
                                 &slope_classes_);
             }
-            const double lip_range = hidden_drop_range_m_;
-            if (options.hidden_drops) lips_ = FindFramesHiddenDrops(cloud, up, noise.per_m2, vehicle_, lip_range);
+            if (options.hidden_drops) {
+              lips_ = FindFramesHiddenDrops(cloud, up, noise.per_m2, vehicle_, hidden_drop_range_m_);
+            }
           });
   // Each step's changes go to a.rules; only the first lambda and the steps after both touch it.
   LabelRuleTracker& track = rule_tracker_;

@@ -194,11 +194,10 @@ void MapPointsOfFrame(const FrameResult& frame, const Eigen::Isometry3d& world_T
   const double min_texture = TextureThreshold(options.min_texture, frame.texture_noise_floor);
   const bool mask = min_texture > 0.0 && frame.labels_min_texture < min_texture;
   ImageU8 keep, lip;
-  // The range the map keeps points to (MappingOptions::FusionFor with the frame's rig). The
-  // frame's analysis searched its lips within it (FramePipeline), so they are taken as they are.
-  const double range = options.auto_range && frame.depth_noise_per_m2 > 0
-                           ? std::min(1000.0, std::sqrt(options.range_depth_sigma_m / frame.depth_noise_per_m2))
-                           : options.fusion.max_range_m;
+  // The range the map keeps points to: FusionFor with the frame's rig, whose f b / sigma_d is
+  // 1 / depth_noise_per_m2. The frame's analysis searched its lips within it (FramePipeline), so
+  // they are taken as they are.
+  const double range = options.FusionFor(1.0, frame.depth_noise_per_m2).max_range_m;
   const ImageU8& found = frame.analysis.lips;
   const bool take_found = options.pixel_stride == 1 && found.width() == frame.cloud.width() &&
                           found.height() == frame.cloud.height() &&
