@@ -499,9 +499,9 @@ InsertStats TraversabilityMap::InsertFrame(const std::vector<ClassifiedPoint>& p
   fusion.CollectVoxels();
   fusion.UpdateVoxels(timestamp_ns);
   ++impl_->frames_inserted;
-  std::vector<Eigen::Vector3d>& path = impl_->sensor_path;
+  const std::vector<Eigen::Vector3d>& path = impl_->sensor_path.points();
   if (path.empty() || (path.back() - sensor_origin_world).norm() >= impl_->options.resolution_m) {
-    path.push_back(sensor_origin_world);
+    impl_->sensor_path.Append(sensor_origin_world);
   }
   impl_->last_timestamp_ns = timestamp_ns;
   return stats;

@@ -558,7 +558,7 @@ std::unique_ptr<internal::MapImpl> ImplWithMetadata(FileMetadata metadata) {
   impl->frames_inserted = metadata.frames_inserted;
   impl->last_timestamp_ns = metadata.last_timestamp_ns;
   impl->software_version = std::move(metadata.software_version);
-  impl->sensor_path = std::move(metadata.sensor_path);
+  impl->sensor_path.Assign(std::move(metadata.sensor_path));
   return impl;
 }
 

@@ -16,6 +16,7 @@
 
 #include <Eigen/Core>
 
+#include "mapping/sensor_path.h"
 #include "mapping/trav_octree.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/traversability_map.h"
@@ -35,8 +36,8 @@ struct TraversabilityMap::Impl {
   std::string software_version;
   /// For a map read from a file, the hash in its end marker ("fnv1a64:<hex>"); empty otherwise.
   std::string file_checksum;
-  /// TraversabilityMap::sensor_path.
-  std::vector<Eigen::Vector3d> sensor_path;
+  /// TraversabilityMap::sensor_path, indexed for NearestXy.
+  internal::SensorPath sensor_path;
   /// InsertFrame's buffers, kept from frame to frame so that a frame allocates nothing once
   /// they have grown; no map state (created on the first insert, never saved or compared).
   std::shared_ptr<internal::InsertScratch> insert_scratch;

@@ -204,7 +204,7 @@ void MergeMetadata(const TraversabilityMap& from, const std::string& from_file, 
   meta.notes.insert(meta.notes.end(), in.metadata.notes.begin(), in.metadata.notes.end());
   for (MapSource& source : SourcesOf(from, from_file)) meta.merged_from.push_back(std::move(source));
   if (meta.calibration_summary.empty()) meta.calibration_summary = in.metadata.calibration_summary;
-  out->sensor_path.insert(out->sensor_path.end(), in.sensor_path.begin(), in.sensor_path.end());
+  for (const Eigen::Vector3d& p : in.sensor_path.points()) out->sensor_path.Append(p);
   out->frames_inserted += in.frames_inserted;
   out->last_timestamp_ns = std::max(out->last_timestamp_ns, in.last_timestamp_ns);
 }

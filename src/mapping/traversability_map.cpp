@@ -57,7 +57,7 @@ void TraversabilityMap::set_metadata(MapMetadata metadata) {
 }
 
 std::uint64_t TraversabilityMap::frames_inserted() const { return impl_->frames_inserted; }
-const std::vector<Eigen::Vector3d>& TraversabilityMap::sensor_path() const { return impl_->sensor_path; }
+const std::vector<Eigen::Vector3d>& TraversabilityMap::sensor_path() const { return impl_->sensor_path.points(); }
 std::int64_t TraversabilityMap::last_timestamp_ns() const { return impl_->last_timestamp_ns; }
 const std::string& TraversabilityMap::software_version() const { return impl_->software_version; }
 std::size_t TraversabilityMap::NumNodes() const { return impl_->tree->size(); }

@@ -6,6 +6,7 @@ ssta_add_test(mapping_test
   ${CMAKE_CURRENT_LIST_DIR}/map_export_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_mcap_export_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surface_judgement_test.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/sensor_path_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_merge_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/map_diff_test.cpp
   ${CMAKE_CURRENT_LIST_DIR}/safe_fusion_test.cpp
