@@ -9,6 +9,7 @@
 #include "commands.h"
 #include "map_arguments.h"
 #include "ssta/core/classes.h"
+#include "ssta/core/units.h"
 #include "ssta/mapping/column_explanation.h"
 #include "ssta/mapping/surface_judgement.h"
 #include "ssta/mapping/traversability_map.h"
@@ -51,6 +52,10 @@ const char* RuleSentence(JudgeRule rule) {
     case JudgeRule::kObstacleWithheld:
       return "the frames' votes call an obstacle on fewer clear views than class_obstacle_min_evidence_views "
              "(as much as stereo noise at their range can make): undecided, not blocked";
+    case JudgeRule::kSmearedHazard:
+      return "the surface's heights are smeared sideways, and within their smear it finds a jump or slope "
+             "beyond max that noise does not explain, which stereo cannot place within the step radius or "
+             "beyond it: undecided";
     default: return "no class: nothing observed here, or no evidence to judge by";
   }
 }
@@ -104,6 +109,21 @@ void Explain(const ExplainArgs& args) {
     std::cout << (s.smeared ? "; their heights may come from more than half the radius away (stereo's range "
                               "error smears them sideways): no judgement\n"
                             : "; too few to judge\n");
+  }
+  const SurfaceRegion& region = why.smeared_region;
+  if (region.along_m > 0.0) {
+    const SurfaceVerdict& w = why.smeared_surface;
+    std::cout << "smeared surface: the columns within " << Fixed(region.along_m, 2) << " m along the view's ray (heading "
+              << Fixed(RadToDeg(std::atan2(region.axis.y(), region.axis.x())), 0) << " deg) and "
+              << Fixed(region.across_m, 2) << " m across it (coverage " << Fixed(w.coverage, 2)
+              << "; the step radius widened by their horizontal sigma " << Fixed(s.xy_sigma_m, 3) << " m)";
+    if (w.determined) {
+      std::cout << "; slope " << Fixed(w.slope_deg, 2) << " +- " << Fixed(w.slope_sigma_deg, 2) << " deg, step "
+                << Fixed(w.step_m, 3) << " +- " << Fixed(w.step_sigma_m, 3) << " m; probabilities "
+                << Three(w.probability, 3) << "\n";
+    } else {
+      std::cout << "; too few to judge\n";
+    }
   }
 }
 

@@ -60,6 +60,12 @@ void AddClassEvidenceFields(OptionFields<MapOptions>* f) {
                        "lip whose floor is hidden, a thin obstacle): its probabilities are mixed with this "
                        "much of a uniform one before they multiply the frames' (0: its word is final)")
                    .AbsentMeans(0.0));
+  f->push_back(Flag<O>("class_smeared_surface_hazards", &O::class_smeared_surface_hazards,
+                       "where the fused heights are too far to place a jump within the step radius, the "
+                       "surface is judged again over the disc widened along the ray by their horizontal "
+                       "sigma; a jump or slope above max there (2 sigmas) leaves a column that is not "
+                       "otherwise non-traversable undecided")
+                   .AbsentMeans(false));
   f->push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
   f->push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));
 }

@@ -123,6 +123,55 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
   return true;
 }
 
+/// Whether the fused surface about `key`'s column is smeared sideways (`surface`, its verdict
+/// over the step radius's disc) and, judged over the region its horizontal sigma widens that
+/// disc to along the ray from the nearest point of the sensor's path (JudgeSmearedSurface),
+/// finds a jump or slope above max at 2 sigmas or more (P >= 0.977): a hazard there that no
+/// noise at its range explains, though stereo cannot place it within the step radius or beyond.
+/// Off unless MapOptions::class_smeared_surface_hazards.
+bool SmearedHazard(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
+                   const CellInfo& cell, const SurfaceVerdict& surface, ColumnExplanation* why) {
+  if (!surface.smeared || !map.options().class_smeared_surface_hazards) return false;
+  const VehicleOptions& vehicle = map.metadata().vehicle;
+  const Eigen::Vector2d centre = cell.center.head<2>();
+  const SurfaceRegion region =
+      SmearedRegion(vehicle.step_radius_m, tree.getResolution(), surface.xy_sigma_m,
+                    centre - internal::TraversabilityMapAccess::Impl(map).sensor_path.NearestXy(centre));
+  const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, std::max(region.along_m, region.across_m));
+  const SurfaceVerdict wide = JudgeSmearedSurface(centre, samples, tree.getResolution(), region, vehicle);
+  if (why != nullptr) {
+    why->smeared_surface = wide;
+    why->smeared_region = region;
+  }
+  constexpr double kTwoSigmas = 0.977;  // P(N(0, 1) < 2)
+  return wide.determined && wide.probability[2] >= kTwoSigmas;
+}
+
+/// A column near a hazard that the smear of its heights does not let stereo place within the
+/// step radius or beyond it (SmearedHazard): undecided, as a voxel without evidence is (no
+/// judge, no probability, confidence or cost). `frames`: the frames' class probabilities, null
+/// without votes.
+void MarkSmearedHazard(const std::array<double, 3>* frames, CellInfo* cell, ColumnExplanation* why) {
+  cell->cls = TravClass::kUndecided;
+  cell->probability = cell->confidence = cell->cost = cell->slope_deg = cell->step_m = kNaN;
+  cell->decided_by = ClassJudge::kNone;
+  if (why != nullptr) {
+    why->rule = JudgeRule::kSmearedHazard;
+    if (frames != nullptr) why->frame_probability = *frames;
+  }
+}
+
+/// The product rule of JudgeFromSurface: the surface's class probabilities `surface`, mixed
+/// with `miss` of a uniform share (it may miss what the frames saw), times the frames'.
+std::array<double, 3> SurfaceTimesFrames(const std::array<double, 3>& frames, const std::array<double, 3>& surface,
+                                         double miss) {
+  std::array<double, 3> product{};
+  double total = 0.0;
+  for (int k = 0; k < 3; ++k) total += (product[k] = frames[k] * ((1.0 - miss) * surface[k] + miss / 3.0));
+  for (double& p : product) p /= total;
+  return product;
+}
+
 /// A column's class from the frames' evidence and the fused surface around it (`cell` holds
 /// DescribeCell's answer for the column's top voxel on entry). Each has its blind spot: a frame
 /// sees a lip or the ring around a rock that the fused surface lacks the columns to show (the
@@ -134,7 +183,10 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 ///    meets the disc (DiscFullySeen): then its verdict, mixed with class_surface_miss_prob of
 ///    a uniform one (it may miss a lip beyond its edge or a thin obstacle), is a likelihood
 ///    multiplied into the frames';
-///  - otherwise the frames decide alone.
+///  - otherwise the frames decide alone;
+///  - where the surface's heights are smeared sideways (far ground) and within their smear it
+///    finds a hazard that noise does not explain (SmearedHazard), a column the above does not
+///    call non-traversable is undecided.
 /// An uncertain surface (stereo noise at range) so never turns open ground red by itself.
 /// `decided_by` names the judge whose own most probable class the verdict is (both: each's, or
 /// neither's after combining). The slope and step are the surface's where it decided or
@@ -149,6 +201,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const std::vector<SurfaceSample> samples =
       SurfaceAround(tree, key, SurfaceDiscRadius(vehicle.step_radius_m, tree.getResolution()));
   const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
+  const bool smeared_hazard = SmearedHazard(map, tree, key, *cell, surface, why);
   const auto& l = node->class_log_odds;
   const bool has_evidence = internal::HasClassEvidence(l, map.options());
   if (why != nullptr) {
@@ -172,11 +225,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
       judge = ClassJudge::kBoth;
       rule = JudgeRule::kWorseOfTwo;
     } else if (surface.coverage >= 1.0 && DiscFullySeen(tree, key, vehicle.step_radius_m)) {
-      // The surface's open ground is mixed with a uniform share: it may miss what the frames saw.
-      const double miss = map.options().class_surface_miss_prob;
-      double total = 0.0;
-      for (int k = 0; k < 3; ++k) total += (posterior[k] = frames[k] * ((1.0 - miss) * s[k] + miss / 3.0));
-      for (double& p : posterior) p /= total;
+      posterior = SurfaceTimesFrames(frames, s, map.options().class_surface_miss_prob);
       judge = ClassJudge::kBoth;
       rule = JudgeRule::kProduct;
     }
@@ -195,6 +244,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
     return;
   }
   const int best = MostProbableClass(posterior);
+  if (smeared_hazard && best != 2) return MarkSmearedHazard(has_evidence ? &frames : nullptr, cell, why);
   if (judge == ClassJudge::kBoth) {
     const bool frames_class = MostProbableClass(frames) == best, surface_class = MostProbableClass(s) == best;
     if (frames_class != surface_class) judge = frames_class ? ClassJudge::kFrames : ClassJudge::kSurface;
@@ -415,6 +465,7 @@ const char* JudgeRuleName(JudgeRule rule) {
   switch (rule) {
     case JudgeRule::kSurfaceAlone: return "surface alone";
     case JudgeRule::kFramesAlone: return "frames alone";
+    case JudgeRule::kSmearedHazard: return "smeared hazard";
     case JudgeRule::kFramesSurfacePartial: return "frames (surface partial)";
     case JudgeRule::kWorseOfTwo: return "worse of two";
     case JudgeRule::kProduct: return "product";

@@ -28,7 +28,7 @@ std::array<double, 3> ClassProbabilities(double value, double sigma, double semi
 /// so that a single stray column (a voxel of noise above the ground) makes no step, while a jump
 /// has columns on both of its sides. Its sigma is the noise of those two columns.
 void LargestJump(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s, const Eigen::Vector2d& gradient,
-                 double* step, double* sigma) {
+                 std::size_t rank, double* step, double* sigma) {
   struct Level {
     double value;
     double sigma;
@@ -40,11 +40,11 @@ void LargestJump(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>
     lower.push_back({residual + sample.sigma_m, sample.sigma_m});
   }
   const auto by_value = [](const Level& a, const Level& b) { return a.value > b.value; };
-  std::nth_element(upper.begin(), upper.begin() + 1, upper.end(), by_value);
-  std::nth_element(lower.begin(), lower.begin() + 1, lower.end(),
+  std::nth_element(upper.begin(), upper.begin() + rank, upper.end(), by_value);
+  std::nth_element(lower.begin(), lower.begin() + rank, lower.end(),
                    [](const Level& a, const Level& b) { return a.value < b.value; });
-  *step = std::max(0.0, upper[1].value - lower[1].value);
-  *sigma = std::hypot(upper[1].sigma, lower[1].sigma);
+  *step = std::max(0.0, upper[rank].value - lower[rank].value);
+  *sigma = std::hypot(upper[rank].sigma, lower[rank].sigma);
 }
 
 /// Weighted least-squares plane h = a + b dx + c dy through `s` (dx, dy from `centre`), with
@@ -77,33 +77,33 @@ bool FitPlane(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s
   return plane->allFinite();
 }
 
-}  // namespace
-
-double SurfaceDiscRadius(double step_radius_m, double spacing_m) { return step_radius_m + 0.5 * spacing_m; }
-
-SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
-                            double spacing_m, const VehicleOptions& vehicle) {
+/// JudgeSurface over the columns whose centres lie in `region` (`samples` may hold more: the
+/// rest are left out); heights smeared sideways are judged too when `judge_smeared`
+/// (JudgeSmearedSurface).
+SurfaceVerdict JudgeRegion(const Eigen::Vector2d& centre, std::vector<SurfaceSample> samples, double spacing_m,
+                           const SurfaceRegion& region, const VehicleOptions& vehicle, bool judge_smeared) {
   SurfaceVerdict v;
-  // Most of the disc must be seen: a few far columns between unobserved ones do not show a
+  samples.erase(std::remove_if(samples.begin(), samples.end(),
+                               [&](const SurfaceSample& s) { return !region.Contains(s.xy - centre); }),
+                samples.end());
+  // Most of the region must be seen: a few far columns between unobserved ones do not show a
   // surface's slope or steps.
-  const double radius = SurfaceDiscRadius(vehicle.step_radius_m, spacing_m);
-  const double cells_in_disc = kPi * radius * radius / (spacing_m * spacing_m);
-  // The columns of the disc, counted as SurfaceAround visits them: lattice offsets within it.
-  const int reach = static_cast<int>(std::floor(radius / spacing_m + 1e-9));
+  const double cells_in_region = kPi * region.along_m * region.across_m / (spacing_m * spacing_m);
+  // The columns of the region, counted as SurfaceAround visits them: lattice offsets within it.
+  const int reach = static_cast<int>(std::floor(std::max(region.along_m, region.across_m) / spacing_m + 1e-9));
   int columns = 0;
   for (int dj = -reach; dj <= reach; ++dj) {
-    for (int di = -reach; di <= reach; ++di) {
-      columns += (di * di + dj * dj) * spacing_m * spacing_m <= radius * radius + 1e-12;
-    }
+    for (int di = -reach; di <= reach; ++di) columns += region.Contains(Eigen::Vector2d(di, dj) * spacing_m);
   }
   v.coverage = std::min(1.0, static_cast<double>(samples.size()) / columns);
-  if (samples.size() < 4 || samples.size() < 0.5 * cells_in_disc) return v;
+  if (samples.size() < 4 || samples.size() < 0.5 * cells_in_region) return v;
   // Heights that may belong a step radius away from their columns show no step or slope there.
   std::vector<double> xy_sigmas;
   for (const SurfaceSample& s : samples) xy_sigmas.push_back(s.xy_sigma_m);
   std::nth_element(xy_sigmas.begin(), xy_sigmas.begin() + xy_sigmas.size() / 2, xy_sigmas.end());
-  v.smeared = xy_sigmas[xy_sigmas.size() / 2] > 0.5 * vehicle.step_radius_m;
-  if (v.smeared) return v;
+  v.xy_sigma_m = xy_sigmas[xy_sigmas.size() / 2];
+  v.smeared = v.xy_sigma_m > 0.5 * vehicle.step_radius_m;
+  if (v.smeared && !judge_smeared) return v;
   // The slope: a plane through the columns that lie on the centre column's side of any jump
   // (within what the steepest drivable slope rises from it), so a curb does not tilt it.
   const SurfaceSample* own = &samples.front();
@@ -127,7 +127,8 @@ SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<Sur
   v.slope_sigma_deg = std::max(0.5, RadToDeg(gradient_sigma / (1.0 + gradient * gradient)));
   v.determined = true;
   // The step: height differences within the disc that the local plane does not explain.
-  LargestJump(centre, samples, plane.tail<2>(), &v.step_m, &v.step_sigma_m);
+  const std::size_t rank = judge_smeared ? std::max<std::size_t>(1, samples.size() / 8) : 1;
+  LargestJump(centre, samples, plane.tail<2>(), rank, &v.step_m, &v.step_sigma_m);
 
   const std::array<double, 3> slope =
       ClassProbabilities(v.slope_deg, v.slope_sigma_deg, vehicle.semi_slope_deg, vehicle.max_slope_deg);
@@ -135,6 +136,39 @@ SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<Sur
                                                         vehicle.semi_step_m, vehicle.max_step_m);
   v.probability = WorseOfClasses(slope, step);
   return v;
+}
+
+}  // namespace
+
+double SurfaceDiscRadius(double step_radius_m, double spacing_m) { return step_radius_m + 0.5 * spacing_m; }
+
+bool SurfaceRegion::Contains(const Eigen::Vector2d& offset) const {
+  const double along = offset.dot(axis) / along_m;
+  const double across = (offset.y() * axis.x() - offset.x() * axis.y()) / across_m;
+  return along * along + across * across <= 1.0 + 1e-9;
+}
+
+SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
+                            double spacing_m, const VehicleOptions& vehicle) {
+  const double radius = SurfaceDiscRadius(vehicle.step_radius_m, spacing_m);
+  return JudgeRegion(centre, samples, spacing_m, {Eigen::Vector2d::UnitX(), radius, radius}, vehicle, false);
+}
+
+SurfaceRegion SmearedRegion(double step_radius_m, double spacing_m, double xy_sigma_m, const Eigen::Vector2d& ray) {
+  SurfaceRegion region;
+  region.across_m = SurfaceDiscRadius(step_radius_m, spacing_m);
+  region.along_m = SurfaceDiscRadius(step_radius_m + std::min(xy_sigma_m, step_radius_m), spacing_m);
+  if (ray.norm() > 1e-9) {
+    region.axis = ray.normalized();
+  } else {
+    region.across_m = region.along_m;  // no direction known: widened every way
+  }
+  return region;
+}
+
+SurfaceVerdict JudgeSmearedSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
+                                   double spacing_m, const SurfaceRegion& region, const VehicleOptions& vehicle) {
+  return JudgeRegion(centre, samples, spacing_m, region, vehicle, true);
 }
 
 std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::array<double, 3>& b) {

@@ -220,6 +220,47 @@ TEST(SafeFusion, FarNoiseLeavesALevelFloorTraversableWithALowerConfidence) {
   EXPECT_EQ(near.TopSurfaceAt(C(31), C(31)).cls, TravClass::kNonTraversable);
 }
 
+TEST(SafeFusion, GroundWithinTheSmearOfAFarJumpIsUndecidedNotOpen) {
+  // A 0.4 m log across the floor on x in [2.0, 2.5), seen from far behind it (the sensor at
+  // (-3, 2), 7 deg off the row judged): the heights are right to 2 cm, but each may belong 0.2 m along its ray
+  // (as much as the step radius), and no frame resolved the log's faces, so every vote calls
+  // it traversable.
+  const auto log = [](int ix, int) { return ix >= 20 && ix < 25 ? 0.4 : 0.0; };
+  auto build = [&](const MapOptions& options) {
+    TraversabilityMap map(options);
+    for (int k = 0; k < 4; ++k) {
+      std::vector<ClassifiedPoint> far = Floor(0.02f, [](int, int) { return false; }, log);
+      for (ClassifiedPoint& p : far) p.horizontal_sigma_m = 0.2f;
+      map.InsertFrame(far, kSensor, k);
+    }
+    return map;
+  };
+  const TraversabilityMap map = build(Options());
+  // The column on x in [1.7, 1.8), 0.2 m and more before the log (beyond its step radius), but
+  // within the smear along the ray (0.45 m from its centre): the log may be within the radius or
+  // not, which these views cannot tell.
+  const ColumnExplanation before = map.ExplainColumn(C(17), C(25));
+  EXPECT_EQ(before.cell.cls, TravClass::kUndecided);
+  EXPECT_EQ(before.rule, JudgeRule::kSmearedHazard);
+  EXPECT_EQ(before.cell.decided_by, ClassJudge::kNone);  // as any undecided column: no judge, no cost
+  EXPECT_TRUE(std::isnan(before.cell.cost));
+  EXPECT_TRUE(before.surface.smeared);
+  EXPECT_NEAR(before.smeared_region.along_m, 0.45, 1e-6);
+  EXPECT_NEAR(before.smeared_region.axis.y() / before.smeared_region.axis.x(), (C(25) - 2.0) / (C(17) + 3.0), 1e-6);
+  EXPECT_NEAR(before.smeared_surface.step_m, 0.4 - 2 * 0.01, 0.005);  // four views of 2 cm each
+  EXPECT_EQ(ClassAt(map, C(22), C(25)), TravClass::kUndecided);  // the log's top: its edges are as near
+  // Beyond the smear, level floor stays open: 0.55 m before the log and 0.55 m after it.
+  EXPECT_EQ(ClassAt(map, C(14), C(25)), TravClass::kTraversable);
+  EXPECT_EQ(ClassAt(map, C(30), C(25)), TravClass::kTraversable);
+  // Without the smeared judgement the frames' votes call the whole log open ground.
+  MapOptions off = Options();
+  off.class_smeared_surface_hazards = false;
+  const TraversabilityMap open = build(off);
+  EXPECT_EQ(ClassAt(open, C(17), C(25)), TravClass::kTraversable);
+  EXPECT_EQ(open.ExplainColumn(C(17), C(25)).rule, JudgeRule::kFramesAlone);
+  EXPECT_EQ(ClassAt(open, C(22), C(25)), TravClass::kTraversable);
+}
+
 TEST(SafeFusion, WithAnEvidenceFloorGroundNoViewResolvedIsUndecided) {
   // Six views from about 17 m on the default rig (height sigma 0.35 m, horizontal 1.4 m): each
   // vote counts 1 / (1 + (0.35 / 0.1)^2) / (1 + (1.4 / 0.6)^2) = 0.0117 of a clear one, so six

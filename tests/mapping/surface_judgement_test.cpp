@@ -122,6 +122,79 @@ TEST(JudgeSurface, HeightsSmearedSidewaysJudgeNothing) {
   EXPECT_FALSE(far.determined);
 }
 
+/// The columns of a 0.1 m map whose centres lie within `radius` of (0, 0), on the surface
+/// `height`, each with height sigma 0.02 m and horizontal sigma `xy_sigma`.
+std::vector<SurfaceSample> Within(double radius, const std::function<double(double, double)>& height,
+                                  double xy_sigma) {
+  std::vector<SurfaceSample> s;
+  const int reach = static_cast<int>(std::floor(radius / 0.1 + 1e-9));
+  for (int j = -reach; j <= reach; ++j) {
+    for (int i = -reach; i <= reach; ++i) {
+      const Eigen::Vector2d xy(0.1 * i, 0.1 * j);
+      if (xy.norm() > radius + 1e-9) continue;
+      s.push_back({xy, height(xy.x(), xy.y()), 0.02, xy_sigma});
+    }
+  }
+  return s;
+}
+
+TEST(JudgeSmearedSurface, AFarJumpCountsWithinTheSmearAlongItsRayAndStrayColumnsDoNot) {
+  const VehicleOptions vehicle;  // step radius 0.2 m
+  // Along the ray the step radius widens by the horizontal sigma, at most to twice the radius;
+  // across it, it does not; both add half a cell.
+  const SurfaceRegion region = SmearedRegion(0.2, 0.1, 0.15, {2.0, 0.0});
+  EXPECT_NEAR(region.along_m, 0.40, 1e-12);
+  EXPECT_NEAR(region.across_m, 0.25, 1e-12);
+  EXPECT_NEAR(region.axis.x(), 1.0, 1e-12);
+  EXPECT_NEAR(SmearedRegion(0.2, 0.1, 0.5, {0.0, -1.0}).along_m, 0.45, 1e-12);
+  const SurfaceRegion around = SmearedRegion(0.2, 0.1, 0.15, Eigen::Vector2d::Zero());
+  EXPECT_NEAR(around.across_m, 0.40, 1e-12);  // no direction: widened every way
+  EXPECT_TRUE(region.Contains({0.4, 0.0}));
+  EXPECT_FALSE(region.Contains({0.0, 0.3}));
+  EXPECT_FALSE(region.Contains({0.3, 0.2}));
+
+  // A 0.5 m jump 0.25 m from the cell along the ray, beyond its step radius's disc (0.25 m),
+  // seen from far (horizontal sigma 0.2 m): the step radius's disc shows nothing and cannot
+  // judge. The smear's region (0.45 m along the ray, 37 columns) holds 6 columns beyond the
+  // jump, more than an eighth, and shows it: 0.5 m less one sigma of each side.
+  const auto ahead = [](double x, double) { return x > 0.25 ? 0.5 : 0.0; };
+  const std::vector<SurfaceSample> near = Within(SurfaceDiscRadius(0.2, 0.1), ahead, 0.2);
+  const SurfaceVerdict own = JudgeSurface({0, 0}, near, 0.1, vehicle);
+  EXPECT_TRUE(own.smeared);
+  EXPECT_FALSE(own.determined);
+  EXPECT_NEAR(own.xy_sigma_m, 0.2, 1e-12);
+  const SurfaceRegion smear = SmearedRegion(0.2, 0.1, 0.2, {2.0, 0.0});
+  const std::vector<SurfaceSample> wide = Within(0.45, ahead, 0.2);
+  const SurfaceVerdict along = JudgeSmearedSurface({0, 0}, wide, 0.1, smear, vehicle);
+  EXPECT_TRUE(along.determined && along.smeared);
+  EXPECT_NEAR(along.step_m, 0.5 - 2 * 0.02, 1e-6);
+  EXPECT_GT(along.probability[2], 0.999);
+  // The same jump beside the ray: the ray's direction is known to a pixel, and it is open.
+  const SurfaceVerdict beside = JudgeSmearedSurface({0, 0}, wide, 0.1, SmearedRegion(0.2, 0.1, 0.2, {0, 1}), vehicle);
+  EXPECT_TRUE(beside.determined);
+  EXPECT_GT(beside.probability[0], 0.99);
+  // Nearer, four columns beyond it are under an eighth of the region's 33 (0.15 m of smear).
+  EXPECT_GT(JudgeSmearedSurface({0, 0}, wide, 0.1, region, vehicle).probability[0], 0.99);
+
+  // Level ground with three stray columns 0.6 m up (far noise): a side needs an eighth of the
+  // region's columns.
+  std::vector<SurfaceSample> level = Within(0.45, [](double, double) { return 0.0; }, 0.2);
+  for (const Eigen::Vector2d& stray : {Eigen::Vector2d(0.3, 0.0), Eigen::Vector2d(-0.1, 0.1), Eigen::Vector2d(0.0, -0.2)}) {
+    for (SurfaceSample& s : level) {
+      if ((s.xy - stray).norm() < 1e-9) s.height_m = 0.6;
+    }
+  }
+  const SurfaceVerdict strays = JudgeSmearedSurface({0, 0}, level, 0.1, smear, vehicle);
+  EXPECT_TRUE(strays.determined);
+  EXPECT_GT(strays.probability[0], 0.99);
+  // The step radius's disc, as JudgeSurface judges it, takes two strays for a side.
+  std::vector<SurfaceSample> two = Within(SurfaceDiscRadius(0.2, 0.1), [](double, double) { return 0.0; }, 0.01);
+  for (SurfaceSample& s : two) {
+    if (std::abs(std::abs(s.xy.x()) - 0.1) < 1e-9 && std::abs(s.xy.y()) < 1e-9) s.height_m = 0.6;
+  }
+  EXPECT_GT(JudgeSurface({0, 0}, two, 0.1, vehicle).probability[2], 0.99);
+}
+
 TEST(JudgeSurface, TooFewColumnsLeaveTheCellUndetermined) {
   const VehicleOptions vehicle;
   std::vector<SurfaceSample> three = {{{0, 0}, 0, 0.01}, {{0.1, 0}, 0, 0.01}, {{0, 0.1}, 0, 0.01}};

@@ -34,11 +34,16 @@ enum class JudgeRule : std::uint8_t {
   /// MapOptions::class_obstacle_min_evidence_views: stereo noise at the views' range can make
   /// that much, so the column is undecided rather than blocked.
   kObstacleWithheld,
+  /// The fused heights are smeared sideways (far ground), and over the disc their horizontal
+  /// sigma widens the step radius to, the surface finds a jump or slope beyond max that noise
+  /// does not explain: a hazard stereo cannot place within the step radius or beyond it. Unless
+  /// the frames call the column non-traversable, it is undecided.
+  kSmearedHazard,
 };
 
 /// Lower-case name, as `ssta explain` prints it: "none", "surface alone", "frames alone",
 /// "frames (surface partial)", "worse of two", "product", "prior withheld",
-/// "obstacle withheld".
+/// "obstacle withheld", "smeared hazard".
 const char* JudgeRuleName(JudgeRule rule);
 
 /// The evidence behind TopSurfaceAt(x, y).
@@ -62,6 +67,11 @@ struct ColumnExplanation {
   SurfaceVerdict surface;            ///< the fused surface's verdict around the column
   int surface_columns = 0;           ///< columns within SurfaceDiscRadius holding a fused height
   bool disc_fully_seen = false;      ///< every column meeting the disc holds a fused height
+  /// Where `surface` is smeared and MapOptions::class_smeared_surface_hazards is on: the verdict
+  /// over the region its smear widens the disc to (JudgeSmearedSurface) and that region; else
+  /// a region of zero size.
+  SurfaceVerdict smeared_surface;
+  SurfaceRegion smeared_region;
   /// The combined class probabilities (traversable, semi, non-traversable); NaN without a class.
   std::array<double, 3> posterior{kNaN, kNaN, kNaN};
 };

@@ -116,6 +116,16 @@ struct MapOptions {
   /// (1 - 2e/3) / (e/3) to one, so frames that saw an obstacle in nearly every view keep it,
   /// while a few noisy votes are still outweighed. 0: the surface's word is final; in [0, 1).
   double class_surface_miss_prob = 0.1;
+  /// Where the fused heights are smeared sideways by more than half the step radius (far
+  /// ground, SurfaceVerdict::smeared), judge the surface again over the disc widened along the
+  /// ray from the nearest point of the sensor's path by their horizontal sigma
+  /// (JudgeSmearedSurface). A jump or slope above max found there at 2 sigmas may lie within the
+  /// step radius of the column or beyond it, which stereo at that range cannot tell: a column
+  /// not otherwise non-traversable is undecided (JudgeRule::kSmearedHazard). On the tuning
+  /// scenes this turns 8 of 35 unsafe footprints undecided and blocks nothing more; it also
+  /// leaves undecided about 5 % of the free footprints, mostly 12-20 m from the path
+  /// (docs/accuracy.md). Open ground found there vouches for nothing.
+  bool class_smeared_surface_hazards = true;
   double class_clamp_min = -2.0;  ///< class log-odds lower clamp; < 0
   double class_clamp_max = 3.5;   ///< class log-odds upper clamp; > 0
   /// A ray stops clearing free space where it comes within this height [m] of its endpoint,

@@ -30,6 +30,8 @@ struct SurfaceVerdict {
   /// error smears them sideways, their median horizontal sigma says): they show no slope or
   /// step of this cell, and the surface is not determined.
   bool smeared = false;
+  /// The median of the columns' xy_sigma_m [m] (0 when too few columns were seen).
+  double xy_sigma_m = 0.0;
   /// Share of the disc's columns that hold a fused height, in [0, 1]: below 1 the surface
   /// cannot vouch for ground next to what it does not see (a lip's hidden side, a rock's top).
   double coverage = 0.0;
@@ -65,5 +67,31 @@ double SurfaceDiscRadius(double step_radius_m, double spacing_m);
 /// are smeared sideways (SurfaceVerdict::smeared).
 SurfaceVerdict JudgeSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
                             double spacing_m, const VehicleOptions& vehicle);
+
+/// An ellipse about a cell's centre in the map's x-y plane: semi-axis `along_m` [m] along the
+/// unit vector `axis`, `across_m` across it (a disc when the two are equal).
+struct SurfaceRegion {
+  Eigen::Vector2d axis = Eigen::Vector2d::UnitX();
+  double along_m = 0.0;
+  double across_m = 0.0;
+  /// Whether the point `offset` [m] from the centre lies within the ellipse (its edge included).
+  bool Contains(const Eigen::Vector2d& offset) const;
+};
+
+/// The region a smeared surface is judged over (JudgeSmearedSurface): stereo's range error moves
+/// a point along its ray, so the step radius's disc is widened along the horizontal direction
+/// `ray` from the view to the cell by the columns' horizontal sigma `xy_sigma_m`, at most to
+/// twice the step radius, and not across it (a ray's direction is known to a pixel). Both
+/// semi-axes add half a cell, as SurfaceDiscRadius does. A zero `ray` widens it every way.
+SurfaceRegion SmearedRegion(double step_radius_m, double spacing_m, double xy_sigma_m, const Eigen::Vector2d& ray);
+
+/// JudgeSurface for a cell whose heights are smeared sideways, over the columns of `samples`
+/// that lie in `region` (SmearedRegion), but for the step each side of a jump must hold an
+/// eighth of those columns (JudgeSurface: two), so that a stray column or two of far noise
+/// makes none. Stereo cannot place a far jump within the step radius, but it measures the
+/// heights on its two sides: a jump over max_step_m within the smear of the cell's own heights
+/// may lie within the step radius of its ground. The verdict keeps `smeared` set.
+SurfaceVerdict JudgeSmearedSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
+                                   double spacing_m, const SurfaceRegion& region, const VehicleOptions& vehicle);
 
 }  // namespace ssta
