@@ -185,11 +185,8 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
   synth::WriteSyntheticSequence(clean, dir / "clean");
   synth::WriteSyntheticSequence(drift, dir / "drift");
 
-  Config corrected;  // gravity.source auto: roll and pitch from the IMU attitude filter
-  // What a drift costs is far ground given the wrong class. The smeared-hazard rule leaves far
-  // columns beside a jump undecided whatever the drift, which would hide part of that cost.
-  corrected.map.fusion.class_smeared_surface_hazards = false;
-  Config uncorrected = corrected;
+  const Config corrected;  // gravity.source auto: roll and pitch from the IMU attitude filter
+  Config uncorrected;
   uncorrected.gravity.source = GravitySource::kPose;
   testing::TempDir a, b, c;
   const ConfusionMatrix reference = MapGridScore(dir / "clean", corrected, a);

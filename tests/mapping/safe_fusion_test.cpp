@@ -235,7 +235,9 @@ TEST(SafeFusion, GroundWithinTheSmearOfAFarJumpIsUndecidedNotOpen) {
     }
     return map;
   };
-  const TraversabilityMap map = build(Options());
+  MapOptions on = Options();
+  on.class_smeared_surface_hazards = true;
+  const TraversabilityMap map = build(on);
   // The column on x in [1.7, 1.8), 0.2 m and more before the log (beyond its step radius), but
   // within the smear along the ray (0.45 m from its centre): the log may be within the radius or
   // not, which these views cannot tell.
@@ -252,10 +254,8 @@ TEST(SafeFusion, GroundWithinTheSmearOfAFarJumpIsUndecidedNotOpen) {
   // Beyond the smear, level floor stays open: 0.55 m before the log and 0.55 m after it.
   EXPECT_EQ(ClassAt(map, C(14), C(25)), TravClass::kTraversable);
   EXPECT_EQ(ClassAt(map, C(30), C(25)), TravClass::kTraversable);
-  // Without the smeared judgement the frames' votes call the whole log open ground.
-  MapOptions off = Options();
-  off.class_smeared_surface_hazards = false;
-  const TraversabilityMap open = build(off);
+  // Without the smeared judgement (the default) the frames' votes call the whole log open ground.
+  const TraversabilityMap open = build(Options());
   EXPECT_EQ(ClassAt(open, C(17), C(25)), TravClass::kTraversable);
   EXPECT_EQ(open.ExplainColumn(C(17), C(25)).rule, JudgeRule::kFramesAlone);
   EXPECT_EQ(ClassAt(open, C(22), C(25)), TravClass::kTraversable);

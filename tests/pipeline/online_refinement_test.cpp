@@ -58,9 +58,6 @@ Config CautiousConfig(bool online) {
   Config config;
   config.vehicle = CautiousVehicle();
   config.refinement.online = online;
-  // What a tilt costs is far ground given the wrong class. The smeared-hazard rule leaves far
-  // columns beside a jump undecided whatever the tilt, which would hide part of that cost.
-  config.map.fusion.class_smeared_surface_hazards = false;
   return config;
 }
 
