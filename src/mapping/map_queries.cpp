@@ -201,7 +201,6 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const std::vector<SurfaceSample> samples =
       SurfaceAround(tree, key, SurfaceDiscRadius(vehicle.step_radius_m, tree.getResolution()));
   const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
-  const bool smeared_hazard = SmearedHazard(map, tree, key, *cell, surface, why);
   const auto& l = node->class_log_odds;
   const bool has_evidence = internal::HasClassEvidence(l, map.options());
   if (why != nullptr) {
@@ -244,7 +243,9 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
     return;
   }
   const int best = MostProbableClass(posterior);
-  if (smeared_hazard && best != 2) return MarkSmearedHazard(has_evidence ? &frames : nullptr, cell, why);
+  if (best != 2 && SmearedHazard(map, tree, key, *cell, surface, why)) {
+    return MarkSmearedHazard(has_evidence ? &frames : nullptr, cell, why);
+  }
   if (judge == ClassJudge::kBoth) {
     const bool frames_class = MostProbableClass(frames) == best, surface_class = MostProbableClass(s) == best;
     if (frames_class != surface_class) judge = frames_class ? ClassJudge::kFrames : ClassJudge::kSurface;
