@@ -24,9 +24,9 @@ std::array<double, 3> ClassProbabilities(double value, double sigma, double semi
 
 /// The height jump within the disc that the local surface does not explain: each column's
 /// height less what `gradient` (the local plane's, dh/dx and dh/dy) rises from `centre`, taken
-/// one sigma towards the plane; the step is the second highest of these less the second lowest,
-/// so that a single stray column (a voxel of noise above the ground) makes no step, while a jump
-/// has columns on both of its sides. Its sigma is the noise of those two columns.
+/// one sigma towards the plane; the step is the (rank + 1)-th highest of these less the
+/// (rank + 1)-th lowest, so that `rank` stray columns (voxels of noise above the ground) make no
+/// step, while a jump has columns on both of its sides. Its sigma is the noise of those two.
 void LargestJump(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s, const Eigen::Vector2d& gradient,
                  std::size_t rank, double* step, double* sigma) {
   struct Level {
@@ -77,15 +77,11 @@ bool FitPlane(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& s
   return plane->allFinite();
 }
 
-/// JudgeSurface over the columns whose centres lie in `region` (`samples` may hold more: the
-/// rest are left out); heights smeared sideways are judged too when `judge_smeared`
-/// (JudgeSmearedSurface).
-SurfaceVerdict JudgeRegion(const Eigen::Vector2d& centre, std::vector<SurfaceSample> samples, double spacing_m,
+/// JudgeSurface over `samples`, the columns whose centres lie in `region`; heights smeared
+/// sideways are judged too when `judge_smeared` (JudgeSmearedSurface).
+SurfaceVerdict JudgeRegion(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples, double spacing_m,
                            const SurfaceRegion& region, const VehicleOptions& vehicle, bool judge_smeared) {
   SurfaceVerdict v;
-  samples.erase(std::remove_if(samples.begin(), samples.end(),
-                               [&](const SurfaceSample& s) { return !region.Contains(s.xy - centre); }),
-                samples.end());
   // Most of the region must be seen: a few far columns between unobserved ones do not show a
   // surface's slope or steps.
   const double cells_in_region = kPi * region.along_m * region.across_m / (spacing_m * spacing_m);
@@ -168,7 +164,11 @@ SurfaceRegion SmearedRegion(double step_radius_m, double spacing_m, double xy_si
 
 SurfaceVerdict JudgeSmearedSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
                                    double spacing_m, const SurfaceRegion& region, const VehicleOptions& vehicle) {
-  return JudgeRegion(centre, samples, spacing_m, region, vehicle, true);
+  std::vector<SurfaceSample> within;
+  for (const SurfaceSample& s : samples) {
+    if (region.Contains(s.xy - centre)) within.push_back(s);
+  }
+  return JudgeRegion(centre, within, spacing_m, region, vehicle, true);
 }
 
 std::array<double, 3> WorseOfClasses(const std::array<double, 3>& a, const std::array<double, 3>& b) {
