@@ -1,6 +1,9 @@
 #include "ssta/pipeline/mount_calibration.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <iomanip>
 #include <optional>
 #include <sstream>
 #include <utility>
@@ -117,9 +120,45 @@ GroundCollection CollectGroundEvidence(SequenceRun* run, const StereoCalibration
   return out;
 }
 
+/// How far the body's z axis turns over the drive: the largest angle between a pose's body z
+/// and the poses' mean body z [deg]; 0 without poses.
+double BodyTiltRadiusDeg(const std::vector<std::optional<Eigen::Isometry3d>>& poses) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& pose : poses) {
+    if (pose) mean += pose->linear().col(2);
+  }
+  if (mean.norm() < 1e-9) return 0.0;
+  mean.normalize();
+  double radius = 0.0;
+  for (const auto& pose : poses) {
+    if (pose) radius = std::max(radius, std::acos(std::clamp(pose->linear().col(2).dot(mean), -1.0, 1.0)));
+  }
+  return radius * 180.0 / 3.14159265358979323846;
+}
+
+/// The body reference, standing in for the path reference, expects the ground the frames see
+/// parallel to the wheel plane of the body that sees it. A body that tilts over the drive by
+/// more than twice systematic_sigma_deg from its mean shows ground that is not uniformly sloped
+/// at the drive's own scale; ground farther ahead may tilt more, the same way for every frame,
+/// so no scatter shows it and the sigma would not cover it. Such a correction is not applied.
+void KeepMountOnNonUniformGround(const RefinementOptions& refinement, double tilt_radius_deg,
+                                 MountRefinementResult* result) {
+  const double limit_deg = 2.0 * refinement.systematic_sigma_deg;
+  if (!result->applied() || tilt_radius_deg <= limit_deg) return;
+  std::ostringstream m;
+  m << std::setprecision(3) << "the ground is not uniform: the body reference stands in for the path reference, and the "
+    << "body tilts up to " << tilt_radius_deg << " deg from its mean over the drive (more than twice "
+    << "systematic_sigma_deg, " << limit_deg << " deg), so the ground ahead need not lie parallel to the wheels; "
+    << "the configured mount is kept (drive on over the ground the first frames see, or on level ground)";
+  result->status = RefinementStatus::kTerrainTooRough;
+  result->message = m.str();
+  result->body_T_camera_refined = result->body_T_camera_initial;
+}
+
 /// Solves for cam0's mount correction from the collected evidence: the path reference when the
 /// drive went over the ground of at least min_frames frames; otherwise the plane under the
-/// wheels now. `body_T_camera` is the configured mount of cam0.
+/// wheels now, where the poses show the body tilting little. `body_T_camera` is the configured
+/// mount of cam0.
 MountSolution SolveMount(const RefinementOptions& refinement, const Eigen::Isometry3d& body_T_camera,
                          const std::vector<std::optional<Eigen::Isometry3d>>& poses, GroundCollection* ground) {
   const bool path = refinement.ground_reference == GroundReference::kPath;
@@ -140,6 +179,7 @@ MountSolution SolveMount(const RefinementOptions& refinement, const Eigen::Isome
     MountRefiner refiner(body, body_T_camera);
     for (GroundEvidence& e : ground->body) refiner.AddFrame(std::move(e));
     out.refinement = refiner.Solve();
+    if (path) KeepMountOnNonUniformGround(refinement, BodyTiltRadiusDeg(poses), &out.refinement);
   }
   return out;
 }

@@ -90,6 +90,8 @@ struct RefinementOptions {
   /// poses' own roll and pitch errors, ground whose plane ahead differs from the wheel plane
   /// later standing on it in the same way all along a drive). 0.2: the RMS per angle of the
   /// errors left on the twelve rendered tuning drives (docs/mount_calibration.md, Measured).
+  /// calibrate-mount also keeps the configured mount when the body reference stands in for the
+  /// path reference and the poses' body z turns more than twice this from its mean over the drive.
   double systematic_sigma_deg = 0.2;
   /// Prior on the mount correction: zero with this 1-sigma per angle [deg].
   double prior_sigma_deg = 5.0;
