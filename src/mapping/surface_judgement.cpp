@@ -164,7 +164,9 @@ SurfaceRegion SmearedRegion(double step_radius_m, double spacing_m, double xy_si
 
 SurfaceVerdict JudgeSmearedSurface(const Eigen::Vector2d& centre, const std::vector<SurfaceSample>& samples,
                                    double spacing_m, const SurfaceRegion& region, const VehicleOptions& vehicle) {
-  std::vector<SurfaceSample> within;
+  // Kept per thread: far columns are judged one after another, each from a few dozen samples.
+  thread_local std::vector<SurfaceSample> within;
+  within.clear();
   for (const SurfaceSample& s : samples) {
     if (region.Contains(s.xy - centre)) within.push_back(s);
   }

@@ -11,6 +11,7 @@
 
 #include "mount/refinement_json.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 #include "ssta/pipeline/sequence_run.h"
 
 namespace ssta {
@@ -133,7 +134,7 @@ double BodyTiltRadiusDeg(const std::vector<std::optional<Eigen::Isometry3d>>& po
   for (const auto& pose : poses) {
     if (pose) radius = std::max(radius, std::acos(std::clamp(pose->linear().col(2).dot(mean), -1.0, 1.0)));
   }
-  return radius * 180.0 / 3.14159265358979323846;
+  return RadToDeg(radius);
 }
 
 /// The body reference, standing in for the path reference, expects the ground the frames see
