@@ -91,8 +91,9 @@ void Explain(const ExplainArgs& args) {
               << (views < needed ? ": too weak, no view resolved this ground: no verdict from the frames" : "")
               << "\n";
   }
-  std::cout << "frames' means: slope " << Fixed(c.frame_mean_slope_deg, 2) << " deg, step "
-            << Fixed(c.frame_mean_step_m, 3) << " m; largest step a frame saw " << Fixed(c.max_step_m, 3) << " m\n";
+  // A point's step is its segment's height above its frame's ground plane, not a jump beside it.
+  std::cout << "frames' means: slope " << Fixed(c.frame_mean_slope_deg, 2) << " deg, step to the ground plane "
+            << Fixed(c.frame_mean_step_m, 3) << " m (largest a frame saw " << Fixed(c.max_step_m, 3) << " m)\n";
   std::cout << "free space: occupancy log-odds " << Fixed(why.occupancy_log_odds, 2) << " (probability "
             << Fixed(why.occupancy, 3) << "; a surface from " << Fixed(why.occupied_threshold, 3)
             << "): hits raise it, rays passing through lower it\n";

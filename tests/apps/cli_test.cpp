@@ -237,6 +237,12 @@ TEST(Cli, ExplainNamesTheRuleAndTheEvidenceOfAColumn) {
   // One clear vote for an obstacle (obstacle gain included) is one clear view.
   EXPECT_NEAR(why.evidence_views, 1.0, 1e-6);
   EXPECT_NE(r.output.find("evidence: 1.00 clear views (a verdict from 0.00)\n"), std::string::npos) << r.output;
+  // The patch's points stand 0.3 m off their frame's ground plane: a step to the plane, which
+  // the line names as such, not a jump seen beside the column.
+  EXPECT_NE(r.output.find("frames' means: slope 2.00 deg, step to the ground plane 0.300 m (largest a frame saw "
+                          "0.300 m)\n"),
+            std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("surface: 0 columns within 0.25 m"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("; too few to judge"), std::string::npos) << r.output;
   r = RunSsta(explain + " --at 40,40", false);  // outside the floor
