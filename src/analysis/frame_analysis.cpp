@@ -10,6 +10,7 @@
 #include "ssta/analysis/label_rule.h"
 #include "ssta/analysis/surface_analyzer.h"
 #include "ssta/core/error.h"
+#include "ssta/core/units.h"
 #include "ssta/stereo/stereo_matcher.h"
 
 namespace ssta {
@@ -63,6 +64,13 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
   // A frame the local rule judges although its plane holds too little of the view
   // (QualityCheck::judged) gets every refinement but those that read the plane.
   const bool judged = a.quality.judged;
+  // The local steps' "above the camera" follows the frame's ground where the vehicle may stand
+  // on it: up a slope the ground ahead rises above the camera's level.
+  Eigen::Vector3d ground_up = up;
+  if (a.ground.found) {
+    const Eigen::Vector3d n = a.ground.plane.head<3>().normalized();
+    if (n.dot(up) >= std::cos(DegToRad(vehicle_.max_slope_deg))) ground_up = n;
+  }
   RunBoth(
       [&] {
         track.Begin(a.labels);
@@ -83,7 +91,7 @@ AnalysisResult FrameAnalyzer::Analyze(const FrameAnalysisInput& in) {
           FindDisparityFaces(*in.disparity, g.f, g.cu, g.cv, up, options, &faces_);
         }
         if (options.step_reference == StepReference::kLocal && judged) {
-          LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_, in.supported);
+          LocalStepClasses(cloud, *in.normals, up, vehicle_, noise, &step_classes_, in.supported, &ground_up);
         }
       });
   if (judged) ApplyAfterBoth(in, &a);

@@ -21,6 +21,7 @@ constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
 struct LevelledPoint {
   std::uint32_t pixel;
   float x, y, h;
+  float above_camera;    ///< > 0: above the camera, out of the grid's heights (LocalStepClasses)
   float relative_sigma;  ///< 1-sigma of its depth over its depth: k Z
   float smear_squared;   ///< square of the 1-sigma of its error along its ray [m^2]: (k Z |p|)^2
 };
@@ -43,9 +44,9 @@ class HeightGrid {
       const LevelledPoint& p = points[k];
       const int c = CellOf(p.x, p.y);
       cell_of_[k] = c;
-      // Above the camera lies nothing the wheels meet, and the sky's false matches lie there
-      // (rays above the horizon): a surface's lower part below the camera tells its jump.
-      if (c < 0 || p.h > 0.0f) continue;
+      // Above the camera lies nothing the wheels meet, and the sky's false matches lie there:
+      // a surface's lower part below the camera tells its jump.
+      if (c < 0 || p.above_camera > 0.0f) continue;
       const float sigma = p.relative_sigma * std::abs(p.h);  // the error along the ray, seen in height
       sum_h[c] += p.h;
       sum_var[c] += sigma * sigma;
@@ -144,7 +145,7 @@ class HeightGrid {
 
 void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
                       const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes,
-                      const ImageU8* supported) {
+                      const ImageU8* supported, const Eigen::Vector3d* ground_up) {
   SSTA_CHECK(step_classes != nullptr && normals.width() == cloud.width() && normals.height() == cloud.height(),
              "LocalStepClasses: cloud and normals differ in size");
   SSTA_CHECK(supported == nullptr || (supported->width() == cloud.width() && supported->height() == cloud.height()),
@@ -160,6 +161,8 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
   const Eigen::Vector3f up = up_camera.cast<float>();
   const Eigen::Vector3f east = up_camera.unitOrthogonal().cast<float>();
   const Eigen::Vector3f north = up.cross(east);
+  const auto max_step = static_cast<float>(vehicle.max_step_m);
+  const Eigen::Vector3f ceiling = ground_up != nullptr ? ground_up->normalized().cast<float>() : up;
   const auto per_m2 = static_cast<float>(noise.per_m2);
   thread_local std::vector<LevelledPoint> points;  // kept between frames
   points.clear();
@@ -169,7 +172,12 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     const float relative_sigma = per_m2 * p.z();
     const float smear_squared = relative_sigma * relative_sigma * p.squaredNorm();
     if (smear_squared > 4.0f * radius * radius) continue;
-    points.push_back({static_cast<std::uint32_t>(i), east.dot(p), north.dot(p), up.dot(p), relative_sigma, smear_squared});
+    const float h = up.dot(p);
+    // Above the camera's level, but up a slope what lies clearly below the plane through the
+    // camera parallel to its ground counts (the margin: that plane's error at range).
+    const float above_camera = smear_squared <= radius * radius ? std::min(h, ceiling.dot(p) + max_step) : h;
+    points.push_back({static_cast<std::uint32_t>(i), east.dot(p), north.dot(p), h, above_camera, relative_sigma,
+                      smear_squared});
   }
   const HeightGrid grid(points, normals, up_camera, 0.5 * vehicle.step_radius_m, vehicle.max_slope_deg);
   const std::vector<float> steps = grid.Steps(vehicle.step_radius_m);

@@ -726,6 +726,20 @@ struct StepWorld {
       }
     }
   }
+  /// Ground rising `rise` m per m ahead over x in [x0, x1), z in [z0, z1): `height_m` below the
+  /// camera at z = 1, its normals the slope's own.
+  void Slope(double x0, double x1, double z0, double z1, double height_m, double rise) {
+    const Eigen::Vector3f n = Eigen::Vector3f(0, -1, static_cast<float>(-rise)).normalized();
+    for (int v = 0; v < cloud.height(); ++v) {
+      for (int u = 0; u < cloud.width(); ++u) {
+        const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
+        if (x < x0 || x >= x1 || z < z0 || z >= z1) continue;
+        cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(height_m - rise * (z - 1.0)),
+                                      static_cast<float>(z));
+        normals(v, u) = n;
+      }
+    }
+  }
   Image3f cloud, normals;
   ImageU8 labels;
 };
@@ -757,6 +771,52 @@ TEST(RefineByLocalSteps, TheBandAroundAJumpTakesItsStepClassOnBothSides) {
     EXPECT_EQ(LabelAt(w, 0.0, 1.5), 1);          // 0.5 m before it
     EXPECT_EQ(LabelAt(w, 0.0, 2.6), 1);          // the terrace's level top
   }
+}
+
+TEST(LocalStepClasses, UpASlopeAJumpAboveTheCameraLevelCountsButNotAboveItsGround) {
+  // Ground rising 0.3 m per m (16.7 deg), `depth` below the camera 1 m ahead, and 3 m ahead a
+  // terrace 0.3 m higher. At a depth of 0.8 m the terrace's top lies 0.1-0.25 m above the
+  // camera's level but 0.8 m below the plane through the camera parallel to the ground.
+  const double rise = 0.3;
+  auto world = [&](double depth) {
+    StepWorld w(200, 250);
+    w.Slope(-1, 1, 1, 3, depth, rise);
+    w.Slope(-1, 1, 3, 3.5, depth - 0.3, rise);
+    return w;
+  };
+  const Eigen::Vector3d level_up(0, -1, 0);
+  const Eigen::Vector3d ground_up = Eigen::Vector3d(0, -1, -rise).normalized();
+  auto classes = [&](const StepWorld& w, const Eigen::Vector3d* ground) {
+    ImageU8 out;
+    LocalStepClasses(w.cloud, w.normals, level_up, VehicleOptions{}, DepthNoise{}, &out, nullptr, ground);
+    return out;
+  };
+  auto at = [](const ImageU8& c, double x, double z) {
+    return c(static_cast<int>(std::lround((z - 1.0) / 0.01)), static_cast<int>(std::lround((x + 1.0) / 0.01)));
+  };
+  const StepWorld w = world(0.8);
+  const ImageU8 by_level = classes(w, nullptr), by_ground = classes(w, &ground_up);
+  for (const double z : {2.95, 3.05}) {  // at the foot and on the edge
+    EXPECT_EQ(at(by_ground, 0.0, z), 3) << z;
+    EXPECT_EQ(at(by_level, 0.0, z), 1) << z;  // the terrace's top is above the camera's level
+  }
+  EXPECT_EQ(at(by_ground, 0.0, 2.3), 1);  // the slope is smooth: its gradient is no step
+  EXPECT_EQ(at(by_ground, 0.0, 3.35), 1);  // the terrace's top
+
+  // The plane counts only what lies more than max_step_m below it (a degree of error in the
+  // fitted ground is 0.2 m at 12 m): at a depth of 0.15 m the terrace's top lies 0.15 m below
+  // the plane and stays out, as it would by the camera's level alone.
+  EXPECT_EQ(at(classes(world(0.15), &ground_up), 0.0, 2.95), 1);
+
+  // A roof 1 m over the terrace's far half lies above the plane and stays out of the heights:
+  // the terrace under it keeps its class.
+  StepWorld roofed = w;
+  for (int v = static_cast<int>(std::lround((3.25 - 1.0) / 0.01)); v < 250; v += 2) {
+    for (int u = 0; u < 200; u += 2) roofed.cloud(v, u).y() -= 1.0f;
+  }
+  const ImageU8 roofed_classes = classes(roofed, &ground_up);
+  EXPECT_EQ(at(roofed_classes, 0.01, 3.35), 1);  // a point of the terrace under the roof
+  EXPECT_EQ(at(roofed_classes, 0.0, 2.95), 3);
 }
 
 TEST(RefineByLocalSteps, PointsSmearedOverTheRadiusBesideAJumpAreUndecidedNotTraversable) {

@@ -263,10 +263,16 @@ void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eige
 /// over the radius beside a jump above max_step_m); ApplyLocalStepClasses then changes
 /// the labels. The two in turn give exactly RefineByLocalSteps' labels.
 /// `supported` (optional, the cloud's size): points where it is 0 stay out of the grid and get
-/// no step class.
+/// no step class. Points above the camera's level stay out of the grid's heights too (tree
+/// crowns and eaves over the ground are nothing the wheels meet), but for those that lie more
+/// than max_step_m below the plane through the camera parallel to the frame's ground, placed
+/// within the step radius: up a slope the ground ahead and what stands on it rise above the
+/// camera's level. `ground_up` is that ground's upward unit normal in the camera frame; null
+/// (or up_camera) keeps the camera's level alone. The margin stands for the error of a fitted
+/// plane's normal: a degree of it is 0.2 m at 12 m.
 void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
                       const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes,
-                      const ImageU8* supported = nullptr);
+                      const ImageU8* supported = nullptr, const Eigen::Vector3d* ground_up = nullptr);
 void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels);
 
 }  // namespace ssta
