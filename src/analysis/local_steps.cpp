@@ -21,7 +21,7 @@ constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
 struct LevelledPoint {
   std::uint32_t pixel;
   float x, y, h;
-  float above_camera;    ///< > 0: above the camera, out of the grid's heights (LocalStepClasses)
+  bool above_camera;     ///< out of the grid's heights (LocalStepClasses)
   float relative_sigma;  ///< 1-sigma of its depth over its depth: k Z
   float smear_squared;   ///< square of the 1-sigma of its error along its ray [m^2]: (k Z |p|)^2
 };
@@ -46,7 +46,7 @@ class HeightGrid {
       cell_of_[k] = c;
       // Above the camera lies nothing the wheels meet, and the sky's false matches lie there:
       // a surface's lower part below the camera tells its jump.
-      if (c < 0 || p.above_camera > 0.0f) continue;
+      if (c < 0 || p.above_camera) continue;
       const float sigma = p.relative_sigma * std::abs(p.h);  // the error along the ray, seen in height
       sum_h[c] += p.h;
       sum_var[c] += sigma * sigma;
@@ -162,7 +162,7 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
   const Eigen::Vector3f east = up_camera.unitOrthogonal().cast<float>();
   const Eigen::Vector3f north = up.cross(east);
   const auto max_step = static_cast<float>(vehicle.max_step_m);
-  const Eigen::Vector3f ceiling = ground_up != nullptr ? ground_up->normalized().cast<float>() : up;
+  const Eigen::Vector3f ceiling = ground_up != nullptr ? ground_up->cast<float>() : up;
   const auto per_m2 = static_cast<float>(noise.per_m2);
   thread_local std::vector<LevelledPoint> points;  // kept between frames
   points.clear();
@@ -175,7 +175,7 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
     const float h = up.dot(p);
     // Above the camera's level, but up a slope what lies clearly below the plane through the
     // camera parallel to its ground counts (the margin: that plane's error at range).
-    const float above_camera = smear_squared <= radius * radius ? std::min(h, ceiling.dot(p) + max_step) : h;
+    const bool above_camera = h > 0.0f && (smear_squared > radius * radius || ceiling.dot(p) + max_step > 0.0f);
     points.push_back({static_cast<std::uint32_t>(i), east.dot(p), north.dot(p), h, above_camera, relative_sigma,
                       smear_squared});
   }

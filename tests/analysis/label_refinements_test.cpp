@@ -716,16 +716,7 @@ struct StepWorld {
   StepWorld(int width, int height) : cloud(width, height, NanVector3f()), normals(width, height, NanVector3f()),
                                      labels(width, height, 1) {}
   /// A level patch at `height_m` below the camera over x in [x0, x1), z in [z0, z1), 1 cm spacing.
-  void Level(double x0, double x1, double z0, double z1, double height_m) {
-    for (int v = 0; v < cloud.height(); ++v) {
-      for (int u = 0; u < cloud.width(); ++u) {
-        const double x = -1.0 + 0.01 * u, z = 1.0 + 0.01 * v;
-        if (x < x0 || x >= x1 || z < z0 || z >= z1) continue;
-        cloud(v, u) = Eigen::Vector3f(static_cast<float>(x), static_cast<float>(height_m), static_cast<float>(z));
-        normals(v, u) = Eigen::Vector3f(0, -1, 0);
-      }
-    }
-  }
+  void Level(double x0, double x1, double z0, double z1, double height_m) { Slope(x0, x1, z0, z1, height_m, 0.0); }
   /// Ground rising `rise` m per m ahead over x in [x0, x1), z in [z0, z1): `height_m` below the
   /// camera at z = 1, its normals the slope's own.
   void Slope(double x0, double x1, double z0, double z1, double height_m, double rise) {
@@ -744,9 +735,12 @@ struct StepWorld {
   ImageU8 labels;
 };
 
-std::uint8_t LabelAt(const StepWorld& w, double x, double z) {
-  return w.labels(static_cast<int>(std::lround((z - 1.0) / 0.01)), static_cast<int>(std::lround((x + 1.0) / 0.01)));
+/// The pixel of a StepWorld-sized image at (x, z).
+std::uint8_t PixelAt(const ImageU8& image, double x, double z) {
+  return image(static_cast<int>(std::lround((z - 1.0) / 0.01)), static_cast<int>(std::lround((x + 1.0) / 0.01)));
 }
+
+std::uint8_t LabelAt(const StepWorld& w, double x, double z) { return PixelAt(w.labels, x, z); }
 
 TEST(RefineByLocalSteps, LevelGroundStaysTraversableAtAnyHeight) {
   StepWorld w(200, 200);
@@ -791,22 +785,19 @@ TEST(LocalStepClasses, UpASlopeAJumpAboveTheCameraLevelCountsButNotAboveItsGroun
     LocalStepClasses(w.cloud, w.normals, level_up, VehicleOptions{}, DepthNoise{}, &out, nullptr, ground);
     return out;
   };
-  auto at = [](const ImageU8& c, double x, double z) {
-    return c(static_cast<int>(std::lround((z - 1.0) / 0.01)), static_cast<int>(std::lround((x + 1.0) / 0.01)));
-  };
   const StepWorld w = world(0.8);
   const ImageU8 by_level = classes(w, nullptr), by_ground = classes(w, &ground_up);
   for (const double z : {2.95, 3.05}) {  // at the foot and on the edge
-    EXPECT_EQ(at(by_ground, 0.0, z), 3) << z;
-    EXPECT_EQ(at(by_level, 0.0, z), 1) << z;  // the terrace's top is above the camera's level
+    EXPECT_EQ(PixelAt(by_ground, 0.0, z), 3) << z;
+    EXPECT_EQ(PixelAt(by_level, 0.0, z), 1) << z;  // the terrace's top is above the camera's level
   }
-  EXPECT_EQ(at(by_ground, 0.0, 2.3), 1);  // the slope is smooth: its gradient is no step
-  EXPECT_EQ(at(by_ground, 0.0, 3.35), 1);  // the terrace's top
+  EXPECT_EQ(PixelAt(by_ground, 0.0, 2.3), 1);  // the slope is smooth: its gradient is no step
+  EXPECT_EQ(PixelAt(by_ground, 0.0, 3.35), 1);  // the terrace's top
 
   // The plane counts only what lies more than max_step_m below it (a degree of error in the
   // fitted ground is 0.2 m at 12 m): at a depth of 0.15 m the terrace's top lies 0.15 m below
   // the plane and stays out, as it would by the camera's level alone.
-  EXPECT_EQ(at(classes(world(0.15), &ground_up), 0.0, 2.95), 1);
+  EXPECT_EQ(PixelAt(classes(world(0.15), &ground_up), 0.0, 2.95), 1);
 
   // A roof 1 m over the terrace's far half lies above the plane and stays out of the heights:
   // the terrace under it keeps its class.
@@ -815,8 +806,8 @@ TEST(LocalStepClasses, UpASlopeAJumpAboveTheCameraLevelCountsButNotAboveItsGroun
     for (int u = 0; u < 200; u += 2) roofed.cloud(v, u).y() -= 1.0f;
   }
   const ImageU8 roofed_classes = classes(roofed, &ground_up);
-  EXPECT_EQ(at(roofed_classes, 0.01, 3.35), 1);  // a point of the terrace under the roof
-  EXPECT_EQ(at(roofed_classes, 0.0, 2.95), 3);
+  EXPECT_EQ(PixelAt(roofed_classes, 0.01, 3.35), 1);  // a point of the terrace under the roof
+  EXPECT_EQ(PixelAt(roofed_classes, 0.0, 2.95), 3);
 }
 
 TEST(RefineByLocalSteps, PointsSmearedOverTheRadiusBesideAJumpAreUndecidedNotTraversable) {
