@@ -73,6 +73,26 @@ DrivenOverGround::DrivenOverGround(const std::vector<std::optional<Eigen::Isomet
     up_.push_back(later_T_body.linear().transpose() * Eigen::Vector3d::UnitZ());
     origin_.push_back(later_T_body.inverse().translation());
   }
+  // The way's curvature at each later body: how its bodies' pitch turns per metre driven,
+  // between the bodies about half a wheelbase behind and ahead of it (a chord's scale, and
+  // steadier than neighbouring poses). A crest turns the body z forward: curvature < 0.
+  half_wheelbase_m_ = 0.5 * options.wheelbase_m;
+  half_track_m_ = 0.5 * options.track_m;
+  const std::size_t n = origin_.size();
+  curvature_.assign(n, 0.0);
+  if (half_wheelbase_m_ <= 0.0) return;
+  std::vector<double> s(n, 0.0);  // distance driven from the first later body [m]
+  for (std::size_t j = 1; j < n; ++j) s[j] = s[j - 1] + (origin_[j] - origin_[j - 1]).norm();
+  std::size_t a = 0, b = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    while (a < j && s[j] - s[a + 1] >= half_wheelbase_m_) ++a;
+    b = std::max(b, j);
+    while (b + 1 < n && s[b] - s[j] < half_wheelbase_m_) ++b;
+    const double ds = s[b] - s[a];
+    if (ds < half_wheelbase_m_) continue;  // too little of the way around it: no curvature
+    const Eigen::Vector3d forward = (origin_[b] - origin_[a]).normalized();
+    curvature_[j] = -(up_[b] - up_[a]).dot(forward) / ds;
+  }
 }
 
 int DrivenOverGround::Find(const Eigen::Vector3d& p_camera) const {
@@ -97,6 +117,41 @@ Eigen::Vector3d DrivenOverGround::MeanUp(const std::vector<Eigen::Vector3d>& poi
   return sum.norm() > 0.0 ? Eigen::Vector3d(sum.normalized()) : Eigen::Vector3d::UnitZ();
 }
 
+double DrivenOverGround::CurvatureAcross(const std::vector<Eigen::Vector3d>& points,
+                                         const std::vector<int>& body) const {
+  // z = a + b x + c y + d x^2 + e x y + f y^2 over the points a body stands on, in this frame's
+  // body about their mean (for conditioning): the curvature across is 2 f. A small tilt of the
+  // mount turns the points but leaves their curvature as it is. One curvature for the stretch:
+  // one that changes along it as well costs more in the far points' noise than it finds
+  // (docs/mount_calibration.md, What limits it).
+  std::vector<Eigen::Vector3d> q;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    if (body[k] < 0) continue;
+    q.push_back(body_T_camera_ * points[k]);
+    mean += q.back();
+  }
+  constexpr int kUnknowns = 6;
+  if (q.size() < 2 * kUnknowns) return 0.0;
+  mean /= static_cast<double>(q.size());
+  using Vector6d = Eigen::Matrix<double, kUnknowns, 1>;
+  using Matrix6d = Eigen::Matrix<double, kUnknowns, kUnknowns>;
+  Matrix6d normal = Matrix6d::Zero();
+  Vector6d rhs = Vector6d::Zero();
+  for (const Eigen::Vector3d& p : q) {
+    const Eigen::Vector3d d = p - mean;
+    Vector6d row;
+    row << 1.0, d.x(), d.y(), d.x() * d.x(), d.x() * d.y(), d.y() * d.y();
+    normal += row * row.transpose();
+    rhs += row * d.z();
+  }
+  // Points in a strip along the way (or across it) span no quadratic: no curvature to tell.
+  const double n = static_cast<double>(q.size());
+  const Eigen::LDLT<Matrix6d> ldlt(normal / n);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-8)) return 0.0;
+  return 2.0 * ldlt.solve(rhs / n)[5];
+}
+
 Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>& points,
                                              std::vector<double>* bend) const {
   if (bend) bend->assign(points.size(), 0.0);
@@ -112,6 +167,7 @@ Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>&
   if (heights.size() < 3) return MeanUp(points);
   std::nth_element(heights.begin(), heights.begin() + heights.size() / 2, heights.end());
   const double origin_height = heights[heights.size() / 2];
+  const double across = half_track_m_ > 0.0 ? CurvatureAcross(points, body) : 0.0;
   // Normal equations of z = a + b x + c y over (x, y) centred on their mean, for conditioning.
   std::vector<Eigen::Vector3d> samples;  // (x, y, z of the body's ground plane there) in this frame's body
   samples.reserve(heights.size());
@@ -123,9 +179,15 @@ Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>&
       body[k] = -1;
       continue;
     }
-    const Eigen::Vector3d ground = origin_[static_cast<std::size_t>(body[k])] - origin_height * n;
+    const auto j = static_cast<std::size_t>(body[k]);
+    const Eigen::Vector3d ground = origin_[j] - origin_height * n;
     const Eigen::Vector3d q = body_T_camera_ * points[k];
-    samples.emplace_back(q.x(), q.y(), ground.z() - (n.x() * (q.x() - ground.x()) + n.y() * (q.y() - ground.y())) / n.z());
+    const double ahead = (later_T_camera_[j] * points[k]).x();
+    const double side = (later_T_camera_[j] * points[k]).y();
+    const double sag = 0.5 * curvature_[j] * (half_wheelbase_m_ * half_wheelbase_m_ - ahead * ahead) +
+                       0.5 * across * (half_track_m_ * half_track_m_ - side * side);
+    samples.emplace_back(q.x(), q.y(),
+                         ground.z() - sag - (n.x() * (q.x() - ground.x()) + n.y() * (q.y() - ground.y())) / n.z());
     centre += q.head<2>();
   }
   if (samples.size() < 3) return MeanUp(points);

@@ -56,6 +56,14 @@ const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
                         "path: ground within this far ahead or behind a later pose's body is driven over"));
     f.push_back(Real<O>("path_half_width_m", &O::path_half_width_m, Above(0), "m",
                         "path: ... and within this far to its side"));
+    f.push_back(Real<O>("wheelbase_m", &O::wheelbase_m, Closed(0, 10), "m",
+                        "path: front to rear wheel contacts; where the way curves, the ground under a body "
+                        "lies below the chord its wheels span by curvature * (wheelbase^2 / 4 - x^2) / 2 at x "
+                        "ahead of its centre (0: the ground is the wheel plane along the way)"));
+    f.push_back(Real<O>("track_m", &O::track_m, Closed(0, 10), "m",
+                        "path: left to right wheel contacts; the same across the way, with the curvature "
+                        "across from the shape of the frame's ground points (0: the ground is the wheel plane "
+                        "across the way)"));
     f.push_back(Real<O>("terrain_tilt_sigma_deg", &O::terrain_tilt_sigma_deg, OpenClosed(0, 45), "deg",
                         "prior on each frame's ground tilt against the reference; limit on their scatter"));
     f.push_back(Real<O>("frame_loss_scale", &O::frame_loss_scale, Above(0), "sigmas",

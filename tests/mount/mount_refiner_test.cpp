@@ -9,8 +9,10 @@
 #include <random>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "ssta/core/error.h"
+#include "ssta/mount/ground_evidence.h"
 #include "ssta/mount/mount_refiner.h"
 #include "ssta/mount/online_mount_refiner.h"
 
@@ -239,12 +241,12 @@ double RollingHeight(double x, double y) {
   return 0.25 * std::sin(kTwoPi * x / 9.0) + 0.06 * y * std::sin(kTwoPi * x / 5.0 + 1.0);
 }
 
-/// The body standing on the rolling ground at x = s (heading +x): the plane through its four
+/// The body standing on the ground `height` at x = s (heading +x): the plane through its four
 /// wheel contacts (wheelbase 0.6 m, track 0.5 m), its origin 0.4 m above them.
-Eigen::Isometry3d BodyOnRollingGround(double s) {
+Eigen::Isometry3d BodyOnRollingGround(double s, double (*height)(double, double) = RollingHeight) {
   const double hx = 0.3, hy = 0.25;
-  const double fl = RollingHeight(s + hx, hy), fr = RollingHeight(s + hx, -hy);
-  const double rl = RollingHeight(s - hx, hy), rr = RollingHeight(s - hx, -hy);
+  const double fl = height(s + hx, hy), fr = height(s + hx, -hy);
+  const double rl = height(s - hx, hy), rr = height(s - hx, -hy);
   const double slope_x = ((fl + fr) - (rl + rr)) / (4 * hx), slope_y = ((fl + rl) - (fr + rr)) / (4 * hy);
   const Eigen::Vector3d up = Eigen::Vector3d(-slope_x, -slope_y, 1.0).normalized();
   const Eigen::Vector3d x_axis = (Eigen::Vector3d::UnitX() - up.x() * up).normalized();
@@ -319,6 +321,73 @@ TEST(MountRefiner, PathReferenceRecoversTheMountOnRollingGround) {
   const double body_error_deg = AngleDeg(TrueMount().linear(), body.body_T_camera_refined.linear());
   std::cout << "rolling ground, body reference: " << body_error_deg << " deg off\n";
   EXPECT_GT(body_error_deg, 5.0 * error_deg) << body.BriefReport();
+}
+
+/// The rolling ground's swell, curving across the way as well (0.3 per m) [m].
+double SaggingHeight(double x, double y) {
+  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
+  return 0.25 * std::sin(kTwoPi * x / 9.0) + 0.15 * y * y;
+}
+
+/// The normal of z = a + b x + c y fitted (least squares) to `points` [body frame].
+Eigen::Vector3d FittedPlaneNormal(const std::vector<Eigen::Vector3d>& points) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) {
+    const Eigen::Vector3d row(1.0, p.x(), p.y());
+    normal += row * row.transpose();
+    rhs += row * p.z();
+  }
+  const Eigen::Vector3d abc = normal.ldlt().solve(rhs);
+  return Eigen::Vector3d(-abc[1], -abc[2], 1.0).normalized();
+}
+
+TEST(DrivenOverGround, TheExpectedGroundSagsBelowTheChordsTheWheelsSpan) {
+  // A frame at x = 0 sees the ground 1-5 m ahead that the bodies of the next 60 frames (0.1 m
+  // apart) stand on. Each body's wheel plane is the chord through its contacts; the ground
+  // between them lies (curvature / 2) (half span^2 - offset^2) below it, along the way (where
+  // the swell's curvature changes from body to body) and across it. The plane expected from the bodies must be
+  // the plane the ground points themselves fit.
+  std::vector<std::optional<Eigen::Isometry3d>> poses;
+  for (int i = 0; i <= 60; ++i) poses.push_back(BodyOnRollingGround(0.1 * i, SaggingHeight));
+  const Eigen::Isometry3d world_T_body = *poses[0];
+  const Eigen::Isometry3d camera_T_world = (world_T_body * TrueMount()).inverse();
+  std::vector<Eigen::Vector3d> points;
+  for (double x = 1.0; x <= 5.0; x += 0.05) {
+    for (double y = -0.6; y <= 0.6 + 1e-9; y += 0.1) {
+      points.push_back(camera_T_world * Eigen::Vector3d(x, y, SaggingHeight(x, y)));
+    }
+  }
+  auto fitted = [&](const DrivenOverGround& driven) {
+    std::vector<Eigen::Vector3d> kept, in_body;
+    for (const Eigen::Vector3d& p : points) {
+      if (!driven.Contains(p)) continue;
+      kept.push_back(p);
+      in_body.push_back(TrueMount() * p);
+    }
+    return std::pair{kept, FittedPlaneNormal(in_body)};
+  };
+  auto angle_deg = [](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    return std::atan2(a.cross(b).norm(), a.dot(b)) / kDeg;
+  };
+
+  RefinementOptions options;  // wheelbase 0.6 m and track 0.5 m, as the bodies above
+  const DrivenOverGround driven(poses, 0, TrueMount(), options);
+  const auto [kept, truth] = fitted(driven);
+  ASSERT_GT(kept.size(), 500u);
+  const double error_deg = angle_deg(driven.ExpectedUp(kept), truth);
+  std::cout << "expected ground with the chords' sag: " << error_deg << " deg off the ground's plane\n";
+  EXPECT_LT(error_deg, 0.02);
+
+  // Each sag alone leaves the other's tilt; neither: the wheel planes taken for the ground.
+  for (const auto& [wheelbase, track] : {std::pair{0.0, 0.5}, {0.6, 0.0}, {0.0, 0.0}}) {
+    options.wheelbase_m = wheelbase;
+    options.track_m = track;
+    const DrivenOverGround chordless(poses, 0, TrueMount(), options);
+    const double off_deg = angle_deg(chordless.ExpectedUp(kept), truth);
+    std::cout << "wheelbase " << wheelbase << " m, track " << track << " m: " << off_deg << " deg off\n";
+    EXPECT_GT(off_deg, 10.0 * error_deg) << wheelbase << " / " << track;  // measured 0.08-0.27 deg
+  }
 }
 
 TEST(MountRefiner, ReportsAndJsonCarryTheEstimate) {

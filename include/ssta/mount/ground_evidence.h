@@ -64,20 +64,29 @@ class DrivenOverGround {
   /// The normal, in this frame's body, of the plane a least-squares fit through `points` finds
   /// if the ground under each point is the wheel plane of the later body standing on it:
   /// parallel to that body's x-y plane, as far below its origin as the points lie in the median
-  /// over all bodies. On curved ground one plane over a long stretch tilts by how its points
-  /// spread, not by the mean of the bodies' tilts; this is the normal to compare it with. MeanUp
-  /// when fewer than 3 points have a body or they span no plane (a strip under 1 cm wide, in the
-  /// RMS). `bend`, when given, receives per point how far that ground lies above the fitted
-  /// plane along this frame's body z [m] (0 for a point no body stands on).
+  /// over all bodies, less the sag of curving ground below the chords the wheels span
+  /// (RefinementOptions::wheelbase_m along the way, with its curvature from the later bodies'
+  /// pitch; RefinementOptions::track_m across it, with its curvature from the points' shape).
+  /// On curved ground one plane over a long stretch tilts by how its points spread, not by the
+  /// mean of the bodies' tilts; this is the normal to compare it with. MeanUp when fewer than
+  /// 3 points have a body or they span no plane (a strip under 1 cm wide, in the RMS). `bend`,
+  /// when given, receives per point how far that ground lies above the fitted plane along this
+  /// frame's body z [m] (0 for a point no body stands on).
   Eigen::Vector3d ExpectedUp(const std::vector<Eigen::Vector3d>& points, std::vector<double>* bend = nullptr) const;
 
  private:
   int Find(const Eigen::Vector3d& p_camera) const;
+  /// The ground's curvature across the way [1/m], one for the stretch, from the shape of the
+  /// `points` whose `body` index is not negative; 0 when they span no quadratic surface.
+  double CurvatureAcross(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& body) const;
   double half_length_, half_width_;
   Eigen::Isometry3d body_T_camera_ = Eigen::Isometry3d::Identity();
   std::vector<Eigen::Isometry3d> later_T_camera_;
   std::vector<Eigen::Vector3d> up_;      ///< later body z in this frame's body
   std::vector<Eigen::Vector3d> origin_;  ///< later body origin in this frame's body [m]
+  std::vector<double> curvature_;        ///< the way's curvature at each later body [1/m]
+  double half_wheelbase_m_ = 0.0;
+  double half_track_m_ = 0.0;
 };
 
 }  // namespace ssta

@@ -150,7 +150,9 @@ class MountRefiner {
 /// the points are chosen again through the refined mount and solved once more (a mount error of
 /// degrees moves far points along the path by centimetres, onto the wrong later body, and on
 /// curved ground that is a tilt). `*frames_on_path` (optional) receives how many frames kept
-/// enough points in the last round. Fewer than min_frames: kTooFewFrames, as Solve().
+/// enough points in the last round. Fewer than min_frames: kTooFewFrames, as Solve(). With the
+/// sag below the wheels' chords (wheelbase_m, track_m), the drive is also solved against the
+/// wheel planes alone; where those determine no mount, their answer is returned.
 MountRefinementResult SolveAlongPath(const RefinementOptions& options, const Eigen::Isometry3d& body_T_camera,
                                      const std::vector<std::optional<Eigen::Isometry3d>>& world_T_body,
                                      const std::vector<GroundEvidence>& frames, int* frames_on_path = nullptr);

@@ -73,6 +73,16 @@ struct RefinementOptions {
   /// Path reference: ... and within this far to the side (along body y) [m]: about half the
   /// track, plus a margin that keeps enough points to see the roll.
   double path_half_width_m = 0.6;
+  /// Path reference: front to rear wheel contacts [m]. A body's wheel plane is the chord
+  /// through its contacts: where the ground curves along the way (curvature k, from how the
+  /// later bodies' pitch turns over a wheelbase), the ground at x ahead of the body's centre lies
+  /// k (w^2 / 4 - x^2) / 2 below that plane, and the expected ground follows it. 0: the ground is
+  /// the wheel plane along the way.
+  double wheelbase_m = 0.6;
+  /// Path reference: left to right wheel contacts [m]. The same across the way, with the
+  /// curvature across from the shape of the frame's ground points (a small mount error turns
+  /// them but does not bend them). 0: the ground is the wheel plane across the way.
+  double track_m = 0.5;
   /// How far each frame's ground plane may tilt away from the reference (terrain, suspension,
   /// IMU error) [deg]: the 1-sigma of the first solve's per-frame tilt prior, and the limit on
   /// the measured scatter of the frames' tilts (larger: "terrain_too_rough").
@@ -88,8 +98,9 @@ struct RefinementOptions {
   /// Added in quadrature to the 1-sigma of pitch and of roll [deg]: errors that every frame
   /// shares, so no scatter shows them (a disparity bias tilts every frame's ground alike, the
   /// poses' own roll and pitch errors, ground whose plane ahead differs from the wheel plane
-  /// later standing on it in the same way all along a drive). 0.2: the RMS per angle of the
-  /// errors left on the twelve rendered tuning drives (docs/mount_calibration.md, Measured).
+  /// later standing on it in the same way all along a drive). 0.2 covers the errors left on the
+  /// twelve rendered tuning drives (docs/mount_calibration.md, Measured: 0.06 and 0.08 deg RMS
+  /// about body x and y, 0.26 deg at most).
   /// calibrate-mount also keeps the configured mount when the body reference stands in for the
   /// path reference and the poses' body z turns more than twice this from its mean over the drive.
   double systematic_sigma_deg = 0.2;
