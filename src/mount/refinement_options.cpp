@@ -62,8 +62,9 @@ const OptionFields<RefinementOptions>& RefinementOptions::Fields() {
                         "ahead of its centre (0: the ground is the wheel plane along the way)"));
     f.push_back(Real<O>("track_m", &O::track_m, Closed(0, 10), "m",
                         "path: left to right wheel contacts; the same across the way, with the curvature "
-                        "across from the shape of the frame's ground points (0: the ground is the wheel plane "
-                        "across the way)"));
+                        "across from the shape of the frame's ground points; with wheelbase_m, also the twist "
+                        "of a side slope that turns along the way, from the later bodies' roll (0: the ground "
+                        "is the wheel plane across the way)"));
     f.push_back(Real<O>("terrain_tilt_sigma_deg", &O::terrain_tilt_sigma_deg, OpenClosed(0, 45), "deg",
                         "prior on each frame's ground tilt against the reference; limit on their scatter"));
     f.push_back(Real<O>("frame_loss_scale", &O::frame_loss_scale, Above(0), "sigmas",

@@ -66,7 +66,9 @@ class DrivenOverGround {
   /// parallel to that body's x-y plane, as far below its origin as the points lie in the median
   /// over all bodies, less the sag of curving ground below the chords the wheels span
   /// (RefinementOptions::wheelbase_m along the way, with its curvature from the later bodies'
-  /// pitch; RefinementOptions::track_m across it, with its curvature from the points' shape).
+  /// pitch; RefinementOptions::track_m across it, with its curvature from the points' shape),
+  /// and the twist of a side slope that turns along the way (from the later bodies' roll), each
+  /// with how it changes along the way.
   /// On curved ground one plane over a long stretch tilts by how its points spread, not by the
   /// mean of the bodies' tilts; this is the normal to compare it with. MeanUp when fewer than
   /// 3 points have a body or they span no plane (a strip under 1 cm wide, in the RMS). `bend`,
@@ -85,6 +87,9 @@ class DrivenOverGround {
   std::vector<Eigen::Vector3d> up_;      ///< later body z in this frame's body
   std::vector<Eigen::Vector3d> origin_;  ///< later body origin in this frame's body [m]
   std::vector<double> curvature_;        ///< the way's curvature at each later body [1/m]
+  std::vector<double> twist_;            ///< how its side slope turns per metre driven there [1/m]
+  std::vector<double> curvature_rate_;   ///< how the curvature changes per metre driven [1/m^2]
+  std::vector<double> twist_rate_;       ///< how the twist changes per metre driven [1/m^2]
   double half_wheelbase_m_ = 0.0;
   double half_track_m_ = 0.0;
 };

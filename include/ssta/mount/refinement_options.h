@@ -81,7 +81,10 @@ struct RefinementOptions {
   double wheelbase_m = 0.6;
   /// Path reference: left to right wheel contacts [m]. The same across the way, with the
   /// curvature across from the shape of the frame's ground points (a small mount error turns
-  /// them but does not bend them). 0: the ground is the wheel plane across the way.
+  /// them but does not bend them). With wheelbase_m, also the twist of a side slope that turns
+  /// along the way (from how the later bodies' roll turns): the four contacts' plane takes the
+  /// mean of the front and the rear axle's side slope. 0: the ground is the wheel plane across
+  /// the way.
   double track_m = 0.5;
   /// How far each frame's ground plane may tilt away from the reference (terrain, suspension,
   /// IMU error) [deg]: the 1-sigma of the first solve's per-frame tilt prior, and the limit on
