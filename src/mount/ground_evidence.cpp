@@ -81,10 +81,7 @@ DrivenOverGround::DrivenOverGround(const std::vector<std::optional<Eigen::Isomet
   // axle: the ground under a body at x ahead and y to the side leaves that plane by
   //   curvature (x^2 - w^2/4) / 2 + twist x y
   //   + curvature' x (x^2 - w^2/4) / 6 + twist' y (x^2 - w^2/4) / 2,
-  // w the wheelbase: to the third order along the way. Where the tuning set's random 5 ends, the
-  // side slope turns by 0.11 per m, and the ground its last frames see tilts 1.7 deg about x
-  // from the wheel plane they all see; on the wide set's random 14 the four contacts' side
-  // slope is up to 0.004 off the slope under the body's centre, the twist' term.
+  // w the wheelbase: to the third order along the way (docs/mount_calibration.md, The evidence).
   half_wheelbase_m_ = 0.5 * options.wheelbase_m;
   half_track_m_ = 0.5 * options.track_m;
   const std::size_t n = origin_.size();
@@ -95,8 +92,8 @@ DrivenOverGround::DrivenOverGround(const std::vector<std::optional<Eigen::Isomet
   if (half_wheelbase_m_ <= 0.0) return;
   std::vector<double> s(n, 0.0);  // distance driven from the first later body [m]
   for (std::size_t j = 1; j < n; ++j) s[j] = s[j - 1] + (origin_[j] - origin_[j - 1]).norm();
-  std::vector<std::size_t> behind(n, 0), ahead(n, 0);  // the bodies the span runs between
-  std::vector<bool> known(n, false);
+  // The bodies each span runs between; equal where the way around a body is too short.
+  std::vector<std::size_t> behind(n, 0), ahead(n, 0);
   std::size_t a = 0, b = 0;
   for (std::size_t j = 0; j < n; ++j) {
     while (a < j && s[j] - s[a + 1] >= half_wheelbase_m_) ++a;
@@ -106,13 +103,13 @@ DrivenOverGround::DrivenOverGround(const std::vector<std::optional<Eigen::Isomet
     if (ds < half_wheelbase_m_) continue;  // too little of the way around it: no curvature
     behind[j] = a;
     ahead[j] = b;
-    known[j] = true;
     const Eigen::Vector3d forward = (origin_[b] - origin_[a]).normalized();
     curvature_[j] = -(up_[b] - up_[a]).dot(forward) / ds;
     if (half_track_m_ > 0.0) twist_[j] = -(up_[b] - up_[a]).dot(up_[j].cross(forward).normalized()) / ds;
   }
+  auto known = [&](std::size_t j) { return ahead[j] > behind[j]; };
   for (std::size_t j = 0; j < n; ++j) {
-    if (!known[j] || !known[behind[j]] || !known[ahead[j]]) continue;
+    if (!known(j) || !known(behind[j]) || !known(ahead[j])) continue;
     const double ds = s[ahead[j]] - s[behind[j]];
     curvature_rate_[j] = (curvature_[ahead[j]] - curvature_[behind[j]]) / ds;
     twist_rate_[j] = (twist_[ahead[j]] - twist_[behind[j]]) / ds;
@@ -206,8 +203,8 @@ Eigen::Vector3d DrivenOverGround::ExpectedUp(const std::vector<Eigen::Vector3d>&
     const auto j = static_cast<std::size_t>(body[k]);
     const Eigen::Vector3d ground = origin_[j] - origin_height * n;
     const Eigen::Vector3d q = body_T_camera_ * points[k];
-    const double ahead = (later_T_camera_[j] * points[k]).x();
-    const double side = (later_T_camera_[j] * points[k]).y();
+    const Eigen::Vector3d in_later = later_T_camera_[j] * points[k];
+    const double ahead = in_later.x(), side = in_later.y();
     const double chord_x = ahead * ahead - half_wheelbase_m_ * half_wheelbase_m_;
     const double sag = -0.5 * curvature_[j] * chord_x + 0.5 * across * (half_track_m_ * half_track_m_ - side * side) -
                        twist_[j] * ahead * side -

@@ -20,6 +20,7 @@ namespace ssta {
 namespace {
 
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
+constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
 
 /// A camera 0.6 m above the body origin, 0.2 m ahead, looking forward and pitched down 15 deg.
 Eigen::Isometry3d TrueMount() {
@@ -237,7 +238,6 @@ TEST(MountRefiner, AFewFramesOnASlopeOfTheirOwnDoNotPullTheEstimate) {
 
 /// Rolling ground: a long swell along the drive and a side slope that comes and goes [m].
 double RollingHeight(double x, double y) {
-  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
   return 0.25 * std::sin(kTwoPi * x / 9.0) + 0.06 * y * std::sin(kTwoPi * x / 5.0 + 1.0);
 }
 
@@ -325,7 +325,6 @@ TEST(MountRefiner, PathReferenceRecoversTheMountOnRollingGround) {
 
 /// The rolling ground's swell, curving across the way as well (0.3 per m) [m].
 double SaggingHeight(double x, double y) {
-  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
   return 0.25 * std::sin(kTwoPi * x / 9.0) + 0.15 * y * y;
 }
 
@@ -345,7 +344,6 @@ Eigen::Vector3d FittedPlaneNormal(const std::vector<Eigen::Vector3d>& points) {
 /// The swell and the curvature across of SaggingHeight, with a side slope that turns along the
 /// way: 0.1 sin(2 pi x / 5 + 1) per m, a twist of up to 0.13 per m [m].
 double TwistingHeight(double x, double y) {
-  constexpr double kTwoPi = 2.0 * 3.14159265358979323846;
   return SaggingHeight(x, y) + 0.1 * y * std::sin(kTwoPi * x / 5.0 + 1.0);
 }
 
