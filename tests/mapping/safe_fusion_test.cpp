@@ -514,6 +514,32 @@ TEST(HiddenDrops, APitsRimIsMarkedWhereItsFarWallHidesTheFloor) {
   EXPECT_TRUE(std::isnan(Profile(shallow, FindHiddenDrops(shallow, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
 }
 
+TEST(HiddenDrops, APitOnRisingGroundIsMarkedWhereItsWallRisesASemiStepIntoView) {
+  VehicleOptions vehicle;  // semi step 0.1 m, max step 0.2 m, max slope 25 deg
+  Eigen::Isometry3d world_T;
+  // Ground rising 0.1 m per m, with a pit 0.3 m deep over x in [3.0, 3.35), seen from 1.1 m up.
+  // The ray over the near edge (0.3 m up) descends at tan 0.8 / 3 and meets the far wall only
+  // 0.093 m down: less than a semi step. But that wall rises 0.13 m into view, to the far rim
+  // at 0.335 m: a face steeper than the vehicle may climb, higher than a semi step, whose foot
+  // lies below the view. Both rims are lips, a step radius deep.
+  const auto rising = [](double depth) {
+    return [depth](double x) { return 0.1 * x - (x >= 3.0 && x < 3.35 ? depth : 0.0); };
+  };
+  const Image3f hidden = Render(1.1, 20.0, rising(0.3), &world_T);
+  const LipProfile p = Profile(hidden, FindHiddenDrops(hidden, world_T, kNoise, vehicle, 20.0, 1), world_T);
+  EXPECT_NEAR(p.first_x, 2.8, 0.04);   // a step radius before the near edge
+  EXPECT_NEAR(p.last_x, 3.55, 0.04);   // a step radius beyond the far edge
+  EXPECT_NEAR(p.max_weight, 255.0 * (0.8 / 3.0) / std::tan(DegToRad(25.0)), 4.0);
+  // On level ground, a pit 0.25 m across shows 0.092 m of its far wall (the ray descends at
+  // tan 1.1 / 3), and that wall rises only as far, back to the near side's height: no face a
+  // semi step high is seen, and nothing is marked.
+  const Image3f level = Render(1.1, 20.0, [](double x) { return x >= 3.0 && x < 3.25 ? -0.3 : 0.0; }, &world_T);
+  EXPECT_TRUE(std::isnan(Profile(level, FindHiddenDrops(level, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
+  // A dip 0.05 m deep on the rising ground shows its floor: nothing is marked.
+  const Image3f dip = Render(1.1, 20.0, rising(0.05), &world_T);
+  EXPECT_TRUE(std::isnan(Profile(dip, FindHiddenDrops(dip, world_T, kNoise, vehicle, 20.0, 1), world_T).last_x));
+}
+
 TEST(HiddenDrops, ALipReachesAStepRadiusFromAnEdgeTheColumnsCrossObliquely) {
   VehicleOptions vehicle;  // step radius 0.2 m
   Eigen::Isometry3d world_T;
