@@ -161,12 +161,12 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
     for (std::size_t i = 1; i < column.size(); ++i) {
       const ColumnPoint& a = column[i];
       const ColumnPoint& before = column[i - 1];
-      // The next view up the column lands lower than A beyond the noise of both heights
-      // (tested first: most points end here), or there is nothing beyond A.
+      // The next view up the column lands lower than A by more than semi_step beyond the noise
+      // of both heights (tested first: most points end here), or there is nothing beyond A.
       const bool last = i + 1 == column.size();
       const float drop = last ? 0.0f : a.p.z() - column[i + 1].p.z();
       const float noise = last ? 0.0f : 3.0f * Hypot(a.sigma, column[i + 1].sigma);
-      if (!last && drop <= noise) continue;
+      if (!last && drop <= semi_step + noise) continue;
       // A lies on a surface, not on a stray match: its neighbour towards the camera is near
       // its height.
       if (std::abs(before.p.z() - a.p.z()) > semi_step + 3.0f * Hypot(before.sigma, a.sigma)) continue;
@@ -178,16 +178,13 @@ ImageU8 FindHiddenDrops(const Image3f& cloud, const Eigen::Isometry3d& world_T_r
       bool far_rim = false;
       if (!last) {
         // The next view lands beyond A and lower by more than the vehicle may step; or lower
-        // by less, on the wall of a pit that shows a semi step: the drop onto it, or its rise
-        // into view, which on rising ground is the larger.
+        // by less, on the wall of a pit.
         const ColumnPoint& b = column[i + 1];
         const float range_b = (b.p.head<2>() - origin).norm();
         if (range_b <= range_a) continue;
         if (drop <= max_step + noise) {
           if (!OnAPitsWall(column, i + 1, range_b, origin, tan_max_slope, per_m2)) continue;
-          const float wall = VisibleWallRise(column, i + 1, range_b, origin, tan_max_slope, per_m2);
-          if (drop <= semi_step + noise && wall <= semi_step + noise) continue;
-          far_rim = wall >= drop - noise;
+          far_rim = VisibleWallRise(column, i + 1, range_b, origin, tan_max_slope, per_m2) >= drop - noise;
         }
       } else {
         // Nothing beyond A in this column: had a floor lain within max_step below A, the ray

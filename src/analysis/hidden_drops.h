@@ -15,12 +15,10 @@ namespace ssta::internal {
 /// lies within `vehicle.semi_step_m`, beyond noise, of A's height) whose next point B lies
 /// farther from the camera and lower than A by more than `vehicle.max_step_m` plus three sigmas
 /// of the two heights' stereo noise is an edge: whatever joins A to B is hidden below the ray
-/// over A. So is a point A whose next point B lies lower by less, but beyond the noise, on a face
-/// that rises towards B's neighbours more steeply than `vehicle.max_slope_deg`: the far wall of a
-/// pit, whose floor lies below the ray, deeper than the wall shows. The pit must show a semi
-/// step: B lies more than `vehicle.semi_step_m` below A, or the wall rises more than that above
-/// B into view (a pit on rising ground), beyond the noise. Where that wall rises back to A's
-/// height, give or take the noise,
+/// over A. So is a point A whose next point B lies lower by less, but by more than
+/// `vehicle.semi_step_m` beyond the noise, on a face that rises towards B's neighbours more
+/// steeply than `vehicle.max_slope_deg`: the far wall of a pit, whose floor lies below the ray,
+/// deeper than the wall shows. Where that wall rises back to A's height, give or take the noise,
 /// it drops to the same floor, so B is an edge too (the pit's far rim). So is a point A with
 /// nothing beyond it in its column whose ray, had a floor lain within max_step_m below A, would
 /// have met it before `range_m` (the map's range; 0: never). A ray that descends more steeply than
