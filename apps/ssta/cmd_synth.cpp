@@ -128,7 +128,7 @@ void AddRenderOptions(CLI::App* cmd, SynthArgs* args) {
                   "labels beyond this range are 255 [m]")
       ->capture_default_str();
   cmd->add_option("--boundary-band", args->options.render.boundary_band_px,
-                  "labels within this many px of a class change are 255")
+                  "labels within this many px of a class change are 255 (the gt grid still scores the cells they see)")
       ->capture_default_str();
   cmd->add_option("--supersample", args->options.render.supersample,
                   "rays per pixel side for anti-aliasing (1 = off, 2 = 2x2: about 5x slower)")

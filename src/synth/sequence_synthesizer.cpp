@@ -81,15 +81,16 @@ std::vector<int> DroppedFrames(const SynthOptions& o) {
   return dropped;
 }
 
-/// The (x, y) of the surface points behind every 4th labelled pixel (label != 255) of a frame,
-/// in the world: what the cameras actually saw, so that the grid only scores that.
+/// The (x, y) of the surface points behind every 4th seen pixel of a frame, in the world: what
+/// the cameras actually saw, so that the grid only scores that. Pixels in the don't-care band
+/// of a class change count as seen: the grid takes its classes from the world, not from them.
 void CollectSeenPoints(const StereoFrame& frame, const Eigen::Isometry3d& world_T_cam0, const RigOptions& rig,
                        std::vector<Eigen::Vector2d>* seen) {
   const double cu = (frame.depth.width() - 1) * 0.5, cv = (frame.depth.height() - 1) * 0.5;
   for (int v = 0; v < frame.depth.height(); v += 2) {
     for (int u = 0; u < frame.depth.width(); u += 2) {
       const float z = frame.depth(v, u);
-      if (!(z > 0) || frame.labels(v, u) == kDontCare) continue;
+      if (!(z > 0) || !frame.seen(v, u)) continue;
       const Eigen::Vector3d p = world_T_cam0 * Eigen::Vector3d((u - cu) * z / rig.focal_px, (v - cv) * z / rig.focal_px, z);
       seen->emplace_back(p.x(), p.y());
     }
@@ -107,8 +108,8 @@ Eigen::AlignedBox2d TruthRegion(const std::vector<Eigen::Vector3d>& cams, double
 }
 
 /// World grid of classes over the area the cameras could label, map_server style: each cell
-/// takes the worst true class of 3x3 samples of the top surface in it. Cells that no labelled
-/// pixel of any frame saw are 255 (don't care): a map cannot know them.
+/// takes the worst true class of 3x3 samples of the top surface in it. Cells that no seen pixel
+/// of any frame (StereoFrame::seen) fell in are 255 (don't care): a map cannot know them.
 void WriteGrid(const TerrainTruth& truth, const SynthOptions& o, const Eigen::AlignedBox2d& region,
                const std::vector<Eigen::Vector2d>& seen, const std::string& gt_dir) {
   const double r = o.grid_resolution_m;

@@ -266,6 +266,8 @@ StereoFrame StereoRenderer::Render(const Eigen::Isometry3d& world_T_cam0, int fr
   RenderCamera(in, world_T_cam1, frame_index, 1, {&out.right, &right_depth, nullptr, nullptr});
   MarkOccluded(right_depth, &out);
   out.labels = BandLabels(raw_class, out.occluded, render_.boundary_band_px);
+  out.seen = ImageU8(w, h, 0);
+  for (std::size_t i = 0; i < out.seen.size(); ++i) out.seen[i] = raw_class[i] != kDontCare && !out.occluded[i];
   return out;
 }
 

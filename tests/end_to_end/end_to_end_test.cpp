@@ -197,15 +197,15 @@ TEST(EndToEnd, ImuCorrectionUndoesRollPitchDriftInTheMap) {
   RecordProperty("uncorrected", std::to_string(without.Accuracy()));
   EXPECT_NEAR(with_imu.Accuracy(), reference.Accuracy(), 0.02);
   EXPECT_NEAR(with_imu.MeanIou(), reference.MeanIou(), 0.02);
-  // Measured 0.860 / 0.860 / 0.836 grid accuracy (truth to 20 m).
+  // Measured 0.820 / 0.820 / 0.797 grid accuracy (truth to 20 m).
   EXPECT_LT(without.Accuracy(), with_imu.Accuracy() - 0.01)
       << "uncorrected " << without.Accuracy() << " vs corrected " << with_imu.Accuracy();
-  EXPECT_GT(reference.Accuracy(), 0.83);
+  EXPECT_GT(reference.Accuracy(), 0.80);
 }
 
 TEST(EndToEnd, DropOffAndForestMapsHoldTheirAccuracy) {
   // Grid accuracy over every cell the cameras saw within 20 m (unknown counts as wrong).
-  // Measured on 20 frames, seed 1: drop-off 0.904, forest 0.926. Coverage is asserted too: an
+  // Measured on 20 frames, seed 1: drop-off 0.899, forest 0.913. Coverage is asserted too: an
   // empty map would score no wrong cell it saw.
   for (const synth::SynthOptions& scene : {Dropoff(20), Forest(20)}) {
     SCOPED_TRACE(scene.scene);
@@ -221,11 +221,11 @@ TEST(EndToEnd, DropOffAndForestMapsHoldTheirAccuracy) {
     RecordProperty(scene.scene + "_footprints_falsely_blocked", std::to_string(blocked));
     std::cout << scene.scene << " footprints: unsafe " << unsafe << ", falsely blocked " << blocked << " of " << footprints.matrix.Scored() << " scored\n";
     // Floors, not the targets of docs/accuracy.md (unsafe <= 5 %, falsely blocked <= 10 %):
-    // measured unsafe 0.45 (drop-off: its lip) and 0.21 (forest), falsely blocked 0.027 and
-    // 0.085. A change that loses obstacles or blocks free ground beyond these fails.
+    // measured unsafe 0.24 (drop-off: its lip) and 0.041 (forest), falsely blocked 0.076 and
+    // 0.063. A change that loses obstacles or blocks free ground beyond these fails.
     const bool dropoff = scene.scene == "dropoff";
-    EXPECT_LE(unsafe, dropoff ? 0.50 : 0.26);
-    EXPECT_LE(blocked, dropoff ? 0.06 : 0.12);
+    EXPECT_LE(unsafe, dropoff ? 0.30 : 0.08);
+    EXPECT_LE(blocked, dropoff ? 0.10 : 0.09);
     EXPECT_GT(footprints.matrix.Scored(), 200);
   }
 }

@@ -481,6 +481,31 @@ TEST(SynthGroundTruth, GridScoresOnlyCellsTheCamerasSaw) {
   EXPECT_GT(dont_care, seen);  // the grid spans the label range around the whole path
 }
 
+TEST(SynthGroundTruth, GridScoresTheCellsBesideObstaclesWhateverTheLabelBand) {
+  // The labels leave a don't-care band along every class change; the grid takes its classes
+  // from the world, so a wide band must not unscore the cells at a crate's foot.
+  auto grid_for_band = [](int band, const std::string& dir) {
+    SynthOptions o = SmallOptions("ramp", 1);
+    o.ramp_slope_deg = 0.0;
+    o.grid_seen_only = true;
+    o.render.boundary_band_px = band;
+    o.added_boxes.push_back({4.0, 0.0, 0.6, 0.6, 0.5, 0.0});
+    WriteSyntheticSequence(o, dir);
+    return ReadLabelImage(dir + "/gt/grid_classes.png");
+  };
+  TempDir tmp;
+  const ImageU8 narrow = grid_for_band(0, tmp.Sub("band0"));
+  const ImageU8 wide = grid_for_band(6, tmp.Sub("band6"));
+  ASSERT_EQ(narrow.size(), wide.size());
+  int red = 0, differ = 0;
+  for (std::size_t i = 0; i < narrow.size(); ++i) {
+    red += narrow[i] == static_cast<std::uint8_t>(TravClass::kNonTraversable);
+    differ += narrow[i] != wide[i];
+  }
+  EXPECT_GT(red, 8);  // the crate's seen faces and the ring at its foot (0.25 m cells)
+  EXPECT_EQ(differ, 0);
+}
+
 TEST(SynthMotion, ImuIntegratesBackToPose) {
   TempDir tmp;
   SynthOptions o = SmallOptions("hills", 31);  // 2 s of driving over rolling hills

@@ -17,6 +17,7 @@ struct StereoFrame {
   ImageU8 left;         ///< cam0 grey image
   ImageU8 right;        ///< cam1 grey image
   ImageU8 labels;       ///< true class ids (TerrainTruth), 255 = don't care
+  ImageU8 seen;         ///< 1 where both cameras see a surface point within the label range
   ImageF disparity;     ///< true disparity u_left - u_right [px], 0 where the sky is seen
   ImageF depth;         ///< cam0 z depth [m], 0 where the sky is seen
   ImageU8 occluded;     ///< 1 where the left pixel's surface point is hidden in cam1

@@ -106,8 +106,9 @@ struct SynthOptions {
   std::uint64_t seed = 1;       ///< seeds scene layout, texture, noise and faults
   double ramp_slope_deg = 20.0; ///< slope of the `ramp` scene's plane [deg]
   double grid_resolution_m = 0.1;  ///< cell size of gt/grid_classes.png [m]
-  /// Cells of gt/grid_classes.png that no labelled pixel of any frame saw are 255 (don't care),
-  /// so that a map is scored on what the cameras could see. false: every cell is classified.
+  /// Cells of gt/grid_classes.png that no frame saw (with both cameras, within the label range)
+  /// are 255 (don't care), so that a map is scored on what the cameras could see; the labels'
+  /// don't-care band does not unscore a cell. false: every cell is classified.
   bool grid_seen_only = true;
   VehicleOptions vehicle;       ///< thresholds for the ground-truth classes; written to vehicle.yaml
   RigOptions rig;
