@@ -301,7 +301,7 @@ void BM_MapUpdate(benchmark::State& state, const Dataset* d) {
 }
 
 /// A map of the dataset's frames, each inserted once: what the query cases ask.
-TraversabilityMap MapOfFrames(const Dataset& d, bool smeared_surface_hazards = false) {
+TraversabilityMap MapOfFrames(const Dataset& d, bool smeared_surface_hazards = true) {
   MapOptions options = d.config.map.fusion;
   options.class_smeared_surface_hazards = smeared_surface_hazards;
   TraversabilityMap map(options);
@@ -326,8 +326,8 @@ std::vector<Eigen::Vector2d> ColumnCentres(const TraversabilityMap& map) {
 
 /// TopSurfaceAt of every column over the map's bounds (one iteration: the whole sweep), the
 /// judge behind `export`, `query` and `eval footprints`: the fused surface within the step
-/// radius and the frames' votes of each column; MapJudgeSmeared with
-/// map.class_smeared_surface_hazards on (far columns judged again over their smear).
+/// radius and the frames' votes of each column, far columns judged again over their smear
+/// (map.class_smeared_surface_hazards, shipped on); MapJudgeUnsmeared with that key off.
 void BM_MapJudge(benchmark::State& state, const Dataset* d, bool smeared_surface_hazards) {
   const TraversabilityMap map = MapOfFrames(*d, smeared_surface_hazards);
   const std::vector<Eigen::Vector2d> centres = ColumnCentres(map);
@@ -765,8 +765,8 @@ void RegisterAll() {
     add("MapSubpixel/" + name, [get = get](benchmark::State& s) { BM_MapSubpixel(s, get()); });
     add("MapPoints/" + name, [get = get](benchmark::State& s) { BM_MapPoints(s, get()); });
     add("MapUpdate/" + name, [get = get](benchmark::State& s) { BM_MapUpdate(s, get()); });
-    add("MapJudge/" + name, [get = get](benchmark::State& s) { BM_MapJudge(s, get(), false); });
-    add("MapJudgeSmeared/" + name, [get = get](benchmark::State& s) { BM_MapJudge(s, get(), true); });
+    add("MapJudge/" + name, [get = get](benchmark::State& s) { BM_MapJudge(s, get(), true); });
+    add("MapJudgeUnsmeared/" + name, [get = get](benchmark::State& s) { BM_MapJudge(s, get(), false); });
     add("MapFootprints/" + name, [get = get](benchmark::State& s) { BM_MapFootprints(s, get()); });
     add("OnlineRefinement/" + name, [get = get](benchmark::State& s) { BM_OnlineRefinement(s, get()); });
     add("EndToEnd/" + name, [get = get](benchmark::State& s) { BM_EndToEnd(s, get()); });

@@ -64,7 +64,7 @@ void AddClassEvidenceFields(OptionFields<MapOptions>* f) {
                        "where the fused heights are too far to place a jump within the step radius, the "
                        "surface is judged again over the disc widened along the ray by their horizontal "
                        "sigma; a jump or slope above max there (2 sigmas) leaves a column that is not "
-                       "otherwise non-traversable undecided")
+                       "otherwise non-traversable undecided (false: the frames' votes decide it)")
                    .AbsentMeans(false));
   f->push_back(Real<O>("class_clamp_min", &O::class_clamp_min, Open(-50, 0), "", "class log-odds lower clamp"));
   f->push_back(Real<O>("class_clamp_max", &O::class_clamp_max, Open(0, 50), "", "class log-odds upper clamp"));

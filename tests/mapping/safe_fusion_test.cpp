@@ -254,8 +254,10 @@ TEST(SafeFusion, GroundWithinTheSmearOfAFarJumpIsUndecidedNotOpen) {
   // Beyond the smear, level floor stays open: 0.55 m before the log and 0.55 m after it.
   EXPECT_EQ(ClassAt(map, C(14), C(25)), TravClass::kTraversable);
   EXPECT_EQ(ClassAt(map, C(30), C(25)), TravClass::kTraversable);
-  // Without the smeared judgement (the default) the frames' votes call the whole log open ground.
-  const TraversabilityMap open = build(Options());
+  // Without the smeared judgement the frames' votes call the whole log open ground.
+  MapOptions off = Options();
+  off.class_smeared_surface_hazards = false;
+  const TraversabilityMap open = build(off);
   EXPECT_EQ(ClassAt(open, C(17), C(25)), TravClass::kTraversable);
   EXPECT_EQ(open.ExplainColumn(C(17), C(25)).rule, JudgeRule::kFramesAlone);
   EXPECT_EQ(ClassAt(open, C(22), C(25)), TravClass::kTraversable);
