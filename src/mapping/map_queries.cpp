@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -75,9 +76,11 @@ const TravNode* ColumnTop(const TravOcTree& tree, octomap::OcTreeKey* key) {
   return node;
 }
 
-/// The fused surface of the columns whose centres lie within `radius_m` of `key`'s column and
-/// that hold a fused height.
-std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m) {
+/// The fused surface of the columns whose centres lie within `radius_m` of `key`'s column, pass
+/// `keep` (given the column's key offset and centre; null: all pass) and hold a fused height.
+std::vector<SurfaceSample> SurfaceAround(
+    const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m,
+    const std::function<bool(int di, int dj, const Eigen::Vector2d& xy)>& keep = nullptr) {
   const double res = tree.getResolution();
   const int reach = static_cast<int>(std::floor(radius_m / res + 1e-9));
   std::vector<SurfaceSample> samples;
@@ -87,6 +90,8 @@ std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::
       const int kx = key[0] + di, ky = key[1] + dj;
       if (kx < 0 || ky < 0 || kx > 0xFFFF || ky > 0xFFFF) continue;
       octomap::OcTreeKey k(static_cast<octomap::key_type>(kx), static_cast<octomap::key_type>(ky), 0);
+      // Before the column is looked up: finding its top is most of a judgement's cost.
+      if (keep && !keep(di, dj, Eigen::Vector2d(KeyCenter(tree, k[0]), KeyCenter(tree, k[1])))) continue;
       const TravNode* node = ColumnTop(tree, &k);
       // Only measured heights with their uncertainty (a map of points without height sigmas
       // has none): a voxel's centre is no surface height.
@@ -129,15 +134,24 @@ bool DiscFullySeen(const TravOcTree& tree, const octomap::OcTreeKey& key, double
 /// finds a jump or slope above max at 2 sigmas or more (P >= 0.977): a hazard there that no
 /// noise at its range explains, though stereo cannot place it within the step radius or beyond.
 /// Off unless MapOptions::class_smeared_surface_hazards.
+/// `disc` holds the columns SurfaceAround found within `disc_radius_m` (JudgeFromSurface's).
 bool SmearedHazard(const TraversabilityMap& map, const TravOcTree& tree, const octomap::OcTreeKey& key,
-                   const CellInfo& cell, const SurfaceVerdict& surface, ColumnExplanation* why) {
+                   const CellInfo& cell, const SurfaceVerdict& surface, const std::vector<SurfaceSample>& disc,
+                   double disc_radius_m, ColumnExplanation* why) {
   if (!surface.smeared || !map.options().class_smeared_surface_hazards) return false;
   const VehicleOptions& vehicle = map.metadata().vehicle;
   const Eigen::Vector2d centre = cell.center.head<2>();
   const SurfaceRegion region =
       SmearedRegion(vehicle.step_radius_m, tree.getResolution(), surface.xy_sigma_m,
                     centre - internal::TraversabilityMapAccess::Impl(map).sensor_path.NearestXy(centre));
-  const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, std::max(region.along_m, region.across_m));
+  // Only the columns JudgeSmearedSurface keeps (the region is narrower across the ray), and
+  // those of `disc` without looking them up again.
+  const double res = tree.getResolution(), disc_r2 = disc_radius_m * disc_radius_m + 1e-12;
+  std::vector<SurfaceSample> samples = SurfaceAround(
+      tree, key, std::max(region.along_m, region.across_m), [&](int di, int dj, const Eigen::Vector2d& xy) {
+        return (di * di + dj * dj) * res * res > disc_r2 && region.Contains(xy - centre);
+      });
+  samples.insert(samples.end(), disc.begin(), disc.end());
   const SurfaceVerdict wide = JudgeSmearedSurface(centre, samples, tree.getResolution(), region, vehicle);
   if (why != nullptr) {
     why->smeared_surface = wide;
@@ -198,8 +212,8 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
   const TravNode* node = tree.search(key);
   if (node == nullptr || !NodeOccupied(tree, *node)) return;
   const VehicleOptions& vehicle = map.metadata().vehicle;
-  const std::vector<SurfaceSample> samples =
-      SurfaceAround(tree, key, SurfaceDiscRadius(vehicle.step_radius_m, tree.getResolution()));
+  const double disc_radius = SurfaceDiscRadius(vehicle.step_radius_m, tree.getResolution());
+  const std::vector<SurfaceSample> samples = SurfaceAround(tree, key, disc_radius);
   const SurfaceVerdict surface = JudgeSurface(cell->center.head<2>(), samples, tree.getResolution(), vehicle);
   const auto& l = node->class_log_odds;
   const bool has_evidence = internal::HasClassEvidence(l, map.options());
@@ -243,7 +257,7 @@ void JudgeFromSurface(const TraversabilityMap& map, const TravOcTree& tree, cons
     return;
   }
   const int best = MostProbableClass(posterior);
-  if (best != 2 && SmearedHazard(map, tree, key, *cell, surface, why)) {
+  if (best != 2 && SmearedHazard(map, tree, key, *cell, surface, samples, disc_radius, why)) {
     return MarkSmearedHazard(has_evidence ? &frames : nullptr, cell, why);
   }
   if (judge == ClassJudge::kBoth) {
