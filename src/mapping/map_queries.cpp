@@ -76,22 +76,25 @@ const TravNode* ColumnTop(const TravOcTree& tree, octomap::OcTreeKey* key) {
   return node;
 }
 
-/// The fused surface of the columns whose centres lie within `radius_m` of `key`'s column, pass
-/// `keep` (given the column's key offset and centre; null: all pass) and hold a fused height.
-std::vector<SurfaceSample> SurfaceAround(
-    const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m,
-    const std::function<bool(int di, int dj, const Eigen::Vector2d& xy)>& keep = nullptr) {
+/// The fused surface of the columns whose centres lie within `radius_m` of `key`'s column but
+/// not within `skip_within_m` of it (negative: none skipped), pass `keep` (given the column's
+/// centre; null: all pass) and hold a fused height.
+std::vector<SurfaceSample> SurfaceAround(const TravOcTree& tree, const octomap::OcTreeKey& key, double radius_m,
+                                         double skip_within_m = -1.0,
+                                         const std::function<bool(const Eigen::Vector2d&)>& keep = nullptr) {
   const double res = tree.getResolution();
   const int reach = static_cast<int>(std::floor(radius_m / res + 1e-9));
   std::vector<SurfaceSample> samples;
   for (int dj = -reach; dj <= reach; ++dj) {
     for (int di = -reach; di <= reach; ++di) {
-      if ((di * di + dj * dj) * res * res > radius_m * radius_m + 1e-12) continue;
+      const double d2 = (di * di + dj * dj) * res * res;
+      if (d2 > radius_m * radius_m + 1e-12) continue;
+      if (skip_within_m >= 0.0 && d2 <= skip_within_m * skip_within_m + 1e-12) continue;
       const int kx = key[0] + di, ky = key[1] + dj;
       if (kx < 0 || ky < 0 || kx > 0xFFFF || ky > 0xFFFF) continue;
       octomap::OcTreeKey k(static_cast<octomap::key_type>(kx), static_cast<octomap::key_type>(ky), 0);
       // Before the column is looked up: finding its top is most of a judgement's cost.
-      if (keep && !keep(di, dj, Eigen::Vector2d(KeyCenter(tree, k[0]), KeyCenter(tree, k[1])))) continue;
+      if (keep && !keep(Eigen::Vector2d(KeyCenter(tree, k[0]), KeyCenter(tree, k[1])))) continue;
       const TravNode* node = ColumnTop(tree, &k);
       // Only measured heights with their uncertainty (a map of points without height sigmas
       // has none): a voxel's centre is no surface height.
@@ -146,11 +149,9 @@ bool SmearedHazard(const TraversabilityMap& map, const TravOcTree& tree, const o
                     centre - internal::TraversabilityMapAccess::Impl(map).sensor_path.NearestXy(centre));
   // Only the columns JudgeSmearedSurface keeps (the region is narrower across the ray), and
   // those of `disc` without looking them up again.
-  const double res = tree.getResolution(), disc_r2 = disc_radius_m * disc_radius_m + 1e-12;
-  std::vector<SurfaceSample> samples = SurfaceAround(
-      tree, key, std::max(region.along_m, region.across_m), [&](int di, int dj, const Eigen::Vector2d& xy) {
-        return (di * di + dj * dj) * res * res > disc_r2 && region.Contains(xy - centre);
-      });
+  std::vector<SurfaceSample> samples =
+      SurfaceAround(tree, key, std::max(region.along_m, region.across_m), disc_radius_m,
+                    [&](const Eigen::Vector2d& xy) { return region.Contains(xy - centre); });
   samples.insert(samples.end(), disc.begin(), disc.end());
   const SurfaceVerdict wide = JudgeSmearedSurface(centre, samples, tree.getResolution(), region, vehicle);
   if (why != nullptr) {
