@@ -125,6 +125,11 @@ void FrameAnalyzer::ApplyAfterBoth(const FrameAnalysisInput& in, AnalysisResult*
     ApplyHiddenDrops(lips_, &a->labels);
     track.Mark(a->labels, LabelRule::kHiddenDrop, &a->rules);
   }
+  // After every fill: the fills and the map read these pixels as the undecided they were.
+  if (local_steps && options.smeared_step_blocks) {
+    ApplySmearedStepBand(step_classes_, &a->labels);
+    track.Mark(a->labels, LabelRule::kSmearedStep, &a->rules);
+  }
 }
 
 ImageU8 TexturedPixels(const ImageU8& left_rectified, const RectifiedGeometry& geometry, int block, double min_std) {

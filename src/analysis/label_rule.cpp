@@ -23,6 +23,7 @@ const std::array<LabelRuleInfo, kNumLabelRules>& LabelRules() {
       {LabelRule::kOutside, "outside", {30, 30, 60}},
       {LabelRule::kTruth, "truth", {255, 0, 255}},
       {LabelRule::kHiddenDrop, "hidden_drop", {120, 0, 40}},
+      {LabelRule::kSmearedStep, "smeared_step", {255, 180, 120}},
   }};
   return kTable;
 }

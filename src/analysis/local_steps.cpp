@@ -215,6 +215,14 @@ void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels) {
   }
 }
 
+void ApplySmearedStepBand(const ImageU8& step_classes, ImageU8* labels) {
+  SSTA_CHECK(labels != nullptr && labels->width() == step_classes.width() && labels->height() == step_classes.height(),
+             "ApplySmearedStepBand: step classes and labels differ in size");
+  for (std::size_t i = 0; i < labels->size(); ++i) {
+    if ((*labels)[i] == kUndecided && step_classes[i] == kUndecided) (*labels)[i] = kNon;
+  }
+}
+
 void RefineByLocalSteps(const Image3f& cloud, const Image3f& normals, const Eigen::Vector3d& up_camera,
                         const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* labels) {
   SSTA_CHECK(labels != nullptr && labels->width() == cloud.width() && labels->height() == cloud.height(),

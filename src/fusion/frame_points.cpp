@@ -91,6 +91,29 @@ const ImageU8* LabelRulesOf(const AnalysisResult& analysis) {
   return known ? &rules : nullptr;
 }
 
+/// No rule known (a result built by hand): the label counts as it is.
+constexpr std::uint8_t kNoRule = 255;
+
+/// The class a pixel votes for in the map: its label, but undecided where the frame's obstacle
+/// is one the map should not count. `rule`: the pixel's LabelRule (kNoRule: unknown);
+/// `segment`: its segment, or null.
+TravClass VoteClass(std::uint8_t label, std::uint8_t rule, const SegmentResult* segment) {
+  const auto cls = static_cast<TravClass>(label);
+  if (cls != TravClass::kNonTraversable) return cls;
+  if (rule == static_cast<std::uint8_t>(LabelRule::kSmallSegment) && segment != nullptr &&
+      ObstacleBySlopeWithinNoise(*segment)) {
+    // Far ground in a few matching windows tilts so, and frames that see it alike would pile
+    // such votes into a false obstacle: a surface seen, without a class.
+    return TravClass::kUndecided;
+  }
+  if (rule == static_cast<std::uint8_t>(LabelRule::kSmearedStep)) {
+    // The frame blocks it for want of knowing which side of a jump's band it lies on; to the
+    // map that is a surface seen without a class, which frames placing it better decide.
+    return TravClass::kUndecided;
+  }
+  return cls;
+}
+
 }  // namespace
 
 void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& world_T_rectified, int stride,
@@ -109,7 +132,6 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
              "the lip mask must have the size of the common area");
   const ImageU8& labels = frame.analysis.labels;
   const ImageU8* rules = LabelRulesOf(frame.analysis);
-  constexpr auto small_segment = static_cast<std::uint8_t>(LabelRule::kSmallSegment);
   // Each segment's (slope, step) once, as the points carry them: a small flat table instead
   // of a SegmentResult (with its plane and statistics) read per point.
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -149,14 +171,9 @@ void ClassifiedPointsInWorld(const FrameResult& frame, const Eigen::Isometry3d& 
         out.height_sigma_m = HeightSigma(q, world_R_rectified, per_m2, gradient(frame.segment_ids(v, u)),
                                          &out.horizontal_sigma_m);
       }
-      out.cls = static_cast<TravClass>(labels(v, u));
       const int id = frame.segment_ids(v, u);
-      if (out.cls == TravClass::kNonTraversable && id >= 0 && rules != nullptr && (*rules)(v, u) == small_segment &&
-          ObstacleBySlopeWithinNoise(segments[static_cast<std::size_t>(id)])) {
-        // Far ground in a few matching windows tilts so, and frames that see it alike would pile
-        // such votes into a false obstacle: a surface seen, without a class.
-        out.cls = TravClass::kUndecided;
-      }
+      out.cls = VoteClass(labels(v, u), rules != nullptr ? (*rules)(v, u) : kNoRule,
+                          id >= 0 ? &segments[static_cast<std::size_t>(id)] : nullptr);
       if (lip != nullptr && (*lip)(v, u) != 0 && out.cls != TravClass::kNonTraversable) {
         out.cls = TravClass::kNonTraversable;
         out.vote_weight = static_cast<float>((*lip)(v, u)) / 255.0f;

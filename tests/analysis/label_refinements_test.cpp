@@ -834,6 +834,42 @@ TEST(RefineByLocalSteps, PointsSmearedOverTheRadiusBesideAJumpAreUndecidedNotTra
   EXPECT_EQ(LabelAt(red, 0.0, 1.95), 3);
 }
 
+TEST(ApplySmearedStepBand, BlocksTheUndecidedPixelsSmearedBesideAJumpAndNothingElse) {
+  // The world of the test above: beyond Z = 1.8 m a point cannot tell which side of the jump at
+  // Z = 2 m it lies on, and the local step rule leaves it undecided; the band then blocks it.
+  // Placed points, points smeared beside no jump and points smeared past twice the radius keep
+  // their labels.
+  const DepthNoise noise{0.06};
+  for (const auto& [jump, band] : {std::pair{0.8, 3}, {0.05, 1}}) {
+    SCOPED_TRACE(jump);
+    StepWorld w(200, 200);
+    w.Level(-1, 1, 1, 2, 1.0);
+    w.Level(-1, 1, 2, 3, 1.0 - jump);
+    ImageU8 step_classes;
+    LocalStepClasses(w.cloud, w.normals, {0, -1, 0}, VehicleOptions{}, noise, &step_classes);
+    ApplyLocalStepClasses(step_classes, &w.labels);
+    ApplySmearedStepBand(step_classes, &w.labels);
+    EXPECT_EQ(LabelAt(w, 0.0, 1.95), band);
+    EXPECT_EQ(LabelAt(w, 0.0, 2.05), band);
+    EXPECT_EQ(LabelAt(w, 0.0, 1.5), 1);
+    EXPECT_EQ(LabelAt(w, 0.0, 2.9), 1);
+  }
+  // Only undecided labels whose step class is undecided change.
+  const ImageU8 step_classes = [] {
+    ImageU8 s(5, 1, 4);
+    s(0, 4) = 0;
+    return s;
+  }();
+  ImageU8 labels(5, 1, 0);
+  const std::uint8_t before[5] = {0, 1, 2, 4, 4};
+  const std::uint8_t expected[5] = {0, 1, 2, 3, 4};
+  for (int u = 0; u < 5; ++u) labels(0, u) = before[u];
+  ApplySmearedStepBand(step_classes, &labels);
+  for (int u = 0; u < 5; ++u) EXPECT_EQ(labels(0, u), expected[u]) << u;
+  ImageU8 wrong(4, 1, 4);
+  EXPECT_THROW(ApplySmearedStepBand(step_classes, &wrong), InternalError);
+}
+
 TEST(ApplyHiddenDrops, ASureLipBlocksASuspectedOneIsUndecidedAndNoLipChangesNothing) {
   // Labels: traversable, semi, undecided, non-traversable, unknown, then traversable pixels with
   // no lip, a weak suspicion (the least FindHiddenDrops gives) and one just short of sure.

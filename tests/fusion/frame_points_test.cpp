@@ -72,6 +72,26 @@ TEST(ClassifiedPointsInWorld, DoesNotCountAnObstacleVoteOfASmallSegmentWhoseSlop
   EXPECT_EQ(ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1)[0].cls, TravClass::kNonTraversable);
 }
 
+TEST(ClassifiedPointsInWorld, CountsAPixelBlockedForItsSmearBesideAJumpAsUndecided) {
+  // Two non-traversable pixels beside a jump: one the frame blocked because its point is smeared
+  // over the step radius (rule smeared_step), one whose step it placed (local_step). The map
+  // takes the first as a surface seen without a class, and a lip over it as the lip's vote.
+  FrameResult f;
+  f.cloud = Image3f(3, 1, Eigen::Vector3f(0, 0, 12));
+  f.segment_ids = ImageI32(3, 1, -1);
+  f.analysis.labels = ImageU8(3, 1, static_cast<std::uint8_t>(TravClass::kNonTraversable));
+  f.analysis.rules = ImageU8(3, 1, static_cast<std::uint8_t>(LabelRule::kSmearedStep));
+  f.analysis.rules(0, 1) = static_cast<std::uint8_t>(LabelRule::kLocalStep);
+  ImageU8 lip(3, 1, 0);
+  lip(0, 2) = 128;
+  const auto points = ClassifiedPointsInWorld(f, Eigen::Isometry3d::Identity(), 1, nullptr, nullptr, &lip);
+  ASSERT_EQ(points.size(), 3u);
+  EXPECT_EQ(points[0].cls, TravClass::kUndecided);
+  EXPECT_EQ(points[1].cls, TravClass::kNonTraversable);
+  EXPECT_EQ(points[2].cls, TravClass::kNonTraversable);
+  EXPECT_NEAR(points[2].vote_weight, 128.0 / 255.0, 1e-6);
+}
+
 TEST(MapPointsOfFrame, TakesTheFramesOwnLipsWhenTheyWereSearchedWithinItsRange) {
   // One row of level ground, where the map's own search finds no lip, and lips the frame's
   // analysis found (AnalysisResult::lips): none, suspected, sure. Searched within the map's

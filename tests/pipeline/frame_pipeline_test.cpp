@@ -237,6 +237,12 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
     // Last, the lips of hidden drops (the analyzer above has no range: FrameAnalyzer's default).
     ApplyHiddenDrops(internal::FindFramesHiddenDrops(r.cloud, r.up_rectified, noise.per_m2, config.vehicle, 0.0),
                      &a.labels);
+    // Then the band of a jump that the noise cannot place.
+    const ImageU8 before_band = a.labels;
+    ApplySmearedStepBand(step_classes, &a.labels);
+    int band_changes = 0;
+    for (std::size_t i = 0; i < a.labels.size(); ++i) band_changes += a.labels[i] != before_band[i];
+    EXPECT_GT(band_changes, 0);  // the frame holds such points
 
     ASSERT_EQ(concurrent.labels.size(), a.labels.size());
     int differ = 0;

@@ -51,8 +51,9 @@ struct FrameAnalysisInput {
 ///   5. thin faces from the disparity (RefineByDisparityFaces),
 ///   6. undecided pixels amid a consensus (FillUndecidedByConsensus),
 ///   7. undecided pixels by their own height (FillUndecidedByHeight),
-///   8. the lips of drop-offs whose foot the frame cannot see (ApplyHiddenDrops).
-/// Steps 1 and 4-8 run only on a frame that passed the quality check. The costly parts of
+///   8. the lips of drop-offs whose foot the frame cannot see (ApplyHiddenDrops),
+///   9. the band of a jump that depth noise keeps the frame from placing (ApplySmearedStepBand).
+/// Steps 1 and 4-9 run only on a frame that passed the quality check. The costly parts of
 /// steps 1, 4, 5 and 8 read inputs no other step changes; they run beside the steps before them, and
 /// their results are applied at their places in the chain, so the labels are those of the steps
 /// one after the other (the texture mask of analysis.label_min_texture needs the full image and

@@ -12,6 +12,7 @@
 //   5. fill by consensus         FillUndecidedByConsensus src/analysis/label_refinements.cpp
 //   6. fill by height            FillUndecidedByHeight    src/analysis/label_refinements.cpp
 //   7. hidden drops              ApplyHiddenDrops         src/analysis/label_refinements.cpp
+//   8. smeared step bands        ApplySmearedStepBand     src/analysis/local_steps.cpp
 // Refinements 1 and 4 also come in two steps each (find, then apply) so that their costly part
 // can run beside the steps before them.
 
@@ -101,6 +102,17 @@ struct LabelRefinementOptions {
   /// more steeply than vehicle.max_slope_deg (no wheel may take what it hides), else undecided
   /// (it may hide the drivable far side of a crest, which a nearer view shows).
   bool hidden_drops = true;
+
+  // Refinement 8, the band of a jump where depth noise cannot place a point (ApplySmearedStepBand).
+
+  /// true: a pixel still undecided because its point, beside a jump above max_step_m, lies
+  /// farther from the camera than the step radius can be told apart (its depth error along the
+  /// ray exceeds vehicle.step_radius_m) is non-traversable in the frame's labels: the frame
+  /// knows the jump is there but not on which side of its band the point lies, and missing an
+  /// obstacle costs more than a false alarm. The map fuses such a pixel as undecided either way
+  /// (its rule, LabelRule::kSmearedStep, says why), for frames that see it from elsewhere decide.
+  /// false: it stays undecided.
+  bool smeared_step_blocks = true;
 
   // After the analysis (FramePipeline).
 
@@ -274,5 +286,12 @@ void LocalStepClasses(const Image3f& cloud, const Image3f& normals, const Eigen:
                       const VehicleOptions& vehicle, const DepthNoise& noise, ImageU8* step_classes,
                       const ImageU8* supported = nullptr, const Eigen::Vector3d* ground_up = nullptr);
 void ApplyLocalStepClasses(const ImageU8& step_classes, ImageU8* labels);
+
+/// The band of a jump that depth noise keeps the frame from placing
+/// (LabelRefinementOptions::smeared_step_blocks): each pixel labelled undecided (4) whose step
+/// class in `step_classes` (LocalStepClasses' output, the labels' size) is undecided, a point
+/// smeared over the step radius beside a jump above max_step_m, becomes non-traversable; every
+/// other label stays as it is.
+void ApplySmearedStepBand(const ImageU8& step_classes, ImageU8* labels);
 
 }  // namespace ssta

@@ -32,8 +32,9 @@ enum class LabelRule : std::uint8_t {
   kOutside = 13,         ///< outside the rectified common area: unknown
   kTruth = 14,           ///< the sequence's true label (build-map --oracle-labels)
   kHiddenDrop = 15,      ///< refinement 8, the lip of a drop-off whose foot the frame cannot see
+  kSmearedStep = 16,     ///< refinement 9, beside a jump, its point smeared over the step radius
 };
-inline constexpr int kNumLabelRules = 16;
+inline constexpr int kNumLabelRules = 17;
 
 /// One row of the rule table: its value and its name in JSON and docs.
 struct LabelRuleInfo {
