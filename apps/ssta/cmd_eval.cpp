@@ -135,6 +135,12 @@ struct FootprintArguments {
   std::string misses_path;     // --misses: the unsafe and falsely blocked poses as CSV
 };
 
+// Tells on stderr when the truth grid predates the seen mask of today's renderer.
+void WarnIfStale(const ClassGrid& truth) {
+  const std::string warning = StaleTruthGridWarning(truth);
+  if (!warning.empty()) std::cerr << warning << "\n";
+}
+
 // A map's footprint verdicts over the truth grid: QueryFootprint, reading the surface as the
 // grid export shows it with --as-exported (one projection of the truth grid's area).
 FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
@@ -150,6 +156,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   const ClassGrid truth = ReadGroundTruthGrid(args.eval.sequence);
   const TraversabilityMap map = LoadMapForConfig(args.eval.prediction, args.config);
   RequireMapForTruthVehicle(map, args.eval.prediction, args.eval.sequence);
+  WarnIfStale(truth);
   // The rectangle the map is asked about: the robot's, grown by the padding on every side.
   const double query_length_m = args.footprint.length_m + 2.0 * args.footprint.padding_m;
   const double query_width_m = args.footprint.width_m + 2.0 * args.footprint.padding_m;
@@ -247,6 +254,7 @@ void AddGridEval(CLI::App* eval) {
   grid->callback([grid_args] {
     RequireTruthVehicle(*grid_args);
     const GridEvalSummary summary = EvaluateExportedGrid(grid_args->prediction, grid_args->sequence);
+    WarnIfStale(summary.truth_grid);
     Report(summary, *grid_args);
     if (!grid_args->picture_path.empty()) {
       WriteImage(MakeGridComparisonPicture(summary.truth_grid, summary.predicted_grid),
@@ -265,6 +273,7 @@ void AddQueryEval(CLI::App* eval) {
             "CSV written by ssta query (x,y,z,class,...: its header names the columns)");
   query->callback([query_args] {
     RequireTruthVehicle(*query_args);
+    WarnIfStale(ReadGroundTruthGrid(query_args->sequence));
     Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);
   });
 }

@@ -9,6 +9,7 @@
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/synth/sequence_synthesizer.h"
 
 namespace ssta {
 namespace {
@@ -71,6 +72,7 @@ ClassGrid ReadClassGrid(const std::string& yaml_path, const std::string& classes
                 ") is not supported; yaw must be 0");
   }
   grid.origin_m = Eigen::Vector2d(origin[0], origin[1]);
+  yaml.Read("seen", &grid.seen);
   grid.classes = ReadLabelImage(classes_png);
   grid.source = classes_png;
   return grid;
@@ -92,6 +94,14 @@ std::string FindGroundTruthDir(const std::string& sequence) {
 ClassGrid ReadGroundTruthGrid(const std::string& sequence) {
   const std::filesystem::path gt = FindGroundTruthDir(sequence);
   return ReadClassGrid((gt / "grid.yaml").string(), (gt / "grid_classes.png").string());
+}
+
+std::string StaleTruthGridWarning(const ClassGrid& truth) {
+  if (truth.seen == synth::kTruthSeenBothCameras) return "";
+  const std::string yaml = (std::filesystem::path(truth.source).parent_path() / "grid.yaml").string();
+  return "warning: " + yaml + ": no 'seen: " + synth::kTruthSeenBothCameras +
+         "': an older ssta synth rendered this truth, and its grid leaves the cells along class boundaries "
+         "(beside every obstacle and lip) unscored; render the sequence again (ssta synth) to score them";
 }
 
 }  // namespace ssta

@@ -149,8 +149,11 @@ void WriteGrid(const TerrainTruth& truth, const SynthOptions& o, const Eigen::Al
   yaml << std::setprecision(10);
   yaml << "# Ground-truth world grid of classes (ids of docs/interfaces.md, section 3); row 0 = largest y.\n"
        << "# A cell takes the worst true class of 3x3 samples of the top surface in it (the class of a\n"
-       << "# point: docs/interfaces.md, section 3). Cells no camera saw are 255 (don't care).\n"
+       << "# point: docs/interfaces.md, section 3). Cells no camera saw are 255 (don't care): with\n"
+       << "# seen both_cameras, a cell is seen when a pixel both cameras see within the label range\n"
+       << "# lands in it.\n"
        << "image: grid_classes.png\n"
+       << "seen: " << kTruthSeenBothCameras << "\n"
        << "resolution: " << r << "\n"
        << "origin: [" << x0 << ", " << y0 << ", 0.0]\n";
   WriteTextAtomically(Join(gt_dir, "grid.yaml"), yaml.str());

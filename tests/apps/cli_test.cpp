@@ -391,7 +391,7 @@ TEST(Cli, MapReadingCommandsTakeTheConfigTheMapWasBuiltWith) {
   const std::string large = std::string(SSTA_CONFIG_DIR) + "/vehicles/large_ugv.yaml";
   fs::create_directories(dir / "seq/gt");
   WriteImage(ImageU8(30, 30, 1), dir / "seq/gt/grid_classes.png");
-  std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\n";
+  std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\nseen: both_cameras\n";
   for (const std::string& command : std::vector<std::string>{
            query, "export --map " + (dir / "m.ot") + " --format csv --out " + (dir / "x"),
            "eval footprints --map " + (dir / "m.ot") + " --gt " + (dir / "seq")}) {
@@ -434,7 +434,7 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
     }
     fs::create_directories(dir / "seq/gt");
     WriteImage(truth, dir / "seq/gt/grid_classes.png");
-    std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\n";
+    std::ofstream(dir / "seq/gt/grid.yaml") << "image: grid_classes.png\nresolution: 0.1\norigin: [0, 0, 0]\nseen: both_cameras\n";
   }
   // 0.3 m squares on every cell: 900 poses, the 116 on the border reach outside the truth.
   // Unsafe: the 5 x 5 centres whose square touches the block; falsely blocked as observed: the

@@ -65,6 +65,23 @@ TEST(eval_ClassGrid, ReadsMapServerYamlWithImageRowZeroOnTop) {
   EXPECT_EQ(grid.source, dir / "map_classes.png");
 }
 
+TEST(eval_ClassGrid, ATruthGridWithoutTheSeenKeyOfTodaysRendererGetsAWarningNamingItsYaml) {
+  TempDir dir;
+  const std::filesystem::path gt = dir.path() / "seq" / "gt";
+  std::filesystem::create_directories(gt);
+  WriteLabels(gt / "grid_classes.png", ImageU8(2, 2, 1));
+  WriteText(gt / "grid.yaml", GridYaml("grid_classes.png", 0.1, 0.0, 0.0));
+  const ClassGrid old_truth = ReadGroundTruthGrid(dir / "seq");
+  EXPECT_EQ(old_truth.seen, "");
+  const std::string warning = StaleTruthGridWarning(old_truth);
+  EXPECT_NE(warning.find((gt / "grid.yaml").string()), std::string::npos) << warning;
+  EXPECT_NE(warning.find("render the sequence again"), std::string::npos) << warning;
+  WriteText(gt / "grid.yaml", GridYaml("grid_classes.png", 0.1, 0.0, 0.0) + "seen: both_cameras\n");
+  EXPECT_EQ(StaleTruthGridWarning(ReadGroundTruthGrid(dir / "seq")), "");
+  WriteText(gt / "grid.yaml", GridYaml("grid_classes.png", 0.1, 0.0, 0.0) + "seen: labelled_pixels\n");
+  EXPECT_NE(StaleTruthGridWarning(ReadGroundTruthGrid(dir / "seq")), "");
+}
+
 TEST(eval_ClassGrid, BadYamlNamesFileAndKey) {
   TempDir dir;
   WriteLabels(dir / "m_classes.png", ImageU8(2, 2, 1));

@@ -403,6 +403,7 @@ TEST(SynthGroundTruth, YardGridClassesAtKnownPlaces) {
   ASSERT_EQ(std::sscanf(yaml.c_str() + at, "origin: [%lf, %lf", &x0, &y0), 2);
   EXPECT_NE(yaml.find("resolution: 0.1"), std::string::npos);
   EXPECT_NE(yaml.find("image: grid_classes.png"), std::string::npos);
+  EXPECT_NE(yaml.find(std::string("\nseen: ") + kTruthSeenBothCameras + "\n"), std::string::npos);
   auto class_at = [&](double x, double y) {
     const int col = static_cast<int>(std::floor((x - x0) / 0.1));
     const int row = grid.height() - 1 - static_cast<int>(std::floor((y - y0) / 0.1));

@@ -28,6 +28,7 @@ struct ClassGrid {
   double resolution_m = 0.0;                            ///< cell edge length [m], > 0
   Eigen::Vector2d origin_m = Eigen::Vector2d::Zero();  ///< lower-left corner, world x, y [m]
   std::string source;  ///< the file the classes came from; names it in error messages
+  std::string seen;    ///< the YAML's `seen` key (truth grids of ssta synth); empty when absent
 
   /// The cell containing world point (x, y) [m], or nothing outside the grid.
   std::optional<GridCell> CellAt(const Eigen::Vector2d& p_world) const;
@@ -53,5 +54,12 @@ std::string FindGroundTruthDir(const std::string& sequence);
 /// Reads SEQ/gt/grid_classes.png with SEQ/gt/grid.yaml (docs/interfaces.md, section 6). Throws
 /// ssta::Error as ReadClassGrid.
 ClassGrid ReadGroundTruthGrid(const std::string& sequence);
+
+/// What a truth grid read by ReadGroundTruthGrid leaves unscored, as a warning to print: empty
+/// when its `seen` key is synth::kTruthSeenBothCameras, else a sentence naming its YAML that says
+/// it predates that seen mask (cells along class boundaries, beside every obstacle and lip, count
+/// as unseen, so unsafe and falsely blocked figures on it leave most of those footprints out)
+/// and to render the sequence again.
+std::string StaleTruthGridWarning(const ClassGrid& truth);
 
 }  // namespace ssta

@@ -12,6 +12,11 @@
 
 namespace ssta::synth {
 
+/// The `seen` key of gt/grid.yaml that WriteSyntheticSequence writes: a cell is seen (scored)
+/// when a pixel that both cameras see within the label range lands in it. Truth grids without
+/// the key came from an older renderer that left the cells along class boundaries unseen.
+inline constexpr char kTruthSeenBothCameras[] = "both_cameras";
+
 /// What WriteSyntheticSequence produced.
 struct SynthSummary {
   int frames_written = 0;            ///< cam0 frames (every frame)
