@@ -273,8 +273,11 @@ void AddQueryEval(CLI::App* eval) {
             "CSV written by ssta query (x,y,z,class,...: its header names the columns)");
   query->callback([query_args] {
     RequireTruthVehicle(*query_args);
-    WarnIfStale(ReadGroundTruthGrid(query_args->sequence));
-    Report(EvaluateQueryCsv(query_args->prediction, query_args->sequence), *query_args);
+    const ClassGrid truth = ReadGroundTruthGrid(query_args->sequence);  // read once: warned about, then scored
+    WarnIfStale(truth);
+    QueryEvalSummary summary = ScoreQueries(ReadQueryCsv(query_args->prediction), truth);
+    summary.prediction = query_args->prediction;
+    Report(summary, *query_args);
   });
 }
 

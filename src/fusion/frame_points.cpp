@@ -100,18 +100,15 @@ constexpr std::uint8_t kNoRule = 255;
 TravClass VoteClass(std::uint8_t label, std::uint8_t rule, const SegmentResult* segment) {
   const auto cls = static_cast<TravClass>(label);
   if (cls != TravClass::kNonTraversable) return cls;
-  if (rule == static_cast<std::uint8_t>(LabelRule::kSmallSegment) && segment != nullptr &&
-      ObstacleBySlopeWithinNoise(*segment)) {
-    // Far ground in a few matching windows tilts so, and frames that see it alike would pile
-    // such votes into a false obstacle: a surface seen, without a class.
-    return TravClass::kUndecided;
-  }
-  if (rule == static_cast<std::uint8_t>(LabelRule::kSmearedStep)) {
-    // The frame blocks it for want of knowing which side of a jump's band it lies on; to the
-    // map that is a surface seen without a class, which frames placing it better decide.
-    return TravClass::kUndecided;
-  }
-  return cls;
+  // Far ground in a few matching windows tilts so, and frames that see it alike would pile
+  // such votes into a false obstacle.
+  const bool slope_of_noise = rule == static_cast<std::uint8_t>(LabelRule::kSmallSegment) && segment != nullptr &&
+                              ObstacleBySlopeWithinNoise(*segment);
+  // The frame blocks it for want of knowing which side of a jump's band it lies on; frames
+  // that place it better decide.
+  const bool band_unplaced = rule == static_cast<std::uint8_t>(LabelRule::kSmearedStep);
+  // Either is a surface seen, without a class.
+  return slope_of_noise || band_unplaced ? TravClass::kUndecided : cls;
 }
 
 }  // namespace
