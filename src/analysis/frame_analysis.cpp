@@ -125,7 +125,7 @@ void FrameAnalyzer::ApplyAfterBoth(const FrameAnalysisInput& in, AnalysisResult*
     ApplyHiddenDrops(lips_, &a->labels);
     track.Mark(a->labels, LabelRule::kHiddenDrop, &a->rules);
   }
-  // After every fill: the fills and the map read these pixels as the undecided they were.
+  // After every fill, which read these pixels as undecided; the map does too (their rule).
   if (local_steps && options.smeared_step_blocks) {
     ApplySmearedStepBand(step_classes_, &a->labels);
     track.Mark(a->labels, LabelRule::kSmearedStep, &a->rules);
