@@ -18,8 +18,9 @@
 # footprints (eval footprints --as-exported), over all seen ground and within 10 m. The last
 # row pools the samples of every scene. A second table pools the footprints per 2 m band of
 # distance from the path, with each class's recall; a third counts the missed footprints by
-# the map's rule at the cell that makes each a miss; a fourth the per-frame labels' pixels per
-# 5 m band of true depth from the camera.
+# the map's rule at the cell that makes each a miss; a fourth splits the map's cells within
+# 10 m of the path by true class and answer, as shares of all of them (where the accuracy goes);
+# a fifth the per-frame labels' pixels per 5 m band of true depth from the camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
@@ -183,6 +184,19 @@ if by_rule:
     print("|---|---|---|---|")
     for rule, (u, fb, edge) in sorted(by_rule.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
         print("| %s | %d | %d | %d |" % (rule, u, fb, edge))
+# Where the map's cells within 10 m of the path go wrong, pooled: each true class by the map's
+# answer as a share of all scored cells, so the three diagonal entries add up to the pooled map
+# accuracy and every other entry is what that confusion costs it (unknown: no surface was
+# observed in the column, even after the export's fill).
+m = totals.get("cells10")
+if m and scored(m):
+    n = scored(m)
+    print()
+    print("| map cells within 10 m, pooled: truth | cells | answered unknown | traversable | semi "
+          "| non-traversable | undecided |")
+    print("|---|---|---|---|---|---|---|")
+    for c, name in ((1, "traversable"), (2, "semi-traversable"), (3, "non-traversable")):
+        print("| %s | %d | %s |" % (name, sum(m[c]), " | ".join(f(m[c][a] / n, True) for a in range(5))))
 if lm:
     print()
     print("Per-frame labels, pooled: recall trav. / semi / non %s." % recalls(lm))
