@@ -275,9 +275,7 @@ void AddQueryEval(CLI::App* eval) {
     RequireTruthVehicle(*query_args);
     const ClassGrid truth = ReadGroundTruthGrid(query_args->sequence);  // read once: warned about, then scored
     WarnIfStale(truth);
-    QueryEvalSummary summary = ScoreQueries(ReadQueryCsv(query_args->prediction), truth);
-    summary.prediction = query_args->prediction;
-    Report(summary, *query_args);
+    Report(EvaluateQueryCsv(query_args->prediction, truth), *query_args);
   });
 }
 

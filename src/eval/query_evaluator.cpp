@@ -115,11 +115,14 @@ QueryEvalSummary ScoreQueries(const std::vector<QueryRow>& rows, const ClassGrid
   return summary;
 }
 
-QueryEvalSummary EvaluateQueryCsv(const std::string& csv_path, const std::string& sequence) {
-  const ClassGrid truth = ReadGroundTruthGrid(sequence);
+QueryEvalSummary EvaluateQueryCsv(const std::string& csv_path, const ClassGrid& truth) {
   QueryEvalSummary summary = ScoreQueries(ReadQueryCsv(csv_path), truth);
   summary.prediction = csv_path;
   return summary;
+}
+
+QueryEvalSummary EvaluateQueryCsv(const std::string& csv_path, const std::string& sequence) {
+  return EvaluateQueryCsv(csv_path, ReadGroundTruthGrid(sequence));
 }
 
 std::string QueryEvalSummary::BriefReport() const {

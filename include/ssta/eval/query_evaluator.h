@@ -46,7 +46,10 @@ struct QueryEvalSummary {
 /// `truth.source` on a truth value other than 0..4 or 255.
 QueryEvalSummary ScoreQueries(const std::vector<QueryRow>& rows, const ClassGrid& truth);
 
-/// ReadQueryCsv(csv_path) scored against ReadGroundTruthGrid(sequence).
+/// ReadQueryCsv(csv_path) scored against `truth` (ScoreQueries), with `prediction` set to csv_path.
+QueryEvalSummary EvaluateQueryCsv(const std::string& csv_path, const ClassGrid& truth);
+
+/// EvaluateQueryCsv against ReadGroundTruthGrid(sequence).
 QueryEvalSummary EvaluateQueryCsv(const std::string& csv_path, const std::string& sequence);
 
 }  // namespace ssta
