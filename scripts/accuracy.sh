@@ -22,6 +22,11 @@
 # 10 m of the path by true class and answer, as shares of all of them (where the accuracy goes);
 # a fifth the per-frame labels' pixels per 5 m band of true depth from the camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
+# DISPARITY=1 (not with MAP_ONLY) also scores the matcher's disparity of every frame against
+# the true one (classify --disparity + eval disparity: out/accuracy/<set>/<scene>/disparity.json)
+# and adds a table per scene: wrong or missing disparities (D1), end-point error, and how much of
+# each depth edge's near side (a lip, a pit's rim, an obstacle's top) the matcher gave the far
+# side's disparity;
 # PADDING=0.1 asks the map about footprints padded by 0.1 m on every side (eval footprints
 # --padding), as a planner that pads its robot would. Each scene's unsafe and falsely blocked
 # footprints are listed in out/accuracy/<set>/<scene>/footprint_misses.csv, nearest the path
@@ -57,8 +62,11 @@ for run in "${runs[@]}"; do
   fi
   echo "accuracy: $name" >&2
   if [ -z "${MAP_ONLY:-}" ]; then
-    "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q "${args[@]}"
+    "$ssta" classify --sequence "$seq" --out "$out/$name/classified" -q ${DISPARITY:+--disparity} "${args[@]}"
     "$ssta" eval labels --pred "$out/$name/classified" --gt "$seq" --json "$out/$name/labels.json" >/dev/null
+    if [ -n "${DISPARITY:-}" ]; then
+      "$ssta" eval disparity --pred "$out/$name/classified" --gt "$seq/gt" --json "$out/$name/disparity.json" >/dev/null
+    fi
   fi
   "$ssta" build-map --sequence "$seq" --map "$out/$name/map.ot" -q "${args[@]}" >/dev/null
   "$ssta" export --map "$out/$name/map.ot" --format grid --out "$out/$name/grid" >/dev/null
@@ -204,6 +212,35 @@ if lm:
     depth = pooled_bands("labels.json", "by_depth")
     if depth:
         band_table("per-frame labels, pooled", "truly non-traversable", "camera", depth)
+
+# The matcher against the true disparity (DISPARITY=1), per scene and pooled over the pixels of
+# every frame: a lip whose near side takes the far side's disparity reads as a rounded slope.
+rows = []
+for run in runs:
+    doc = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "disparity.json"))
+    if doc:
+        rows.append(("%s-%s" % tuple(run.split(":")), doc))
+if rows:
+    keys = ("truth_pixels", "matched_pixels", "bad_matched_pixels", "behind_edge_pixels", "fattened_pixels",
+            "front_edge_pixels", "eroded_pixels")
+    pooled = {k: sum(doc[k] for _, doc in rows) for k in keys}
+    pooled["epe_sum"] = sum(doc["epe_px"] * doc["matched_pixels"] for _, doc in rows)
+    def matcher_row(name, d, epe, bold=""):
+        ratio = lambda n, t: n / t if t else None
+        cells = (name, f(ratio(d["truth_pixels"] - d["matched_pixels"] + d["bad_matched_pixels"], d["truth_pixels"]), True),
+                 f(ratio(d["bad_matched_pixels"], d["matched_pixels"]), True), "%.2f" % epe,
+                 f(ratio(d["matched_pixels"], d["truth_pixels"]), True),
+                 f(ratio(d["fattened_pixels"], d["behind_edge_pixels"]), True),
+                 f(ratio(d["eroded_pixels"], d["front_edge_pixels"]), True))
+        return "| " + " | ".join(bold + c + bold for c in cells) + " |"
+    print()
+    print("| matcher against the true disparity | D1 all | D1 matched | EPE [px] | density "
+          "| edges: fattened | edges: eroded (near side given the far side's) |")
+    print("|---|---|---|---|---|---|---|")
+    for name, doc in rows:
+        print(matcher_row(name, doc, doc["epe_px"]))
+    epe = pooled["epe_sum"] / pooled["matched_pixels"] if pooled["matched_pixels"] else float("nan")
+    print(matcher_row("pooled", pooled, epe, bold="**"))
 PY
 
 echo
