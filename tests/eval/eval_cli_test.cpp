@@ -58,6 +58,27 @@ TEST_F(eval_Cli, GridAndQueryRun) {
   EXPECT_NE(r.output.find("accuracy 1.0000"), std::string::npos) << r.output;
 }
 
+TEST_F(eval_Cli, QueryWarnsOnceAboutATruthGridWithoutTheSeenKeyAndStillScoresIt) {
+  // eval query reads the truth grid once, warns about it, then scores against that same grid.
+  WriteText(dir_ / "q.csv",
+            "x,y,z,class,cost,probability,slope_deg,step_m,observations\n"
+            "0.5,1.5,0,1,0,1,0,0,1\n");
+  const std::string command = "eval query --pred " + (dir_ / "q.csv") + " --gt " + (dir_ / "seq");
+  const std::string warning = "warning: " + (dir_ / "seq/gt/grid.yaml") + ": no 'seen: both_cameras'";
+  RunResult r = RunSsta(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::size_t first = r.output.find(warning);
+  ASSERT_NE(first, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find(warning, first + 1), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("accuracy 1.0000"), std::string::npos) << r.output;
+
+  WriteText(dir_ / "seq/gt/grid.yaml", GridYaml("grid_classes.png", 1.0, 0.0, 0.0) + "seen: both_cameras\n");
+  r = RunSsta(command);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("warning:"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("accuracy 1.0000"), std::string::npos) << r.output;
+}
+
 TEST_F(eval_Cli, BadInputExitsNonZeroNamingTheFile) {
   WriteText(dir_ / "bad.csv", "x,y,z,class\n0.5,1.5,0,9\n");
   const RunResult r = RunSsta("eval query --pred " + (dir_ / "bad.csv") + " --gt " + (dir_ / "seq"));

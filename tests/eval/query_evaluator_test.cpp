@@ -2,6 +2,7 @@
 
 #include "eval_test_helpers.h"
 #include "ssta/core/error.h"
+#include "ssta/eval/class_grid.h"
 #include "ssta/eval/query_evaluator.h"
 
 namespace ssta {
@@ -36,6 +37,10 @@ TEST(eval_Query, ScoresRowsAgainstTheTruthCellAtXY) {
                                "\r\n"
                                " 0.5 , 0.2 ,0.0, 1 ,0.1,0.9,2.0,0.01,5\r\n");  // truth 1, right
   const QueryEvalSummary s = EvaluateQueryCsv(dir / "q.csv", dir / "seq");
+  // The same scores from a truth grid read beforehand (as `ssta eval query` does, to warn first).
+  const QueryEvalSummary from_grid = EvaluateQueryCsv(dir / "q.csv", ReadGroundTruthGrid(dir / "seq"));
+  EXPECT_EQ(from_grid.ToJson(), s.ToJson());
+  EXPECT_EQ(from_grid.prediction, dir / "q.csv");
   EXPECT_EQ(s.rows, 6);
   EXPECT_EQ(s.outside_truth, 1);
   const ConfusionMatrix& m = s.matrix;
