@@ -217,18 +217,20 @@ if lm:
 # every frame: a lip whose near side takes the far side's disparity reads as a rounded slope.
 rows = []
 for run in runs:
-    doc = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "disparity.json"))
+    name = "%s-%s" % tuple(run.split(":"))
+    doc = load(os.path.join(out, name, "disparity.json"))
     if doc:
-        rows.append(("%s-%s" % tuple(run.split(":")), doc))
+        doc["epe_sum"] = doc["epe_px"] * doc["matched_pixels"]  # pools by matched pixels
+        rows.append((name, doc))
 if rows:
     keys = ("truth_pixels", "matched_pixels", "bad_matched_pixels", "behind_edge_pixels", "fattened_pixels",
-            "front_edge_pixels", "eroded_pixels")
+            "front_edge_pixels", "eroded_pixels", "epe_sum")
     pooled = {k: sum(doc[k] for _, doc in rows) for k in keys}
-    pooled["epe_sum"] = sum(doc["epe_px"] * doc["matched_pixels"] for _, doc in rows)
-    def matcher_row(name, d, epe, bold=""):
+    def matcher_row(name, d, bold=""):
         ratio = lambda n, t: n / t if t else None
+        epe = ratio(d["epe_sum"], d["matched_pixels"])
         cells = (name, f(ratio(d["truth_pixels"] - d["matched_pixels"] + d["bad_matched_pixels"], d["truth_pixels"]), True),
-                 f(ratio(d["bad_matched_pixels"], d["matched_pixels"]), True), "%.2f" % epe,
+                 f(ratio(d["bad_matched_pixels"], d["matched_pixels"]), True), "n/a" if epe is None else "%.2f" % epe,
                  f(ratio(d["matched_pixels"], d["truth_pixels"]), True),
                  f(ratio(d["fattened_pixels"], d["behind_edge_pixels"]), True),
                  f(ratio(d["eroded_pixels"], d["front_edge_pixels"]), True))
@@ -238,9 +240,8 @@ if rows:
           "| edges: fattened | edges: eroded (near side given the far side's) |")
     print("|---|---|---|---|---|---|---|")
     for name, doc in rows:
-        print(matcher_row(name, doc, doc["epe_px"]))
-    epe = pooled["epe_sum"] / pooled["matched_pixels"] if pooled["matched_pixels"] else float("nan")
-    print(matcher_row("pooled", pooled, epe, bold="**"))
+        print(matcher_row(name, doc))
+    print(matcher_row("pooled", pooled, bold="**"))
 PY
 
 echo
