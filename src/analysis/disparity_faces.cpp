@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -255,6 +256,47 @@ void ApplyDisparityFaces(const DisparityFaces& faces, const ImageF& disparity, c
       const float d = disparity(vv, u);
       if (d > 0.0f && std::abs(d - face_d) <= options.face_grow_tolerance_px) {
         c = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+      }
+    }
+  }
+}
+
+void JudgeFacesByHeight(const Image3f& cloud, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                        const ImageU8& before, ImageU8* labels) {
+  SSTA_CHECK(labels != nullptr && before.width() == labels->width() && before.height() == labels->height() &&
+                 cloud.width() == labels->width() && cloud.height() == labels->height(),
+             "JudgeFacesByHeight: cloud, labels before and labels after differ in size");
+  constexpr auto kNon = static_cast<std::uint8_t>(TravClass::kNonTraversable);
+  constexpr auto kSemi = static_cast<std::uint8_t>(TravClass::kSemiTraversable);
+  const Eigen::Vector3f up = up_camera.normalized().cast<float>();
+  const int w = labels->width(), h = labels->height();
+  // A run is the column's consecutive non-traversable pixels, whichever rule made them: a face
+  // continues the obstacle another rule found above or below it.
+  for (int u = 0; u < w; ++u) {
+    for (int v = 0; v < h;) {
+      if ((*labels)(v, u) != kNon) {
+        ++v;
+        continue;
+      }
+      const int first = v;
+      float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+      int points = 0;
+      bool made = false;
+      for (; v < h && (*labels)(v, u) == kNon; ++v) {
+        made = made || before(v, u) != kNon;
+        const Eigen::Vector3f& p = cloud(v, u);
+        if (!p.allFinite()) continue;
+        const float z = up.dot(p);
+        lo = std::min(lo, z);
+        hi = std::max(hi, z);
+        ++points;
+      }
+      const double height = points >= 2 ? static_cast<double>(hi - lo) : 0.0;
+      if (!made || height >= vehicle.max_step_m) continue;
+      for (int r = first; r < v; ++r) {
+        const std::uint8_t was = before(r, u);
+        if (was == kNon) continue;
+        (*labels)(r, u) = height >= vehicle.semi_step_m && was != kSemi ? kSemi : was;
       }
     }
   }

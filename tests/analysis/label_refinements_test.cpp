@@ -569,6 +569,98 @@ TEST(RefineByDisparityFaces, GrowsAFaceOverAllItsRowsAndNoFurther) {
   }
 }
 
+// The organized cloud of a StepScene disparity: X = (u - cu, v - cv, f) b / d.
+Image3f StepSceneCloud(const ImageF& d) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  Image3f cloud(d.width(), d.height(), Eigen::Vector3f(nan, nan, nan));
+  for (int v = 0; v < d.height(); ++v) {
+    for (int u = 0; u < d.width(); ++u) {
+      if (!(d(v, u) > 0)) continue;
+      const double t = StepScene::kB / d(v, u);
+      cloud(v, u) = Eigen::Vector3d((u - StepScene::kCu) * t, (v - StepScene::kCv) * t, StepScene::kF * t).cast<float>();
+    }
+  }
+  return cloud;
+}
+
+TEST(JudgeFacesByHeight, AFaceIsAStepOfItsHeight) {
+  // Curbs 3 m ahead, judged by the default vehicle (semi step 0.10 m, max step 0.20 m): the
+  // face test flags them all; their height then decides, as the class rule decides a step.
+  const VehicleOptions vehicle;
+  struct Case {
+    double height_m;
+    int expected;
+  };
+  for (const Case c : {Case{0.30, 3}, Case{0.15, 2}, Case{0.07, 1}}) {
+    StepScene scene;
+    scene.height_m = c.height_m;
+    ImageF d;
+    ImageI32 part;
+    scene.Render(&d, &part);
+    AnalysisOptions o = FaceOptions();
+    o.face_min_slope_deg = 35;
+    const ImageU8 before(640, 480, 1);
+    ImageU8 labels = before;
+    RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), o, &labels);
+    int face_px = 0, flagged = 0;
+    for (int v = 0; v < 480; ++v) {
+      face_px += part(v, 320) == 1;
+      flagged += part(v, 320) == 1 && labels(v, 320) == 3;
+    }
+    ASSERT_GE(flagged, face_px / 2) << c.height_m;  // the test found the face first
+    JudgeFacesByHeight(StepSceneCloud(d), scene.Up(), vehicle, before, &labels);
+    int right = 0, face_inner = 0, off_face_changed = 0;
+    for (int v = 1; v < 479; ++v) {
+      for (int u = 0; u < 640; ++u) {
+        if (part(v, u) == 1 && labels(v, u) != 1) right += labels(v, u) == c.expected;
+        face_inner += part(v, u) == 1 && labels(v, u) != 1;
+        // Ground and top more than 2 rows from the face are never the face's.
+        if (part(v, u) != 1 && part(v - 1, u) != 1 && part(v + 1, u) != 1 && v > 2 && v < 477 &&
+            part(v - 2, u) != 1 && part(v + 2, u) != 1) {
+          off_face_changed += labels(v, u) != 1;
+        }
+      }
+    }
+    if (c.expected == 1) {
+      EXPECT_EQ(face_inner, 0) << c.height_m;  // every flagged pixel went back to traversable
+    } else {
+      ASSERT_GT(face_inner, 640 * 5) << c.height_m;
+      EXPECT_EQ(right, face_inner) << c.height_m;
+    }
+    EXPECT_EQ(off_face_changed, 0) << c.height_m;
+  }
+}
+
+TEST(JudgeFacesByHeight, APlateauOfTheMatcherOnGroundIsNoHazardAndOtherRulesStand) {
+  // Level ground; SGBM's smoothness holds one disparity over 17 rows of it (rows 300-316 take
+  // row 308's), which the face test reads as a face: 17 rows about 2 m away are 8 cm of height.
+  StepScene scene;
+  scene.face_m = 100.0;
+  ImageF d;
+  ImageI32 part;
+  scene.Render(&d, &part);
+  for (int v = 300; v <= 316; ++v) {
+    for (int u = 0; u < 640; ++u) d(v, u) = d(308, u);
+  }
+  AnalysisOptions o = FaceOptions();
+  o.face_min_slope_deg = 35;
+  ImageU8 before(640, 480, 1);
+  // Another rule's obstacle in the plateau (columns 100-109) and undecided pixels (200-209).
+  for (int v = 300; v <= 316; ++v) {
+    for (int u = 100; u < 110; ++u) before(v, u) = 3;
+    for (int u = 200; u < 210; ++u) before(v, u) = 4;
+  }
+  ImageU8 labels = before;
+  RefineByDisparityFaces(d, StepScene::kF, StepScene::kCu, StepScene::kCv, scene.Up(), o, &labels);
+  int flagged = 0;
+  for (int v = 300; v <= 316; ++v) flagged += labels(v, 320) == 3;
+  ASSERT_GE(flagged, 5);  // without its height the plateau is a face
+  JudgeFacesByHeight(StepSceneCloud(d), scene.Up(), VehicleOptions(), before, &labels);
+  int changed = 0;
+  for (std::size_t i = 0; i < labels.size(); ++i) changed += labels[i] != before[i];
+  EXPECT_EQ(changed, 0);
+}
+
 TEST(FillUndecidedByConsensus, TakesTheClassOfAClearMajorityOnlyAndInOnePass) {
   AnalysisOptions options = PlanesOnly();
   options.undecided_fill_radius_px = 1;

@@ -79,6 +79,11 @@ struct LabelRefinementOptions {
   double face_grow_tolerance_px = 0.25;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
+  /// A face is judged by its height, as a step is (JudgeFacesByHeight): each image column's run
+  /// of pixels the face test turned non-traversable keeps that only where its points span at
+  /// least vehicle.max_step_m along up; from semi_step_m it is semi-traversable; lower, the run
+  /// takes back the class it had. false: every face is non-traversable.
+  bool face_by_height = true;
 
   // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).
 
@@ -200,6 +205,20 @@ void RefineByFragmentPlanes(const Image3f& cloud, const ImageI32& segment_ids, d
 /// focal length and principal point [px].
 void RefineByDisparityFaces(const ImageF& disparity, double f, double cu, double cv, const Eigen::Vector3d& up_camera,
                             const LabelRefinementOptions& options, ImageU8* labels);
+
+/// Faces by their height (LabelRefinementOptions::face_by_height). `before`: the labels just
+/// before the face test; `labels`: after it. Each image column's run of consecutive
+/// non-traversable pixels that holds a pixel the test made so (non-traversable in `labels`, not
+/// in `before`) spans a height: its points' highest minus lowest along `up_camera`. The run
+/// counts the pixels other rules made non-traversable too: a face continues the obstacle they
+/// found above or below it. A run of at least vehicle.max_step_m stays non-traversable; below
+/// that, the test's pixels take back their classes from `before`, but traversable and undecided
+/// ones become semi-traversable where the run reaches semi_step_m. Under the class rule of
+/// docs/interfaces.md, section 3, a face lower than the semi step is no hazard; the matcher's
+/// fronto-parallel plateaus on near ground (SGBM's smoothness prefers them) are such faces, a
+/// few centimetres tall.
+void JudgeFacesByHeight(const Image3f& cloud, const Eigen::Vector3d& up_camera, const VehicleOptions& vehicle,
+                        const ImageU8& before, ImageU8* labels);
 
 /// RefineByDisparityFaces in two steps, so that the costly one can run beside the label steps
 /// before it: FindDisparityFaces reads the disparity only and marks, per pixel, what the test
