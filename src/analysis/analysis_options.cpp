@@ -91,8 +91,10 @@ void AddRefinementFields(OptionFields<O>& f) {
   f.push_back(Real<O>("face_grow_tolerance_px", &O::face_grow_tolerance_px, Closed(0, 5), "px",
                       "rows within the window whose disparity is a face's within this join it; 0: off"));
   f.push_back(Flag<O>("face_by_height", &O::face_by_height,
-                      "a face is judged by its height along each image column as a step is: non-traversable "
-                      "from vehicle.max_step_m, semi-traversable from semi_step_m, lower no hazard"));
+                      "a face is judged as a step is, by the height its image column's run of "
+                      "non-traversable pixels spans: non-traversable from vehicle.max_step_m, semi from "
+                      "semi_step_m, lower no hazard (SGBM's plateaus on near ground read as faces a few cm "
+                      "tall)"));
 }
 
 }  // namespace
