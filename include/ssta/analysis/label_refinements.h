@@ -9,6 +9,7 @@
 //   3. fragments                 RefineByFragmentPlanes   src/analysis/label_refinements.cpp
 //   3b. local steps              RefineByLocalSteps       src/analysis/local_steps.cpp
 //   4. thin faces                RefineByDisparityFaces   src/analysis/disparity_faces.cpp
+//   4b. faces by their height    JudgeFacesByHeight       src/analysis/disparity_faces.cpp
 //   5. fill by consensus         FillUndecidedByConsensus src/analysis/label_refinements.cpp
 //   6. fill by height            FillUndecidedByHeight    src/analysis/label_refinements.cpp
 //   7. hidden drops              ApplyHiddenDrops         src/analysis/label_refinements.cpp
