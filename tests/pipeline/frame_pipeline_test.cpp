@@ -225,6 +225,9 @@ TEST(FrameAnalyzer, ConcurrentStepsGiveTheLabelsOfTheStepsInOrder) {
     EXPECT_GT(step_changes, 100);  // the local steps matter (the crate's band, the curbs)
     const ImageU8 before_faces = a.labels;
     RefineByDisparityFaces(r.disparity, g.f, g.cu, g.cv, r.up_rectified, config.analysis, &a.labels);
+    if (config.analysis.face_window_px > 0 && config.analysis.face_by_height) {
+      JudgeFacesByHeight(r.cloud, r.up_rectified, config.vehicle, before_faces, &a.labels);
+    }
     int face_changes = 0;
     for (std::size_t i = 0; i < a.labels.size(); ++i) face_changes += a.labels[i] != before_faces[i];
     if (config.analysis.face_window_px > 0) {
