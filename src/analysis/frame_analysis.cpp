@@ -110,11 +110,9 @@ void FrameAnalyzer::ApplyAfterBoth(const FrameAnalysisInput& in, AnalysisResult*
     track.Mark(a->labels, LabelRule::kLocalStep, &a->rules);
   }
   if (options.face_window_px > 0) {
-    if (options.face_by_height) labels_before_faces_ = a->labels;
     ApplyDisparityFaces(faces_, *in.disparity, options, &a->labels);
-    if (options.face_by_height) {
-      JudgeFacesByHeight(*in.cloud, in.up_rectified, vehicle_, labels_before_faces_, &a->labels);
-    }
+    // The tracker still holds the labels from before the faces.
+    if (options.face_by_height) JudgeFacesByHeight(*in.cloud, in.up_rectified, vehicle_, track.Before(), &a->labels);
     track.Mark(a->labels, LabelRule::kDisparityFace, &a->rules);
   }
   FillUndecidedByConsensus(options, &a->labels, local_steps ? &step_classes_ : nullptr);

@@ -87,7 +87,6 @@ class FrameAnalyzer {
   double hidden_drop_range_m_;
   ImageU8 slope_classes_;   // step 1's classes, kept between frames
   DisparityFaces faces_;    // step 4's faces, kept between frames
-  ImageU8 labels_before_faces_;  // the labels before the faces (face_by_height), kept between frames
   ImageU8 step_classes_;    // the local steps' classes, kept between frames
   ImageU8 lips_;            // step 8's lip mask (FindHiddenDrops), until it joins the result
   LabelRuleTracker rule_tracker_;  // the labels before each step, for AnalysisResult::rules

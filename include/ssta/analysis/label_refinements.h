@@ -80,10 +80,10 @@ struct LabelRefinementOptions {
   double face_grow_tolerance_px = 0.25;
   /// A pixel whose surface rises along its image column steeper than this is on a face [deg].
   double face_min_slope_deg = 35.0;
-  /// A face is judged by its height, as a step is (JudgeFacesByHeight): each image column's run
-  /// of pixels the face test turned non-traversable keeps that only where its points span at
-  /// least vehicle.max_step_m along up; from semi_step_m it is semi-traversable; lower, the run
-  /// takes back the class it had. false: every face is non-traversable.
+  /// A face is judged by its height, as a step is (JudgeFacesByHeight): the face test's pixels
+  /// stay non-traversable only where their image column's run of non-traversable pixels spans
+  /// vehicle.max_step_m along up; from semi_step_m they are semi-traversable; lower, they take
+  /// back the class they had. false: every face is non-traversable.
   bool face_by_height = true;
 
   // Refinement 5, undecided pixels amid a consensus (FillUndecidedByConsensus).

@@ -58,6 +58,8 @@ class LabelRuleTracker {
   void Begin(const ImageU8& labels);
   /// Precondition: Begin was called with labels of this size.
   void Mark(const ImageU8& labels, LabelRule rule, ImageU8* rules);
+  /// The labels as the last Begin or Mark saw them: before the step now running.
+  const ImageU8& Before() const { return before_; }
 
  private:
   ImageU8 before_;
