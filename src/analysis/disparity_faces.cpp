@@ -296,7 +296,7 @@ void JudgeFacesByHeight(const Image3f& cloud, const Eigen::Vector3d& up_camera, 
       for (int r = first; r < v; ++r) {
         const std::uint8_t was = before(r, u);
         if (was == kNon) continue;
-        (*labels)(r, u) = height >= vehicle.semi_step_m && was != kSemi ? kSemi : was;
+        (*labels)(r, u) = height >= vehicle.semi_step_m ? kSemi : was;
       }
     }
   }
