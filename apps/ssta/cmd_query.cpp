@@ -57,12 +57,12 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
     return args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
   });
   std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
-               "attitude_heights\n"
+               "attitude_heights,drivable_confidence\n"
             << static_cast<int>(result.worst) << ',' << PrintNumber(result.mean_cost, "%.4f") << ','
             << PrintNumber(result.max_cost, "%.4f") << ',' << PrintNumber(result.fraction_observed, "%.4f") << ','
             << result.cells << ',' << result.observed_cells << ',' << PrintNumber(result.pitch_deg, "%.2f") << ','
             << PrintNumber(result.roll_deg, "%.2f") << ',' << static_cast<int>(result.attitude) << ','
-            << result.attitude_heights << "\n";
+            << result.attitude_heights << ',' << PrintNumber(result.drivable_confidence, "%.4f") << "\n";
 }
 
 // --path FILE.csv [--width W]: one row per sample; the verdict on stderr.

@@ -36,6 +36,7 @@ struct FootprintRow {
   double pitch_deg, roll_deg;
   std::uint8_t attitude;
   std::int32_t attitude_heights;
+  double drivable_confidence;
   bool within_limits;
 };
 
@@ -185,7 +186,7 @@ py::array Footprints(const MapHandle& handle, const py::object& poses_arg, doubl
       });
       rows[i] = FootprintRow{static_cast<std::uint8_t>(f.worst), f.mean_cost, f.max_cost, f.fraction_observed,
                              f.cells, f.observed_cells, f.pitch_deg, f.roll_deg, static_cast<std::uint8_t>(f.attitude),
-                             f.attitude_heights,
+                             f.attitude_heights, f.drivable_confidence,
                              f.attitude == TravClass::kTraversable || f.attitude == TravClass::kSemiTraversable};
     }
   }
@@ -490,7 +491,9 @@ Returns:
     roll_deg (float64, left side up positive; both NaN with fewer than 3 heights),
     attitude (uint8: 1 below 0.8 of the map's vehicle max_pitch_deg / max_descent_deg /
     max_roll_deg, 2 up to them, 3 beyond, 0 without a plane), attitude_heights (int32, the
-    heights fitted) and within_limits (bool: attitude 1 or 2).
+    heights fitted), drivable_confidence (float64: the lowest confidence of its traversable and
+    semi-traversable cells; a planner that needs more treats the footprint as undecided; NaN
+    without such a cell) and within_limits (bool: attitude 1 or 2).
 
 Raises:
     ValueError naming `poses`, `length_m` or `width_m`; ssta.Error naming `poses[i]` for a
@@ -614,7 +617,8 @@ void BindMap(py::module_& m) {
   PYBIND11_NUMPY_DTYPE_EX(FootprintRow, worst, "worst", mean_cost, "mean_cost", max_cost, "max_cost",
                           fraction_observed, "fraction_observed", cells, "cells", observed_cells, "observed_cells",
                           pitch_deg, "pitch_deg", roll_deg, "roll_deg", attitude, "attitude", attitude_heights,
-                          "attitude_heights", within_limits, "within_limits");
+                          "attitude_heights", drivable_confidence, "drivable_confidence", within_limits,
+                          "within_limits");
   PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
                           fraction_observed, "fraction_observed");
 

@@ -151,7 +151,7 @@ class Map:
     ) -> np.ndarray:
         """N x 3 poses (x [m], y [m], yaw [rad]) -> structured rows: worst, mean_cost, max_cost,
         fraction_observed, cells, observed_cells, pitch_deg, roll_deg, attitude,
-        attitude_heights, within_limits."""
+        attitude_heights, drivable_confidence, within_limits."""
     def path(
         self,
         vertices: _Array,

@@ -15,7 +15,7 @@ from conftest import cli_error, read_csv
 # The CSV's precision per column (QueryCsvRow): compare to half its last digit.
 CSV_DECIMALS = {"x": 4, "y": 4, "z": 4, "cost": 4, "probability": 4, "slope_deg": 2, "step_m": 3,
                 "confidence": 4, "frame_mean_slope_deg": 2, "frame_mean_step_m": 3, "mean_cost": 4, "max_cost": 4, "fraction_observed": 4, "distance_m": 4,
-                "pitch_deg": 2, "roll_deg": 2}
+                "pitch_deg": 2, "roll_deg": 2, "drivable_confidence": 4}
 
 
 def assert_rows_match_csv(rows, csv_columns, columns_of_rows=None):

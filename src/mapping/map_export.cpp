@@ -236,7 +236,7 @@ CellInfo ExportedSurface::Answer(double x, double y, bool reproject_outside) con
   // probability under the map's evidence, which was for the other class.
   // Nor a slope and step that decided it.
   if (!cell.observed || exported != cell.cls) {
-    cell.probability = std::numeric_limits<double>::quiet_NaN();
+    cell.probability = cell.confidence = std::numeric_limits<double>::quiet_NaN();
     if (exported != cell.cls) {
       const int c = static_cast<int>(exported);
       cell.decided_by = c >= 1 && c <= 3 ? ClassJudge::kExport : ClassJudge::kNone;

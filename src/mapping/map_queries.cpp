@@ -539,6 +539,12 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
         worst_distance2 = distance2;
       }
     }
+    if ((cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) &&
+        std::isfinite(cell.confidence)) {
+      result.drivable_confidence = std::isnan(result.drivable_confidence)
+                                       ? cell.confidence
+                                       : std::min(result.drivable_confidence, cell.confidence);
+    }
     if (std::isfinite(cell.cost)) {
       cost_sum += cell.cost;
       ++cost_count;

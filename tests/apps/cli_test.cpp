@@ -264,10 +264,10 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   // The floor is level: the vehicle stands flat on it (attitude 1, traversable).
   EXPECT_EQ(r.output,
             "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
-            "attitude_heights\n3,1.0000,1.0000,1.0000,9,9,0.00,0.00,1,9\n");
+            "attitude_heights,drivable_confidence\n3,1.0000,1.0000,1.0000,9,9,0.00,0.00,1,9,nan\n");
   r = RunSsta(query + " --footprint 0.65,0.65,90,0.3,0.3 --as-exported --local-ground 1", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9,0.00,0.00,1,9");
+  EXPECT_EQ(Lines(r.output).back(), "1,0.0000,0.0000,1.0000,9,9,0.00,0.00,1,9,nan");  // the export made it floor
 
   std::ofstream(dir / "path.csv") << "x,y\n0.05,0.65\n1.55,0.65\n";
   r = RunSsta(query + " --path " + (dir / "path.csv"));  // with the verdict from stderr
@@ -360,8 +360,8 @@ TEST(Cli, ExportWithHeadingsWritesACostLayerPerHeading) {
 
   r = RunSsta("query --map " + (dir / "m.ot") + " --footprint 1.5,1.5,90,1,0.6", false);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::vector<std::string> row = Fields(Lines(r.output).back());  // ...,pitch,roll,attitude,heights
-  ASSERT_EQ(row.size(), 10u) << r.output;
+  const std::vector<std::string> row = Fields(Lines(r.output).back());  // ...,pitch,roll,attitude,heights,confidence
+  ASSERT_EQ(row.size(), 11u) << r.output;
   EXPECT_NEAR(std::stod(row[6]), 0.0, 0.05);
   EXPECT_NEAR(std::stod(row[7]), -20.0, 0.05);  // facing +y, the left (-x) side is the lower one
   EXPECT_EQ(row[8], "3");                        // beyond the 15 deg roll limit

@@ -362,6 +362,8 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
   EXPECT_EQ(exported.worst, TravClass::kTraversable);
   EXPECT_EQ(exported.cells, 9);
   EXPECT_EQ(exported.mean_cost, 0.0);
+  // The export, not the map's evidence, made those cells traversable: no confidence to give.
+  EXPECT_TRUE(std::isnan(exported.drivable_confidence));
   // The hole is unobserved as observed; as exported it holds its filled class and counts.
   const FootprintQuery on_hole{testing::C(12), testing::C(12), 0.0, 0.05, 0.05};
   const Eigen::AlignedBox2d hole_box(Eigen::Vector2d(1.2, 1.2), Eigen::Vector2d(1.3, 1.3));

@@ -126,6 +126,8 @@ TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {
   const FootprintResult floor = map().QueryFootprint({0.5, 0.5, 0.3, 0.5, 0.4});
   EXPECT_EQ(floor.worst, TravClass::kTraversable);
   EXPECT_NEAR(floor.mean_cost, OneViewFloorCost(), 1e-8);
+  // Each floor column was seen once: the footprint is as sure of driving there as one view is.
+  EXPECT_NEAR(floor.drivable_confidence, OneViewProbability(), 1e-6);
   // x in [2.7, 3.1]: centres 2.75 .. 3.05, the last off the floor; y centres 0.45, 0.55.
   const FootprintResult edge = map().QueryFootprint({2.9, 0.5, 0.0, 0.4, 0.18});
   EXPECT_EQ(edge.cells, 8);
@@ -135,6 +137,7 @@ TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {
   const FootprintResult tiny = map().QueryFootprint({1.12, 1.12, 0.0, 0.01, 0.01});
   EXPECT_EQ(tiny.cells, 1);
   EXPECT_EQ(tiny.worst, TravClass::kNonTraversable);
+  EXPECT_TRUE(std::isnan(tiny.drivable_confidence));  // no drivable cell under it
 }
 
 TEST_F(FloorAndBoxQueries, PathThroughTheBoxReportsTheFirstNonTraversablePoint) {

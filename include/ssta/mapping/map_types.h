@@ -143,6 +143,10 @@ struct FootprintResult {
   /// Mean cost over the observed cells that have one (class 1..3); NaN when there are none.
   double mean_cost = std::numeric_limits<double>::quiet_NaN();
   double max_cost = std::numeric_limits<double>::quiet_NaN();  ///< NaN when no cell has a cost
+  /// The lowest CellInfo::confidence among the observed traversable and semi-traversable cells:
+  /// how sure the map is that a drivable answer holds under the whole footprint (a planner that
+  /// needs more treats the footprint as undecided). NaN when no such cell has a confidence.
+  double drivable_confidence = std::numeric_limits<double>::quiet_NaN();
   double fraction_observed = 0.0;  ///< observed columns / columns, in [0, 1]
   int cells = 0;                   ///< columns under the footprint
   /// Of those, columns with an observed surface (or, read from a surface source such as
