@@ -18,9 +18,11 @@
 # footprints (eval footprints --as-exported), over all seen ground and within 10 m. The last
 # row pools the samples of every scene. A second table pools the footprints per 2 m band of
 # distance from the path, with each class's recall; a third counts the missed footprints by
-# the map's rule at the cell that makes each a miss; a fourth splits the map's cells within
-# 10 m of the path by true class and answer, as shares of all of them (where the accuracy goes);
-# a fifth the per-frame labels' pixels per 5 m band of true depth from the camera.
+# the map's rule at the cell that makes each a miss; a fourth what a planner that drives only
+# on footprints answered at least this confident (bars 0.4 to 0.99) is told; a fifth splits the
+# map's cells within 10 m of the path by true class and answer, as shares of all of them (where
+# the accuracy goes); a sixth the per-frame labels' pixels per 5 m band of true depth from the
+# camera.
 # SCENES="yard:1 random:3" runs those scenes only; MAP_ONLY=1 skips the per-frame labels;
 # DISPARITY=1 (not with MAP_ONLY) also scores the matcher's disparity of every frame against
 # the true one (classify --disparity + eval disparity: out/accuracy/<set>/<scene>/disparity.json)
@@ -192,6 +194,28 @@ if by_rule:
     print("|---|---|---|---|")
     for rule, (u, fb, edge) in sorted(by_rule.items(), key=lambda kv: -(kv[1][0] + kv[1][1])):
         print("| %s | %d | %d | %d |" % (rule, u, fb, edge))
+# What a planner that drives only on footprints answered at least this confident is told (eval
+# footprints' by_min_confidence): the truly blocked it would drive into, the truly free it would
+# drive on, pooled over the scenes. The bar is the planner's; the map's classes stay.
+bars = {}
+blocked_free = [0, 0]
+for run in runs:
+    doc = load(os.path.join(out, "%s-%s" % tuple(run.split(":")), "footprints.json"))
+    if not doc or "by_min_confidence" not in doc:
+        continue
+    m = confusion(doc["metrics"])
+    blocked_free[0] += sum(m[3])
+    blocked_free[1] += sum(m[1]) + sum(m[2])
+    for row in doc["by_min_confidence"]:
+        counts = bars.setdefault(row["min_confidence"], [0, 0])
+        counts[0] += row["unsafe"]
+        counts[1] += row["free_drivable"]
+if bars and all(blocked_free):
+    print()
+    print("| footprints, pooled: drive only on answers at least this confident | unsafe | free answered drivable |")
+    print("|---|---|---|")
+    for bar, (u, d) in sorted(bars.items()):
+        print("| %.2f | %s | %s |" % (bar, f(u / blocked_free[0], True), f(d / blocked_free[1], True)))
 # Where the map's cells within 10 m of the path go wrong, pooled: each true class by the map's
 # answer as a share of all scored cells, so the three diagonal entries add up to the pooled map
 # accuracy and every other entry is what that confusion costs it (unknown: no surface was

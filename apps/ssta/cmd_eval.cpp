@@ -148,7 +148,7 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   if (!args.footprint.IsValid(&error)) {  // named by the option that set the key
     for (const auto& [key, flag] : {std::pair<std::string, std::string>{"length_m", "--length"},
                                     {"width_m", "--width"}, {"step_m", "--step"}, {"yaws_deg", "--yaws"},
-                                    {"padding_m", "--padding"}}) {
+                                    {"padding_m", "--padding"}, {"min_confidence", "--min-confidence"}}) {
       if (error.rfind(key, 0) == 0) error = flag + error.substr(key.size());
     }
     throw Error(error);
@@ -172,7 +172,8 @@ FootprintEvalSummary EvaluateMapFootprints(const FootprintArguments& args) {
   const auto oracle = [&](const FootprintPose& pose) {
     const FootprintQuery q{pose.x_m, pose.y_m, pose.yaw_rad, query_length_m, query_width_m};
     const FootprintResult r = exported ? map.QueryFootprint(q, *exported) : map.QueryFootprint(q);
-    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed, r.worst_x_m, r.worst_y_m};
+    return FootprintAnswer{static_cast<std::uint8_t>(r.worst), r.fraction_observed, r.worst_x_m, r.worst_y_m,
+                           r.drivable_confidence};
   };
   FootprintEvalSummary summary;
   try {
@@ -303,6 +304,11 @@ void AddFootprintsEval(CLI::App* eval) {
   footprints->add_option("--padding", fp_args->footprint.padding_m,
                          "ask the map about the rectangle grown by this on every side, as a planner pads its "
                          "footprint; the truth stays --length x --width [m]")
+      ->capture_default_str();
+  footprints->add_option("--min-confidence", fp_args->footprint.min_confidence,
+                         "drive only on answers this sure: a footprint answered traversable or semi-traversable "
+                         "whose least confident drivable cell is below this counts as undecided, as for a planner "
+                         "with that bar (the report lists the trade for a range of bars either way)")
       ->capture_default_str();
   AddAsExported(footprints,
                 "read the map as the exported grid shows it (its local-ground and hole-filling steps), as query "

@@ -74,6 +74,65 @@ std::string Fixed(double value, int digits) {
   return buffer;
 }
 
+/// FootprintEvalSummary::by_min_confidence as the poses come: a drivable answer counts at
+/// every bar its confidence reaches (no confidence reaches all of them).
+class ConfidenceBars {
+ public:
+  ConfidenceBars() {
+    for (const double bar : FootprintEvalSummary::kConfidenceBars) bars_.push_back({bar, 0, 0});
+  }
+
+  void Add(std::uint8_t truth, std::uint8_t answer, double confidence) {
+    if (answer != 1 && answer != 2) return;
+    for (FootprintEvalSummary::ConfidenceBar& bar : bars_) {
+      if (!(confidence < bar.min_confidence)) ++(truth == 3 ? bar.unsafe : bar.free_drivable);
+    }
+  }
+
+  /// The bars with their rates over the truly blocked and truly free poses of `matrix`.
+  std::vector<FootprintEvalSummary::ConfidenceBar> Finish(const ConfusionMatrix& matrix) {
+    std::int64_t blocked = 0, free = 0;
+    for (int predicted = 0; predicted < ConfusionMatrix::kSize; ++predicted) {
+      blocked += matrix.Count(3, predicted);
+      free += matrix.Count(1, predicted) + matrix.Count(2, predicted);
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (FootprintEvalSummary::ConfidenceBar& bar : bars_) {
+      bar.unsafe_rate = blocked > 0 ? static_cast<double>(bar.unsafe) / blocked : nan;
+      bar.free_drivable_rate = free > 0 ? static_cast<double>(bar.free_drivable) / free : nan;
+    }
+    return std::move(bars_);
+  }
+
+ private:
+  std::vector<FootprintEvalSummary::ConfidenceBar> bars_;
+};
+
+/// The miss of a pose with truth `t` answered `answered`: for an unsafe one the truth's worst
+/// cell under it, for a falsely blocked one the cell the answer names.
+FootprintMiss MakeMiss(const ClassGrid& truth, const FootprintPose& pose, std::uint8_t t, std::uint8_t answered,
+                       const FootprintAnswer& answer, const Eigen::Vector2d& truth_cell, double distance) {
+  FootprintMiss miss;
+  miss.unsafe = ConfusionMatrix::IsUnsafe(t, answered);
+  miss.pose = pose;
+  miss.truth = t;
+  miss.answer = answered;
+  miss.fraction_known = answer.fraction_known;
+  miss.distance_from_path_m = distance;
+  if (miss.unsafe) {  // TruthUnder's cell, whose class is t
+    miss.cell_x_m = truth_cell.x();
+    miss.cell_y_m = truth_cell.y();
+    miss.cell_truth = t;
+  } else {
+    miss.cell_x_m = answer.worst_x_m;
+    miss.cell_y_m = answer.worst_y_m;
+    if (std::isfinite(miss.cell_x_m) && std::isfinite(miss.cell_y_m)) {
+      miss.cell_truth = truth.ClassAt({miss.cell_x_m, miss.cell_y_m});
+    }
+  }
+  return miss;
+}
+
 }  // namespace
 
 bool FootprintEvalOptions::IsValid(std::string* error) const {
@@ -82,6 +141,9 @@ bool FootprintEvalOptions::IsValid(std::string* error) const {
   if (!(std::isfinite(step_m) && step_m > 0.0)) return Fail(error, "step_m: must be a positive number of metres");
   if (!(std::isfinite(padding_m) && padding_m >= 0.0)) {
     return Fail(error, "padding_m: must be a number of metres >= 0");
+  }
+  if (!(min_confidence >= 0.0 && min_confidence <= 1.0)) {
+    return Fail(error, "min_confidence: must be a probability in [0, 1]");
   }
   if (yaws_deg.empty()) return Fail(error, "yaws_deg: needs at least one heading");
   for (const double yaw : yaws_deg) {
@@ -103,6 +165,7 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
   const int k = std::max(1, static_cast<int>(std::lround(options.step_m / truth.resolution_m)));
   const double half_l = 0.5 * options.length_m, half_w = 0.5 * options.width_m;
   double known_sum = 0.0;
+  ConfidenceBars bars;
   std::unique_ptr<internal::BandAccumulator> bands;
   if (!path.empty()) bands = std::make_unique<internal::BandAccumulator>(path, FootprintEvalSummary::kDistanceBandM);
   const int height = truth.classes.height();
@@ -124,31 +187,19 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
         SSTA_CHECK(answer.worst <= 4, "ScoreFootprints: the oracle answered a class above 4");
         SSTA_CHECK(answer.fraction_known >= 0.0 && answer.fraction_known <= 1.0,
                    "ScoreFootprints: the oracle's fraction_known is not in [0, 1]");
-        summary.matrix.Add(t, answer.worst);
-        if (bands) bands->Add(centre, t, answer.worst);
-        const bool unsafe = ConfusionMatrix::IsUnsafe(t, answer.worst);
-        if (unsafe || ConfusionMatrix::IsFalselyBlocked(t, answer.worst)) {
+        SSTA_CHECK(!(answer.confidence < 0.0 || answer.confidence > 1.0),
+                   "ScoreFootprints: the oracle's confidence is not in [0, 1]");
+        const bool drivable = answer.worst == 1 || answer.worst == 2;
+        const double confidence = std::isnan(answer.confidence) ? 1.0 : answer.confidence;
+        bars.Add(t, answer.worst, confidence);
+        // Below the planner's bar a drivable answer is no answer: undecided.
+        const std::uint8_t answered = drivable && confidence < options.min_confidence ? 4 : answer.worst;
+        summary.matrix.Add(t, answered);
+        if (bands) bands->Add(centre, t, answered);
+        if (ConfusionMatrix::IsUnsafe(t, answered) || ConfusionMatrix::IsFalselyBlocked(t, answered)) {
           const double distance = path.empty() ? std::numeric_limits<double>::quiet_NaN()
                                                : internal::DistanceToPath(centre, path);
-          FootprintMiss miss;
-          miss.unsafe = unsafe;
-          miss.pose = pose;
-          miss.truth = t;
-          miss.answer = answer.worst;
-          miss.fraction_known = answer.fraction_known;
-          miss.distance_from_path_m = distance;
-          if (unsafe) {  // TruthUnder's cell, whose class is t
-            miss.cell_x_m = truth_cell.x();
-            miss.cell_y_m = truth_cell.y();
-            miss.cell_truth = t;
-          } else {
-            miss.cell_x_m = answer.worst_x_m;
-            miss.cell_y_m = answer.worst_y_m;
-            if (std::isfinite(miss.cell_x_m) && std::isfinite(miss.cell_y_m)) {
-              miss.cell_truth = truth.ClassAt({miss.cell_x_m, miss.cell_y_m});
-            }
-          }
-          summary.misses.push_back(std::move(miss));
+          summary.misses.push_back(MakeMiss(truth, pose, t, answered, answer, truth_cell, distance));
         }
         if (answer.fraction_known < 1.0) ++summary.partly_known;
         known_sum += answer.fraction_known;
@@ -163,6 +214,7 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
   summary.unsafe = summary.matrix.Unsafe();
   summary.falsely_blocked = summary.matrix.FalselyBlocked();
   if (bands) summary.by_distance = bands->Finish();
+  summary.by_min_confidence = bars.Finish(summary.matrix);
   const std::int64_t scored = summary.matrix.Scored();
   summary.mean_fraction_known = scored > 0 ? known_sum / static_cast<double>(scored)
                                            : std::numeric_limits<double>::quiet_NaN();
@@ -213,6 +265,14 @@ std::string FootprintEvalSummary::BriefReport() const {
          "), mean known share " + Fixed(mean_fraction_known, 3) + "\n";
   out += matrix.BriefReport("footprints");
   out += internal::BandsReport(by_distance, path_source);
+  if (!by_min_confidence.empty()) {
+    out += "driving only on answers at least this confident (unsafe / free answered drivable):";
+    for (const ConfidenceBar& bar : by_min_confidence) {
+      out += " " + Fixed(bar.min_confidence, 2) + ": " + Fixed(100.0 * bar.unsafe_rate, 1) + " % / " +
+             Fixed(100.0 * bar.free_drivable_rate, 1) + " %;";
+    }
+    out.back() = '\n';
+  }
   const std::vector<RuleCount> rules = MissesByRule();
   if (!rules.empty() && !(rules.size() == 1 && rules.front().rule == "unknown")) {
     out += "misses by what decided their cell (unsafe / falsely blocked):";
@@ -237,6 +297,8 @@ std::string FootprintEvalSummary::ToJson() const {
   json.Number(options.step_m);
   json.Key("padding_m");
   json.Number(options.padding_m);
+  json.Key("min_confidence");
+  json.Number(options.min_confidence);
   json.Key("yaws_deg");
   json.BeginInlineArray();
   for (const double yaw : options.yaws_deg) json.Number(yaw);
@@ -260,6 +322,23 @@ std::string FootprintEvalSummary::ToJson() const {
     json.Key("by_distance_from_path");
     internal::WriteBandsJson(by_distance, path_source, kDistanceBandM, &json);
   }
+  json.Key("by_min_confidence");
+  json.BeginArray();
+  for (const ConfidenceBar& bar : by_min_confidence) {
+    json.BeginObject();
+    json.Key("min_confidence");
+    json.Number(bar.min_confidence);
+    json.Key("unsafe");
+    json.Integer(bar.unsafe);
+    json.Key("unsafe_rate");
+    json.Number(bar.unsafe_rate);
+    json.Key("free_drivable");
+    json.Integer(bar.free_drivable);
+    json.Key("free_drivable_rate");
+    json.Number(bar.free_drivable_rate);
+    json.EndObject();
+  }
+  json.EndArray();
   json.Key("misses_by_rule");
   json.BeginArray();
   for (const RuleCount& r : MissesByRule()) {

@@ -480,6 +480,17 @@ TEST(Cli, EvalFootprintsCountsUnsafeAndFalselyBlockedFootprints) {
   EXPECT_NE(r.output.find("the map asked with 0.10 m of padding"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("answered traversable or semi): 25 of 25 (1.0000)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("answered non-traversable): 49 of 759 (0.0646)"), std::string::npos) << r.output;
+  // The report lists what a planner with a confidence bar is told; with the bar at 1 no drivable
+  // answer is sure enough, so none is unsafe and the block's footprints are undecided.
+  EXPECT_NE(r.output.find("driving only on answers at least this confident (unsafe / free answered drivable): 0.40:"),
+            std::string::npos)
+      << r.output;
+  r = RunSsta(eval + " --length 0.3 --yaws 0 --min-confidence 1");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("answered traversable or semi): 0 of 25 (0.0000)"), std::string::npos) << r.output;
+  r = RunSsta(eval + " --min-confidence 1.5");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--min-confidence: must be a probability in [0, 1]"), std::string::npos) << r.output;
   r = RunSsta(eval + " --padding -0.1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--padding: must be a number of metres >= 0"), std::string::npos) << r.output;

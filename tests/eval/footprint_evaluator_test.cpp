@@ -210,6 +210,49 @@ TEST(eval_Footprints, ListsEachUnsafeAndFalselyBlockedPoseNearestThePathFirst) {
   EXPECT_EQ(json.find("\"unsafe\": 16", ring), json.find("\"unsafe\"", ring)) << json;
 }
 
+TEST(eval_Footprints, APlannersConfidenceBarTurnsUnsureDrivableAnswersUndecided) {
+  // Every footprint answered traversable; the ones whose centre lies left of x = 2 m (columns
+  // 0-19) with confidence 0.55, the others with 0.97. The block's 16 truly non-traversable
+  // centres are columns 19-22: 4 of them on the unsure side.
+  const FootprintEvalOptions options = SquaresOnEveryCell();
+  const auto oracle = [](const FootprintPose& pose) {
+    FootprintAnswer a = Always(1, 1.0);
+    a.confidence = pose.x_m < 2.0 ? 0.55 : 0.97;
+    return a;
+  };
+  const FootprintEvalSummary all = ScoreFootprints(Truth(), options, oracle);
+  EXPECT_EQ(all.unsafe, 16);
+  // Scored centres per column: rows 1..38, less the don't-care cell's 3 x 3 (columns 4-6).
+  const std::int64_t left_free = 19 * 38 - 9 - 4, right_free = 19 * 38 - 12;  // columns 1-19, 20-38
+  ASSERT_EQ(left_free + right_free, 1410 + 9);
+  ASSERT_EQ(all.by_min_confidence.size(), std::size(FootprintEvalSummary::kConfidenceBars));
+  for (const FootprintEvalSummary::ConfidenceBar& bar : all.by_min_confidence) {
+    const bool left_counts = bar.min_confidence <= 0.55, right_counts = bar.min_confidence <= 0.97;
+    EXPECT_EQ(bar.unsafe, (left_counts ? 4 : 0) + (right_counts ? 12 : 0)) << bar.min_confidence;
+    EXPECT_EQ(bar.free_drivable, (left_counts ? left_free : 0) + (right_counts ? right_free : 0)) << bar.min_confidence;
+    EXPECT_NEAR(bar.unsafe_rate, bar.unsafe / 16.0, kTol);
+    EXPECT_NEAR(bar.free_drivable_rate, bar.free_drivable / 1419.0, kTol);
+  }
+  // A planner with a bar of 0.6 drives only on the right: the left's answers are undecided.
+  FootprintEvalOptions barred = options;
+  barred.min_confidence = 0.6;
+  const FootprintEvalSummary b = ScoreFootprints(Truth(), barred, oracle);
+  EXPECT_EQ(b.unsafe, 12);
+  EXPECT_EQ(b.matrix.Count(3, 4), 4);
+  EXPECT_EQ(b.matrix.Count(1, 4) + b.matrix.Count(2, 4), left_free);
+  EXPECT_EQ(b.falsely_blocked, 0);
+  EXPECT_NE(b.ToJson().find("\"by_min_confidence\""), std::string::npos);
+  // A blocked answer stays blocked whatever its confidence; no confidence counts as sure.
+  const FootprintEvalSummary blocked = ScoreFootprints(Truth(), barred, [](const FootprintPose&) {
+    FootprintAnswer a = Always(3, 1.0);
+    a.confidence = 0.1;
+    return a;
+  });
+  EXPECT_EQ(blocked.falsely_blocked, 1419);
+  const FootprintEvalSummary unsaid = ScoreFootprints(Truth(), barred, [](const FootprintPose&) { return Always(1, 1.0); });
+  EXPECT_EQ(unsaid.unsafe, 16);
+}
+
 TEST(eval_Footprints, DiagonalFootprintsCoverTheirDiagonalCells) {
   // 0.3 x 0.1 m at 45 degrees: the centre and the two cells along the diagonal (0.141 m along,
   // 0 across); the orthogonal neighbours lie 0.071 m across, outside the 0.05 m half width.
@@ -272,6 +315,9 @@ TEST(eval_Footprints, BadOptionsAndTruthAreNamed) {
   EXPECT_NE(error_of(bad, Truth()).find("yaws_deg"), std::string::npos);
   bad.yaws_deg.clear();
   EXPECT_NE(error_of(bad, Truth()).find("yaws_deg"), std::string::npos);
+  bad = FootprintEvalOptions{};
+  bad.min_confidence = 1.5;
+  EXPECT_NE(error_of(bad, Truth()).find("min_confidence"), std::string::npos);
   ClassGrid truth = Truth();
   truth.classes(0, 0) = 7;
   EXPECT_NE(error_of(FootprintEvalOptions{}, truth).find("truth.png"), std::string::npos);

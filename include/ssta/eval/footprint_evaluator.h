@@ -26,6 +26,10 @@ struct FootprintEvalOptions {
   /// The map is asked about the rectangle grown by this on every side, as a planner pads its
   /// robot's footprint; the truth stays the robot's own rectangle [m], >= 0.
   double padding_m = 0.0;
+  /// A planner's bar for driving: a footprint answered traversable or semi-traversable with a
+  /// FootprintAnswer::confidence below this counts as undecided (neither unsafe nor drivable),
+  /// in [0, 1]; 0 takes every answer as it is.
+  double min_confidence = 0.0;
 
   /// True when every field is finite and in range; otherwise `*error` (when not null) gets a
   /// message that starts with the key ("length_m: must be positive").
@@ -50,6 +54,9 @@ struct FootprintAnswer {
   /// nearest its centre; NaN when the method does not say (or knows no cell).
   double worst_x_m = std::numeric_limits<double>::quiet_NaN();
   double worst_y_m = std::numeric_limits<double>::quiet_NaN();
+  /// How sure the method is of a traversable or semi-traversable answer, in [0, 1]
+  /// (FootprintResult::drivable_confidence); NaN when it does not say (then it is taken as 1).
+  double confidence = std::numeric_limits<double>::quiet_NaN();
 };
 
 using FootprintOracle = std::function<FootprintAnswer(const FootprintPose&)>;
@@ -114,6 +121,18 @@ struct FootprintEvalSummary {
   /// Every unsafe and falsely blocked pose: the unsafe ones first, each kind nearest to the
   /// path first (in lattice order without a path).
   std::vector<FootprintMiss> misses;
+  /// What a planner that drives only on answers at least this confident is told, for each of
+  /// kConfidenceBars (FootprintEvalOptions::min_confidence as it would set it): the truly
+  /// blocked poses it would drive into, the truly free ones it would drive on.
+  struct ConfidenceBar {
+    double min_confidence = 0.0;
+    std::int64_t unsafe = 0;         ///< of the truly blocked scored poses
+    std::int64_t free_drivable = 0;  ///< of the truly free (traversable or semi) scored poses
+    double unsafe_rate = 0.0;        ///< unsafe / truly blocked; NaN without any
+    double free_drivable_rate = 0.0; ///< free_drivable / truly free; NaN without any
+  };
+  std::vector<ConfidenceBar> by_min_confidence;
+  static constexpr double kConfidenceBars[] = {0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.99};
 
   std::string BriefReport() const;
   /// {"kind": "footprints", "unit": "footprints", "prediction", "truth", "footprint":
