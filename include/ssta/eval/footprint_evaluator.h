@@ -136,9 +136,11 @@ struct FootprintEvalSummary {
 
   std::string BriefReport() const;
   /// {"kind": "footprints", "unit": "footprints", "prediction", "truth", "footprint":
-  ///  {"length_m", "width_m", "step_m", "yaws_deg"}, "poses", "partly_unseen", "unsafe",
-  ///  "falsely_blocked", "partly_known", "mean_fraction_known", "metrics": {...}} with
-  /// "metrics" as described at ConfusionMatrix.
+  ///  {"length_m", "width_m", "step_m", "padding_m", "min_confidence", "yaws_deg"}, "poses",
+  ///  "partly_unseen", "unsafe", "falsely_blocked", "partly_known", "mean_fraction_known",
+  ///  "metrics": {...}, "by_distance_from_path" (with a path), "by_min_confidence": [{"min_confidence",
+  ///  "unsafe", "unsafe_rate", "free_drivable", "free_drivable_rate"}...], "misses_by_rule": [...]}
+  /// with "metrics" as described at ConfusionMatrix.
   std::string ToJson() const;
   /// `misses` as CSV: a header line "kind,x_m,y_m,yaw_deg,truth,answer,fraction_known,
   /// distance_from_path_m,cell_x_m,cell_y_m,cell_truth,cell_class,cell_rule", then one line
