@@ -7,9 +7,17 @@ namespace ssta::internal {
 
 namespace {
 
+// Deeper than any config, calibration or truth file nests; an alias inside the node its anchor
+// names (`&a [*a]`) makes a cycle that would otherwise be walked until the stack runs out.
+constexpr int kMaxYamlDepth = 64;
+
 // yaml-cpp keeps both entries of a key written twice and answers lookups with the first, so a
 // config whose `vehicle:` appears twice would run half of each: refused, naming the line.
-void RejectDuplicateKeys(const YAML::Node& node, const std::string& file) {
+void RejectDuplicateKeys(const YAML::Node& node, const std::string& file, int depth = 0) {
+  if (depth > kMaxYamlDepth) {
+    throw Error(file + ":" + std::to_string(node.Mark().line + 1) + ": nested more than " +
+                std::to_string(kMaxYamlDepth) + " levels deep (an alias inside the node its anchor names?)");
+  }
   if (node.IsMap()) {
     std::set<std::string> keys;
     for (const auto& entry : node) {
@@ -17,10 +25,10 @@ void RejectDuplicateKeys(const YAML::Node& node, const std::string& file) {
         throw Error(file + ":" + std::to_string(entry.first.Mark().line + 1) + ": key '" + entry.first.Scalar() +
                     "' appears twice in the same mapping");
       }
-      RejectDuplicateKeys(entry.second, file);
+      RejectDuplicateKeys(entry.second, file, depth + 1);
     }
   } else if (node.IsSequence()) {
-    for (const auto& item : node) RejectDuplicateKeys(item, file);
+    for (const auto& item : node) RejectDuplicateKeys(item, file, depth + 1);
   }
 }
 

@@ -195,6 +195,9 @@ const std::vector<BadInput>& Cases() {
       {"ConfigDuplicateKey",  // yaml-cpp would answer with the first and ignore the second
        [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "vehicle:\n  max_slope_deg: 20\nvehicle:\n  semi_slope_deg: 10\n"; },
        kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml:3: key 'vehicle' appears twice in the same mapping"}},
+      {"ConfigAliasInsideItsAnchor",  // a cycle: walking it would run out of stack (found by fuzz_sensor_yaml)
+       [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "&a\nvehicle: [*a]\n"; },
+       kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml:", "nested more than 64 levels deep"}},
       {"ConfigIsAFolder", [](auto&, auto& d) { fs::create_directories(d + "/c.yaml"); },
        kBuild + " --config {dir}/c.yaml", {"{dir}/c.yaml: is a folder, not a file"}},
       {"ConfigWrongType", [](auto&, auto& d) { std::ofstream(d + "/c.yaml") << "map:\n  resolution_m: fine\n"; },
