@@ -82,8 +82,8 @@ class ConfidenceBars {
     for (const double bar : FootprintEvalSummary::kConfidenceBars) bars_.push_back({bar, 0, 0});
   }
 
-  void Add(std::uint8_t truth, std::uint8_t answer, double confidence) {
-    if (answer != 1 && answer != 2) return;
+  void Add(std::uint8_t truth, bool drivable, double confidence) {
+    if (!drivable) return;
     for (FootprintEvalSummary::ConfidenceBar& bar : bars_) {
       if (!(confidence < bar.min_confidence)) ++(truth == 3 ? bar.unsafe : bar.free_drivable);
     }
@@ -91,11 +91,7 @@ class ConfidenceBars {
 
   /// The bars with their rates over the truly blocked and truly free poses of `matrix`.
   std::vector<FootprintEvalSummary::ConfidenceBar> Finish(const ConfusionMatrix& matrix) {
-    std::int64_t blocked = 0, free = 0;
-    for (int predicted = 0; predicted < ConfusionMatrix::kSize; ++predicted) {
-      blocked += matrix.Count(3, predicted);
-      free += matrix.Count(1, predicted) + matrix.Count(2, predicted);
-    }
+    const std::int64_t blocked = matrix.TruthTotal(3), free = matrix.TruthTotal(1) + matrix.TruthTotal(2);
     const double nan = std::numeric_limits<double>::quiet_NaN();
     for (FootprintEvalSummary::ConfidenceBar& bar : bars_) {
       bar.unsafe_rate = blocked > 0 ? static_cast<double>(bar.unsafe) / blocked : nan;
@@ -191,7 +187,7 @@ FootprintEvalSummary ScoreFootprints(const ClassGrid& truth, const FootprintEval
                    "ScoreFootprints: the oracle's confidence is not in [0, 1]");
         const bool drivable = answer.worst == 1 || answer.worst == 2;
         const double confidence = std::isnan(answer.confidence) ? 1.0 : answer.confidence;
-        bars.Add(t, answer.worst, confidence);
+        bars.Add(t, drivable, confidence);
         // Below the planner's bar a drivable answer is no answer: undecided.
         const std::uint8_t answered = drivable && confidence < options.min_confidence ? 4 : answer.worst;
         summary.matrix.Add(t, answered);

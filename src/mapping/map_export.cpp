@@ -233,7 +233,7 @@ CellInfo ExportedSurface::Answer(double x, double y, bool reproject_outside) con
   if (!grid_.classes.Contains(v, u)) return cell;  // not reached: the column lies in its own projection
   const auto exported = static_cast<TravClass>(grid_.classes(v, u));
   // A class the export decided (a step judged by the local ground, a filled hole) has no
-  // probability under the map's evidence, which was for the other class.
+  // probability or confidence under the map's evidence, which was for the other class.
   // Nor a slope and step that decided it.
   if (!cell.observed || exported != cell.cls) {
     cell.probability = cell.confidence = std::numeric_limits<double>::quiet_NaN();

@@ -539,11 +539,8 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
         worst_distance2 = distance2;
       }
     }
-    if ((cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) &&
-        std::isfinite(cell.confidence)) {
-      result.drivable_confidence = std::isnan(result.drivable_confidence)
-                                       ? cell.confidence
-                                       : std::min(result.drivable_confidence, cell.confidence);
+    if (cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) {
+      result.drivable_confidence = std::fmin(result.drivable_confidence, cell.confidence);  // NaN: no say
     }
     if (std::isfinite(cell.cost)) {
       cost_sum += cell.cost;
