@@ -443,6 +443,9 @@ PathSample SampleAcross(const Station& station, double width_m, int lateral, con
     if (std::isfinite(cell.cost)) {
       sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
     }
+    if (cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) {
+      sample.drivable_confidence = std::fmin(sample.drivable_confidence, cell.confidence);  // NaN: no say
+    }
   }
   sample.fraction_observed = static_cast<double>(observed) / lateral;
   return sample;

@@ -11,6 +11,7 @@
 
 #include "map_test_util.h"
 #include "ssta/mapping/column_explanation.h"
+#include "ssta/mapping/confidence_bar.h"
 #include "ssta/mapping/map_export.h"
 
 namespace ssta {
@@ -138,6 +139,51 @@ TEST_F(FloorAndBoxQueries, FootprintOnTheFloorAndOverTheEdge) {
   EXPECT_EQ(tiny.cells, 1);
   EXPECT_EQ(tiny.worst, TravClass::kNonTraversable);
   EXPECT_TRUE(std::isnan(tiny.drivable_confidence));  // no drivable cell under it
+}
+
+TEST_F(FloorAndBoxQueries, AConfidenceBarLeavesOnlyTheDrivableAnswersThatSure) {
+  const double once = OneViewProbability();  // every floor column's confidence
+  const FootprintQuery on_floor{0.5, 0.5, 0.3, 0.5, 0.4};
+  // Under the bar's floor (0), at it and just below the floor's confidence: the answer as it is.
+  for (const double bar : {0.0, once - 1e-6}) {
+    const FootprintResult r = map().QueryFootprint(on_floor, WithConfidenceBar(map(), {}, bar));
+    EXPECT_EQ(r.worst, TravClass::kTraversable) << bar;
+    EXPECT_NEAR(r.drivable_confidence, once, 1e-6) << bar;
+    EXPECT_NEAR(r.mean_cost, OneViewFloorCost(), 1e-8) << bar;
+  }
+  // Above it, every floor column is undecided: no cost, no drivable confidence, as
+  // `eval footprints --min-confidence` counts a footprint whose drivable_confidence is below.
+  const FootprintResult unsure = map().QueryFootprint(on_floor, WithConfidenceBar(map(), {}, once + 1e-6));
+  EXPECT_EQ(unsure.worst, TravClass::kUndecided);
+  EXPECT_TRUE(std::isnan(unsure.mean_cost));
+  EXPECT_TRUE(std::isnan(unsure.drivable_confidence));
+  EXPECT_EQ(unsure.observed_cells, unsure.cells);
+  // An obstacle stays an obstacle at any bar, and a path still stops where it did.
+  EXPECT_EQ(map().QueryFootprint({1.12, 1.12, 0.0, 0.01, 0.01}, WithConfidenceBar(map(), {}, 1.0)).worst,
+            TravClass::kNonTraversable);
+  const std::vector<Eigen::Vector2d> line{{0.2, 1.15}, {2.0, 1.15}};
+  const PathResult plain = map().QueryPath(line, 0.2);
+  const PathResult barred = map().QueryPath(line, 0.2, WithConfidenceBar(map(), {}, 0.9));
+  EXPECT_NEAR(plain.samples.front().drivable_confidence, once, 1e-6);
+  EXPECT_EQ(barred.samples.front().cls, TravClass::kUndecided);
+  EXPECT_TRUE(std::isnan(barred.samples.front().drivable_confidence));
+  EXPECT_TRUE(barred.blocked);
+  EXPECT_NEAR(barred.first_non_traversable_distance_m, plain.first_non_traversable_distance_m, 1e-12);
+  // The bar reads through another source: here one that answers every column as the floor
+  // beside it with no confidence (an export step's class), which no bar turns undecided.
+  const TraversabilityMap::SurfaceSource no_say = [&](double, double) {
+    CellInfo c = map().TopSurfaceAt(0.5, 0.5);
+    c.confidence = std::numeric_limits<double>::quiet_NaN();
+    return c;
+  };
+  EXPECT_EQ(map().QueryFootprint(on_floor, WithConfidenceBar(map(), no_say, 1.0)).worst, TravClass::kTraversable);
+  EXPECT_THROW(WithConfidenceBar(map(), {}, 1.5), Error);
+  EXPECT_THROW(AtConfidenceBar(map().TopSurfaceAt(0.5, 0.5), -0.1), Error);
+  // One cell through the bar: undecided, still observed, with no judge.
+  const CellInfo voxel = AtConfidenceBar(map().TopSurfaceAt(0.5, 0.5), 0.99);
+  EXPECT_EQ(voxel.cls, TravClass::kUndecided);
+  EXPECT_EQ(voxel.decided_by, ClassJudge::kNone);
+  EXPECT_TRUE(voxel.observed);
 }
 
 TEST_F(FloorAndBoxQueries, PathThroughTheBoxReportsTheFirstNonTraversablePoint) {

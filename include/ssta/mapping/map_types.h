@@ -180,6 +180,9 @@ struct PathSample {
   double cost = std::numeric_limits<double>::quiet_NaN();  ///< max cost across the width
   double fraction_observed = 0.0;  ///< observed lateral cells (as FootprintResult) / lateral cells
   CellInfo cell;                   ///< the cell that set `cls` (the centre cell if none did)
+  /// The lowest CellInfo::confidence among the traversable and semi-traversable cells across
+  /// the width, as FootprintResult::drivable_confidence; NaN when no such cell has one.
+  double drivable_confidence = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// A polyline checked against the map.

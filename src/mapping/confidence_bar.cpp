@@ -1,0 +1,40 @@
+#include "ssta/mapping/confidence_bar.h"
+
+#include <limits>
+#include <utility>
+
+#include "ssta/core/error.h"
+
+namespace ssta {
+namespace {
+
+void CheckBar(double min_confidence) {
+  if (!(min_confidence >= 0.0 && min_confidence <= 1.0)) {
+    throw Error("confidence bar: min_confidence must be a probability in [0, 1]");
+  }
+}
+
+}  // namespace
+
+CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence) {
+  CheckBar(min_confidence);
+  const bool drivable = cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable;
+  // NaN compares false: a class without a confidence stays.
+  if (!drivable || !(cell.confidence < min_confidence)) return cell;
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  CellInfo barred = cell;
+  barred.cls = TravClass::kUndecided;
+  barred.cost = barred.probability = barred.confidence = barred.slope_deg = barred.step_m = kNaN;
+  barred.decided_by = ClassJudge::kNone;
+  return barred;
+}
+
+TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,
+                                                   double min_confidence) {
+  CheckBar(min_confidence);
+  return [&map, surface = std::move(surface), min_confidence](double x, double y) {
+    return AtConfidenceBar(surface ? surface(x, y) : map.TopSurfaceAt(x, y), min_confidence);
+  };
+}
+
+}  // namespace ssta
