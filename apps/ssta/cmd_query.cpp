@@ -5,12 +5,15 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <utility>
 
 #include "commands.h"
 #include "map_arguments.h"
+#include "ssta/mapping/confidence_bar.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/files/file_util.h"
 #include "ssta/mapping/traversability_map.h"
@@ -26,7 +29,17 @@ struct QueryArgs {
   double path_width_m = 0.0;
   bool as_exported = false;
   GridExportOptions exported;  // the export's steps, for --as-exported
+  double min_confidence = 0.0;  // --min-confidence: drivable answers below it are undecided
 };
+
+// The surface the footprint and path queries read: as exported or observed (`exported`, null
+// for TopSurfaceAt), through the planner's confidence bar when one is set.
+TraversabilityMap::SurfaceSource QuerySurface(const TraversabilityMap& map, const QueryArgs& args,
+                                              const ExportedSurface* exported) {
+  TraversabilityMap::SurfaceSource surface;
+  if (exported != nullptr) surface = std::cref(*exported);
+  return args.min_confidence > 0.0 ? WithConfidenceBar(map, std::move(surface), args.min_confidence) : surface;
+}
 
 // Runs a map query; its error names the option that asked it instead of the library's query
 // ("footprint query: ..." -> "--footprint 1,1,0,1e9,0.5: ...").
@@ -54,7 +67,9 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   std::string option = "--footprint ";
   for (std::size_t i = 0; i < f.size(); ++i) option += (i ? "," : "") + PrintNumber(f[i], "%g");
   const FootprintResult result = NamingTheOption(option, "footprint query: ", [&] {
-    return args.as_exported ? map.QueryFootprint(q, ExportedSurface(map, box, args.exported)) : map.QueryFootprint(q);
+    const std::unique_ptr<ExportedSurface> exported =
+        args.as_exported ? std::make_unique<ExportedSurface>(map, box, args.exported) : nullptr;
+    return map.QueryFootprint(q, QuerySurface(map, args, exported.get()));
   });
   std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
                "attitude_heights,drivable_confidence\n"
@@ -78,17 +93,18 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
   const Eigen::Vector2d half_width = Eigen::Vector2d::Constant(0.5 * args.path_width_m);
   const std::string option = "--path " + args.path + " --width " + PrintNumber(args.path_width_m, "%g");
   const PathResult result = NamingTheOption(option, "path query: ", [&] {
-    return args.as_exported
-               ? map.QueryPath(polyline, args.path_width_m,
-                               ExportedSurface(map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width),
-                                               args.exported))
-               : map.QueryPath(polyline, args.path_width_m);
+    const std::unique_ptr<ExportedSurface> exported =
+        args.as_exported ? std::make_unique<ExportedSurface>(
+                               map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width), args.exported)
+                         : nullptr;
+    return map.QueryPath(polyline, args.path_width_m, QuerySurface(map, args, exported.get()));
   });
-  std::cout << "distance_m,x,y,class,cost,fraction_observed\n";
+  std::cout << "distance_m,x,y,class,cost,fraction_observed,drivable_confidence\n";
   for (const PathSample& sample : result.samples) {
     std::cout << PrintNumber(sample.distance_m, "%.4f") << ',' << PrintNumber(sample.point.x(), "%.4f") << ','
               << PrintNumber(sample.point.y(), "%.4f") << ',' << static_cast<int>(sample.cls) << ','
-              << PrintNumber(sample.cost, "%.4f") << ',' << PrintNumber(sample.fraction_observed, "%.4f") << "\n";
+              << PrintNumber(sample.cost, "%.4f") << ',' << PrintNumber(sample.fraction_observed, "%.4f") << ','
+              << PrintNumber(sample.drivable_confidence, "%.4f") << "\n";
   }
   std::cerr << "path " << PrintNumber(result.length_m, "%.2f") << " m, " << result.samples.size()
             << " samples, worst class " << static_cast<int>(result.worst) << ", "
@@ -150,11 +166,14 @@ std::vector<std::vector<double>> ReadPoints(const std::string& path, std::size_t
   return out;
 }
 
-// `exported`: the surface as exported (X,Y points only), or null for the map as observed.
-std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, const ExportedSurface* exported) {
-  const CellInfo cell = p.size() == 3       ? map.CellAt({p[0], p[1], p[2]})
-                        : exported != nullptr ? (*exported)(p[0], p[1])
-                                              : map.TopSurfaceAt(p[0], p[1]);
+// `exported`: the surface as exported (X,Y points only), or null for the map as observed;
+// `min_confidence`: the planner's bar (0: none).
+std::string Answer(const TraversabilityMap& map, const std::vector<double>& p, const ExportedSurface* exported,
+                   double min_confidence) {
+  const CellInfo cell = AtConfidenceBar(p.size() == 3         ? map.CellAt({p[0], p[1], p[2]})
+                                        : exported != nullptr ? (*exported)(p[0], p[1])
+                                                              : map.TopSurfaceAt(p[0], p[1]),
+                                        min_confidence);
   if (cell.observed) return QueryCsvRow(cell);
   // Unobserved: class 0 at the asked point (docs/interfaces.md, section 5); with --as-exported, the
   // class of a filled hole.
@@ -189,6 +208,9 @@ void RunQuery(const QueryArgs& args) {
   if (args.at.empty() && args.points.empty() && args.footprint.empty() && args.path.empty()) {
     throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
   }
+  if (!(args.min_confidence >= 0.0 && args.min_confidence <= 1.0)) {
+    throw Error("--min-confidence: must be a probability in [0, 1]");
+  }
   const TraversabilityMap map = LoadMapForConfig(args.map, args.config);
   if (!args.footprint.empty()) return AnswerFootprint(map, args);
   if (!args.path.empty()) return AnswerPath(map, ReadPoints(args.path, 2), args);
@@ -206,7 +228,7 @@ void RunQuery(const QueryArgs& args) {
     exported = std::make_unique<ExportedSurface>(map, box, args.exported);
   }
   std::cout << kQueryCsvHeader << "\n";
-  for (const auto& p : points) std::cout << Answer(map, p, exported.get()) << "\n";
+  for (const auto& p : points) std::cout << Answer(map, p, exported.get(), args.min_confidence) << "\n";
 }
 
 }  // namespace
@@ -224,7 +246,9 @@ void RegisterQuery(CLI::App& app) {
       "with cost nan: the planner decides. --as-exported gives X,Y the class\n"
       "and cost of `export --format grid` (steps judged by the local ground: class 1, cost 0; a filled\n"
       "hole: its class, z and cost nan); without it, answers are the map as observed.\n"
-      "--footprint and --path print their own headers (see their help) and take --as-exported too.");
+      "--footprint and --path print their own headers (see their help) and take --as-exported too.\n"
+      "--min-confidence C answers a traversable or semi-traversable cell less sure than C as undecided\n"
+      "(class 4, no cost), and so every footprint and path sample with such a cell under it.");
   cmd->add_option("--map", args->map, "map file (.ot) written by build-map")->required();
   AddMapConfig(cmd, &args->config);
   auto* at = cmd->add_option("--at", args->at, "one point: X,Y or X,Y,Z [m, world frame]")
@@ -251,6 +275,10 @@ void RegisterQuery(CLI::App& app) {
     path->excludes(a);
   }
   footprint->excludes(path);
+  cmd->add_option("--min-confidence", args->min_confidence,
+                  "drive only on answers this sure: a traversable or semi-traversable cell whose confidence is "
+                  "below this is undecided, in points, footprints and paths (0: every answer)")
+      ->capture_default_str();
   AddAsExported(cmd,
                 "X,Y, footprints and paths: read the cells as the exported grid shows them (its local-ground and "
                 "hole-filling steps)",

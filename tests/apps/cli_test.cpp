@@ -274,11 +274,26 @@ TEST(Cli, QueryFootprintAndPathAsObservedAndAsExported) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   auto lines = Lines(r.output);
   EXPECT_EQ(lines.size(), 1u + 31u + 1u) << r.output;  // header, a sample every 0.05 m, verdict
-  EXPECT_EQ(lines[0], "distance_m,x,y,class,cost,fraction_observed");
+  EXPECT_EQ(lines[0], "distance_m,x,y,class,cost,fraction_observed,drivable_confidence");
   // Floor seen once: traversable, confidence 0.742 (one view and the open-ground prior), so
   // cost 0.25 * 1.5 * (1 - 0.742).
-  EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0967,1.0000");
+  EXPECT_EQ(lines[1], "0.0000,0.0500,0.6500,1,0.0967,1.0000,0.7421");
   EXPECT_NE(r.output.find("blocked at 0.50 m"), std::string::npos) << r.output;  // x = 0.55 (0.5 rounds below)
+  // A planner that needs 0.75 is told the once-seen floor is undecided, with no cost; the patch
+  // still blocks the path where it did.
+  r = RunSsta(query + " --path " + (dir / "path.csv") + " --min-confidence 0.75");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Lines(r.output)[1], "0.0000,0.0500,0.6500,4,nan,1.0000,nan");
+  EXPECT_NE(r.output.find("worst class 3, blocked at 0.50 m"), std::string::npos) << r.output;
+  r = RunSsta(query + " --at 0.05,0.65 --min-confidence 0.74", false);  // just under the floor's 0.7421
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Lines(r.output).back().substr(0, 25), "0.0500,0.6500,0.0500,1,0.");
+  r = RunSsta(query + " --at 0.05,0.65 --min-confidence 0.75", false);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(Lines(r.output).back().substr(0, 31), "0.0500,0.6500,0.0500,4,nan,nan,");
+  r = RunSsta(query + " --at 0.05,0.65 --min-confidence 1.5");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--min-confidence: must be a probability in [0, 1]"), std::string::npos) << r.output;
   r = RunSsta(query + " --path " + (dir / "path.csv") + " --width 0.4 --as-exported --local-ground 1");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("path 1.50 m, 31 samples, worst class 1, not blocked, 100 % observed"), std::string::npos)
