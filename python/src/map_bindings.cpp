@@ -17,6 +17,7 @@
 #include "bindings.h"
 #include "query_row.h"
 #include "ssta/mapping/map_diff.h"
+#include "ssta/mapping/confidence_bar.h"
 #include "ssta/mapping/map_export.h"
 #include "ssta/mapping/traversability_map.h"
 #if !SSTA_PYTHON_MAP_ONLY
@@ -44,7 +45,7 @@ struct FootprintRow {
 struct PathRow {
   double distance_m, x, y;
   std::uint8_t cls;
-  double cost, fraction_observed;
+  double cost, fraction_observed, drivable_confidence;
 };
 
 // A loaded map and the file it came from.
@@ -52,6 +53,22 @@ struct MapHandle {
   TraversabilityMap map;
   std::string path;
 };
+
+// The planner's confidence bar of query, footprints and path (`--min-confidence`), checked.
+void CheckMinConfidence(double min_confidence) {
+  if (!(min_confidence >= 0.0 && min_confidence <= 1.0)) {
+    throw py::value_error("min_confidence: must be a probability in [0, 1], got " + std::to_string(min_confidence));
+  }
+}
+
+// The surface the footprint and path queries read: `exported` (null: the map as observed),
+// through the bar when one is set.
+TraversabilityMap::SurfaceSource BarredSurface(const TraversabilityMap& map, const ExportedSurface* exported,
+                                               double min_confidence) {
+  TraversabilityMap::SurfaceSource surface;
+  if (exported != nullptr) surface = std::cref(*exported);
+  return min_confidence > 0.0 ? WithConfidenceBar(map, std::move(surface), min_confidence) : surface;
+}
 
 // The grid export's two steps, for the queries' as_exported (`--fill-holes`, `--local-ground`).
 GridExportOptions ExportSteps(int fill_holes, double local_ground_radius_m) {
@@ -121,8 +138,9 @@ py::dtype QueryRowDtype() {
 }
 
 py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_exported, int fill_holes,
-                double local_ground_radius_m) {
+                double local_ground_radius_m, double min_confidence) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
+  CheckMinConfidence(min_confidence);
   const auto points = MatrixArg(points_arg, "points", 2, 3);
   const py::ssize_t n = points.shape(0), cols = points.shape(1);
   py::array out(QueryRowDtype(), std::vector<py::ssize_t>{n});
@@ -143,9 +161,10 @@ py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_e
     }
     for (py::ssize_t i = 0; i < n; ++i) {
       const double* q = p + i * cols;
-      const CellInfo cell = cols == 3 ? map.CellAt({q[0], q[1], q[2]})
-                            : exported ? (*exported)(q[0], q[1])
-                                       : map.TopSurfaceAt(q[0], q[1]);
+      const CellInfo cell = AtConfidenceBar(cols == 3   ? map.CellAt({q[0], q[1], q[2]})
+                                            : exported ? (*exported)(q[0], q[1])
+                                                       : map.TopSurfaceAt(q[0], q[1]),
+                                            min_confidence);
       // An unobserved cell answers at the point asked, z NaN for (x, y) (`ssta query`).
       const Eigen::Vector3d at = cell.observed ? cell.center : Eigen::Vector3d(q[0], q[1], cols == 3 ? q[2] : kNaN);
       rows[i] = MakeQueryRow(cell, at);
@@ -155,8 +174,9 @@ py::array Query(const MapHandle& handle, const py::object& points_arg, bool as_e
 }
 
 py::array Footprints(const MapHandle& handle, const py::object& poses_arg, double length_m, double width_m,
-                     bool as_exported, int fill_holes, double local_ground_radius_m) {
+                     bool as_exported, int fill_holes, double local_ground_radius_m, double min_confidence) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
+  CheckMinConfidence(min_confidence);
   NonNegativeArg(length_m, "length_m");
   NonNegativeArg(width_m, "width_m");
   const auto poses = MatrixArg(poses_arg, "poses", 3, 3);
@@ -179,11 +199,11 @@ py::array Footprints(const MapHandle& handle, const py::object& poses_arg, doubl
       }
       exported = ExportedOver(map, box, steps);
     }
+    const TraversabilityMap::SurfaceSource surface = BarredSurface(map, exported.get(), min_confidence);
     for (py::ssize_t i = 0; i < n; ++i) {
       const FootprintQuery query{p[i * 3], p[i * 3 + 1], p[i * 3 + 2], length_m, width_m};
-      const FootprintResult f = NamingTheArgument("poses[" + std::to_string(i) + "]", "footprint query: ", [&] {
-        return exported ? map.QueryFootprint(query, std::cref(*exported)) : map.QueryFootprint(query);
-      });
+      const FootprintResult f = NamingTheArgument("poses[" + std::to_string(i) + "]", "footprint query: ",
+                                                  [&] { return map.QueryFootprint(query, surface); });
       rows[i] = FootprintRow{static_cast<std::uint8_t>(f.worst), f.mean_cost, f.max_cost, f.fraction_observed,
                              f.cells, f.observed_cells, f.pitch_deg, f.roll_deg, static_cast<std::uint8_t>(f.attitude),
                              f.attitude_heights, f.drivable_confidence,
@@ -194,8 +214,9 @@ py::array Footprints(const MapHandle& handle, const py::object& poses_arg, doubl
 }
 
 py::dict Path(const MapHandle& handle, const py::object& vertices_arg, double width_m, bool as_exported,
-              int fill_holes, double local_ground_radius_m) {
+              int fill_holes, double local_ground_radius_m, double min_confidence) {
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
+  CheckMinConfidence(min_confidence);
   NonNegativeArg(width_m, "width_m");
   const auto vertices = MatrixArg(vertices_arg, "vertices", 2, 2);
   const py::ssize_t n = vertices.shape(0);
@@ -212,10 +233,12 @@ py::dict Path(const MapHandle& handle, const py::object& vertices_arg, double wi
     }
     const TraversabilityMap& map = handle.map;
     result = NamingTheArgument("vertices", "path query: ", [&] {
-      if (!as_exported) return map.QueryPath(polyline, width_m);
       const Eigen::Vector2d half_width = Eigen::Vector2d::Constant(0.5 * width_m);
-      const ExportedSurface exported(map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width), steps);
-      return map.QueryPath(polyline, width_m, std::cref(exported));
+      const std::unique_ptr<ExportedSurface> exported =
+          as_exported ? std::make_unique<ExportedSurface>(
+                            map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width), steps)
+                      : nullptr;
+      return map.QueryPath(polyline, width_m, BarredSurface(map, exported.get(), min_confidence));
     });
   }
   py::array_t<PathRow> samples(static_cast<py::ssize_t>(result.samples.size()));
@@ -223,7 +246,7 @@ py::dict Path(const MapHandle& handle, const py::object& vertices_arg, double wi
   for (std::size_t i = 0; i < result.samples.size(); ++i) {
     const PathSample& s = result.samples[i];
     rows[i] = PathRow{s.distance_m, s.point.x(), s.point.y(), static_cast<std::uint8_t>(s.cls), s.cost,
-                      s.fraction_observed};
+                      s.fraction_observed, s.drivable_confidence};
   }
   py::dict out;
   out["samples"] = samples;
@@ -442,6 +465,9 @@ Args:
         observed surface of that map column (the ground the robot drives on); (x, y, z): the
         voxel holding that point.
 {as_exported}
+    min_confidence: drive only on answers this sure: a traversable or semi-traversable cell
+        whose confidence is below it answers undecided (class 4, cost NaN), as `ssta query
+        --min-confidence` (0: every answer as it is; 0..1).
 Returns:
     A structured array of N rows with the fields of `ssta query`'s CSV, then two more:
     x, y, z (float64): the voxel centre [m]; for an unobserved cell the point asked (z NaN
@@ -469,7 +495,8 @@ Returns:
 
 Raises:
     ValueError naming `points` for another shape, a non-numeric dtype or NaN / infinity;
-    ValueError for N x 3 points with as_exported (the exported grid is 2D).
+    ValueError for N x 3 points with as_exported (the exported grid is 2D), and naming
+    `min_confidence` outside [0, 1].
 )doc";
 
 constexpr const char* kFootprintsDoc = R"doc(
@@ -482,6 +509,9 @@ Args:
     width_m: its side across the heading [m], >= 0. Every map column the rectangle touches
         counts: an obstacle under any part of it is under the robot.
 {as_exported}
+    min_confidence: drive only on answers this sure: a traversable or semi-traversable cell
+        whose confidence is below it answers undecided (class 4, cost NaN), as `ssta query
+        --min-confidence` (0: every answer as it is; 0..1).
 Returns:
     A structured array of N rows: worst (uint8, the worst class under it: 3, then 4 (undecided),
     then 2, then 1; 0 when no cell is observed),
@@ -496,8 +526,8 @@ Returns:
     without such a cell) and within_limits (bool: attitude 1 or 2).
 
 Raises:
-    ValueError naming `poses`, `length_m` or `width_m`; ssta.Error naming `poses[i]` for a
-    footprint beyond the map's addressable area or over more than 10^7 columns.
+    ValueError naming `poses`, `length_m`, `width_m` or `min_confidence`; ssta.Error naming
+    `poses[i]` for a footprint beyond the map's addressable area or over more than 10^7 columns.
 )doc";
 
 constexpr const char* kPathDoc = R"doc(
@@ -511,14 +541,18 @@ Args:
     vertices: N x 2 (x, y) in W [m], N >= 1, no NaN.
     width_m: corridor width [m], >= 0.
 {as_exported}
+    min_confidence: drive only on answers this sure: a traversable or semi-traversable cell
+        whose confidence is below it answers undecided (class 4, cost NaN), as `ssta query
+        --min-confidence` (0: every answer as it is; 0..1).
 Returns:
-    A dict: samples (structured array: distance_m, x, y, class, cost, fraction_observed),
+    A dict: samples (structured array: distance_m, x, y, class, cost, fraction_observed,
+    drivable_confidence: the lowest confidence of the drivable cells across the width),
     worst (int), mean_cost, fraction_observed, length_m (float), blocked (bool),
     first_non_traversable ((x, y) or None) and first_non_traversable_distance_m (NaN when not
     blocked).
 
 Raises:
-    ValueError naming `vertices` or `width_m`; ssta.Error naming `vertices` for a path over more
+    ValueError naming `vertices`, `width_m` or `min_confidence`; ssta.Error naming `vertices` for a path over more
     than 10^7 cells or 10^6 samples.
 )doc";
 
@@ -620,7 +654,7 @@ void BindMap(py::module_& m) {
                           "attitude_heights", drivable_confidence, "drivable_confidence", within_limits,
                           "within_limits");
   PYBIND11_NUMPY_DTYPE_EX(PathRow, distance_m, "distance_m", x, "x", y, "y", cls, "class", cost, "cost",
-                          fraction_observed, "fraction_observed");
+                          fraction_observed, "fraction_observed", drivable_confidence, "drivable_confidence");
 
   py::class_<MapHandle, std::shared_ptr<MapHandle>>(m, "Map", kMapDoc)
       .def_static(
@@ -650,13 +684,13 @@ void BindMap(py::module_& m) {
           "has no surface.")
       .def_property_readonly("metadata", &Metadata, kMetadataDoc)
       .def("query", &Query, py::arg("points"), py::kw_only(), py::arg("as_exported") = false,
-           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
+           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0, py::arg("min_confidence") = 0.0,
            ExportedDoc(kQueryDoc).c_str())
       .def("footprints", &Footprints, py::arg("poses"), py::arg("length_m"), py::arg("width_m"), py::kw_only(),
            py::arg("as_exported") = false, py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
-           ExportedDoc(kFootprintsDoc).c_str())
+           py::arg("min_confidence") = 0.0, ExportedDoc(kFootprintsDoc).c_str())
       .def("path", &Path, py::arg("vertices"), py::arg("width_m"), py::kw_only(), py::arg("as_exported") = false,
-           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0,
+           py::arg("fill_holes") = 5, py::arg("local_ground_radius_m") = 0.0, py::arg("min_confidence") = 0.0,
            ExportedDoc(kPathDoc).c_str())
       .def("project", &Project, py::arg("region") = py::none(), py::arg("resolution_m") = py::none(),
            py::kw_only(), py::arg("as_exported") = false, py::arg("fill_holes") = 5,

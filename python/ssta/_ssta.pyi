@@ -136,6 +136,7 @@ class Map:
         as_exported: bool = False,
         fill_holes: int = 5,
         local_ground_radius_m: float = 0.0,
+        min_confidence: float = 0.0,
     ) -> np.ndarray:
         """N x 2 / N x 3 points [m] -> structured rows: x, y, z, class, cost, probability,
         slope_deg, step_m, observations, confidence, height_m, observed."""
@@ -148,6 +149,7 @@ class Map:
         as_exported: bool = False,
         fill_holes: int = 5,
         local_ground_radius_m: float = 0.0,
+        min_confidence: float = 0.0,
     ) -> np.ndarray:
         """N x 3 poses (x [m], y [m], yaw [rad]) -> structured rows: worst, mean_cost, max_cost,
         fraction_observed, cells, observed_cells, pitch_deg, roll_deg, attitude,
@@ -160,6 +162,7 @@ class Map:
         as_exported: bool = False,
         fill_holes: int = 5,
         local_ground_radius_m: float = 0.0,
+        min_confidence: float = 0.0,
     ) -> dict[str, Any]:
         """N x 2 vertices [m] and a corridor width [m] -> samples and the verdict."""
     def project(

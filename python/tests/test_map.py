@@ -126,12 +126,13 @@ FOOTPRINTS = [(3.0, 0.0, 0.0, 1.2, 0.8), (4.0, 1.0, 30.0, 1.0, 0.6), (6.5, -1.5,
               (9.0, 2.0, -45.0, 0.5, 0.5), (40.0, 40.0, 0.0, 1.0, 1.0)]
 
 
-@pytest.mark.parametrize("as_exported", [False, True])
-def test_footprints_equal_cli(the_map, yard_map, cli, as_exported):
+@pytest.mark.parametrize("as_exported,min_confidence", [(False, 0.0), (True, 0.0), (False, 0.8), (True, 0.8)])
+def test_footprints_equal_cli(the_map, yard_map, cli, as_exported, min_confidence):
     poses = np.array([(x, y, np.radians(yaw_deg)) for x, y, yaw_deg, _, _ in FOOTPRINTS])
-    extra = ["--as-exported"] if as_exported else []
+    extra = (["--as-exported"] if as_exported else []) + ["--min-confidence", min_confidence]
     for (x, y, yaw_deg, length, width), pose in zip(FOOTPRINTS, poses):
-        got = the_map.footprints(pose[None, :], length, width, as_exported=as_exported)
+        got = the_map.footprints(pose[None, :], length, width, as_exported=as_exported,
+                                 min_confidence=min_confidence)
         expected = read_csv(cli("query", "--map", yard_map, "--footprint",
                                 f"{x},{y},{yaw_deg},{length},{width}", *extra).stdout)
         assert_rows_match_csv(got, expected, {})
@@ -142,13 +143,13 @@ def test_footprints_equal_cli(the_map, yard_map, cli, as_exported):
     assert_structured_equal(together, one_by_one)
 
 
-@pytest.mark.parametrize("as_exported", [False, True])
-def test_path_equals_cli(the_map, yard_map, cli, tmp_path, as_exported):
+@pytest.mark.parametrize("as_exported,min_confidence", [(False, 0.0), (True, 0.0), (False, 0.8)])
+def test_path_equals_cli(the_map, yard_map, cli, tmp_path, as_exported, min_confidence):
     vertices = np.array([[1.5, 0.0], [5.0, 0.5], [8.0, -2.0], [12.0, -2.0]])
     np.savetxt(tmp_path / "path.csv", vertices, delimiter=",", header="x,y", comments="")
-    extra = ["--as-exported"] if as_exported else []
+    extra = (["--as-exported"] if as_exported else []) + ["--min-confidence", min_confidence]
     result = cli("query", "--map", yard_map, "--path", tmp_path / "path.csv", "--width", 0.8, *extra)
-    got = the_map.path(vertices, 0.8, as_exported=as_exported)
+    got = the_map.path(vertices, 0.8, as_exported=as_exported, min_confidence=min_confidence)
     assert_rows_match_csv(got["samples"], read_csv(result.stdout))
     # The verdict the CLI prints on stderr: "path L m, N samples, worst class W, blocked at D m, P % observed".
     verdict = result.stderr.strip()
@@ -158,6 +159,30 @@ def test_path_equals_cli(the_map, yard_map, cli, tmp_path, as_exported):
         assert got["first_non_traversable"] is not None
     else:
         assert "not blocked" in verdict and got["first_non_traversable"] is None
+
+
+def test_a_confidence_bar_makes_only_the_unsure_drivable_answers_undecided(the_map):
+    # Every 0.5 m over the yard's mapped area, heading 0: the footprints a planner with a bar of
+    # 0.8 is told are those without one, except that a drivable answer whose least sure
+    # drivable cell is under 0.8 is undecided (4), as `eval footprints --min-confidence` counts.
+    x_min, y_min, _, x_max, y_max, _ = the_map.bounds
+    xs, ys = np.meshgrid(np.arange(x_min, x_max, 0.5), np.arange(y_min, y_max, 0.5))
+    poses = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    plain = the_map.footprints(poses, 1.0, 0.6)
+    barred = the_map.footprints(poses, 1.0, 0.6, min_confidence=0.8)
+    unsure = np.isin(plain["worst"], (1, 2)) & (plain["drivable_confidence"] < 0.8)
+    assert 0 < unsure.sum() < np.isin(plain["worst"], (1, 2)).sum()  # the bar has work to do
+    np.testing.assert_array_equal(barred["worst"][unsure], 4)
+    np.testing.assert_array_equal(barred["worst"][~unsure], plain["worst"][~unsure])
+    assert np.all(np.isnan(barred["drivable_confidence"]) | (barred["drivable_confidence"] >= 0.8))
+    # A point query takes the same bar: a drivable cell under it has class 4 and no cost.
+    rows = the_map.query(poses[:, :2], min_confidence=0.8)
+    low = the_map.query(poses[:, :2])
+    below = np.isin(low["class"], (1, 2)) & (low["confidence"] < 0.8)
+    np.testing.assert_array_equal(rows["class"][below], 4)
+    assert np.all(np.isnan(rows["cost"][below]))
+    with pytest.raises(ValueError, match="min_confidence"):
+        the_map.footprints(poses[:1], 1.0, 0.6, min_confidence=1.5)
 
 
 def test_project_as_exported_equals_grid_export(the_map, yard_map, cli, tmp_path):
