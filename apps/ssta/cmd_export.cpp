@@ -30,6 +30,7 @@ struct ExportArgs {
   std::string compression = "zstd";
   std::string frame = McapExportOptions{}.map_frame;
   int headings = 0;
+  double min_confidence = 0.0;  // --min-confidence: the planner's bar (GridExportOptions::min_confidence)
   std::vector<double> heading_footprint = {HeadingCostOptions{}.footprint_length_m, HeadingCostOptions{}.footprint_width_m};
 };
 
@@ -107,7 +108,7 @@ void CheckFormatOptions(const ExportArgs& args, const CLI::App& cmd) {
   const std::string& f = args.format;
   const bool gridded = f == "grid" || f == "picture" || f == "mcap";
   if (!gridded) {  // the grid's options would be ignored: say so instead
-    for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground"}) {
+    for (const char* option : {"--resolution", "--region", "--fill-holes", "--local-ground", "--min-confidence"}) {
       if (cmd.count(option) > 0) throw Error(std::string(option) + ": only for --format grid, picture or mcap");
     }
   }
@@ -124,6 +125,9 @@ void CheckFormatOptions(const ExportArgs& args, const CLI::App& cmd) {
     if (f != "mcap" && cmd.count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
   }
   if (args.frame.empty()) throw Error("--frame: must not be empty");
+  if (!(args.min_confidence >= 0.0 && args.min_confidence <= 1.0)) {
+    throw Error("--min-confidence: must be a probability in [0, 1]");
+  }
   if (cmd.count("--resolution") > 0 && !(args.resolution_m > 0.0 && std::isfinite(args.resolution_m))) {
     throw Error("--resolution: must be a positive number of metres");
   }
@@ -149,6 +153,7 @@ GridExportOptions GridOptionsOf(const ExportArgs& args) {
   options.resolution_m = args.resolution_m;
   options.fill_min_neighbours = args.fill_min_neighbours;
   options.local_ground_radius_m = args.local_ground_radius_m;
+  options.min_confidence = args.min_confidence;
   options.headings.headings = args.headings;
   options.headings.footprint_length_m = args.heading_footprint[0];
   options.headings.footprint_width_m = args.heading_footprint[1];
@@ -186,7 +191,11 @@ std::string WriteExport(const TraversabilityMap& map, const ExportArgs& args, co
     written = files + " (" + std::to_string(grid.width()) + "x" +
               std::to_string(grid.height()) + " cells; " + std::to_string(changes.judged_by_local_ground) +
               " judged traversable by the local ground, " + std::to_string(changes.holes_filled) +
-              " holes filled)";
+              " holes filled" +
+              (options.min_confidence > 0.0
+                   ? ", " + std::to_string(changes.below_confidence_bar) + " drivable cells below the confidence bar"
+                   : std::string()) +
+              ")";
   } else if (f == "mcap") {
     McapExportOptions mcap;
     mcap.grid = options;
@@ -255,6 +264,11 @@ void RegisterExport(CLI::App& app) {
       ->delimiter(',')
       ->expected(4);
   AddGridExportSteps(cmd, "grid, picture, mcap: ", &args->fill_min_neighbours, &args->local_ground_radius_m);
+  cmd->add_option("--min-confidence", args->min_confidence,
+                  "grid, picture, mcap: a planner's bar: a traversable or semi-traversable cell whose confidence "
+                  "is below this is exported undecided (unknown in the PGM and the OccupancyGrid), as `query "
+                  "--min-confidence` answers it. 0: every cell as the map has it")
+      ->capture_default_str();
   cmd->add_option("--headings", args->headings,
                   "grid, mcap: also a cost layer per heading, N headings evenly spaced from +x towards +y: the class "
                   "cost raised where the vehicle's pitch or roll on the ground under its footprint nears or passes "

@@ -1,5 +1,7 @@
 #include "ssta/mapping/confidence_bar.h"
 
+#include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <utility>
 
@@ -27,6 +29,22 @@ CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence) {
   barred.cost = barred.probability = barred.confidence = barred.slope_deg = barred.step_m = kNaN;
   barred.decided_by = ClassJudge::kNone;
   return barred;
+}
+
+int ApplyConfidenceBar(GridProjection* grid, double min_confidence) {
+  CheckBar(min_confidence);
+  SSTA_CHECK(grid != nullptr, "ApplyConfidenceBar: grid must not be null");
+  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+  int changed = 0;
+  for (std::size_t i = 0; i < grid->classes.size(); ++i) {
+    const auto cls = static_cast<TravClass>(grid->classes[i]);
+    const bool drivable = cls == TravClass::kTraversable || cls == TravClass::kSemiTraversable;
+    if (!drivable || !(grid->confidence[i] < min_confidence)) continue;  // NaN: no say
+    grid->classes[i] = static_cast<std::uint8_t>(TravClass::kUndecided);
+    grid->cost[i] = grid->confidence[i] = grid->slope_deg[i] = grid->step_m[i] = kNaN;
+    ++changed;
+  }
+  return changed;
 }
 
 TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,

@@ -18,6 +18,7 @@
 #include "ssta/core/error.h"
 #include "ssta/files/file_util.h"
 #include "ssta/files/png_file.h"
+#include "ssta/mapping/confidence_bar.h"
 
 namespace ssta {
 namespace {
@@ -196,6 +197,7 @@ GridProjection ProjectAsExported(const TraversabilityMap& map, const GridExportO
   if (options.fill_min_neighbours != 0) {
     counts.holes_filled = FillHoles(&grid.classes, options.fill_min_neighbours);  // checks 1..8
   }
+  if (options.min_confidence != 0.0) counts.below_confidence_bar = ApplyConfidenceBar(&grid, options.min_confidence);
   if (changes != nullptr) *changes = counts;
   return grid;
 }

@@ -622,6 +622,28 @@ TEST(Cli, PathsAnOptionWritesAreCheckedBeforeTheWork) {
   }
 }
 
+TEST(Cli, ExportAtAConfidenceBarWritesTheUnsureFloorUnknown) {
+  // The floor was seen once (confidence 0.7421): a bar of 0.75 exports every floor cell
+  // undecided, which the navigation PGM shows unknown; the patch stays an obstacle.
+  testing::TempDir dir;
+  SaveFloorWithPatch(dir / "m.ot");
+  const std::string common = "export --map " + (dir / "m.ot");
+  auto r = RunSsta(common + " --format grid --out " + (dir / "g") + " --fill-holes 0 --min-confidence 0.75");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("0 holes filled, 891 drivable cells below the confidence bar)"), std::string::npos)
+      << r.output;
+  const cv::Mat pgm = cv::imread(dir / "g.pgm", cv::IMREAD_UNCHANGED);
+  ASSERT_FALSE(pgm.empty());
+  EXPECT_EQ(cv::countNonZero(pgm == 254), 0);  // no cell exported free
+  EXPECT_EQ(cv::countNonZero(pgm == 0), 9);    // the 0.3 x 0.3 m patch
+  r = RunSsta(common + " --format ply --out " + (dir / "p") + " --min-confidence 0.5");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--min-confidence: only for --format grid, picture or mcap"), std::string::npos) << r.output;
+  r = RunSsta(common + " --format grid --out " + (dir / "g") + " --min-confidence -0.1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--min-confidence: must be a probability in [0, 1]"), std::string::npos) << r.output;
+}
+
 TEST(Cli, ExportRefusesToWriteOverTheMapItReads) {
   testing::TempDir dir;
   TraversabilityMap().Save(dir / "m.ot");  // empty: the octovis export of it crashed in OctoMap

@@ -1,4 +1,5 @@
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -13,6 +14,7 @@
 #include "map_test_util.h"
 #include "ssta/files/file_util.h"
 #include "ssta/io/image_io.h"
+#include "ssta/mapping/confidence_bar.h"
 #include "ssta/mapping/map_export.h"
 #include "temp_dir.h"
 
@@ -389,6 +391,56 @@ TEST(MapExport, FootprintsAndPathsCanReadTheSurfaceAsExported) {
   EXPECT_EQ(corner(testing::C(21), testing::C(21)).cls, TravClass::kNonTraversable);
   EXPECT_THROW(corner(std::nan(""), 0.0), Error);
   EXPECT_THROW(ExportedSurface(map, Eigen::AlignedBox2d()), Error);  // empty region
+}
+
+TEST(MapExport, AConfidenceBarExportsTheUnsureDrivableCellsUndecided) {
+  // A 1.0 x 0.4 m floor: its left half (x < 0.5) seen by three frames, its right half by one,
+  // so the right half is the less sure of the two.
+  TraversabilityMap map(OctoMapCarving());
+  for (int frame = 0; frame < 3; ++frame) {
+    std::vector<ClassifiedPoint> points;
+    for (int i = 0; i < 10; ++i) {
+      for (int j = 0; j < 4; ++j) {
+        if (i >= 5 && frame > 0) continue;
+        points.push_back(Pt(testing::C(i), testing::C(j), 0.05, TravClass::kTraversable));
+      }
+    }
+    map.InsertFrame(points, {0.5, 0.2, 2.0}, 1000 + frame);
+  }
+  GridExportOptions plain;
+  plain.fill_min_neighbours = 0;
+  const GridProjection all = ProjectAsExported(map, plain);
+  const double left = all.confidence(0, 0), right = all.confidence(0, 9);
+  ASSERT_GT(left, right);
+  GridExportOptions barred = plain;
+  barred.min_confidence = 0.5 * (left + right);
+  GridExportChanges changes;
+  const GridProjection sure = ProjectAsExported(map, barred, &changes);
+  EXPECT_EQ(changes.below_confidence_bar, 20);  // the right half, 5 x 4 cells
+  GridProjection by_hand = all;
+  EXPECT_EQ(ApplyConfidenceBar(&by_hand, barred.min_confidence), 20);
+  for (int v = 0; v < all.height(); ++v) {
+    for (int u = 0; u < all.width(); ++u) {
+      const auto expected = u < 5 ? TravClass::kTraversable : TravClass::kUndecided;
+      EXPECT_EQ(static_cast<TravClass>(sure.classes(v, u)), expected) << v << "," << u;
+      EXPECT_EQ(sure.classes(v, u), by_hand.classes(v, u));
+      EXPECT_EQ(std::isnan(sure.cost(v, u)), u >= 5);
+      // A query through the same bar reads the exported cell as the barred export shows it.
+      const Eigen::Vector2d p = all.PixelCenter(v, u);
+      const ExportedSurface unbarred(map, Eigen::AlignedBox2d(p, p), plain);
+      EXPECT_EQ(AtConfidenceBar(unbarred(p.x(), p.y()), barred.min_confidence).cls,
+                ExportedSurface(map, Eigen::AlignedBox2d(p, p), barred)(p.x(), p.y()).cls);
+    }
+  }
+  // The navigation PGM shows the barred cells unknown (205), the sure ones free (254).
+  TempDir dir;
+  ExportGrid(map, dir / "g", barred);
+  const cv::Mat pgm = cv::imread(dir / "g.pgm", cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(pgm.cols, 10);
+  EXPECT_EQ(pgm.at<std::uint8_t>(0, 0), 254);
+  EXPECT_EQ(pgm.at<std::uint8_t>(0, 9), 205);
+  barred.min_confidence = 1.5;
+  EXPECT_THROW(ProjectAsExported(map, barred), Error);
 }
 
 TEST(MapExport, GridOfAnEmptyMapNeedsARegion) {

@@ -23,4 +23,10 @@ CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence);
 TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,
                                                    double min_confidence);
 
+/// AtConfidenceBar on every pixel of a projection: a traversable or semi-traversable pixel whose
+/// confidence is below `min_confidence` becomes undecided (class 4; cost, confidence, slope and
+/// step NaN). Returns the number of pixels changed. Throws ssta::Error unless
+/// 0 <= min_confidence <= 1.
+int ApplyConfidenceBar(GridProjection* grid, double min_confidence);
+
 }  // namespace ssta

@@ -49,6 +49,11 @@ struct GridExportOptions {
   /// vehicle): written by ExportGrid and ExportMcap when headings > 0; the other exports and
   /// the queries ignore it.
   HeadingCostOptions headings;
+  /// A planner's confidence bar, applied last (ApplyConfidenceBar, ssta/mapping/confidence_bar.h):
+  /// a traversable or semi-traversable pixel whose confidence is below it is undecided, so the
+  /// navigation PGM shows it unknown. A pixel whose class an export step gave has no confidence
+  /// and keeps it. 0 (the default): off; in [0, 1].
+  double min_confidence = 0.0;
 };
 
 /// One pass over a projection: each non-traversable pixel (3) whose slope (the one that decided
@@ -73,6 +78,7 @@ int FillHoles(ImageU8* classes, int min_neighbours);
 struct GridExportChanges {
   int judged_by_local_ground = 0;  ///< non-traversable pixels made traversable (JudgeStepsByLocalGround)
   int holes_filled = 0;            ///< unknown pixels filled (FillHoles)
+  int below_confidence_bar = 0;    ///< drivable pixels made undecided (GridExportOptions::min_confidence)
 };
 
 /// The grid that ExportGrid writes, without writing it: the map's projection of
