@@ -271,9 +271,11 @@ py::array_t<T> ImageArray(const Image<T>& image) {
 
 py::dict Project(const MapHandle& handle, const std::optional<std::vector<double>>& region_arg,
                  std::optional<double> resolution_arg, bool as_exported, int fill_holes,
-                 double local_ground_radius_m, int headings, const std::vector<double>& heading_footprint) {
+                 double local_ground_radius_m, int headings, const std::vector<double>& heading_footprint,
+                 double min_confidence) {
   const TraversabilityMap& map = handle.map;
   const GridExportOptions steps = ExportSteps(fill_holes, local_ground_radius_m);
+  CheckMinConfidence(min_confidence);
   Eigen::AlignedBox2d region;
   if (region_arg) {
     const std::vector<double>& r = *region_arg;
@@ -313,6 +315,8 @@ py::dict Project(const MapHandle& handle, const std::optional<std::vector<double
     } else {
       grid = map.Project(region, resolution_m);
     }
+    // Last, as the export applies it (GridExportOptions::min_confidence).
+    if (min_confidence > 0.0) ApplyConfidenceBar(&grid, min_confidence);
     if (headings > 0) heading_costs = HeadingCosts(grid, map.metadata().vehicle, heading_options);
   }
   py::dict out;
@@ -571,6 +575,9 @@ Args:
         vehicle's pitch or roll on the ground under the footprint nears (0.8 of) or passes the
         map's vehicle limits (max_pitch_deg, max_descent_deg, max_roll_deg; 1 beyond).
     heading_footprint: (length_m, width_m) of that footprint, centred at each pixel.
+    min_confidence: a planner's bar, applied last: a traversable or semi-traversable pixel
+        whose confidence is below it is class 4 with cost NaN, as `ssta export
+        --min-confidence` writes it (0: off; 0..1).
 
 Returns:
     A dict of H x W arrays, row 0 the largest y, column 0 the smallest x (an image; pass
@@ -697,7 +704,7 @@ void BindMap(py::module_& m) {
            py::arg("local_ground_radius_m") = 0.0, py::arg("headings") = 0,
            py::arg("heading_footprint") = std::vector<double>{HeadingCostOptions{}.footprint_length_m,
                                                                HeadingCostOptions{}.footprint_width_m},
-           ExportedDoc(kProjectDoc).c_str())
+           py::arg("min_confidence") = 0.0, ExportedDoc(kProjectDoc).c_str())
       .def("diff", &Diff, py::arg("other"), py::kw_only(), py::arg("out") = py::none(),
            py::arg("min_confidence") = MapDiffOptions{}.min_confidence,
            py::arg("slope_noise_deg") = MapDiffOptions{}.slope_noise_deg,

@@ -175,6 +175,7 @@ class Map:
         local_ground_radius_m: float = 0.0,
         headings: int = 0,
         heading_footprint: Sequence[float] = (1.0, 0.6),
+        min_confidence: float = 0.0,
     ) -> dict[str, Any]:
         """The top surface as H x W arrays (class, cost, height_m, slope_deg, step_m,
         surface_z_m), origin, extent; with headings=N, cost_heading (H x W x N) and headings_deg."""

@@ -185,6 +185,17 @@ def test_a_confidence_bar_makes_only_the_unsure_drivable_answers_undecided(the_m
         the_map.footprints(poses[:1], 1.0, 0.6, min_confidence=1.5)
 
 
+def test_project_at_a_confidence_bar_equals_the_grid_export_at_it(the_map, yard_map, cli, tmp_path):
+    cli("export", "--map", yard_map, "--format", "grid", "--out", tmp_path / "grid", "--min-confidence", 0.8)
+    classes_png = np.round(matplotlib.image.imread(tmp_path / "grid_classes.png") * 255).astype(np.uint8)
+    barred = the_map.project(as_exported=True, min_confidence=0.8)
+    np.testing.assert_array_equal(barred["class"], classes_png)
+    plain = the_map.project(as_exported=True)
+    assert (barred["class"] == 4).sum() > (plain["class"] == 4).sum()  # the bar withheld some
+    with pytest.raises(ValueError, match="min_confidence"):
+        the_map.project(min_confidence=-1.0)
+
+
 def test_project_as_exported_equals_grid_export(the_map, yard_map, cli, tmp_path):
     cli("export", "--map", yard_map, "--format", "grid", "--out", tmp_path / "grid")
     classes_png = np.round(matplotlib.image.imread(tmp_path / "grid_classes.png") * 255).astype(np.uint8)
