@@ -34,9 +34,13 @@ CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence) {
 int ApplyConfidenceBar(GridProjection* grid, double min_confidence) {
   CheckBar(min_confidence);
   SSTA_CHECK(grid != nullptr, "ApplyConfidenceBar: grid must not be null");
+  const std::size_t n = grid->classes.size();
+  SSTA_CHECK(grid->confidence.size() == n && grid->cost.size() == n && grid->slope_deg.size() == n &&
+                 grid->step_m.size() == n,
+             "ApplyConfidenceBar: the grid's confidence, cost, slope and step must have its classes' size");
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   int changed = 0;
-  for (std::size_t i = 0; i < grid->classes.size(); ++i) {
+  for (std::size_t i = 0; i < n; ++i) {
     const auto cls = static_cast<TravClass>(grid->classes[i]);
     const bool drivable = cls == TravClass::kTraversable || cls == TravClass::kSemiTraversable;
     if (!drivable || !(grid->confidence[i] < min_confidence)) continue;  // NaN: no say
