@@ -85,6 +85,10 @@ void AddAsExported(CLI::App* cmd, const std::string& help, bool* as_exported, Gr
   cmd->get_option("--local-ground")->needs(flag);
 }
 
+void RequireProbability(const std::string& flag, double value) {
+  if (!(value >= 0.0 && value <= 1.0)) throw Error(flag + ": must be a probability in [0, 1]");
+}
+
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
                         double* local_ground_radius_m) {
   cmd->add_option("--fill-holes", *fill_min_neighbours,
@@ -125,9 +129,7 @@ void CheckFormatOptions(const ExportArgs& args, const CLI::App& cmd) {
     if (f != "mcap" && cmd.count(option) > 0) throw Error(std::string(option) + ": only for --format mcap");
   }
   if (args.frame.empty()) throw Error("--frame: must not be empty");
-  if (!(args.min_confidence >= 0.0 && args.min_confidence <= 1.0)) {
-    throw Error("--min-confidence: must be a probability in [0, 1]");
-  }
+  RequireProbability("--min-confidence", args.min_confidence);
   if (cmd.count("--resolution") > 0 && !(args.resolution_m > 0.0 && std::isfinite(args.resolution_m))) {
     throw Error("--resolution: must be a positive number of metres");
   }

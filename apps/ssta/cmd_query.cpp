@@ -9,7 +9,6 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
-#include <utility>
 
 #include "commands.h"
 #include "map_arguments.h"
@@ -32,13 +31,12 @@ struct QueryArgs {
   double min_confidence = 0.0;  // --min-confidence: drivable answers below it are undecided
 };
 
-// The surface the footprint and path queries read: as exported or observed (`exported`, null
-// for TopSurfaceAt), through the planner's confidence bar when one is set.
+// The surface the footprint and path queries read: `exported` (null: TopSurfaceAt) through the
+// planner's confidence bar.
 TraversabilityMap::SurfaceSource QuerySurface(const TraversabilityMap& map, const QueryArgs& args,
                                               const ExportedSurface* exported) {
-  TraversabilityMap::SurfaceSource surface;
-  if (exported != nullptr) surface = std::cref(*exported);
-  return args.min_confidence > 0.0 ? WithConfidenceBar(map, std::move(surface), args.min_confidence) : surface;
+  return WithConfidenceBar(map, exported != nullptr ? TraversabilityMap::SurfaceSource(std::cref(*exported)) : nullptr,
+                           args.min_confidence);
 }
 
 // Runs a map query; its error names the option that asked it instead of the library's query
@@ -208,9 +206,7 @@ void RunQuery(const QueryArgs& args) {
   if (args.at.empty() && args.points.empty() && args.footprint.empty() && args.path.empty()) {
     throw Error("query needs --at X,Y[,Z], --points FILE.csv, --footprint X,Y,YAW_DEG,LENGTH,WIDTH or --path FILE.csv");
   }
-  if (!(args.min_confidence >= 0.0 && args.min_confidence <= 1.0)) {
-    throw Error("--min-confidence: must be a probability in [0, 1]");
-  }
+  RequireProbability("--min-confidence", args.min_confidence);
   const TraversabilityMap map = LoadMapForConfig(args.map, args.config);
   if (!args.footprint.empty()) return AnswerFootprint(map, args);
   if (!args.path.empty()) return AnswerPath(map, ReadPoints(args.path, 2), args);

@@ -18,6 +18,10 @@ namespace ssta::cli {
 void AddGridExportSteps(CLI::App* cmd, const std::string& scope, int* fill_min_neighbours,
                         double* local_ground_radius_m);
 
+/// Throws ssta::Error "<flag>: must be a probability in [0, 1]" unless 0 <= value <= 1 (NaN
+/// included): a bar such as `--min-confidence`.
+void RequireProbability(const std::string& flag, double value);
+
 /// `--config FILE` (repeatable) for the commands that read a map (`query`, `export`, `eval
 /// footprints`): every command takes one (docs/interfaces.md, section 4), and a script may pass the one
 /// it built the map with. A map's classes were fused for the vehicle it was built for, so the

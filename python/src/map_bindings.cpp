@@ -62,12 +62,11 @@ void CheckMinConfidence(double min_confidence) {
 }
 
 // The surface the footprint and path queries read: `exported` (null: the map as observed),
-// through the bar when one is set.
+// through the bar.
 TraversabilityMap::SurfaceSource BarredSurface(const TraversabilityMap& map, const ExportedSurface* exported,
                                                double min_confidence) {
-  TraversabilityMap::SurfaceSource surface;
-  if (exported != nullptr) surface = std::cref(*exported);
-  return min_confidence > 0.0 ? WithConfidenceBar(map, std::move(surface), min_confidence) : surface;
+  return WithConfidenceBar(map, exported != nullptr ? TraversabilityMap::SurfaceSource(std::cref(*exported)) : nullptr,
+                           min_confidence);
 }
 
 // The grid export's two steps, for the queries' as_exported (`--fill-holes`, `--local-ground`).

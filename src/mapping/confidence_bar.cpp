@@ -54,6 +54,7 @@ int ApplyConfidenceBar(GridProjection* grid, double min_confidence) {
 TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,
                                                    double min_confidence) {
   CheckBar(min_confidence);
+  if (min_confidence == 0.0) return surface;  // every answer as it is
   return [&map, surface = std::move(surface), min_confidence](double x, double y) {
     return AtConfidenceBar(surface ? surface(x, y) : map.TopSurfaceAt(x, y), min_confidence);
   };

@@ -18,8 +18,8 @@ CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence);
 
 /// `surface` (empty: map.TopSurfaceAt) read through AtConfidenceBar, for QueryFootprint and
 /// QueryPath: a footprint or a path sample with a drivable column under the bar is undecided
-/// (an undecided column outranks drivable ones). The map, and what `surface` reads, must
-/// outlive the source. Throws ssta::Error unless 0 <= min_confidence <= 1.
+/// (an undecided column outranks drivable ones); at 0, `surface` itself. The map, and what
+/// `surface` reads, must outlive the source. Throws ssta::Error unless 0 <= min_confidence <= 1.
 TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,
                                                    double min_confidence);
 
