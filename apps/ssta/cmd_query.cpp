@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <functional>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -30,14 +29,6 @@ struct QueryArgs {
   GridExportOptions exported;  // the export's steps, for --as-exported
   double min_confidence = 0.0;  // --min-confidence: drivable answers below it are undecided
 };
-
-// The surface the footprint and path queries read: `exported` (null: TopSurfaceAt) through the
-// planner's confidence bar.
-TraversabilityMap::SurfaceSource QuerySurface(const TraversabilityMap& map, const QueryArgs& args,
-                                              const ExportedSurface* exported) {
-  return WithConfidenceBar(map, exported != nullptr ? TraversabilityMap::SurfaceSource(std::cref(*exported)) : nullptr,
-                           args.min_confidence);
-}
 
 // Runs a map query; its error names the option that asked it instead of the library's query
 // ("footprint query: ..." -> "--footprint 1,1,0,1e9,0.5: ...").
@@ -67,7 +58,7 @@ void AnswerFootprint(const TraversabilityMap& map, const QueryArgs& args) {
   const FootprintResult result = NamingTheOption(option, "footprint query: ", [&] {
     const std::unique_ptr<ExportedSurface> exported =
         args.as_exported ? std::make_unique<ExportedSurface>(map, box, args.exported) : nullptr;
-    return map.QueryFootprint(q, QuerySurface(map, args, exported.get()));
+    return map.QueryFootprint(q, WithConfidenceBarOver(map, exported.get(), args.min_confidence));
   });
   std::cout << "worst,mean_cost,max_cost,fraction_observed,cells,observed_cells,pitch_deg,roll_deg,attitude,"
                "attitude_heights,drivable_confidence\n"
@@ -95,7 +86,7 @@ void AnswerPath(const TraversabilityMap& map, const std::vector<std::vector<doub
         args.as_exported ? std::make_unique<ExportedSurface>(
                                map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width), args.exported)
                          : nullptr;
-    return map.QueryPath(polyline, args.path_width_m, QuerySurface(map, args, exported.get()));
+    return map.QueryPath(polyline, args.path_width_m, WithConfidenceBarOver(map, exported.get(), args.min_confidence));
   });
   std::cout << "distance_m,x,y,class,cost,fraction_observed,drivable_confidence\n";
   for (const PathSample& sample : result.samples) {

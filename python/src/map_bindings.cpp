@@ -61,14 +61,6 @@ void CheckMinConfidence(double min_confidence) {
   }
 }
 
-// The surface the footprint and path queries read: `exported` (null: the map as observed),
-// through the bar.
-TraversabilityMap::SurfaceSource BarredSurface(const TraversabilityMap& map, const ExportedSurface* exported,
-                                               double min_confidence) {
-  return WithConfidenceBar(map, exported != nullptr ? TraversabilityMap::SurfaceSource(std::cref(*exported)) : nullptr,
-                           min_confidence);
-}
-
 // The grid export's two steps, for the queries' as_exported (`--fill-holes`, `--local-ground`).
 GridExportOptions ExportSteps(int fill_holes, double local_ground_radius_m) {
   if (fill_holes < 0 || fill_holes > 8) {
@@ -198,7 +190,7 @@ py::array Footprints(const MapHandle& handle, const py::object& poses_arg, doubl
       }
       exported = ExportedOver(map, box, steps);
     }
-    const TraversabilityMap::SurfaceSource surface = BarredSurface(map, exported.get(), min_confidence);
+    const TraversabilityMap::SurfaceSource surface = WithConfidenceBarOver(map, exported.get(), min_confidence);
     for (py::ssize_t i = 0; i < n; ++i) {
       const FootprintQuery query{p[i * 3], p[i * 3 + 1], p[i * 3 + 2], length_m, width_m};
       const FootprintResult f = NamingTheArgument("poses[" + std::to_string(i) + "]", "footprint query: ",
@@ -237,7 +229,7 @@ py::dict Path(const MapHandle& handle, const py::object& vertices_arg, double wi
           as_exported ? std::make_unique<ExportedSurface>(
                             map, Eigen::AlignedBox2d(box.min() - half_width, box.max() + half_width), steps)
                       : nullptr;
-      return map.QueryPath(polyline, width_m, BarredSurface(map, exported.get(), min_confidence));
+      return map.QueryPath(polyline, width_m, WithConfidenceBarOver(map, exported.get(), min_confidence));
     });
   }
   py::array_t<PathRow> samples(static_cast<py::ssize_t>(result.samples.size()));

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <utility>
 
@@ -16,13 +17,17 @@ void CheckBar(double min_confidence) {
   }
 }
 
+/// Whether a cell of class `cls` and `confidence` falls below the bar: a drivable one less sure
+/// than it (NaN compares false: a class without a confidence stays).
+bool BelowBar(TravClass cls, double confidence, double min_confidence) {
+  return IsDrivable(cls) && confidence < min_confidence;
+}
+
 }  // namespace
 
 CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence) {
   CheckBar(min_confidence);
-  const bool drivable = cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable;
-  // NaN compares false: a class without a confidence stays.
-  if (!drivable || !(cell.confidence < min_confidence)) return cell;
+  if (!BelowBar(cell.cls, cell.confidence, min_confidence)) return cell;
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
   CellInfo barred = cell;
   barred.cls = TravClass::kUndecided;
@@ -41,9 +46,7 @@ int ApplyConfidenceBar(GridProjection* grid, double min_confidence) {
   constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
   int changed = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    const auto cls = static_cast<TravClass>(grid->classes[i]);
-    const bool drivable = cls == TravClass::kTraversable || cls == TravClass::kSemiTraversable;
-    if (!drivable || !(grid->confidence[i] < min_confidence)) continue;  // NaN: no say
+    if (!BelowBar(static_cast<TravClass>(grid->classes[i]), grid->confidence[i], min_confidence)) continue;
     grid->classes[i] = static_cast<std::uint8_t>(TravClass::kUndecided);
     grid->cost[i] = grid->confidence[i] = grid->slope_deg[i] = grid->step_m[i] = kNaN;
     ++changed;
@@ -58,6 +61,12 @@ TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map,
   return [&map, surface = std::move(surface), min_confidence](double x, double y) {
     return AtConfidenceBar(surface ? surface(x, y) : map.TopSurfaceAt(x, y), min_confidence);
   };
+}
+
+TraversabilityMap::SurfaceSource WithConfidenceBarOver(const TraversabilityMap& map, const ExportedSurface* exported,
+                                                       double min_confidence) {
+  return WithConfidenceBar(map, exported != nullptr ? TraversabilityMap::SurfaceSource(std::cref(*exported)) : nullptr,
+                           min_confidence);
 }
 
 }  // namespace ssta

@@ -443,7 +443,7 @@ PathSample SampleAcross(const Station& station, double width_m, int lateral, con
     if (std::isfinite(cell.cost)) {
       sample.cost = std::isnan(sample.cost) ? cell.cost : std::max(sample.cost, cell.cost);
     }
-    if (cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) {
+    if (IsDrivable(cell.cls)) {
       sample.drivable_confidence = std::fmin(sample.drivable_confidence, cell.confidence);  // NaN: no say
     }
   }
@@ -542,7 +542,7 @@ FootprintResult TraversabilityMap::QueryFootprint(const FootprintQuery& q, const
         worst_distance2 = distance2;
       }
     }
-    if (cell.cls == TravClass::kTraversable || cell.cls == TravClass::kSemiTraversable) {
+    if (IsDrivable(cell.cls)) {
       result.drivable_confidence = std::fmin(result.drivable_confidence, cell.confidence);  // NaN: no say
     }
     if (std::isfinite(cell.cost)) {

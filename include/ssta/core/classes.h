@@ -29,6 +29,11 @@ std::string_view ClassName(TravClass c);
 /// black for it and callers leave the image showing through.
 Rgb8 ClassColour(TravClass c);
 
+/// A class a vehicle may drive on: traversable or semi-traversable.
+inline constexpr bool IsDrivable(TravClass c) {
+  return c == TravClass::kTraversable || c == TravClass::kSemiTraversable;
+}
+
 /// The worse of two verdicts among traversable < semi-traversable < non-traversable.
 /// Unknown and undecided are not ordered with these; precondition: both are 1..3.
 TravClass Worse(TravClass a, TravClass b);

@@ -3,6 +3,7 @@
 // A planner's confidence bar: drivable answers the map is less sure of than the planner needs
 // are undecided (docs/interfaces.md, section 5; docs/accuracy.md, "What is scored").
 
+#include "ssta/mapping/map_export.h"
 #include "ssta/mapping/map_types.h"
 #include "ssta/mapping/traversability_map.h"
 
@@ -22,6 +23,11 @@ CellInfo AtConfidenceBar(const CellInfo& cell, double min_confidence);
 /// `surface` reads, must outlive the source. Throws ssta::Error unless 0 <= min_confidence <= 1.
 TraversabilityMap::SurfaceSource WithConfidenceBar(const TraversabilityMap& map, TraversabilityMap::SurfaceSource surface,
                                                    double min_confidence);
+
+/// WithConfidenceBar over `exported` (null: the map as observed), which must outlive the source:
+/// what `query --as-exported` and the Python queries' as_exported read.
+TraversabilityMap::SurfaceSource WithConfidenceBarOver(const TraversabilityMap& map, const ExportedSurface* exported,
+                                                       double min_confidence);
 
 /// AtConfidenceBar on every pixel of a projection: a traversable or semi-traversable pixel whose
 /// confidence is below `min_confidence` becomes undecided (class 4; cost, confidence, slope and
